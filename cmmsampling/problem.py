@@ -1,0 +1,42 @@
+"""SamplingProblem: everything a strategy needs to place N points on one face."""
+import numpy as np
+
+from .deviation import DeviationObjective, EvaluationGrid
+from .domain import FaceDomain
+from .fitting import SubstituteSpace, default_pole_count
+
+
+class SamplingProblem:
+    """A face, N, the substitute space, the evaluation grid and the seed.
+
+    model: SurfaceModel; n: points wanted; fit_degree, fit_poles: (k_u, k_v), (n_u, n_v) of the
+    substitute; smoothing: its second-difference weight; grid: (g_u, g_v) evaluation raster;
+    seed: for the random parts of the strategies.
+    """
+
+    def __init__(self, model, n, fit_degree, fit_poles, smoothing, grid, seed):
+        self.model = model
+        self.n = n
+        self.seed = seed
+        self.domain = FaceDomain(model.bounds)
+        self.space = SubstituteSpace(fit_degree, fit_poles, model.bounds, smoothing)
+        self.grid = EvaluationGrid(model, grid)
+        self._objective = None
+
+    @property
+    def objective(self):
+        """The batched maximum-deviation objective (built on first use)."""
+        if self._objective is None:
+            self._objective = DeviationObjective(self.model, self.space, self.grid)
+        return self._objective
+
+    def project(self, uv):
+        """Map uv: (..., 2) onto the face's domain."""
+        return self.domain.project(np.asarray(uv, dtype=float))
+
+
+def resolve_fit_poles(fit_poles, n, fit_degree):
+    """(n_u, n_v): the given pole counts, or :func:`default_pole_count` for N in each direction."""
+    if fit_poles is None:
+        return (default_pole_count(n, fit_degree[0]), default_pole_count(n, fit_degree[1]))
+    return fit_poles

@@ -1,0 +1,83 @@
+"""SamplingResult: the probe points of one run and how well their substitute fits the face."""
+from dataclasses import dataclass, field
+
+import numpy as np
+
+
+@dataclass
+class SamplingResult:
+    """One sampling run.
+
+    strategy: its name; n: number of points; uv: (N, 2) on ``model.face``; points: (N, 3) mm;
+    normals: (N, 3) unit vectors out of the material (the probe approaches along -normal);
+    poles: (n_u, n_v, 3) mm, the substitute's poles; space: its SubstituteSpace;
+    deviation: DeviationStats on the evaluation grid; history: best maximum deviation (mm) per
+    iteration for the optimisers, else None; evaluations: fitness evaluations;
+    timings: seconds per phase; settings: every parameter of the run; cancelled: stopped early.
+    """
+
+    strategy: str
+    uv: np.ndarray
+    points: np.ndarray
+    normals: np.ndarray
+    poles: np.ndarray
+    space: object
+    deviation: object
+    model: object
+    history: np.ndarray = None
+    evaluations: int = 0
+    timings: dict = field(default_factory=dict)
+    settings: dict = field(default_factory=dict)
+    cancelled: bool = False
+
+    @property
+    def n(self):
+        """Number of probe points."""
+        return len(self.uv)
+
+    @property
+    def face(self):
+        """The face as it was given."""
+        return self.model.source_face
+
+    @property
+    def substitute(self):
+        """The fitted substitute surface as a Part.BSplineSurface."""
+        return self.space.to_part(self.poles)
+
+    @property
+    def labels(self):
+        """Point labels P1..PN."""
+        return [f"P{i + 1}" for i in range(self.n)]
+
+    def summary(self):
+        """The headline figures as a dict (deviations in mm, times in s)."""
+        d = self.deviation
+        return {
+            "strategy": self.strategy,
+            "n": self.n,
+            "max_mm": d.maximum,
+            "mean_mm": d.mean,
+            "rms_mm": d.rms,
+            "std_mm": d.std,
+            "occ_max_mm": d.occ_maximum,
+            "occ_distance_max_mm": d.occ_distance_maximum,
+            "time_s": self.timings.get("total_s", float("nan")),
+            "evaluations": self.evaluations,
+            "cancelled": self.cancelled,
+        }
+
+    def __repr__(self):
+        d = self.deviation
+        return (
+            f"<SamplingResult {self.strategy} N={self.n} max={d.maximum:.4f} mm "
+            f"mean={d.mean:.4f} mm rms={d.rms:.4f} mm in {self.timings.get('total_s', 0):.2f} s"
+            f"{' (cancelled)' if self.cancelled else ''}>"
+        )
+
+    def point_table(self):
+        """Per-point rows (label, x, y, z, i, j, k, u, v) as a list of tuples."""
+        return [
+            (label, *map(float, p), *map(float, nrm), *map(float, uv))
+            for label, p, nrm, uv in zip(self.labels, self.points, self.normals, self.uv)
+        ]

@@ -1,0 +1,217 @@
+"""The scripting entry points: :func:`sample` runs a strategy, :func:`evaluate` judges any point set."""
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from . import strategies as blind
+from .deviation import DEFAULT_GRID, DeviationStats, occ_cross_check
+from .fitting import DEFAULT_DEGREE, DEFAULT_SMOOTHING
+from .problem import SamplingProblem, resolve_fit_poles
+from .pso import SwarmSettings, particle_swarm
+from .result import SamplingResult
+from .strategies import StrategyOutcome
+from .surface import SurfaceModel
+from .threads import blas_threads
+from .validation import check_choice, check_int, check_pair, check_real, check_uv
+
+MIN_POINTS = 4
+MIN_AREA_RATIO = 1e-12
+
+
+@dataclass(frozen=True)
+class Strategy:
+    """A named strategy: run(problem, progress, **options) -> StrategyOutcome, its options with
+    their defaults, and whether it optimises (uses the objective, reports history)."""
+
+    name: str
+    run: object
+    description: str
+    options: dict = field(default_factory=dict)
+    optimiser: bool = False
+
+
+def _blind(function):
+    """Adapter: a blind strategy ignores progress and takes no options."""
+    return lambda problem, progress: function(problem)
+
+
+def run_pso(problem, progress, population, iterations, w1, w2, c1, c2, velocity_limit,
+            start_from_uniform):
+    """The paper's PSO (eq. 7-9) on the problem's maximum-deviation objective.
+
+    With start_from_uniform, particles 0 and 1 start at the uniform parametric and uniform
+    Cartesian layouts, so the result is never worse than either.
+    """
+    settings = SwarmSettings(population, iterations, w1, w2, c1, c2, velocity_limit, problem.seed)
+    seeds = []
+    if start_from_uniform:
+        seeds = [blind.uniform_parametric(problem).uv, blind.uniform_cartesian(problem).uv]
+    swarm = particle_swarm(
+        problem.objective, problem.domain.lower, problem.domain.upper, problem.n, settings,
+        seeds=seeds, project=problem.project, progress=progress,
+    )
+    return StrategyOutcome(swarm.best, swarm.history, swarm.evaluations, swarm.cancelled)
+
+
+PSO_DEFAULTS = {
+    "population": 25, "iterations": 3000, "w1": 0.5, "w2": 0.0, "c1": 2.0, "c2": 2.0,
+    "velocity_limit": 0.1, "start_from_uniform": True,
+}
+
+STRATEGIES = {
+    s.name: s
+    for s in (
+        Strategy("uniform_cartesian", _blind(blind.uniform_cartesian),
+                 "regular grid over the face's footprint in machine X/Y/Z (paper eq. 3-4)"),
+        Strategy("uniform_parametric", _blind(blind.uniform_parametric),
+                 "regular grid in the face's (u, v) (paper eq. 5-6)"),
+        Strategy("random", _blind(blind.random_uniform), "uniform random (u, v), seeded"),
+        Strategy("hammersley", _blind(blind.hammersley), "Hammersley set in (u, v)"),
+        Strategy("halton", _blind(blind.halton), "Halton sequence in (u, v), bases 2 and 3"),
+        Strategy("curvature_mean", _blind(blind.curvature_adaptive),
+                 "more points on patches of high mean curvature"),
+        Strategy("curvature_gaussian", _blind(blind.curvature_gaussian),
+                 "more points on patches of high Gaussian curvature"),
+        Strategy("pso", run_pso, "the paper's particle swarm optimisation of the maximum deviation",
+                 PSO_DEFAULTS, optimiser=True),
+    )
+}
+
+
+def _check_pso_options(options):
+    """Validate PSO options (already merged with defaults); returns the cleaned dict."""
+    clean = dict(options)
+    clean["population"] = check_int("population", options["population"], 2)
+    clean["iterations"] = check_int("iterations", options["iterations"], 1)
+    clean["w1"] = check_real("w1", options["w1"], 0.0, 1.2)
+    clean["w2"] = check_real("w2", options["w2"], 0.0, 1.2)
+    if clean["w2"] > clean["w1"]:
+        raise ValueError(f"inertia must decrease: w1 ({clean['w1']}) must be >= w2 ({clean['w2']})")
+    clean["c1"] = check_real("c1", options["c1"], 0.0)
+    clean["c2"] = check_real("c2", options["c2"], 0.0)
+    clean["velocity_limit"] = check_real("velocity_limit", options["velocity_limit"], maximum=1.0, above=0.0)
+    clean["start_from_uniform"] = bool(options["start_from_uniform"])
+    return clean
+
+
+OPTION_CHECKS = {"pso": _check_pso_options}
+
+
+def strategy_options(strategy, options):
+    """The strategy's options: defaults updated by ``options``, validated.
+
+    Raises TypeError for an option the strategy does not take (listing those it does).
+    """
+    entry = STRATEGIES[strategy]
+    unknown = sorted(set(options) - set(entry.options))
+    if unknown:
+        takes = ", ".join(entry.options) or "no options"
+        raise TypeError(f"strategy {strategy!r} does not take {', '.join(unknown)}; it takes {takes}")
+    merged = {**entry.options, **options}
+    check = OPTION_CHECKS.get(strategy)
+    return check(merged) if check else merged
+
+
+def make_problem(face, n, fit_degree=DEFAULT_DEGREE, fit_poles=None, smoothing=DEFAULT_SMOOTHING,
+                 grid=DEFAULT_GRID, seed=0):
+    """Validate the common inputs and build a SamplingProblem (see :func:`sample`)."""
+    n = check_int("n", n, MIN_POINTS)
+    degree = check_pair("fit_degree", fit_degree, 1)
+    poles = resolve_fit_poles(None if fit_poles is None else check_pair("fit_poles", fit_poles, 2), n, degree)
+    for axis, (d, p) in enumerate(zip(degree, poles)):
+        if p < d + 1:
+            raise ValueError(
+                f"fit_poles along {'uv'[axis]} ({p}) must be at least fit_degree + 1 ({d + 1})"
+            )
+    smoothing = check_real("smoothing", smoothing, above=0.0)
+    grid = check_pair("grid", grid, 2)
+    seed = check_int("seed", seed, 0)
+    model = SurfaceModel.from_face(face)
+    _check_area(model.face)
+    return SamplingProblem(model, n, degree, poles, smoothing, grid, seed)
+
+
+def _check_area(face):
+    """ValueError for a face without usable area."""
+    diagonal = face.BoundBox.DiagonalLength
+    if not np.isfinite(face.Area) or face.Area <= MIN_AREA_RATIO * max(diagonal, 1e-300) ** 2:
+        raise ValueError(
+            f"the face has no usable area ({face.Area:.3g} mm^2 for a {diagonal:.3g} mm bounding box); "
+            "pick a face that is not degenerate"
+        )
+
+
+def sample(face, n=81, strategy="pso", *, fit_degree=DEFAULT_DEGREE, fit_poles=None,
+           smoothing=DEFAULT_SMOOTHING, grid=DEFAULT_GRID, seed=0, progress=None, occ_check=True,
+           **options):
+    """Place n probe points on a face with a strategy and judge them.
+
+    face: a Part.Face (or a Shape holding one face), e.g. ``cmmsampling.reference_face()``;
+    n: number of probe points (>= 4); strategy: a key of :data:`STRATEGIES`;
+    fit_degree, fit_poles: degree and pole count of the substitute B-spline per direction
+    (an int or a (u, v) pair; poles default to round(2 sqrt(n) / 3)); smoothing: relative weight
+    of its second-difference smoothing; grid: evaluation raster (int or pair, default 60 x 60);
+    seed: for random parts; progress: callable (iteration, best_max_mm) for the optimisers, returning
+    True to stop (the best so far is kept); occ_check: cross-check the final maximum with OCC;
+    options: the strategy's own (see ``STRATEGIES[name].options``; PSO: population, iterations, w1,
+    w2, c1, c2, velocity_limit, start_from_uniform).
+    Returns a SamplingResult.
+    """
+    check_choice("strategy", strategy, list(STRATEGIES))
+    options = strategy_options(strategy, options)
+    problem = make_problem(face, n, fit_degree, fit_poles, smoothing, grid, seed)
+    start = time.perf_counter()
+    with blas_threads(1):
+        outcome = STRATEGIES[strategy].run(problem, progress, **options)
+    strategy_s = time.perf_counter() - start
+    settings = {"strategy": strategy, "n": problem.n, **_common_settings(problem), **options}
+    return _judge(problem, outcome, strategy, settings, strategy_s, occ_check)
+
+
+def evaluate(face, uv, *, strategy="given", fit_degree=DEFAULT_DEGREE, fit_poles=None,
+             smoothing=DEFAULT_SMOOTHING, grid=DEFAULT_GRID, occ_check=True):
+    """Judge a given point set: fit the substitute to the face's points at uv and measure it.
+
+    uv: (N, 2) parameters on the face (as in SamplingResult.uv); the other arguments as in
+    :func:`sample`. Returns a SamplingResult labelled with ``strategy``.
+    """
+    uv = check_uv(uv)
+    problem = make_problem(face, len(uv), fit_degree, fit_poles, smoothing, grid)
+    settings = {"strategy": strategy, "n": problem.n, **_common_settings(problem)}
+    return _judge(problem, StrategyOutcome(uv), strategy, settings, 0.0, occ_check)
+
+
+def _common_settings(problem):
+    """The fit and grid settings of a problem, JSON-friendly."""
+    return {
+        "fit_degree": list(problem.space.degrees),
+        "fit_poles": list(problem.space.poles),
+        "smoothing": problem.space.smoothing,
+        "grid": list(problem.grid.size),
+        "seed": problem.seed,
+    }
+
+
+def _judge(problem, outcome, strategy, settings, strategy_s, occ_check):
+    """Points, normals, fit and deviation statistics for a strategy's outcome."""
+    start = time.perf_counter()
+    uv = np.asarray(outcome.uv, dtype=float)
+    with blas_threads(1):
+        field_mm, poles = problem.objective.field(uv)
+    stats = DeviationStats.from_field(field_mm, problem.grid)
+    evaluation_s = time.perf_counter() - start
+    result = SamplingResult(
+        strategy=strategy, uv=uv, points=problem.model.points(uv), normals=problem.model.normals(uv),
+        poles=poles, space=problem.space, deviation=stats, model=problem.model,
+        history=outcome.history, evaluations=outcome.evaluations, settings=settings,
+        cancelled=outcome.cancelled,
+    )
+    occ_s = 0.0
+    if occ_check:
+        start = time.perf_counter()
+        occ_cross_check(stats, result.substitute, problem.model.face)
+        occ_s = time.perf_counter() - start
+    result.timings = {"strategy_s": strategy_s, "evaluation_s": evaluation_s, "occ_check_s": occ_s,
+                      "total_s": strategy_s + evaluation_s + occ_s}
+    return result

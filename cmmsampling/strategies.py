@@ -1,0 +1,261 @@
+"""Blind and curvature-adaptive sampling strategies.
+
+Every strategy has the signature ``strategy(problem, **options) -> StrategyOutcome`` where
+``problem`` is a :class:`cmmsampling.problem.SamplingProblem` (face model, N, domain, seed) and
+the outcome holds exactly N parameter pairs ``uv: (N, 2)`` inside the face's domain. Points and
+normals follow from ``problem.model``.
+"""
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from .bspline import radical_inverse
+
+CARTESIAN_RASTER = 121
+NEWTON_STEPS = 30
+NEWTON_TOLERANCE = 1e-9
+
+
+@dataclass
+class StrategyOutcome:
+    """What a strategy returns.
+
+    uv: (N, 2) parameters on the face; history: best maximum deviation (mm) per iteration for
+    the optimisers, else None; evaluations: fitness evaluations spent; cancelled: stopped early.
+    """
+
+    uv: np.ndarray
+    history: np.ndarray = None
+    evaluations: int = 0
+    cancelled: bool = False
+    details: dict = field(default_factory=dict)
+
+
+def grid_shape(n, aspect=1.0):
+    """(rows, cols) with rows * cols >= n and cols / rows close to ``aspect`` (width / height).
+
+    A perfect fit (e.g. 9 x 9 for 81 on a square) is used when there is one.
+    """
+    rows = max(1, int(round(np.sqrt(n / aspect))))
+    best = None
+    for r in range(max(1, rows - 2), rows + 3):
+        c = int(np.ceil(n / r))
+        score = (r * c - n, abs(np.log(c / r / aspect)))
+        if best is None or score < best[0]:
+            best = (score, (r, c))
+    return best[1]
+
+
+def thin_evenly(uv, n):
+    """Keep n of the M >= n points, spread evenly along their order: (M, 2) -> (n, 2)."""
+    if len(uv) == n:
+        return uv
+    keep = np.round(np.linspace(0, len(uv) - 1, n)).astype(int)
+    return uv[keep]
+
+
+def _unit_grid(rows, cols):
+    """Regular rows x cols grid of the unit square, corners included: (rows * cols, 2)."""
+    u = np.linspace(0.0, 1.0, rows) if rows > 1 else np.array([0.5])
+    v = np.linspace(0.0, 1.0, cols) if cols > 1 else np.array([0.5])
+    return np.stack(np.meshgrid(u, v, indexing="ij"), axis=-1).reshape(-1, 2)
+
+
+def _dense_enough(make_candidates, problem, start):
+    """Grow a candidate layout until at least N of its points lie on the face, then thin it.
+
+    make_candidates(m) -> (M, 2) uv for a layout of about m points; start: first m to try.
+    """
+    n = problem.n
+    m = start
+    for _ in range(60):
+        uv = make_candidates(m)
+        inside = uv[problem.domain.contains(uv)]
+        if len(inside) >= n:
+            return thin_evenly(inside, n)
+        m = int(np.ceil(m * max(1.1, n / max(len(inside), 1))))
+    raise ValueError(
+        f"could not place {n} points on the face: too few candidate points fall inside it; "
+        "lower N or check that the face has a usable area"
+    )
+
+
+def uniform_parametric(problem):
+    """Regular grid in (u, v) (paper eq. 5-6), corners included.
+
+    The grid has rows x cols >= N nodes with rows / cols following the parameter range's aspect;
+    surplus nodes, and nodes off a trimmed face, are dropped evenly so that exactly N remain.
+    """
+    du, dv = problem.model.span
+    aspect = dv / du if du > 0 else 1.0
+
+    def candidates(m):
+        rows, cols = grid_shape(m, aspect)
+        return problem.domain.from_unit(_unit_grid(rows, cols))
+
+    return StrategyOutcome(_dense_enough(candidates, problem, problem.n))
+
+
+def projection_frame(model, raster=CARTESIAN_RASTER):
+    """Axes of the Cartesian footprint: (e1, e2, e3) rows of a (3, 3) array.
+
+    e3 is the machine axis (X, Y or Z) closest to the face's mean normal, and e1, e2 are the
+    other two machine axes in cyclic order, so a face seen from +Z gets its grid in X and Y,
+    as on a CMM table.
+    """
+    uv = model.raster((raster, raster)).reshape(-1, 2)
+    normals = model.normals(uv)
+    mean_normal = np.nanmean(normals, axis=0)
+    axis = int(np.argmax(np.abs(mean_normal)))
+    return np.eye(3)[[(axis + 1) % 3, (axis + 2) % 3, axis]]
+
+
+def _solve_footprint(model, frame, targets, seeds):
+    """Newton solve of (P(u, v) . e1, P(u, v) . e2) = targets.
+
+    targets: (M, 2) footprint coordinates in mm; seeds: (M, 2) starting uv.
+    Returns (uv (M, 2), residual (M,) mm); uv is kept inside the parameter rectangle.
+    """
+    lower = np.array([model.bounds[0], model.bounds[2]])
+    upper = np.array([model.bounds[1], model.bounds[3]])
+    uv = seeds.copy()
+    for _ in range(NEWTON_STEPS):
+        d = model.derivatives(uv, 1)
+        gap = d[(0, 0)] @ frame[:2].T - targets
+        jac = np.stack([d[(1, 0)] @ frame[:2].T, d[(0, 1)] @ frame[:2].T], axis=-1)
+        det = jac[:, 0, 0] * jac[:, 1, 1] - jac[:, 0, 1] * jac[:, 1, 0]
+        safe = np.abs(det) > 1e-300
+        step = np.zeros_like(uv)
+        step[safe, 0] = (jac[safe, 1, 1] * gap[safe, 0] - jac[safe, 0, 1] * gap[safe, 1]) / det[safe]
+        step[safe, 1] = (-jac[safe, 1, 0] * gap[safe, 0] + jac[safe, 0, 0] * gap[safe, 1]) / det[safe]
+        uv = np.clip(uv - step, lower, upper)
+    residual = np.linalg.norm(model.points(uv) @ frame[:2].T - targets, axis=1)
+    return uv, residual
+
+
+def uniform_cartesian(problem):
+    """Regular grid in machine coordinates over the face's footprint (paper eq. 3-4).
+
+    The footprint is the face seen along the machine axis closest to its mean normal
+    (:func:`projection_frame`); a rows x cols grid spans its bounding box, and each node's height
+    is taken from the face (the (u, v) whose point projects onto the node, by Newton's method).
+    Nodes that miss the face (outside a non-rectangular footprint or in a hole) are dropped, the
+    grid is refined until at least N nodes hit, and the surplus is dropped evenly.
+    """
+    model = problem.model
+    frame = projection_frame(model)
+    raster_uv = model.raster((CARTESIAN_RASTER, CARTESIAN_RASTER)).reshape(-1, 2)
+    raster_uv = raster_uv[problem.domain.contains(raster_uv)]
+    foot = model.points(raster_uv) @ frame[:2].T
+    low, high = foot.min(axis=0), foot.max(axis=0)
+    extent = np.maximum(high - low, 1e-12)
+    tree = cKDTree(foot)
+    tolerance = NEWTON_TOLERANCE * max(1.0, float(extent.max()))
+
+    def candidates(m):
+        rows, cols = grid_shape(m, extent[1] / extent[0])
+        targets = low + _unit_grid(rows, cols) * extent
+        seeds = raster_uv[tree.query(targets)[1]]
+        uv, residual = _solve_footprint(model, frame, targets, seeds)
+        return np.where((residual <= tolerance)[:, None], uv, np.nan)
+
+    return StrategyOutcome(_dense_enough(candidates, problem, problem.n))
+
+
+def random_uniform(problem):
+    """Independent uniform random (u, v), seeded by ``problem.seed``; off-face draws are redrawn."""
+    rng = np.random.default_rng(problem.seed)
+    return StrategyOutcome(_dense_enough(lambda m: problem.domain.from_unit(rng.random((m, 2))),
+                                         problem, problem.n))
+
+
+def hammersley(problem):
+    """Hammersley set in (u, v): (i / M, radical inverse base 2 of i), i = 0..M-1 (Woo et al. 1995).
+
+    M = N on an untrimmed face; on a trimmed face M grows until N points fall inside.
+    """
+    def candidates(m):
+        i = np.arange(m)
+        return problem.domain.from_unit(np.column_stack([(i + 0.5) / m, radical_inverse(i, 2)]))
+
+    return StrategyOutcome(_dense_enough(candidates, problem, problem.n))
+
+
+def halton(problem):
+    """Halton sequence in (u, v), bases 2 and 3, starting at index 1; off-face points are skipped."""
+    def candidates(m):
+        i = np.arange(1, m + 1)
+        return problem.domain.from_unit(np.column_stack([radical_inverse(i, 2), radical_inverse(i, 3)]))
+
+    n = problem.n
+    uv = candidates(4 * n + 16)
+    inside = uv[problem.domain.contains(uv)]
+    if len(inside) >= n:
+        return StrategyOutcome(inside[:n])
+    return StrategyOutcome(_dense_enough(candidates, problem, 8 * n))
+
+
+def _patch_scores(model, domain, patches, curvature, raster_per_patch=8):
+    """Integral of |curvature| over each patch plus a share of its area: (rows, cols).
+
+    curvature: "mean" uses |H| (1/mm), "gaussian" uses sqrt|K| (1/mm), so both weigh alike.
+    The area share (20% of the face's average) keeps flat patches from getting no points.
+    """
+    rows, cols = patches
+    uv = model.raster((rows * raster_per_patch, cols * raster_per_patch))
+    flat = uv.reshape(-1, 2)
+    d = model.derivatives(flat, 1)
+    area = np.linalg.norm(np.cross(d[(1, 0)], d[(0, 1)]), axis=1)
+    mean, gauss = model.curvatures(flat)
+    bend = np.abs(mean) if curvature == "mean" else np.sqrt(np.abs(gauss))
+    bend = np.nan_to_num(bend)
+    area = np.where(domain.contains(flat), np.nan_to_num(area), 0.0)
+    weight = bend * area + 0.2 * area * (bend * area).sum() / max(area.sum(), 1e-300)
+    return weight.reshape(rows, raster_per_patch, cols, raster_per_patch).sum(axis=(1, 3))
+
+
+def allocate(scores, n):
+    """Split n points over patches in proportion to scores (largest remainder): (P,) -> (P,) ints."""
+    share = scores / scores.sum() * n
+    counts = np.floor(share).astype(int)
+    remainder = n - counts.sum()
+    counts[np.argsort(share - counts)[::-1][:remainder]] += 1
+    return counts
+
+
+def _points_in_patches(counts, patches):
+    """Unit-square points: counts[p] Hammersley points in each patch of a rows x cols split."""
+    rows, cols = patches
+    flat_counts = counts.ravel()
+    patch = np.repeat(np.arange(flat_counts.size), flat_counts)
+    start = np.cumsum(flat_counts) - flat_counts
+    rank = np.arange(patch.size) - start[patch]
+    m = flat_counts[patch]
+    local = np.column_stack([(rank + 0.5) / m, (radical_inverse(rank, 2) + 0.5 / m) % 1.0])
+    corner = np.column_stack([patch // cols, patch % cols])
+    return (corner + local) / np.array([rows, cols])
+
+
+def curvature_adaptive(problem, curvature="mean"):
+    """More points where the face bends (Elkott et al. 2002; Obeidat & Raman 2009).
+
+    The domain is split into patches (about N / 4 of them); each gets points in proportion to the
+    integral of its curvature over its area (``curvature`` = "mean" or "gaussian"), plus an area
+    share, and the points are spread inside each patch as a Hammersley set. Points off a trimmed
+    face are moved to the nearest point of the domain.
+    """
+    if curvature not in ("mean", "gaussian"):
+        raise ValueError(f"curvature must be 'mean' or 'gaussian', got {curvature!r}")
+    model, n = problem.model, problem.n
+    du, dv = model.span
+    patches = grid_shape(max(1, n // 4), dv / du if du > 0 else 1.0)
+    scores = _patch_scores(model, problem.domain, patches, curvature)
+    counts = allocate(scores.ravel(), n).reshape(scores.shape)
+    uv = problem.domain.from_unit(_points_in_patches(counts, patches))
+    return StrategyOutcome(problem.domain.project(uv), details={"points_per_patch": counts})
+
+
+def curvature_gaussian(problem):
+    """:func:`curvature_adaptive` weighted by Gaussian curvature."""
+    return curvature_adaptive(problem, curvature="gaussian")

@@ -1,0 +1,66 @@
+"""Checks of user input that fail early with a message naming the problem and the fix."""
+import numbers
+
+import numpy as np
+
+
+def check_int(name, value, minimum):
+    """Return value as int; TypeError if it is not a whole number, ValueError if below minimum."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+        if isinstance(value, numbers.Real) and float(value).is_integer():
+            value = int(value)
+        else:
+            raise TypeError(f"{name} must be a whole number, got {value!r} ({type(value).__name__})")
+    if value < minimum:
+        raise ValueError(f"{name} must be at least {minimum}, got {value}")
+    return int(value)
+
+
+def check_real(name, value, minimum=None, maximum=None, above=None):
+    """Return value as float; TypeError if not a number, ValueError if NaN, infinite or out of range.
+
+    minimum/maximum are inclusive limits, above an exclusive lower limit.
+    """
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise TypeError(f"{name} must be a number, got {value!r} ({type(value).__name__})")
+    value = float(value)
+    if not np.isfinite(value):
+        raise ValueError(f"{name} must be a finite number, got {value}")
+    if minimum is not None and value < minimum:
+        raise ValueError(f"{name} must be at least {minimum}, got {value}")
+    if maximum is not None and value > maximum:
+        raise ValueError(f"{name} must be at most {maximum}, got {value}")
+    if above is not None and value <= above:
+        raise ValueError(f"{name} must be greater than {above}, got {value}")
+    return value
+
+
+def check_pair(name, value, minimum):
+    """An int or a pair of ints, each at least minimum -> (a, b)."""
+    if np.ndim(value) == 0:
+        value = check_int(name, value, minimum)
+        return (value, value)
+    pair = tuple(value)
+    if len(pair) != 2:
+        raise ValueError(f"{name} must be one whole number or a pair (along u, along v), got {value!r}")
+    return tuple(check_int(f"{name}[{i}]", v, minimum) for i, v in enumerate(pair))
+
+
+def check_choice(name, value, choices):
+    """value must be one of choices; ValueError listing them otherwise."""
+    if value not in choices:
+        known = ", ".join(repr(c) for c in choices)
+        raise ValueError(f"unknown {name} {value!r}; choose one of {known}")
+    return value
+
+
+def check_uv(uv, n=None):
+    """(N, 2) finite float array; ValueError naming the bad shape or values."""
+    array = np.asarray(uv, dtype=float)
+    if array.ndim != 2 or array.shape[1] != 2:
+        raise ValueError(f"uv must be an (N, 2) array of (u, v) pairs, got shape {array.shape}")
+    if n is not None and len(array) != n:
+        raise ValueError(f"expected {n} (u, v) pairs, got {len(array)}")
+    if not np.all(np.isfinite(array)):
+        raise ValueError("uv contains NaN or infinite values")
+    return array
