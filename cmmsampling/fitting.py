@@ -17,8 +17,8 @@ from .bspline import clamped_uniform_knots, design_matrices, second_difference_m
 from .surface import make_bspline_surface
 
 DEFAULT_DEGREE = 3
-DEFAULT_SMOOTHING = 1e-6
-RIDGE = 1e-9
+DEFAULT_SMOOTHING = 1e-8
+RIDGE = 1e-6
 
 
 def default_pole_count(n_points, degree=DEFAULT_DEGREE):

@@ -1,0 +1,84 @@
+"""Substitute fit and deviation objective: exactness, batching, uniqueness, OCC agreement."""
+import numpy as np
+import pytest
+
+from cmmsampling.deviation import DeviationObjective, EvaluationGrid
+from cmmsampling.fitting import SubstituteSpace, default_pole_count
+from cmmsampling.surface import SurfaceModel, make_bspline_surface
+
+
+def _bicubic_face(poles=(6, 6), seed=1):
+    """A non-rational bicubic face on [0, 1]^2 with clamped uniform knots: it lies in the 6 x 6 space."""
+    rng = np.random.default_rng(seed)
+    x, y = np.meshgrid(np.linspace(0, 50, poles[0]), np.linspace(0, 40, poles[1]), indexing="ij")
+    z = rng.normal(0, 3, x.shape)
+    return make_bspline_surface(np.stack([x, y, z], -1), (3, 3)).toShape(), np.stack([x, y, z], -1)
+
+
+def test_fit_reproduces_a_surface_of_the_space():
+    face, poles = _bicubic_face()
+    model = SurfaceModel.from_face(face)
+    space = SubstituteSpace((3, 3), (6, 6), model.bounds)
+    uv = np.random.default_rng(0).random((81, 2))
+    fitted = space.fit(uv, model.points(uv))
+    assert np.abs(fitted - poles).max() < 1e-5
+    objective = DeviationObjective(model, space, EvaluationGrid(model, 40))
+    assert objective(uv[None])[0] < 1e-5
+
+
+def test_batched_fit_equals_single_fits(reference):
+    model = SurfaceModel.from_face(reference)
+    space = SubstituteSpace((3, 3), (6, 6), model.bounds)
+    uv = np.random.default_rng(5).random((4, 30, 2))
+    batched = space.fit(uv, model.points(uv))
+    for p in range(4):
+        single = space.fit(uv[p], model.points(uv[p]))
+        assert np.allclose(batched[p], single, atol=1e-10)
+
+
+@pytest.mark.parametrize("layout", ["cluster", "coincident", "collinear"])
+def test_degenerate_point_sets_still_have_a_finite_fit(reference, layout):
+    model = SurfaceModel.from_face(reference)
+    space = SubstituteSpace((3, 3), (6, 6), model.bounds)
+    uv = {
+        "cluster": 0.5 + 1e-3 * np.random.default_rng(1).random((20, 2)),
+        "coincident": np.full((20, 2), 0.5),
+        "collinear": np.column_stack([np.linspace(0, 1, 20), np.full(20, 0.3)]),
+    }[layout]
+    poles = space.fit(uv, model.points(uv))
+    assert np.all(np.isfinite(poles)) and np.abs(poles).max() < 1e3
+    if layout != "collinear":
+        assert np.abs(space.evaluate(poles, uv) - model.points(uv)).max() < 1e-4
+
+
+def test_fitted_part_surface_matches_our_evaluation(reference):
+    model = SurfaceModel.from_face(reference)
+    space = SubstituteSpace((3, 3), (7, 5), model.bounds)
+    uv = np.random.default_rng(2).random((60, 2))
+    poles = space.fit(uv, model.points(uv))
+    part = space.to_part(poles)
+    check = np.random.default_rng(3).random((25, 2))
+    ours = space.evaluate(poles, check)
+    occ = np.array([tuple(part.value(u, v)) for u, v in check])
+    assert np.abs(ours - occ).max() < 1e-9 * 100
+    assert (part.NbUPoles, part.NbVPoles, part.UDegree) == (7, 5, 3)
+
+
+def test_objective_field_and_max_agree_with_occ(reference):
+    model = SurfaceModel.from_face(reference)
+    space = SubstituteSpace((3, 3), (6, 6), model.bounds)
+    grid = EvaluationGrid(model, (30, 25))
+    objective = DeviationObjective(model, space, grid)
+    uv = np.random.default_rng(4).random((3, 81, 2))
+    maxima = objective(uv)
+    field, poles = objective.field(uv[1])
+    assert field.max() == pytest.approx(maxima[1], rel=1e-12)
+    part = space.to_part(poles)
+    occ = np.array([(part.value(u, v) - reference.Surface.value(u, v)).Length
+                    for u, v in grid.uv.reshape(-1, 2)]).reshape(grid.size)
+    assert np.abs(occ - field).max() < 1e-9
+
+
+@pytest.mark.parametrize("n, expected", [(25, 4), (49, 5), (81, 6), (144, 8), (400, 13), (4, 4)])
+def test_default_pole_count(n, expected):
+    assert default_pole_count(n) == expected

@@ -1,0 +1,113 @@
+"""SurfaceModel against OpenCASCADE: points, normals, derivatives and curvature."""
+import numpy as np
+import pytest
+from conftest import sample_faces, uv_samples
+
+from cmmsampling.surface import SurfaceModel, reference_poles
+
+FACES = sample_faces()
+
+
+def _scale(model):
+    return max(1.0, float(np.abs(model.poles).max()))
+
+
+@pytest.mark.parametrize("name", sorted(FACES))
+def test_points_match_occ(name):
+    model = SurfaceModel.from_face(FACES[name])
+    uv = uv_samples(model)
+    ours = model.points(uv)
+    occ = np.array([tuple(model.face.Surface.value(u, v)) for u, v in uv])
+    assert np.abs(ours - occ).max() <= 1e-9 * _scale(model)
+    on_face = np.array([tuple(model.face.valueAt(u, v)) for u, v in uv])
+    assert np.abs(ours - on_face).max() <= 1e-9 * _scale(model)
+
+
+@pytest.mark.parametrize("name", sorted(FACES))
+def test_normals_match_occ_face_orientation(name):
+    model = SurfaceModel.from_face(FACES[name])
+    uv = uv_samples(model)
+    ours = model.normals(uv)
+    occ = np.array([tuple(model.face.normalAt(u, v)) for u, v in uv])
+    assert np.abs(ours - occ).max() <= 1e-9
+    assert np.allclose(np.linalg.norm(ours, axis=1), 1.0, atol=1e-12)
+
+
+def test_rational_faces_are_detected():
+    assert SurfaceModel.from_face(FACES["rational_patch"]).rational
+    assert SurfaceModel.from_face(FACES["sphere_converted"]).rational
+    assert not SurfaceModel.from_face(FACES["reference_bspline"]).rational
+
+
+def test_reversed_face_normal_points_out_of_the_box():
+    face = FACES["box_face_reversed"]
+    model = SurfaceModel.from_face(face)
+    assert model.reversed
+    centre = face.CenterOfMass
+    normal = model.normals(uv_samples(model, 1))[0]
+    box_centre = np.array([15.0, 10.0, 5.0])
+    assert np.dot(normal, np.array(tuple(centre)) - box_centre) > 0
+
+
+@pytest.mark.parametrize("name", ["rational_patch", "torus_converted", "reference_bspline"])
+def test_derivatives_match_finite_differences(name):
+    model = SurfaceModel.from_face(FACES[name])
+    u0, u1, v0, v1 = model.bounds
+    unit = 0.1 + 0.8 * np.random.default_rng(4).random((10, 2))
+    uv = np.array([u0, v0]) + unit * np.array([u1 - u0, v1 - v0])
+    d = model.derivatives(uv, 2)
+    h = 1e-5 * np.array([u1 - u0, v1 - v0])
+    for axis, key, key2 in ((0, (1, 0), (2, 0)), (1, (0, 1), (0, 2))):
+        step = np.zeros(2)
+        step[axis] = h[axis]
+        plus, minus = model.derivatives(uv + step, 1), model.derivatives(uv - step, 1)
+        fd = (plus[(0, 0)] - minus[(0, 0)]) / (2 * h[axis])
+        fd2 = (plus[key] - minus[key]) / (2 * h[axis])
+        scale = np.abs(d[key]).max()
+        assert np.abs(fd - d[key]).max() <= 1e-6 * scale
+        assert np.abs(fd2 - d[key2]).max() <= 1e-4 * max(np.abs(d[key2]).max(), scale)
+
+
+def test_curvature_of_sphere_and_cylinder():
+    sphere = SurfaceModel.from_face(FACES["sphere_converted"])
+    u0, u1, v0, v1 = sphere.bounds
+    uv = np.column_stack([np.linspace(u0 + 0.1, u1 - 0.1, 7), np.linspace(v0 + 0.3, v1 - 0.3, 7)])
+    mean, gauss = sphere.curvatures(uv)
+    assert np.allclose(np.abs(mean), 0.1, rtol=1e-9) and np.allclose(gauss, 0.01, rtol=1e-9)
+    cylinder = SurfaceModel.from_face(FACES["cylinder_converted"])
+    mean, gauss = cylinder.curvatures(uv_samples(cylinder))
+    assert np.allclose(np.abs(mean), 0.05, rtol=1e-9) and np.allclose(gauss, 0.0, atol=1e-12)
+
+
+def test_curvature_matches_occ(reference):
+    model = SurfaceModel.from_face(reference)
+    uv = uv_samples(model, 15, seed=2)
+    mean, gauss = model.curvatures(uv)
+    occ_mean = np.array([reference.Surface.curvature(u, v, "Mean") for u, v in uv])
+    occ_gauss = np.array([reference.Surface.curvature(u, v, "Gauss") for u, v in uv])
+    assert np.allclose(np.abs(mean), np.abs(occ_mean), rtol=1e-7, atol=1e-12)
+    assert np.allclose(gauss, occ_gauss, rtol=1e-7, atol=1e-12)
+
+
+def test_reference_face_definition(reference):
+    surface = reference.Surface
+    assert (surface.UDegree, surface.VDegree) == (5, 5)
+    assert (surface.NbUPoles, surface.NbVPoles) == (9, 9)
+    poles = np.array([[tuple(p) for p in row] for row in surface.getPoles()])
+    assert np.allclose(poles, reference_poles())
+    assert poles[8, 8, 0] == pytest.approx(100.0) and poles[3, 2, 1] == pytest.approx(25.0)
+    x, y = 75.0, 25.0
+    z = 12 * np.sin(2.5 * np.pi * x / 100) * np.cos(1.7 * np.pi * y / 100)
+    z += 8 * np.exp(-((x - 70) ** 2 + (y - 30) ** 2) / 300)
+    assert poles[6, 2, 2] == pytest.approx(z, abs=1e-12)
+    assert np.allclose(surface.getWeights(), 1.0)
+    assert reference.ParameterRange == pytest.approx((0.0, 1.0, 0.0, 1.0))
+
+
+def test_non_face_input_is_refused():
+    import Part
+
+    with pytest.raises(TypeError, match="one face"):
+        SurfaceModel.from_face(Part.makeBox(1, 1, 1))
+    with pytest.raises(TypeError, match="Part.Face"):
+        SurfaceModel.from_face("Face1")
