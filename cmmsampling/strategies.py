@@ -200,7 +200,8 @@ def _patch_scores(model, domain, patches, curvature, raster_per_patch=8):
     """Integral of |curvature| over each patch plus a share of its area: (rows, cols).
 
     curvature: "mean" uses |H| (1/mm), "gaussian" uses sqrt|K| (1/mm), so both weigh alike.
-    The area share (20% of the face's average) keeps flat patches from getting no points.
+    The area share (20% of the face's average) keeps flat patches from getting no points; a face
+    without that curvature (a plane, or a cylinder for "gaussian") is weighted by area alone.
     """
     rows, cols = patches
     uv = model.raster((rows * raster_per_patch, cols * raster_per_patch))
@@ -211,7 +212,8 @@ def _patch_scores(model, domain, patches, curvature, raster_per_patch=8):
     bend = np.abs(mean) if curvature == "mean" else np.sqrt(np.abs(gauss))
     bend = np.nan_to_num(bend)
     area = np.where(domain.contains(flat), np.nan_to_num(area), 0.0)
-    weight = bend * area + 0.2 * area * (bend * area).sum() / max(area.sum(), 1e-300)
+    average_bend = (bend * area).sum() / max(area.sum(), 1e-300)
+    weight = bend * area + area * (0.2 * average_bend if average_bend > 0 else 1.0)
     return weight.reshape(rows, raster_per_patch, cols, raster_per_patch).sum(axis=(1, 3))
 
 

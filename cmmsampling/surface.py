@@ -162,6 +162,11 @@ def as_face(shape):
         faces = shape.Faces
         if len(faces) == 1:
             return faces[0]
+        if not faces:
+            raise TypeError(
+                f"expected a face, got a{'n' if shape.ShapeType[0] in 'AEIOU' else ''} "
+                f"{shape.ShapeType} with no faces; select a face of a solid, shell or surface"
+            )
         raise TypeError(
             f"expected one face, got a {shape.ShapeType} with {len(faces)} faces; "
             "pick a single face, e.g. shape.Faces[0]"

@@ -1,0 +1,121 @@
+"""The scripting API: the paper's result on the reference surface, OCC cross-check, bad input."""
+import math
+
+import numpy as np
+import pytest
+from conftest import Part
+
+import cmmsampling
+
+
+@pytest.fixture(scope="module")
+def paper_runs():
+    """Uniform parametric, uniform Cartesian and the paper's PSO (81 points, 25 x 3000) on the reference."""
+    face = cmmsampling.reference_face()
+    return {name: cmmsampling.sample(face, 81, name)
+            for name in ("uniform_parametric", "uniform_cartesian", "pso")}
+
+
+def test_pso_with_the_paper_parameters_beats_uniform(paper_runs):
+    pso = paper_runs["pso"].deviation.maximum
+    assert pso * 1.5 <= paper_runs["uniform_parametric"].deviation.maximum
+    assert pso < paper_runs["uniform_cartesian"].deviation.maximum
+    history = paper_runs["pso"].history
+    assert len(history) == 3000 and np.all(np.diff(history) <= 0)
+    assert history[-1] == pytest.approx(pso, rel=1e-12)
+    assert paper_runs["pso"].evaluations == 25 * 3001
+
+
+def test_uniform_figures_match_the_prototype(paper_runs):
+    assert paper_runs["uniform_parametric"].deviation.maximum == pytest.approx(1.574, abs=1e-3)
+    assert paper_runs["uniform_cartesian"].deviation.maximum == pytest.approx(1.053, abs=1e-3)
+
+
+@pytest.mark.parametrize("name", ["uniform_parametric", "uniform_cartesian", "pso"])
+def test_occ_cross_check(paper_runs, name):
+    d = paper_runs[name].deviation
+    assert d.occ_maximum == pytest.approx(d.maximum, abs=1e-9)
+    assert 0 < d.occ_distance_maximum <= d.maximum + 1e-9
+
+
+def test_result_contents(paper_runs):
+    r = paper_runs["pso"]
+    assert r.n == 81 and r.labels[0] == "P1" and r.labels[-1] == "P81"
+    s = r.substitute
+    assert isinstance(s, Part.BSplineSurface) and (s.NbUPoles, s.NbVPoles, s.UDegree) == (6, 6, 3)
+    assert r.settings["population"] == 25 and r.settings["iterations"] == 3000
+    assert r.settings["fit_poles"] == [6, 6] and r.settings["grid"] == [60, 60]
+    d = r.deviation
+    assert d.mean <= d.rms <= d.maximum and math.isclose(d.rms ** 2, d.mean ** 2 + d.std ** 2, rel_tol=1e-9)
+    assert np.nanmax(d.field) == pytest.approx(d.maximum)
+    row = r.point_table()[0]
+    assert row[0] == "P1" and len(row) == 9
+    summary = r.summary()
+    assert summary["max_mm"] == d.maximum and summary["strategy"] == "pso"
+
+
+def test_evaluate_reproduces_a_sampled_result(paper_runs):
+    again = cmmsampling.evaluate(cmmsampling.reference_face(), paper_runs["pso"].uv, occ_check=False)
+    assert again.deviation.maximum == pytest.approx(paper_runs["pso"].deviation.maximum, rel=1e-12)
+
+
+def test_progress_is_reported_and_can_cancel(reference):
+    seen = []
+    result = cmmsampling.sample(reference, 25, "pso", iterations=50, occ_check=False,
+                                progress=lambda k, best: seen.append((k, best)) or k >= 10)
+    assert result.cancelled and len(seen) == 10 and len(result.history) == 10
+    assert seen[-1][1] == pytest.approx(result.deviation.maximum)
+
+
+def test_pso_never_worse_than_the_uniform_layouts(reference):
+    result = cmmsampling.sample(reference, 49, "pso", iterations=2, occ_check=False)
+    for name in ("uniform_parametric", "uniform_cartesian"):
+        uniform = cmmsampling.sample(reference, 49, name, occ_check=False)
+        assert result.deviation.maximum <= uniform.deviation.maximum + 1e-12
+
+
+def _pso(**kwargs):
+    """Arguments of a short PSO run, with the given ones replaced."""
+    return {"n": 25, "strategy": "pso", "iterations": 2, **kwargs}
+
+
+BAD = [
+    (_pso(n=3), ValueError, "n must be at least 4"),
+    (_pso(n=81.5), TypeError, "n must be a whole number"),
+    (_pso(n="81"), TypeError, "n must be a whole number"),
+    (_pso(iterations=0), ValueError, "iterations must be at least 1"),
+    (_pso(population=1), ValueError, "population must be at least 2"),
+    (_pso(c1=float("nan")), ValueError, "c1 must be a finite number"),
+    (_pso(c2=-1.0), ValueError, "c2 must be at least 0"),
+    (_pso(w1=0.2, w2=0.5), ValueError, "inertia must decrease"),
+    (_pso(w1=1.5), ValueError, "w1 must be at most 1.2"),
+    (_pso(grid=1), ValueError, "grid must be at least 2"),
+    (_pso(grid=(60, 60, 3)), ValueError, "grid must be one whole number or a pair"),
+    (_pso(fit_poles=3), ValueError, "fit_poles along u \\(3\\) must be at least fit_degree \\+ 1 \\(4\\)"),
+    (_pso(smoothing=0), ValueError, "smoothing must be greater than 0"),
+    ({"strategy": "spiral"}, ValueError, "unknown strategy 'spiral'; choose one of .*'pso'"),
+    ({"strategy": "halton", "iterations": 5}, TypeError, "strategy 'halton' does not take iterations"),
+    (_pso(swarm=5), TypeError, "does not take swarm; it takes population"),
+]
+
+
+@pytest.mark.parametrize("kwargs, error, message", BAD)
+def test_bad_input_gets_a_clear_message(reference, kwargs, error, message):
+    with pytest.raises(error, match=message):
+        cmmsampling.sample(reference, **kwargs)
+
+
+def test_bad_faces_get_a_clear_message():
+    with pytest.raises(TypeError, match="expected one face, got a Solid with 6 faces"):
+        cmmsampling.sample(Part.makeBox(1, 2, 3), 25, "uniform_parametric")
+    with pytest.raises(TypeError, match="expected a face, got an Edge with no faces"):
+        cmmsampling.sample(Part.makeLine((0, 0, 0), (1, 0, 0)), 25, "uniform_parametric")
+    with pytest.raises(TypeError, match="expected a Part.Face, got NoneType"):
+        cmmsampling.sample(None, 25, "uniform_parametric")
+    from cmmsampling.surface import make_bspline_surface
+
+    x, y = np.meshgrid(np.linspace(0, 10, 4), np.linspace(0, 10, 4), indexing="ij")
+    flat_line = np.stack([x + y, np.zeros_like(x), np.zeros_like(x)], -1)
+    collapsed = make_bspline_surface(flat_line, (3, 3)).toShape()
+    with pytest.raises(ValueError, match="no usable area"):
+        cmmsampling.sample(collapsed, 25, "uniform_parametric")

@@ -1,0 +1,76 @@
+"""Every strategy: exactly N points, on the face (OCC distance), inside the domain, unit normals."""
+import numpy as np
+import pytest
+from conftest import Part, rational_patch_face
+
+import cmmsampling
+from cmmsampling.strategies import allocate, grid_shape, thin_evenly
+
+BLIND = [name for name, s in cmmsampling.STRATEGIES.items() if not s.optimiser]
+FACES = {
+    "reference": cmmsampling.reference_face,
+    "rational": rational_patch_face,
+    "cylinder": lambda: Part.makeCylinder(10, 20).Faces[0],
+}
+
+
+@pytest.mark.parametrize("face_name", sorted(FACES))
+@pytest.mark.parametrize("strategy", BLIND)
+@pytest.mark.parametrize("n", [4, 25, 37])
+def test_blind_strategy_gives_n_points_on_the_face(face_name, strategy, n):
+    face = FACES[face_name]()
+    result = cmmsampling.sample(face, n, strategy, occ_check=False)
+    assert result.uv.shape == (n, 2) and result.points.shape == (n, 3)
+    u0, u1, v0, v1 = result.model.bounds
+    assert np.all((result.uv[:, 0] >= u0) & (result.uv[:, 0] <= u1))
+    assert np.all((result.uv[:, 1] >= v0) & (result.uv[:, 1] <= v1))
+    distances = [face.distToShape(Part.Vertex(*p))[0] for p in result.points]
+    assert max(distances) < 1e-6
+    assert np.allclose(np.linalg.norm(result.normals, axis=1), 1.0)
+    occ_normals = np.array([tuple(result.model.face.normalAt(u, v)) for u, v in result.uv])
+    assert np.abs(occ_normals - result.normals).max() < 1e-9
+    assert len(np.unique(np.round(result.uv, 12), axis=0)) == n
+
+
+def test_uniform_parametric_is_the_paper_grid(reference):
+    result = cmmsampling.sample(reference, 81, "uniform_parametric", occ_check=False)
+    expected = np.stack(np.meshgrid(np.linspace(0, 1, 9), np.linspace(0, 1, 9), indexing="ij"), -1)
+    assert np.allclose(result.uv, expected.reshape(-1, 2))
+
+
+def test_uniform_cartesian_is_a_regular_xy_grid_with_heights_from_the_face(reference):
+    result = cmmsampling.sample(reference, 81, "uniform_cartesian", occ_check=False)
+    xs = np.linspace(0, 100, 9)
+    expected = np.stack(np.meshgrid(xs, xs, indexing="ij"), -1).reshape(-1, 2)
+    assert np.abs(result.points[:, :2] - expected).max() < 1e-7
+    heights = [reference.Surface.value(u, v).z for u, v in result.uv]
+    assert np.allclose(result.points[:, 2], heights)
+
+
+def test_random_strategies_follow_the_seed(reference):
+    a = cmmsampling.sample(reference, 30, "random", seed=1, occ_check=False)
+    b = cmmsampling.sample(reference, 30, "random", seed=1, occ_check=False)
+    c = cmmsampling.sample(reference, 30, "random", seed=2, occ_check=False)
+    assert np.array_equal(a.uv, b.uv) and not np.array_equal(a.uv, c.uv)
+
+
+def test_curvature_strategy_puts_more_points_where_the_face_bends():
+    """On a face flat on one half and wavy on the other, most points go to the wavy half."""
+    from cmmsampling.surface import make_bspline_surface
+
+    x, y = np.meshgrid(np.linspace(0, 100, 12), np.linspace(0, 100, 12), indexing="ij")
+    z = np.where(x > 50, 6 * np.sin(x / 4) * np.cos(y / 5), 0.0)
+    face = make_bspline_surface(np.stack([x, y, z], -1), (3, 3)).toShape()
+    for strategy in ("curvature_mean", "curvature_gaussian"):
+        result = cmmsampling.sample(face, 64, strategy, occ_check=False)
+        wavy = np.count_nonzero(result.points[:, 0] > 55)
+        assert wavy > 0.6 * 64, strategy
+
+
+def test_helpers():
+    assert grid_shape(81) == (9, 9)
+    rows, cols = grid_shape(50, 2.0)
+    assert rows * cols >= 50 and cols > rows
+    assert len(thin_evenly(np.zeros((10, 2)), 7)) == 7
+    counts = allocate(np.array([1.0, 1.0, 2.0]), 9)
+    assert counts.sum() == 9 and counts[2] >= counts[0]
