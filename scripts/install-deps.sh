@@ -1,0 +1,17 @@
+#!/usr/bin/env bash
+# Install what cmmsampling needs on Debian 12, only what is missing: FreeCAD 0.20 (Part/OCC,
+# numpy, scipy), Xvfb for the GUI tests, pytest, hypothesis, matplotlib, threadpoolctl.
+set -euo pipefail
+PACKAGES=(freecad xvfb xauth python3-pytest python3-matplotlib python3-hypothesis python3-threadpoolctl)
+missing=()
+for p in "${PACKAGES[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -eq 0 ]; then
+  exit 0
+fi
+echo "Installing: ${missing[*]}" >&2
+SUDO=""
+[ "$(id -u)" -eq 0 ] || SUDO="sudo"
+$SUDO apt-get update -qq
+DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
