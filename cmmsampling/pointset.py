@@ -1,0 +1,46 @@
+"""PointSet: labelled probe points with approach vectors, the unit every exporter and reader uses."""
+from dataclasses import dataclass, field
+
+import numpy as np
+
+
+@dataclass
+class PointSet:
+    """N probe points in one coordinate frame.
+
+    labels: N strings (P1..PN by default); points: (N, 3) mm; normals: (N, 3) unit vectors out of the
+    material (the probe travels along -normal); uv: (N, 2) face parameters or None when unknown;
+    deviation: (N,) mm, the substitute's distance from the CAD face at each point, or None;
+    metadata: JSON-friendly facts about where the points came from (source face, strategy, n,
+    parameters, deviation figures in mm).
+    """
+
+    labels: list
+    points: np.ndarray
+    normals: np.ndarray
+    uv: np.ndarray = None
+    deviation: np.ndarray = None
+    metadata: dict = field(default_factory=dict)
+
+    def __len__(self):
+        return len(self.labels)
+
+    @classmethod
+    def from_result(cls, result, source=""):
+        """The probe points of a SamplingResult; source names the face (e.g. 'Body:Face3')."""
+        substitute = result.space.evaluate(result.poles, result.uv)
+        d = result.deviation
+        metadata = {
+            "source": source,
+            **result.settings,
+            "max_mm": d.maximum, "mean_mm": d.mean, "rms_mm": d.rms, "std_mm": d.std,
+            "occ_max_mm": d.occ_maximum,
+        }
+        return cls(
+            labels=result.labels,
+            points=np.array(result.points, dtype=float),
+            normals=np.array(result.normals, dtype=float),
+            uv=np.array(result.uv, dtype=float),
+            deviation=np.linalg.norm(substitute - result.points, axis=1),
+            metadata=metadata,
+        )
