@@ -10,18 +10,34 @@ Scripting API (FreeCAD Python console, ``freecadcmd`` or ``/usr/bin/python3``)::
     result.substitute                              # Part.BSplineSurface
     sorted(cmmsampling.STRATEGIES)
 
+The names below are imported on first use, so that the numeric modules (bspline, nurbs, fitting,
+deviation, pso) load without FreeCAD, e.g. in a worker process.
+
 The method follows Zahmati & Amirabadi, Modares Mechanical Engineering 16(8), 55-64, 2016.
 """
-from .freecad_env import import_part
+import importlib
 
-import_part()
+_API = {
+    "STRATEGIES": "sampling",
+    "sample": "sampling",
+    "evaluate": "sampling",
+    "SamplingResult": "result",
+    "SurfaceModel": "surface",
+    "reference_face": "surface",
+    "default_pole_count": "fitting",
+}
 
-from .fitting import default_pole_count  # noqa: E402
-from .result import SamplingResult  # noqa: E402
-from .sampling import STRATEGIES, evaluate, sample  # noqa: E402
-from .surface import SurfaceModel, reference_face  # noqa: E402
+__all__ = sorted(_API)
 
-__all__ = [
-    "STRATEGIES", "SamplingResult", "SurfaceModel", "default_pole_count", "evaluate",
-    "reference_face", "sample",
-]
+
+def __getattr__(name):
+    """Import the public API lazily (PEP 562)."""
+    if name in _API:
+        value = getattr(importlib.import_module(f".{_API[name]}", __name__), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'cmmsampling' has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_API))

@@ -61,6 +61,78 @@ def _basis_table(t, degree, x, span):
     return ndu
 
 
+def basis_values_many(channels):
+    """Non-zero basis values of several knot vectors at once, in one Cox-de Boor pass.
+
+    channels: list of (t, k, x): full knot vector t, degree k and parameters x: (N_c,).
+    Each degree step runs once for all basis indices r and all channels not yet at their degree,
+    so the Python work does not grow with the number of channels.
+    Returns a list of (span (N_c,), values (k + 1, N_c)) in the order of channels; row r of values
+    belongs to basis function span - k + r.
+    """
+    order = sorted(range(len(channels)), key=lambda c: -channels[c][1])
+    spans, knots, xs, shifted = {}, [], [], []
+    shift = 0
+    for c in order:
+        t, k, x = channels[c]
+        x = np.asarray(x, dtype=float).ravel()
+        spans[c] = find_spans(t, k, x)
+        knots.append(t)
+        xs.append(x)
+        shifted.append(spans[c] + shift)
+        shift += len(t)
+    knots, x, span = np.concatenate(knots), np.concatenate(xs), np.concatenate(shifted)
+    ends = np.cumsum([len(v) for v in xs])
+    starts = ends - [len(v) for v in xs]
+    degrees = [channels[c][1] for c in order]
+    offsets = np.arange(1, degrees[0] + 1)[:, None]
+    left = x - knots[np.clip(span + 1 - offsets, 0, len(knots) - 1)]
+    right = knots[np.clip(span + offsets, 0, len(knots) - 1)] - x
+    values = np.ones((1, x.shape[0]))
+    results = {}
+    for j in range(1, degrees[0] + 2):
+        for i, k in enumerate(degrees):
+            if k == j - 1:
+                results[order[i]] = values[:, starts[i]:ends[i]]
+        if j > degrees[0]:
+            break
+        active = ends[sum(k >= j for k in degrees) - 1]
+        to_right = right[:j, :active]
+        to_left = left[j - 1::-1, :active]
+        temp = values[:, :active] / (to_right + to_left)
+        values = np.empty((j + 1, active))
+        values[:j] = to_right * temp
+        values[j] = 0.0
+        values[1:] += to_left * temp
+    return [(spans[c], results[c]) for c in range(len(channels))]
+
+
+def dense_from_local(span, values, degree, n):
+    """Dense (N, n) collocation matrix from local values: (k + 1, N) at span: (N,)."""
+    count = span.shape[0]
+    out = np.zeros((count, n))
+    flat = (np.arange(count) * n + span - degree)[None, :] + np.arange(degree + 1)[:, None]
+    out.ravel()[flat.ravel()] = values.ravel()
+    return out
+
+
+def tensor_rows_from_local(local_u, local_v, degrees, poles):
+    """Rows kron(N(u_i), N(v_i)): (N, n_u * n_v) from local values along u and v.
+
+    local_u, local_v: (span, values) pairs as :func:`basis_values_many` returns them;
+    degrees: (k_u, k_v); poles: (n_u, n_v). Column a * n_v + b belongs to basis pair (a, b).
+    """
+    (span_u, along_u), (span_v, along_v) = local_u, local_v
+    (ku, kv), (n_u, n_v) = degrees, poles
+    count = span_u.shape[0]
+    products = along_u[:, None, :] * along_v[None, :, :]
+    first = np.arange(count) * (n_u * n_v) + (span_u - ku) * n_v + span_v - kv
+    offsets = (np.arange(ku + 1)[:, None] * n_v + np.arange(kv + 1)[None, :])[:, :, None]
+    rows = np.zeros((count, n_u * n_v))
+    rows.ravel()[(first + offsets).ravel()] = products.ravel()
+    return rows
+
+
 def _derivatives_from_table(ndu, degree, n_derivatives):
     """Derivatives of the non-zero basis functions from the A2.3 table.
 
@@ -106,11 +178,11 @@ def basis_derivatives(t, degree, x, n_derivatives=0):
     ders[d, r, i] is the d-th derivative of basis function span[i] - k + r at x[i].
     """
     x = np.asarray(x, dtype=float).ravel()
-    span = find_spans(t, degree, x)
-    ndu = _basis_table(t, degree, x, span)
     if n_derivatives == 0:
-        return span, ndu[:, degree][None]
-    return span, _derivatives_from_table(ndu, degree, n_derivatives)
+        span, values = basis_values_many([(t, degree, x)])[0]
+        return span, values[None]
+    span = find_spans(t, degree, x)
+    return span, _derivatives_from_table(_basis_table(t, degree, x, span), degree, n_derivatives)
 
 
 def design_matrices(t, degree, x, n_derivatives=0):
@@ -120,14 +192,8 @@ def design_matrices(t, degree, x, n_derivatives=0):
     Returns (n_derivatives + 1, N, n): entry [d, i, j] is the d-th derivative of basis j at x[i].
     """
     x = np.asarray(x, dtype=float).ravel()
-    n = len(t) - degree - 1
     span, ders = basis_derivatives(t, degree, x, n_derivatives)
-    out = np.zeros((n_derivatives + 1, x.shape[0], n))
-    rows = np.arange(x.shape[0])[:, None]
-    cols = span[:, None] - degree + np.arange(degree + 1)
-    for d in range(n_derivatives + 1):
-        out[d, rows, cols] = ders[d].T
-    return out
+    return np.stack([dense_from_local(span, d, degree, len(t) - degree - 1) for d in ders])
 
 
 def second_difference_matrix(n):

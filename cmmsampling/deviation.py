@@ -2,19 +2,16 @@
 
 The deviation at a grid node (u, v) is the distance |S(u, v) - F(u, v)| in mm between the
 substitute surface S and the CAD face F at the same parameters. It bounds the closest-point
-distance from S(u, v) to F from above; the OCC cross-check reports both.
+distance from S(u, v) to F from above; the OCC cross-check (cmmsampling.crosscheck) reports both.
+Pure numpy: the objective can be shipped to a worker process.
 """
 from dataclasses import dataclass
 
 import numpy as np
 
-from .freecad_env import import_part
-
-Part = import_part()
-import FreeCAD  # noqa: E402  (importable once import_part() has set the path)
+from .bspline import basis_values_many, design_matrices
 
 DEFAULT_GRID = 60
-OCC_DISTANCE_NODES = 50
 
 
 class EvaluationGrid:
@@ -44,43 +41,56 @@ def _grid_size(size):
 class DeviationObjective:
     """Maximum deviation of the substitute fit, for whole swarms of point sets at once.
 
-    model: SurfaceModel (the CAD truth); space: SubstituteSpace; grid: EvaluationGrid.
+    model: the CAD truth (a SurfaceModel or NurbsPatch; only its NurbsPatch is kept, so the
+    objective pickles without FreeCAD objects); space: SubstituteSpace; grid: EvaluationGrid.
     Calling it with uv: (P, N, 2) returns (P,) maximum deviations in mm.
     """
 
     def __init__(self, model, space, grid):
-        self.model = model
+        self.model = model.patch()
         self.space = space
         self.grid = grid
         u = grid.uv[:, 0, 0]
         v = grid.uv[0, :, 1]
-        self._grid_u = space.bases(np.column_stack([u, np.full_like(u, v[0])]))[0][0]
-        self._grid_v_t = space.bases(np.column_stack([np.full_like(v, u[0]), v]))[1][0].T.copy()
-        self._cad = np.ascontiguousarray(grid.cad.transpose(0, 2, 1))
-        self._mask = grid.mask
+        self._grid_u = design_matrices(space.uknots, space.degrees[0], u)[0]
+        self._grid_v_t = design_matrices(space.vknots, space.degrees[1], v)[0].T.copy()
+        self._cad = np.ascontiguousarray(grid.cad.transpose(2, 0, 1))
+        self._inside = None if grid.mask.all() else grid.mask.ravel()
         self.evaluations = 0
 
     def fit(self, uv):
-        """Substitute poles for point sets at uv: (..., N, 2) -> (..., n_u, n_v, 3)."""
-        return self.space.fit(uv, self.model.points(uv))
+        """Substitute poles for point sets at uv: (..., N, 2) -> (..., n_u, n_v, 3).
+
+        The CAD points and the fit's collocation rows come from one basis evaluation pass.
+        """
+        uv = np.asarray(uv, dtype=float)
+        flat = uv.reshape(-1, 2)
+        cad_u, cad_v, fit_u, fit_v = basis_values_many(
+            self.model.basis_channels(flat) + self.space.basis_channels(flat))
+        points = self.model.points_from_local(cad_u, cad_v).reshape(uv.shape[:-1] + (3,))
+        rows = self.space.rows_from_local(fit_u, fit_v).reshape(uv.shape[:-1] + (self.space.size,))
+        return self.space.solve(rows, points)
 
     def squared_field(self, poles):
         """Squared deviation on the grid for poles (P, n_u, n_v, 3) -> (P, g_u, g_v) mm^2."""
-        n_u, n_v = self.space.poles
         count = poles.shape[0]
-        by_coord = np.ascontiguousarray(poles.transpose(0, 1, 3, 2)).reshape(count, n_u, 3 * n_v)
-        along_u = np.matmul(self._grid_u, by_coord).reshape(count, -1, n_v)
-        surface = np.matmul(along_u, self._grid_v_t).reshape((count,) + self._cad.shape)
+        by_coord = np.ascontiguousarray(poles.transpose(0, 3, 1, 2))
+        surface = np.matmul(np.matmul(self._grid_u, by_coord), self._grid_v_t)
         surface -= self._cad
         np.square(surface, out=surface)
-        return surface.sum(axis=2)
+        squared = surface[:, 0]
+        squared += surface[:, 1]
+        squared += surface[:, 2]
+        return squared.reshape(count, *self._cad.shape[1:])
 
     def __call__(self, uv):
         """Maximum deviation of each point set's substitute: uv (P, N, 2) -> (P,) mm."""
         uv = np.asarray(uv, dtype=float)
-        squared = self.squared_field(self.fit(uv))
+        squared = self.squared_field(self.fit(uv)).reshape(uv.shape[0], -1)
+        if self._inside is not None:
+            squared = squared[:, self._inside]
         self.evaluations += uv.shape[0]
-        return np.sqrt(squared[:, self._mask].max(axis=1))
+        return np.sqrt(squared.max(axis=1))
 
     def field(self, uv):
         """Deviation field and poles of one point set: uv (N, 2) -> ((g_u, g_v) mm, (n_u, n_v, 3))."""
@@ -96,7 +106,7 @@ class DeviationStats:
     field: (g_u, g_v) deviation per node (NaN outside the face); grid_uv: (g_u, g_v, 2).
     occ_maximum: the same maximum with both surfaces evaluated by OpenCASCADE.
     occ_distance_maximum: OCC closest-point distance from the substitute to the CAD face,
-    the largest over the grid nodes of largest deviation (at most OCC_DISTANCE_NODES of them).
+    the largest over the grid nodes of largest deviation (see cmmsampling.crosscheck).
     """
 
     maximum: float
@@ -121,18 +131,3 @@ class DeviationStats:
             field=shown,
             grid_uv=grid.uv,
         )
-
-
-def occ_cross_check(stats, substitute, face):
-    """Fill stats.occ_maximum and stats.occ_distance_maximum using OpenCASCADE only.
-
-    substitute: the fitted Part.BSplineSurface; face: the CAD Part.Face (its (u, v) are the grid's).
-    """
-    nodes = stats.grid_uv[~np.isnan(stats.field)]
-    cad = face.Surface
-    gaps = np.array([(substitute.value(u, v) - cad.value(u, v)).Length for u, v in nodes])
-    stats.occ_maximum = float(gaps.max())
-    worst = nodes[np.argsort(gaps)[-OCC_DISTANCE_NODES:]]
-    distances = [face.distToShape(Part.Vertex(substitute.value(u, v)))[0] for u, v in worst]
-    stats.occ_distance_maximum = float(max(distances))
-    return stats

@@ -13,8 +13,10 @@ depend on N. Many point sets are fitted in one call.
 """
 import numpy as np
 
-from .bspline import clamped_uniform_knots, design_matrices, second_difference_matrix
-from .surface import make_bspline_surface
+from .bspline import (
+    basis_values_many, clamped_uniform_knots, design_matrices, second_difference_matrix,
+    tensor_rows_from_local,
+)
 
 DEFAULT_DEGREE = 3
 DEFAULT_SMOOTHING = 1e-8
@@ -56,15 +58,22 @@ class SubstituteSpace:
         Returns (bu, bv): (n_derivatives + 1, M, n_u) and (n_derivatives + 1, M, n_v), M = uv.size / 2.
         """
         uv = np.asarray(uv, dtype=float).reshape(-1, 2)
-        bu = design_matrices(self.uknots, self.degrees[0], uv[:, 0], n_derivatives)
-        bv = design_matrices(self.vknots, self.degrees[1], uv[:, 1], n_derivatives)
-        return bu, bv
+        return (design_matrices(self.uknots, self.degrees[0], uv[:, 0], n_derivatives),
+                design_matrices(self.vknots, self.degrees[1], uv[:, 1], n_derivatives))
+
+    def basis_channels(self, uv):
+        """The (knots, degree, parameters) along u and v for uv: (N, 2), for basis_values_many."""
+        return [(self.uknots, self.degrees[0], uv[:, 0]), (self.vknots, self.degrees[1], uv[:, 1])]
+
+    def rows_from_local(self, local_u, local_v):
+        """Rows kron(N(u), N(v)): (N, n_u * n_v) from local basis values along u and v."""
+        return tensor_rows_from_local(local_u, local_v, self.degrees, self.poles)
 
     def collocation(self, uv):
         """Rows kron(N(u), N(v)) of the fit: uv (..., N, 2) -> (..., N, n_u * n_v)."""
         uv = np.asarray(uv, dtype=float)
-        bu, bv = self.bases(uv)
-        rows = bu[0][:, :, None] * bv[0][:, None, :]
+        flat = uv.reshape(-1, 2)
+        rows = self.rows_from_local(*basis_values_many(self.basis_channels(flat)))
         return rows.reshape(uv.shape[:-1] + (self.size,))
 
     def normal_matrix(self, rows):
@@ -73,18 +82,23 @@ class SubstituteSpace:
         gram = np.matmul(np.swapaxes(rows, -1, -2), rows)
         return gram + (self.smoothing * n_points / self.size) * self.regulariser
 
+    def solve(self, rows, points):
+        """Least-squares poles from collocation rows (..., N, M) and points (..., N, 3) mm.
+
+        Returns poles (..., n_u, n_v, 3) mm.
+        """
+        points = np.asarray(points, dtype=float)
+        rhs = np.matmul(np.swapaxes(rows, -1, -2), points)
+        poles = np.linalg.solve(self.normal_matrix(rows), rhs)
+        return poles.reshape(points.shape[:-2] + self.poles + (3,))
+
     def fit(self, uv, points):
         """Least-squares poles for each point set.
 
         uv: (P, N, 2) or (N, 2) parameters; points: matching (..., N, 3) mm.
         Returns poles (..., n_u, n_v, 3) mm.
         """
-        rows = self.collocation(uv)
-        points = np.asarray(points, dtype=float)
-        lhs = self.normal_matrix(rows)
-        rhs = np.matmul(np.swapaxes(rows, -1, -2), points)
-        poles = np.linalg.solve(lhs, rhs)
-        return poles.reshape(points.shape[:-2] + self.poles + (3,))
+        return self.solve(self.collocation(uv), points)
 
     def evaluate(self, poles, uv):
         """Substitute points at uv: poles (n_u, n_v, 3), uv (..., 2) -> (..., 3) mm."""
@@ -92,10 +106,6 @@ class SubstituteSpace:
         bu, bv = self.bases(uv)
         along_u = (bu[0] @ np.asarray(poles).reshape(self.poles[0], -1)).reshape(-1, self.poles[1], 3)
         return np.einsum("njc,nj->nc", along_u, bv[0]).reshape(uv.shape[:-1] + (3,))
-
-    def to_part(self, poles):
-        """The fitted surface as a Part.BSplineSurface over the face's parameter range."""
-        return make_bspline_surface(poles, self.degrees, uknots=self.uknots, vknots=self.vknots)
 
 
 def _regulariser(poles):

@@ -4,6 +4,7 @@ import numpy as np
 from .deviation import DeviationObjective, EvaluationGrid
 from .domain import FaceDomain
 from .fitting import SubstituteSpace, default_pole_count
+from .parallel import TwoProcessObjective
 
 
 class SamplingProblem:
@@ -11,13 +12,15 @@ class SamplingProblem:
 
     model: SurfaceModel; n: points wanted; fit_degree, fit_poles: (k_u, k_v), (n_u, n_v) of the
     substitute; smoothing: its second-difference weight; grid: (g_u, g_v) evaluation raster;
-    seed: for the random parts of the strategies.
+    seed: for the random parts of the strategies; workers: processes an optimiser's swarm is
+    spread over (1 or 2).
     """
 
-    def __init__(self, model, n, fit_degree, fit_poles, smoothing, grid, seed):
+    def __init__(self, model, n, fit_degree, fit_poles, smoothing, grid, seed, workers=1):
         self.model = model
         self.n = n
         self.seed = seed
+        self.workers = workers
         self.domain = FaceDomain(model.bounds)
         self.space = SubstituteSpace(fit_degree, fit_poles, model.bounds, smoothing)
         self.grid = EvaluationGrid(model, grid)
@@ -29,6 +32,12 @@ class SamplingProblem:
         if self._objective is None:
             self._objective = DeviationObjective(self.model, self.space, self.grid)
         return self._objective
+
+    def swarm_objective(self):
+        """The objective for whole swarms: split over two processes when workers == 2."""
+        if self.workers == 2:
+            return TwoProcessObjective(self.objective)
+        return self.objective
 
     def project(self, uv):
         """Map uv: (..., 2) onto the face's domain."""

@@ -3,6 +3,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .surface import substitute_surface
+
 
 @dataclass
 class SamplingResult:
@@ -43,7 +45,7 @@ class SamplingResult:
     @property
     def substitute(self):
         """The fitted substitute surface as a Part.BSplineSurface."""
-        return self.space.to_part(self.poles)
+        return substitute_surface(self.space, self.poles)
 
     @property
     def labels(self):

@@ -1,11 +1,13 @@
 """The scripting entry points: :func:`sample` runs a strategy, :func:`evaluate` judges any point set."""
+import os
 import time
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from . import strategies as blind
-from .deviation import DEFAULT_GRID, DeviationStats, occ_cross_check
+from .crosscheck import occ_cross_check
+from .deviation import DEFAULT_GRID, DeviationStats
 from .fitting import DEFAULT_DEGREE, DEFAULT_SMOOTHING
 from .problem import SamplingProblem, resolve_fit_poles
 from .pso import SwarmSettings, particle_swarm
@@ -48,7 +50,7 @@ def run_pso(problem, progress, population, iterations, w1, w2, c1, c2, velocity_
     if start_from_uniform:
         seeds = [blind.uniform_parametric(problem).uv, blind.uniform_cartesian(problem).uv]
     swarm = particle_swarm(
-        problem.objective, problem.domain.lower, problem.domain.upper, problem.n, settings,
+        problem.swarm_objective(), problem.domain.lower, problem.domain.upper, problem.n, settings,
         seeds=seeds, project=problem.project, progress=progress,
     )
     return StrategyOutcome(swarm.best, swarm.history, swarm.evaluations, swarm.cancelled)
@@ -114,7 +116,7 @@ def strategy_options(strategy, options):
 
 
 def make_problem(face, n, fit_degree=DEFAULT_DEGREE, fit_poles=None, smoothing=DEFAULT_SMOOTHING,
-                 grid=DEFAULT_GRID, seed=0):
+                 grid=DEFAULT_GRID, seed=0, workers=None):
     """Validate the common inputs and build a SamplingProblem (see :func:`sample`)."""
     n = check_int("n", n, MIN_POINTS)
     degree = check_pair("fit_degree", fit_degree, 1)
@@ -127,9 +129,20 @@ def make_problem(face, n, fit_degree=DEFAULT_DEGREE, fit_poles=None, smoothing=D
     smoothing = check_real("smoothing", smoothing, above=0.0)
     grid = check_pair("grid", grid, 2)
     seed = check_int("seed", seed, 0)
+    workers = _check_workers(workers)
     model = SurfaceModel.from_face(face)
     _check_area(model.face)
-    return SamplingProblem(model, n, degree, poles, smoothing, grid, seed)
+    return SamplingProblem(model, n, degree, poles, smoothing, grid, seed, workers)
+
+
+def _check_workers(workers):
+    """1 or 2 processes for the optimisers; None picks 2 where the machine has 2 or more cores."""
+    if workers is None:
+        return 2 if (os.cpu_count() or 1) >= 2 else 1
+    workers = check_int("workers", workers, 1)
+    if workers > 2:
+        raise ValueError(f"workers must be 1 or 2, got {workers}")
+    return workers
 
 
 def _check_area(face):
@@ -144,7 +157,7 @@ def _check_area(face):
 
 def sample(face, n=81, strategy="pso", *, fit_degree=DEFAULT_DEGREE, fit_poles=None,
            smoothing=DEFAULT_SMOOTHING, grid=DEFAULT_GRID, seed=0, progress=None, occ_check=True,
-           **options):
+           workers=None, **options):
     """Place n probe points on a face with a strategy and judge them.
 
     face: a Part.Face (or a Shape holding one face), e.g. ``cmmsampling.reference_face()``;
@@ -154,13 +167,15 @@ def sample(face, n=81, strategy="pso", *, fit_degree=DEFAULT_DEGREE, fit_poles=N
     of its second-difference smoothing; grid: evaluation raster (int or pair, default 60 x 60);
     seed: for random parts; progress: callable (iteration, best_max_mm) for the optimisers, returning
     True to stop (the best so far is kept); occ_check: cross-check the final maximum with OCC;
+    workers: processes the optimisers spread each swarm over (1 or 2; None = 2 on a multi-core
+    machine; the results are identical);
     options: the strategy's own (see ``STRATEGIES[name].options``; PSO: population, iterations, w1,
     w2, c1, c2, velocity_limit, start_from_uniform).
     Returns a SamplingResult.
     """
     check_choice("strategy", strategy, list(STRATEGIES))
     options = strategy_options(strategy, options)
-    problem = make_problem(face, n, fit_degree, fit_poles, smoothing, grid, seed)
+    problem = make_problem(face, n, fit_degree, fit_poles, smoothing, grid, seed, workers)
     start = time.perf_counter()
     with blas_threads(1):
         outcome = STRATEGIES[strategy].run(problem, progress, **options)
@@ -190,6 +205,7 @@ def _common_settings(problem):
         "smoothing": problem.space.smoothing,
         "grid": list(problem.grid.size),
         "seed": problem.seed,
+        "workers": problem.workers,
     }
 
 

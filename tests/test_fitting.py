@@ -4,7 +4,7 @@ import pytest
 
 from cmmsampling.deviation import DeviationObjective, EvaluationGrid
 from cmmsampling.fitting import DEFAULT_SMOOTHING, SubstituteSpace, default_pole_count
-from cmmsampling.surface import SurfaceModel, make_bspline_surface
+from cmmsampling.surface import SurfaceModel, make_bspline_surface, substitute_surface
 
 
 def _bicubic_face(poles=(6, 6), seed=1):
@@ -59,7 +59,7 @@ def test_fitted_part_surface_matches_our_evaluation(reference):
     space = SubstituteSpace((3, 3), (7, 5), model.bounds)
     uv = np.random.default_rng(2).random((60, 2))
     poles = space.fit(uv, model.points(uv))
-    part = space.to_part(poles)
+    part = substitute_surface(space, poles)
     check = np.random.default_rng(3).random((25, 2))
     ours = space.evaluate(poles, check)
     occ = np.array([tuple(part.value(u, v)) for u, v in check])
@@ -76,7 +76,7 @@ def test_objective_field_and_max_agree_with_occ(reference):
     maxima = objective(uv)
     field, poles = objective.field(uv[1])
     assert field.max() == pytest.approx(maxima[1], rel=1e-12)
-    part = space.to_part(poles)
+    part = substitute_surface(space, poles)
     occ = np.array([(part.value(u, v) - reference.Surface.value(u, v)).Length
                     for u, v in grid.uv.reshape(-1, 2)]).reshape(grid.size)
     assert np.abs(occ - field).max() < 1e-9

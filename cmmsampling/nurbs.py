@@ -1,0 +1,145 @@
+"""NurbsPatch: a tensor-product NURBS surface as numpy arrays, evaluated for many (u, v) at once.
+
+Pure numpy: no FreeCAD import, so worker processes can load it quickly. Units are mm; parameters
+``uv`` lie in ``bounds`` (the face's parameter range).
+"""
+import numpy as np
+
+from .bspline import basis_values_many, dense_from_local, design_matrices
+
+
+class NurbsPatch:
+    """Poles, weights and knots of one surface, with vectorised evaluation.
+
+    degrees: (k_u, k_v); poles: (n_u, n_v, 3) mm; weights: (n_u, n_v); uknots, vknots: full knot
+    vectors; bounds: (u0, u1, v0, v1) parameter range used; reversed: flip normals (a Reversed
+    face), so that they point out of the material. rational: weights not all equal.
+    """
+
+    def __init__(self, degrees, poles, weights, uknots, vknots, bounds, reversed_face=False):
+        self.degrees = tuple(int(d) for d in degrees)
+        self.poles = np.asarray(poles, dtype=float)
+        self.weights = np.asarray(weights, dtype=float)
+        self.uknots = np.asarray(uknots, dtype=float)
+        self.vknots = np.asarray(vknots, dtype=float)
+        self.bounds = tuple(float(b) for b in bounds)
+        self.reversed = bool(reversed_face)
+        self.rational = not np.allclose(self.weights, self.weights.flat[0], rtol=0, atol=1e-14)
+        self._plain = self.poles.reshape(self.poles.shape[0], -1).copy()
+        self._homogeneous = np.concatenate(
+            [self.poles * self.weights[..., None], self.weights[..., None]], axis=2
+        )
+
+    def patch(self):
+        """This surface as a plain NurbsPatch (what a worker process needs)."""
+        return NurbsPatch(self.degrees, self.poles, self.weights, self.uknots, self.vknots,
+                          self.bounds, self.reversed)
+
+    @property
+    def span(self):
+        """(du, dv): the lengths of the parameter range."""
+        u0, u1, v0, v1 = self.bounds
+        return (u1 - u0, v1 - v0)
+
+    def _homogeneous_derivatives(self, uv, order):
+        """Derivatives of the homogeneous surface A(u, v) = sum w P N, w(u, v) = sum w N.
+
+        uv: (N, 2). Returns dict {(a, b): (N, 4)} for all a + b <= order.
+        """
+        uv = np.asarray(uv, dtype=float).reshape(-1, 2)
+        bu = design_matrices(self.uknots, self.degrees[0], uv[:, 0], order)
+        bv = design_matrices(self.vknots, self.degrees[1], uv[:, 1], order)
+        n_u, n_v = self.weights.shape
+        flat = self._homogeneous.reshape(n_u, n_v * 4)
+        out = {}
+        for a in range(order + 1):
+            along_u = (bu[a] @ flat).reshape(-1, n_v, 4)
+            for b in range(order + 1 - a):
+                out[(a, b)] = np.einsum("njc,nj->nc", along_u, bv[b])
+        return out
+
+    def derivatives(self, uv, order=1):
+        """Surface point and partial derivatives up to ``order`` (0, 1 or 2), rational-exact.
+
+        uv: (N, 2) in the parameter range. Returns dict {(a, b): (N, 3)} with the a-th u- and
+        b-th v-derivative, in mm per parameter unit.
+        """
+        h = self._homogeneous_derivatives(uv, order)
+        w = {key: value[:, 3:] for key, value in h.items()}
+        a = {key: value[:, :3] for key, value in h.items()}
+        s = {(0, 0): a[(0, 0)] / w[(0, 0)]}
+        if order >= 1:
+            s[(1, 0)] = (a[(1, 0)] - w[(1, 0)] * s[(0, 0)]) / w[(0, 0)]
+            s[(0, 1)] = (a[(0, 1)] - w[(0, 1)] * s[(0, 0)]) / w[(0, 0)]
+        if order >= 2:
+            base = s[(0, 0)]
+            s[(2, 0)] = (a[(2, 0)] - 2 * w[(1, 0)] * s[(1, 0)] - w[(2, 0)] * base) / w[(0, 0)]
+            s[(0, 2)] = (a[(0, 2)] - 2 * w[(0, 1)] * s[(0, 1)] - w[(0, 2)] * base) / w[(0, 0)]
+            s[(1, 1)] = (
+                a[(1, 1)] - w[(1, 0)] * s[(0, 1)] - w[(0, 1)] * s[(1, 0)] - w[(1, 1)] * base
+            ) / w[(0, 0)]
+        return s
+
+    def basis_channels(self, uv):
+        """The (knots, degree, parameters) along u and v for uv: (N, 2), for basis_values_many."""
+        return [(self.uknots, self.degrees[0], uv[:, 0]), (self.vknots, self.degrees[1], uv[:, 1])]
+
+    def points_from_local(self, local_u, local_v):
+        """Surface points (N, 3) mm from the local basis values along u and v at N parameters."""
+        n_u, n_v = self.weights.shape
+        bu = dense_from_local(*local_u, self.degrees[0], n_u)
+        bv = dense_from_local(*local_v, self.degrees[1], n_v)
+        if self.rational:
+            along_u = (bu @ self._homogeneous.reshape(n_u, -1)).reshape(-1, n_v, 4)
+            h = np.matmul(bv[:, None, :], along_u)[:, 0]
+            return h[:, :3] / h[:, 3:]
+        along_u = (bu @ self._plain).reshape(-1, n_v, 3)
+        return np.matmul(bv[:, None, :], along_u)[:, 0]
+
+    def points(self, uv):
+        """Surface points, uv: (..., 2) -> (..., 3) mm."""
+        uv = np.asarray(uv, dtype=float)
+        flat = uv.reshape(-1, 2)
+        xyz = self.points_from_local(*basis_values_many(self.basis_channels(flat)))
+        return xyz.reshape(uv.shape[:-1] + (3,))
+
+    def normals(self, uv):
+        """Unit normals pointing out of the material (face orientation respected).
+
+        uv: (..., 2) -> (..., 3). Where the surface is degenerate (zero cross product) the
+        normal is NaN.
+        """
+        uv = np.asarray(uv, dtype=float)
+        d = self.derivatives(uv.reshape(-1, 2), 1)
+        return unit_normals(d[(1, 0)], d[(0, 1)], self.reversed).reshape(uv.shape[:-1] + (3,))
+
+    def curvatures(self, uv):
+        """Mean and Gaussian curvature at uv: (N, 2) -> (H, K), each (N,), in 1/mm and 1/mm^2.
+
+        The sign of H follows the outward normal.
+        """
+        d = self.derivatives(uv, 2)
+        su, sv = d[(1, 0)], d[(0, 1)]
+        n = unit_normals(su, sv, self.reversed)
+        e, f, g = (su * su).sum(1), (su * sv).sum(1), (sv * sv).sum(1)
+        l_, m_, n_ = (d[(2, 0)] * n).sum(1), (d[(1, 1)] * n).sum(1), (d[(0, 2)] * n).sum(1)
+        det = e * g - f * f
+        mean = (e * n_ - 2 * f * m_ + g * l_) / (2 * det)
+        gauss = (l_ * n_ - m_ * m_) / det
+        return mean, gauss
+
+    def raster(self, size):
+        """A regular raster of the parameter range: size (n_u, n_v) -> uv (n_u, n_v, 2)."""
+        u0, u1, v0, v1 = self.bounds
+        u = np.linspace(u0, u1, size[0])
+        v = np.linspace(v0, v1, size[1])
+        return np.stack(np.meshgrid(u, v, indexing="ij"), axis=-1)
+
+
+
+def unit_normals(su, sv, reversed_face):
+    """Normalised su x sv, flipped for a Reversed face. su, sv: (N, 3) -> (N, 3)."""
+    n = np.cross(su, sv)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        n = n / np.linalg.norm(n, axis=1, keepdims=True)
+    return -n if reversed_face else n
