@@ -21,6 +21,7 @@ _API = {
     "STRATEGIES": "sampling",
     "sample": "sampling",
     "evaluate": "sampling",
+    "lower_bound": "sampling",
     "SamplingResult": "result",
     "SurfaceModel": "surface",
     "reference_face": "surface",

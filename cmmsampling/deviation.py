@@ -83,6 +83,20 @@ class DeviationObjective:
         squared += surface[:, 2]
         return squared.reshape(count, *self._cad.shape[1:])
 
+    def grid_error(self, poles):
+        """Error S - F on the grid for one substitute, poles (n_u * n_v, 3) or (n_u, n_v, 3).
+
+        Returns (error (3, g_u, g_v) mm, distance (g_u, g_v) mm, inside (g_u, g_v) bool).
+        """
+        by_coord = np.asarray(poles).reshape(self.space.poles + (3,)).transpose(2, 0, 1)
+        error = self._grid_u @ by_coord @ self._grid_v_t - self._cad
+        return error, np.sqrt((error ** 2).sum(axis=0)), self.grid.mask
+
+    def grid_transpose(self, field):
+        """G^T applied to a grid field (3, g_u, g_v): the (n_u * n_v, 3) pole-space result."""
+        pulled = self._grid_u.T @ field @ self._grid_v_t.T
+        return pulled.transpose(1, 2, 0).reshape(-1, 3)
+
     def __call__(self, uv):
         """Maximum deviation of each point set's substitute: uv (P, N, 2) -> (P,) mm."""
         uv = np.asarray(uv, dtype=float)

@@ -1,10 +1,14 @@
 """SamplingProblem: everything a strategy needs to place N points on one face."""
 import numpy as np
 
+from .bound import minimax_bound
 from .deviation import DeviationObjective, EvaluationGrid
 from .domain import FaceDomain
 from .fitting import SubstituteSpace, default_pole_count
 from .parallel import TwoProcessObjective
+
+
+CHECK_DENSITY = 3
 
 
 class SamplingProblem:
@@ -25,6 +29,8 @@ class SamplingProblem:
         self.space = SubstituteSpace(fit_degree, fit_poles, model.bounds, smoothing)
         self.grid = EvaluationGrid(model, grid)
         self._objective = None
+        self._check = None
+        self._bounds = None
 
     @property
     def objective(self):
@@ -32,6 +38,27 @@ class SamplingProblem:
         if self._objective is None:
             self._objective = DeviationObjective(self.model, self.space, self.grid)
         return self._objective
+
+    @property
+    def check_objective(self):
+        """The objective on the check grid, CHECK_DENSITY times denser per direction (built on first use).
+
+        Optimising on a grid partly fits its nodes; every result is also judged here.
+        """
+        if self._check is None:
+            size = tuple(CHECK_DENSITY * g for g in self.grid.size)
+            self._check = DeviationObjective(self.model, self.space, EvaluationGrid(self.model, size))
+        return self._check
+
+    def bounds(self):
+        """Certified lower bounds (MinimaxBound, mm) on the grid and on the check grid, computed once.
+
+        Returns {"grid": MinimaxBound, "check": MinimaxBound}.
+        """
+        if self._bounds is None:
+            self._bounds = {"grid": minimax_bound(self.space, self.grid),
+                            "check": minimax_bound(self.space, self.check_objective.grid)}
+        return self._bounds
 
     def swarm_objective(self):
         """The objective for whole swarms: split over two processes when workers == 2."""

@@ -15,7 +15,9 @@ class SamplingResult:
     poles: (n_u, n_v, 3) mm, the substitute's poles; space: its SubstituteSpace;
     deviation: DeviationStats on the evaluation grid; history: best maximum deviation (mm) per
     iteration for the optimisers, else None; evaluations: fitness evaluations;
-    timings: seconds per phase; settings: every parameter of the run; cancelled: stopped early.
+    timings: seconds per phase; settings: every parameter of the run; cancelled: stopped early;
+    check: DeviationStats on the check grid (3x denser than the grid optimised on);
+    problem: the SamplingProblem it was computed for (grids, objective, bounds).
     """
 
     strategy: str
@@ -31,6 +33,8 @@ class SamplingResult:
     timings: dict = field(default_factory=dict)
     settings: dict = field(default_factory=dict)
     cancelled: bool = False
+    check: object = None
+    problem: object = None
 
     @property
     def n(self):
@@ -46,6 +50,21 @@ class SamplingResult:
     def substitute(self):
         """The fitted substitute surface as a Part.BSplineSurface."""
         return substitute_surface(self.space, self.poles)
+
+    def bounds(self):
+        """Certified lower bounds of the best maximum deviation any N points could reach, mm.
+
+        {"grid": MinimaxBound on the evaluation grid, "check": on the check grid}; computed on first
+        call for this face, N, fit and grid (about a second or more), then cached.
+        """
+        return self.problem.bounds()
+
+    def multiple_of_bound(self, check=False):
+        """Maximum deviation as a multiple of the certified lower bound (>= 1), on the grid or the
+        check grid."""
+        bound = self.bounds()["check" if check else "grid"].lower
+        maximum = (self.check if check else self.deviation).maximum
+        return maximum / bound if bound > 0 else float("inf")
 
     @property
     def labels(self):
@@ -64,6 +83,7 @@ class SamplingResult:
             "std_mm": d.std,
             "occ_max_mm": d.occ_maximum,
             "occ_distance_max_mm": d.occ_distance_maximum,
+            "check_max_mm": self.check.maximum if self.check is not None else float("nan"),
             "time_s": self.timings.get("total_s", float("nan")),
             "evaluations": self.evaluations,
             "cancelled": self.cancelled,

@@ -10,6 +10,7 @@ from .crosscheck import occ_cross_check
 from .deviation import DEFAULT_GRID, DeviationStats
 from .fitting import DEFAULT_DEGREE, DEFAULT_SMOOTHING
 from .problem import SamplingProblem, resolve_fit_poles
+from .optimal import default_min_spacing, descend
 from .pso import SwarmSettings, particle_swarm
 from .result import SamplingResult
 from .strategies import StrategyOutcome
@@ -56,6 +57,43 @@ def run_pso(problem, progress, population, iterations, w1, w2, c1, c2, velocity_
     return StrategyOutcome(swarm.best, swarm.history, swarm.evaluations, swarm.cancelled)
 
 
+def run_optimal(problem, progress, min_spacing, start, time_limit, max_evaluations):
+    """Near-optimal points by gradient descent on a smoothed maximum (see cmmsampling.optimal).
+
+    min_spacing: mm between points (None: a fifth of the even spacing sqrt(area / N));
+    start: a strategy name or an (N, 2) uv array; time_limit: s; max_evaluations: surrogate
+    evaluations (None: no limit).
+    """
+    if min_spacing is None:
+        min_spacing = default_min_spacing(problem.model.face.Area, problem.n)
+    if isinstance(start, str):
+        start_uv = STRATEGIES[start].run(problem, None, **STRATEGIES[start].options).uv
+    else:
+        start_uv = check_uv(start, problem.n)
+    result = descend(problem.objective, problem.project(start_uv), problem.domain.lower,
+                     problem.domain.upper, min_spacing, time_limit, max_evaluations, progress)
+    return StrategyOutcome(result.uv, result.history, result.evaluations, result.cancelled,
+                           details={"min_spacing": min_spacing, "closest": result.closest})
+
+
+def _check_optimal_options(options):
+    """Validate the options of the 'optimal' strategy (merged with defaults)."""
+    clean = dict(options)
+    if options["min_spacing"] is not None:
+        clean["min_spacing"] = check_real("min_spacing", options["min_spacing"], 0.0)
+    if options["time_limit"] is not None:
+        clean["time_limit"] = check_real("time_limit", options["time_limit"], above=0.0)
+    if options["max_evaluations"] is not None:
+        clean["max_evaluations"] = check_int("max_evaluations", options["max_evaluations"], 1)
+    if isinstance(options["start"], str):
+        starts = [name for name in STRATEGIES if name != "optimal"]
+        check_choice("start", options["start"], starts)
+    return clean
+
+
+OPTIMAL_DEFAULTS = {"min_spacing": None, "start": "uniform_parametric", "time_limit": None,
+                    "max_evaluations": None}
+
 PSO_DEFAULTS = {
     "population": 25, "iterations": 3000, "w1": 0.5, "w2": 0.0, "c1": 2.0, "c2": 2.0,
     "velocity_limit": 0.1, "start_from_uniform": True,
@@ -77,6 +115,9 @@ STRATEGIES = {
                  "more points on patches of high Gaussian curvature"),
         Strategy("pso", run_pso, "the paper's particle swarm optimisation of the maximum deviation",
                  PSO_DEFAULTS, optimiser=True),
+        Strategy("optimal", run_optimal,
+                 "gradient descent on a smoothed maximum deviation, close to the certified bound",
+                 OPTIMAL_DEFAULTS, optimiser=True),
     )
 }
 
@@ -97,7 +138,7 @@ def _check_pso_options(options):
     return clean
 
 
-OPTION_CHECKS = {"pso": _check_pso_options}
+OPTION_CHECKS = {"pso": _check_pso_options, "optimal": _check_optimal_options}
 
 
 def strategy_options(strategy, options):
@@ -180,8 +221,27 @@ def sample(face, n=81, strategy="pso", *, fit_degree=DEFAULT_DEGREE, fit_poles=N
     with blas_threads(1):
         outcome = STRATEGIES[strategy].run(problem, progress, **options)
     strategy_s = time.perf_counter() - start
-    settings = {"strategy": strategy, "n": problem.n, **_common_settings(problem), **options}
+    settings = {"strategy": strategy, "n": problem.n, **_common_settings(problem),
+                **_json_friendly({**options, **outcome.details})}
     return _judge(problem, outcome, strategy, settings, strategy_s, occ_check)
+
+
+def _json_friendly(options):
+    """Options with arrays (e.g. a start layout) replaced by lists, for settings and documents."""
+    return {k: (np.asarray(v).tolist() if isinstance(v, np.ndarray) else v) for k, v in options.items()}
+
+
+def lower_bound(face, n=81, *, fit_degree=DEFAULT_DEGREE, fit_poles=None, smoothing=DEFAULT_SMOOTHING,
+                grid=DEFAULT_GRID, check=False):
+    """Certified lower bound of the maximum deviation any n points can reach on this face.
+
+    The substitute space (fit_degree, fit_poles from n) and grid as in :func:`sample`; check=True
+    uses the check grid (3x denser). Returns a MinimaxBound: ``lower`` (the certificate, mm),
+    ``upper`` (a surface of the space that reaches it within ``gap``), ``converged``.
+    """
+    problem = make_problem(face, n, fit_degree, fit_poles, smoothing, grid)
+    with blas_threads(1):
+        return problem.bounds()["check" if check else "grid"]
 
 
 def evaluate(face, uv, *, strategy="given", fit_degree=DEFAULT_DEGREE, fit_poles=None,
@@ -215,13 +275,15 @@ def _judge(problem, outcome, strategy, settings, strategy_s, occ_check):
     uv = np.asarray(outcome.uv, dtype=float)
     with blas_threads(1):
         field_mm, poles = problem.objective.field(uv)
+        check_mm = problem.check_objective.field(uv)[0]
     stats = DeviationStats.from_field(field_mm, problem.grid)
+    check = DeviationStats.from_field(check_mm, problem.check_objective.grid)
     evaluation_s = time.perf_counter() - start
     result = SamplingResult(
         strategy=strategy, uv=uv, points=problem.model.points(uv), normals=problem.model.normals(uv),
         poles=poles, space=problem.space, deviation=stats, model=problem.model,
         history=outcome.history, evaluations=outcome.evaluations, settings=settings,
-        cancelled=outcome.cancelled,
+        cancelled=outcome.cancelled, check=check, problem=problem,
     )
     occ_s = 0.0
     if occ_check:

@@ -1,0 +1,156 @@
+"""Near-optimal probe points: gradient descent on a smooth surrogate of the maximum deviation.
+
+For a point set uv: (N, 2) the substitute's poles C solve (B^T B + lam R) C = B^T Q with Q the face's
+points at uv. The surrogate is the log-sum-exp  f = log(sum_g exp(tau d_g)) / tau  of the grid
+deviations d_g = |S(g) - F(g)|, which tends to max_g d_g as tau grows. Its gradient with respect
+to every (u_i, v_i) follows from one adjoint solve A Z = G^T (s E / d) (s: the softmax weights):
+
+    df/du_i = r_i . (dB_i/du Z) + y_i . (dQ_i/du - dB_i/du C),    r = Q - B C,  y = B Z,
+
+and likewise for v. L-BFGS-B minimises it over the (u, v) box in stages of rising tau
+(tau = kappa / current maximum, kappa from 10 to 3000), each stage started at the best point set so
+far. Every evaluation is judged by the true maximum; the best point set that keeps the points at
+least ``min_spacing`` mm apart is returned. A quadratic penalty on closer pairs steers the descent.
+"""
+import time
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import minimize
+from scipy.special import logsumexp, softmax
+
+KAPPAS = (10.0, 30.0, 100.0, 300.0, 1000.0, 3000.0)
+STAGE_ITERATIONS = 400
+SPACING_FRACTION = 0.2
+
+
+class Stop(Exception):
+    """Raised inside the objective to end the descent (budget spent or cancelled)."""
+
+
+def default_min_spacing(area, n):
+    """A fifth of the spacing of N points spread evenly over a face of ``area`` mm^2: mm."""
+    return SPACING_FRACTION * float(np.sqrt(area / n))
+
+
+@dataclass
+class Surrogate:
+    """Value, gradient and true maximum of the smoothed objective at one point set."""
+
+    value: float
+    gradient: np.ndarray
+    maximum: float
+    closest: float
+
+
+def surrogate(objective, uv, tau, min_spacing=0.0, penalty=0.0):
+    """Log-sum-exp surrogate of the maximum deviation and its exact gradient.
+
+    objective: DeviationObjective; uv: (N, 2); tau: 1/mm; min_spacing: mm; penalty: weight (mm per
+    mm^2 of violation) of sum over pairs closer than min_spacing of (min_spacing - distance)^2.
+    Returns a Surrogate with gradient (N, 2) in mm per parameter unit.
+    """
+    model, space = objective.model, objective.space
+    d = model.derivatives(uv, 1)
+    q, q_u, q_v = d[(0, 0)], d[(1, 0)], d[(0, 1)]
+    bu, bv = space.bases(uv, 1)
+    rows = (bu[0][:, :, None] * bv[0][:, None, :]).reshape(len(uv), -1)
+    rows_u = (bu[1][:, :, None] * bv[0][:, None, :]).reshape(len(uv), -1)
+    rows_v = (bu[0][:, :, None] * bv[1][:, None, :]).reshape(len(uv), -1)
+    lhs = space.normal_matrix(rows)
+    poles = np.linalg.solve(lhs, rows.T @ q)
+    error, distance, inside = objective.grid_error(poles)
+    scaled = tau * distance[inside]
+    value = logsumexp(scaled) / tau
+    weights = np.zeros_like(distance)
+    weights[inside] = softmax(scaled)
+    adjoint = np.linalg.solve(lhs, objective.grid_transpose(error * (weights / np.maximum(distance, 1e-300))))
+    residual = q - rows @ poles
+    back = rows @ adjoint
+    gradient = np.column_stack([
+        ((rows_u @ adjoint) * residual).sum(1) + (back * (q_u - rows_u @ poles)).sum(1),
+        ((rows_v @ adjoint) * residual).sum(1) + (back * (q_v - rows_v @ poles)).sum(1),
+    ])
+    spacing_value, spacing_gradient, closest = _spacing_penalty(q, min_spacing, penalty)
+    gradient += np.column_stack([(spacing_gradient * q_u).sum(1), (spacing_gradient * q_v).sum(1)])
+    return Surrogate(value + spacing_value, gradient, float(distance[inside].max()), closest)
+
+
+def _spacing_penalty(points, min_spacing, weight):
+    """Penalty on pairs closer than min_spacing: (value, d value / d points (N, 3), closest mm).
+
+    Coincident points have no direction to be pushed apart; they add no gradient (and, being
+    closer than min_spacing, are never accepted as a result)."""
+    gaps = points[:, None, :] - points[None, :, :]
+    distance = np.sqrt((gaps ** 2).sum(-1))
+    np.fill_diagonal(distance, np.inf)
+    closest = float(distance.min()) if len(points) > 1 else np.inf
+    if weight <= 0 or min_spacing <= 0:
+        return 0.0, np.zeros_like(points), closest
+    short = np.maximum(min_spacing - distance, 0.0)
+    value = 0.5 * weight * float((short ** 2).sum())
+    pulling = (short > 0) & (distance > 0)
+    factor = np.zeros_like(distance)
+    factor[pulling] = -2.0 * weight * short[pulling] / distance[pulling]
+    return value, (factor[:, :, None] * gaps).sum(1), closest
+
+
+@dataclass
+class DescentResult:
+    """uv: (N, 2) best feasible point set; maximum: its maximum deviation (mm); history: best
+    maximum after each evaluation; evaluations; cancelled; closest: smallest point distance (mm)."""
+
+    uv: np.ndarray
+    maximum: float
+    history: np.ndarray
+    evaluations: int
+    cancelled: bool
+    closest: float
+
+
+def descend(objective, start, lower, upper, min_spacing=0.0, time_limit=None, max_evaluations=None,
+            progress=None):
+    """Minimise the maximum deviation from the point set ``start`` (N, 2) inside the box.
+
+    lower, upper: (2,) parameter box; min_spacing: mm between points; time_limit: s;
+    max_evaluations: surrogate evaluations; progress: callable (evaluation, best_max_mm) returning
+    True to stop. Returns a DescentResult (the best feasible point set seen; the start if none
+    better).
+    """
+    lower, upper = np.asarray(lower, float), np.asarray(upper, float)
+    scale = upper - lower
+    start = np.asarray(start, dtype=float)
+    state = {"uv": start.copy(), "max": np.inf, "closest": np.inf, "count": 0, "history": []}
+    began = time.perf_counter()
+    first = surrogate(objective, start, 1.0, min_spacing, 0.0)
+    if first.closest >= min_spacing:
+        state.update(uv=start.copy(), max=first.maximum, closest=first.closest)
+    penalty = 100.0 * first.maximum / max(min_spacing, 1e-12) ** 2
+
+    def fun(x, tau):
+        uv = lower + x.reshape(-1, 2) * scale
+        s = surrogate(objective, uv, tau, min_spacing, penalty)
+        state["count"] += 1
+        if s.maximum < state["max"] and s.closest >= min_spacing:
+            state.update(uv=uv.copy(), max=s.maximum, closest=s.closest)
+        state["history"].append(state["max"])
+        stopped = progress is not None and progress(state["count"], state["max"])
+        out_of_budget = (max_evaluations is not None and state["count"] >= max_evaluations) or (
+            time_limit is not None and time.perf_counter() - began >= time_limit)
+        if stopped or out_of_budget:
+            state["cancelled"] = bool(stopped)
+            raise Stop
+        return s.value, (s.gradient * scale).ravel()
+
+    cancelled = False
+    for kappa in KAPPAS:
+        tau = kappa / max(state["max"] if np.isfinite(state["max"]) else first.maximum, 1e-12)
+        try:
+            minimize(fun, ((state["uv"] - lower) / scale).ravel(), args=(tau,), jac=True,
+                     method="L-BFGS-B", bounds=[(0.0, 1.0)] * start.size,
+                     options={"maxiter": STAGE_ITERATIONS, "ftol": 1e-15, "gtol": 1e-12})
+        except Stop:
+            cancelled = state.get("cancelled", False)
+            break
+    return DescentResult(state["uv"], state["max"], np.array(state["history"]), state["count"],
+                         cancelled, state["closest"])
