@@ -26,6 +26,14 @@ _API = {
     "SurfaceModel": "surface",
     "reference_face": "surface",
     "default_pole_count": "fitting",
+    "export": "exporting",
+    "ExportError": "exporting",
+    "measured_deviation": "exporting",
+    "sanitise_labels": "exporting",
+    "read_points": "pointfiles",
+    "PointSet": "pointset",
+    "short_path": "probe_path",
+    "add_to_document": "document",
 }
 
 __all__ = sorted(_API)

@@ -1,39 +1,17 @@
-"""Test set-up: the checkout on sys.path, FreeCAD importable, shared geometry fixtures."""
+"""Test set-up: the checkout on sys.path, FreeCAD importable, shared fixtures.
+
+Shared helpers live in tests/geometry.py (a unique module name: tests/gui has a conftest too).
+"""
 import os
 import sys
 
-import numpy as np
 import pytest
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-if ROOT not in sys.path:
-    sys.path.insert(0, ROOT)
-
-from cmmsampling.freecad_env import import_part  # noqa: E402
-
-Part = import_part()
-import FreeCAD  # noqa: E402
-
-TESTDATA = os.path.join(os.path.dirname(ROOT), "shared", "testdata")
-
-
-def rational_patch_face(seed=3):
-    """A rational bicubic NURBS patch (5 x 4 poles, weights 0.5..2) as a Part.Face."""
-    from cmmsampling.surface import make_bspline_surface
-
-    rng = np.random.default_rng(seed)
-    x, y = np.meshgrid(np.linspace(0, 40, 5), np.linspace(0, 30, 4), indexing="ij")
-    z = 5 * np.sin(x / 13) * np.cos(y / 11) + rng.normal(0, 1, x.shape)
-    weights = rng.uniform(0.5, 2.0, x.shape)
-    surface = make_bspline_surface(np.stack([x, y, z], -1), (3, 3), weights=weights)
-    return surface.toShape()
-
-
-def uv_samples(model, count=40, seed=0):
-    """Random (count, 2) parameters inside the model's parameter range."""
-    u0, u1, v0, v1 = model.bounds
-    unit = np.random.default_rng(seed).random((count, 2))
-    return np.column_stack([u0 + unit[:, 0] * (u1 - u0), v0 + unit[:, 1] * (v1 - v0)])
+TESTS = os.path.dirname(os.path.abspath(__file__))
+for folder in (ROOT, TESTS):
+    if folder not in sys.path:
+        sys.path.insert(0, folder)
 
 
 @pytest.fixture(scope="session")
@@ -41,18 +19,3 @@ def reference():
     import cmmsampling
 
     return cmmsampling.reference_face()
-
-
-def sample_faces():
-    """Named faces covering non-rational, rational, converted, reversed and periodic cases."""
-    import cmmsampling
-
-    box = Part.makeBox(30, 20, 10)
-    return {
-        "reference_bspline": cmmsampling.reference_face(),
-        "rational_patch": rational_patch_face(),
-        "cylinder_converted": Part.makeCylinder(10, 20).Faces[0],
-        "torus_converted": Part.makeTorus(20, 5).Faces[0],
-        "sphere_converted": Part.makeSphere(10).Faces[0],
-        "box_face_reversed": [f for f in box.Faces if f.Orientation == "Reversed"][0],
-    }

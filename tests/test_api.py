@@ -3,7 +3,7 @@ import math
 
 import numpy as np
 import pytest
-from conftest import Part
+from geometry import Part
 
 import cmmsampling
 

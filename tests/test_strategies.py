@@ -1,7 +1,7 @@
 """Every strategy: exactly N points, on the face (OCC distance), inside the domain, unit normals."""
 import numpy as np
 import pytest
-from conftest import Part, rational_patch_face
+from geometry import Part, rational_patch_face
 
 import cmmsampling
 from cmmsampling.strategies import allocate, grid_shape, thin_evenly

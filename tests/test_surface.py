@@ -1,7 +1,7 @@
 """SurfaceModel against OpenCASCADE: points, normals, derivatives and curvature."""
 import numpy as np
 import pytest
-from conftest import sample_faces, uv_samples
+from geometry import sample_faces, uv_samples
 
 from cmmsampling.surface import SurfaceModel, reference_poles
 

@@ -1,0 +1,182 @@
+"""A grammar checker for the DMIS subset cmmsampling writes: ``check(text) -> [error, ...]``.
+
+Physical lines: at most 80 characters of printable ASCII; ``$$`` starts a comment line; a line
+ending in ``$`` goes on in the next one. Statements, in this order::
+
+    DMISMN/'name',NN.N                        first
+    UNITS/MM,ANGDEC   MODE/PROG,MAN   SNSET/(APPRCH|RETRCT|SEARCH),d
+    F(label)=FEAT/POINT,CART,x,y,z,i,j,k      label new, after UNITS
+    MEAS/POINT,F(label),n                     label defined, not inside another MEAS
+    PTMEAS/CART,x,y,z,i,j,k                   only inside MEAS, n of them
+    ENDMES                                    closes MEAS
+    ENDFIL                                    last
+
+Numbers are fixed notation (-12.345), counts whole numbers, labels 1-64 characters of
+[A-Za-z0-9_.-], (i, j, k) unit vectors to 1e-6.
+"""
+import re
+
+LINE_LIMIT = 80
+NUMBER = r"[+-]?\d+\.\d+"
+LABEL = r"[A-Za-z0-9_.-]{1,64}"
+VECTOR_TOLERANCE = 1e-6
+
+SIMPLE = {
+    "DMISMN": re.compile(rf"DMISMN/'[ -&(-~]*',\d\d\.\d\Z"),
+    "UNITS": re.compile(r"UNITS/MM,ANGDEC\Z"),
+    "MODE": re.compile(r"MODE/PROG,MAN\Z"),
+    "SNSET": re.compile(rf"SNSET/(APPRCH|RETRCT|SEARCH),{NUMBER}\Z"),
+    "ENDMES": re.compile(r"ENDMES\Z"),
+    "ENDFIL": re.compile(r"ENDFIL\Z"),
+}
+FEATURE = re.compile(r"F\(([^()]*)\)=FEAT/POINT,CART,(.*)\Z")
+MEASURE = re.compile(r"MEAS/POINT,F\(([^()]*)\),(.*)\Z")
+POINT = re.compile(r"PTMEAS/CART,(.*)\Z")
+
+
+def check(text):
+    """Errors (str, each naming its line) of DMIS text against the subset; [] when it conforms."""
+    errors = [f"line {n}: {e}" for n, line in enumerate(text.split("\n"), 1) for e in line_errors(line)]
+    statements, continued = statements_of(text)
+    if continued:
+        errors.append("the file ends inside a continued statement")
+    if not statements:
+        return errors + ["no statements"]
+    if statements[0][0] != 1 or not statements[0][1].startswith("DMISMN/"):
+        errors.append("line 1 must be the DMISMN statement")
+    if statements[-1][1] != "ENDFIL":
+        errors.append(f"line {statements[-1][0]}: the last statement must be ENDFIL")
+    state = ProgramState()
+    for number, statement in statements:
+        errors += [f"line {number}: {e}" for e in state.take(statement)]
+    if state.measuring:
+        errors.append(f"MEAS of F({state.measuring}) has no ENDMES")
+    return errors
+
+
+def line_errors(line):
+    """Errors of one physical line: length and characters."""
+    errors = []
+    if len(line) > LINE_LIMIT:
+        errors.append(f"{len(line)} characters, more than {LINE_LIMIT}")
+    if re.search(r"[^ -~]", line):
+        errors.append("characters other than printable ASCII")
+    return errors
+
+
+def statements_of(text):
+    """([(first line number, statement)], whether the text ends inside a continued statement)."""
+    statements, pending, first = [], "", None
+    for number, line in enumerate(text.split("\n"), 1):
+        if line.startswith("$$") or not line.strip():
+            continue
+        first = first or number
+        if line.endswith("$"):
+            pending += line[:-1]
+            continue
+        statements.append((first, pending + line))
+        pending, first = "", None
+    return statements, bool(pending)
+
+
+class ProgramState:
+    """What the statements so far have defined: units, feature labels, an open MEAS."""
+
+    def __init__(self):
+        self.units = False
+        self.features = set()
+        self.measuring = None
+        self.expected = 0
+        self.points = 0
+        self.ended = False
+
+    def take(self, statement):
+        """Errors of the next statement, given the state; updates the state."""
+        if self.ended:
+            return ["statement after ENDFIL"]
+        keyword = re.match(r"[A-Z]*", statement).group()
+        if keyword == "F" and statement.startswith("F("):
+            return self.feature(statement)
+        if keyword == "MEAS":
+            return self.measure(statement)
+        if keyword == "PTMEAS":
+            return self.point(statement)
+        if keyword not in SIMPLE:
+            return [f"unknown statement {statement[:30]!r}"]
+        if not SIMPLE[keyword].match(statement):
+            return [f"malformed {keyword}: {statement!r}"]
+        return self.simple(keyword)
+
+    def simple(self, keyword):
+        """State changes and errors of the statements without labels or numbers."""
+        if keyword == "UNITS":
+            self.units = True
+        if keyword == "ENDMES":
+            if not self.measuring:
+                return ["ENDMES without MEAS"]
+            errors = [] if self.points == self.expected else [
+                f"MEAS of F({self.measuring}) announced {self.expected} points, got {self.points}"]
+            self.measuring = None
+            return errors
+        if keyword == "ENDFIL":
+            self.ended = True
+            return ["ENDFIL inside MEAS"] if self.measuring else []
+        return ["statement inside MEAS"] if self.measuring else []
+
+    def feature(self, statement):
+        """F(label)=FEAT/POINT,CART,x,y,z,i,j,k."""
+        match = FEATURE.match(statement)
+        if match is None:
+            return [f"malformed FEAT: {statement!r}"]
+        label, fields = match.groups()
+        errors = label_errors(label) + numbers_errors(fields)
+        if label in self.features:
+            errors.append(f"F({label}) defined twice")
+        if not self.units:
+            errors.append("FEAT before UNITS")
+        if self.measuring:
+            errors.append("FEAT inside MEAS")
+        self.features.add(label)
+        return errors
+
+    def measure(self, statement):
+        """MEAS/POINT,F(label),n."""
+        match = MEASURE.match(statement)
+        if match is None:
+            return [f"malformed MEAS: {statement!r}"]
+        label, count = match.groups()
+        errors = label_errors(label)
+        if label not in self.features:
+            errors.append(f"MEAS of F({label}) before its FEAT")
+        if self.measuring:
+            errors.append(f"MEAS inside the MEAS of F({self.measuring})")
+        if not re.fullmatch(r"[1-9]\d*", count):
+            errors.append(f"the point count {count!r} is not a positive whole number")
+        self.measuring, self.expected, self.points = label, int(count) if count.isdigit() else 0, 0
+        return errors
+
+    def point(self, statement):
+        """PTMEAS/CART,x,y,z,i,j,k inside MEAS."""
+        match = POINT.match(statement)
+        if match is None:
+            return [f"malformed PTMEAS: {statement!r}"]
+        self.points += 1
+        errors = numbers_errors(match.group(1))
+        return errors if self.measuring else errors + ["PTMEAS outside MEAS"]
+
+
+def label_errors(label):
+    """Errors of a feature label."""
+    return [] if re.fullmatch(LABEL, label) else [f"label {label!r} is not 1-64 characters of [A-Za-z0-9_.-]"]
+
+
+def numbers_errors(fields):
+    """Errors of 'x,y,z,i,j,k': six fixed-notation numbers, (i, j, k) a unit vector."""
+    values = fields.split(",")
+    if len(values) != 6:
+        return [f"expected 6 numbers x,y,z,i,j,k, got {len(values)}"]
+    bad = [v for v in values if not re.fullmatch(NUMBER, v)]
+    if bad:
+        return [f"not fixed-notation numbers: {bad}"]
+    length = sum(float(v) ** 2 for v in values[3:]) ** 0.5
+    return [] if abs(length - 1.0) <= VECTOR_TOLERANCE else [f"(i, j, k) has length {length:.9f}, not 1"]
