@@ -1,5 +1,6 @@
 """Command line: sample faces headless with ``/usr/bin/python3 -m cmmsampling`` or ``freecadcmd``."""
 import argparse
+import os
 import sys
 import time
 
@@ -8,14 +9,24 @@ from . import STRATEGIES, reference_face, sample
 DESCRIPTION = """Where should a CMM's contact probe touch a free-form face?
 
 Places N probe points on a face with a sampling strategy, fits a least-squares B-spline
-(the substitute geometry) to them and reports its deviation from the CAD face in mm."""
+(the substitute geometry) to them and reports its deviation from the CAD face in mm.
+Probe points are written with their approach vectors (unit outward normals; the probe
+travels along -i,-j,-k) as DMIS (.dmi), PC-DMIS XYZIJK (.xyz) or CSV (.csv).
+
+examples:
+  python -m cmmsampling faces part.step
+  python -m cmmsampling sample part.step --face 3 -n 49 --out face3.dmi --out face3.csv
+  python -m cmmsampling sample part.igs --face 1 --strategy pso --edge-offset 2 --fcstd out.FCStd
+  python -m cmmsampling demo"""
+
+CLI_EDGE_OFFSET = 1.5
 
 
 def build_parser():
     """The argument parser with its sub-commands."""
     parser = argparse.ArgumentParser(prog="python -m cmmsampling", description=DESCRIPTION,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
-    commands = parser.add_subparsers(dest="command", required=True)
+    commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     demo = commands.add_parser(
         "demo", help="sample the built-in reference surface with every strategy and print a table")
     demo.add_argument("-n", "--points", type=int, default=81, help="probe points per strategy (default 81)")
@@ -23,27 +34,68 @@ def build_parser():
                       help="PSO iterations (default 3000, the paper's)")
     demo.add_argument("--population", type=int, default=25, help="PSO particles (default 25, the paper's)")
     demo.add_argument("--seed", type=int, default=0, help="seed of the random parts (default 0)")
+    faces = commands.add_parser("faces", help="list the faces of a STEP, IGES or BREP file")
+    faces.add_argument("file", help="a .step/.stp, .iges/.igs or .brep/.brp file")
+    one = commands.add_parser("sample", help="sample one face of a STEP, IGES or BREP file",
+                              formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    _sample_arguments(one)
     return parser
 
 
-class TerminalProgress:
-    """A one-line progress bar on stderr for an optimiser run of ``total`` iterations."""
+def _sample_arguments(parser):
+    """Arguments of the ``sample`` sub-command."""
+    parser.add_argument("file", help="a .step/.stp, .iges/.igs or .brep/.brp file (lengths in mm)")
+    parser.add_argument("--face", type=int, required=True,
+                        help="face number as 'faces' lists it (FreeCAD's FaceN)")
+    parser.add_argument("-n", "--points", type=int, default=49, help="number of probe points")
+    parser.add_argument("--strategy", default="optimal", choices=list(STRATEGIES),
+                        help="where the points go; 'optimal' comes closest to the best possible, "
+                             "'pso' is the paper's swarm")
+    parser.add_argument("--edge-offset", type=float, default=CLI_EDGE_OFFSET,
+                        help="mm every point keeps from the face's edges (probe ball radius plus a margin)")
+    parser.add_argument("--min-spacing", type=float, default=None,
+                        help="mm between points (default: 0, or a fifth of the even spacing for 'optimal')")
+    parser.add_argument("--iterations", type=int, help="PSO iterations (default 3000)")
+    parser.add_argument("--population", type=int, help="PSO particles (default 25)")
+    parser.add_argument("--time-limit", type=float, help="seconds for the 'optimal' strategy")
+    parser.add_argument("--seed", type=int, default=0, help="seed of the random parts")
+    parser.add_argument("--out", action="append", default=[], metavar="FILE",
+                        help="write the probe points; format from the extension .dmi, .xyz or .csv "
+                             "(repeat for several files)")
+    parser.add_argument("--probe-radius", type=float, default=0.0,
+                        help="mm: write ball centres (point + r * normal) instead of contact points")
+    parser.add_argument("--order", default="as_optimised", choices=["as_optimised", "short_path"],
+                        help="point order in the files; short_path shortens the probe's travel")
+    parser.add_argument("--fcstd", metavar="FILE", help="also save a FreeCAD document with the results")
 
-    def __init__(self, label, total, stream=sys.stderr, every_s=0.2):
+
+class TerminalProgress:
+    """A one-line progress display on stderr for an optimiser: a bar when ``total`` is known."""
+
+    def __init__(self, label, total=None, stream=sys.stderr, every_s=0.2):
         self.label, self.total, self.stream, self.every_s = label, total, stream, every_s
         self._last = 0.0
 
     def __call__(self, iteration, best):
         now = time.monotonic()
-        if now - self._last >= self.every_s or iteration == self.total:
+        last = self.total is not None and iteration == self.total
+        if now - self._last >= self.every_s or last:
             self._last = now
-            done = int(30 * iteration / self.total)
-            self.stream.write(f"\r{self.label} [{'#' * done}{'.' * (30 - done)}] "
-                              f"{iteration}/{self.total} best max {best:.4f} mm")
-            if iteration == self.total:
+            if self.total:
+                done = int(30 * iteration / self.total)
+                where = f"[{'#' * done}{'.' * (30 - done)}] {iteration}/{self.total}"
+            else:
+                where = f"evaluation {iteration}"
+            self.stream.write(f"\r{self.label} {where} best max {best:.4f} mm ")
+            if last:
                 self.stream.write("\n")
             self.stream.flush()
         return False
+
+    def finish(self):
+        """End the progress line."""
+        self.stream.write("\n")
+        self.stream.flush()
 
 
 def format_table(results):
@@ -65,7 +117,7 @@ def run_demo(args):
     print(f"Reference surface: degree 5 x 5, 9 x 9 poles, 100 x 100 mm; N = {args.points}, "
           "substitute: bicubic, default poles; grid 60 x 60")
     results = []
-    for name, strategy in STRATEGIES.items():
+    for name in STRATEGIES:
         options = {}
         if name == "pso":
             options = {"iterations": args.iterations, "population": args.population,
@@ -75,11 +127,112 @@ def run_demo(args):
     return 0
 
 
+def read_shape(path):
+    """The shape in a STEP, IGES or BREP file; ValueError naming the problem otherwise."""
+    import Part
+
+    extension = os.path.splitext(path)[1].lower()
+    if extension not in (".step", ".stp", ".iges", ".igs", ".brep", ".brp"):
+        raise ValueError(f"{path}: unknown file type {extension!r}; use a STEP, IGES or BREP file")
+    if not os.path.isfile(path):
+        raise ValueError(f"{path}: no such file")
+    shape = Part.read(path)
+    if not shape.Faces:
+        raise ValueError(f"{path}: the file holds no faces")
+    return shape
+
+
+def describe_faces(shape):
+    """One line per face: number, surface type, area (mm^2), size (mm), degrees and poles of its NURBS."""
+    from .domain import face_domain
+    from .surface import SurfaceModel
+
+    lines = [f"{'face':>5} {'surface':<22} {'area mm^2':>11} {'size mm':>24} {'degree':>7} {'poles':>7} trimmed"]
+    for number, face in enumerate(shape.Faces, start=1):
+        model = SurfaceModel.from_face(face)
+        box = face.BoundBox
+        size = f"{box.XLength:.1f} x {box.YLength:.1f} x {box.ZLength:.1f}"
+        poles = "x".join(str(p) for p in model.weights.shape)
+        degree = "x".join(str(d) for d in model.degrees)
+        trimmed = "yes" if face_domain(model).trimmed else "no"
+        lines.append(f"{'Face' + str(number):>5} {type(face.Surface).__name__:<22} {face.Area:>11.2f} "
+                     f"{size:>24} {degree:>7} {poles:>7} {trimmed}")
+    return "\n".join(lines)
+
+
+def run_faces(args):
+    """List the faces of a CAD file."""
+    print(describe_faces(read_shape(args.file)))
+    return 0
+
+
+def _strategy_options(args):
+    """Strategy options given on the command line, with a progress display."""
+    options = {}
+    if args.strategy == "pso":
+        options = {k: v for k, v in (("iterations", args.iterations), ("population", args.population))
+                   if v is not None}
+        options["progress"] = TerminalProgress("PSO", options.get("iterations", 3000))
+    elif args.strategy == "optimal":
+        if args.time_limit is not None:
+            options["time_limit"] = args.time_limit
+        options["progress"] = TerminalProgress("optimal")
+    return options
+
+
+def run_sample(args):
+    """Sample one face of a CAD file and write what was asked for."""
+    shape = read_shape(args.file)
+    if not 1 <= args.face <= len(shape.Faces):
+        raise ValueError(f"--face must be between 1 and {len(shape.Faces)} for {args.file}, got {args.face}")
+    options = _strategy_options(args)
+    progress = options.get("progress")
+    result = sample(shape.Faces[args.face - 1], args.points, args.strategy, seed=args.seed,
+                    edge_offset=args.edge_offset, min_spacing=args.min_spacing, **options)
+    if progress is not None and progress.total is None:
+        progress.finish()
+    print(f"{os.path.basename(args.file)} Face{args.face}: {args.strategy}, N = {result.n}, "
+          f"edge offset {args.edge_offset:g} mm, spacing {result.settings['min_spacing']:.3g} mm")
+    print(format_table([result]))
+    _write_outputs(result, args)
+    return 0
+
+
+def _write_outputs(result, args):
+    """Point files and the optional FreeCAD document."""
+    from .exporting import export
+    from .pointset import PointSet
+
+    points = PointSet.from_result(result, f"{os.path.basename(args.file)}:Face{args.face}")
+    for path in args.out:
+        print(export(points, path, probe_radius=args.probe_radius, order=args.order))
+    if args.fcstd:
+        _save_document(result, args)
+
+
+def _save_document(result, args):
+    """Save the result in a new FreeCAD document, the source shape included."""
+    import FreeCAD
+
+    from .document import add_to_document
+
+    document = FreeCAD.newDocument("cmmsampling")
+    try:
+        part = document.addObject("Part::Feature", os.path.splitext(os.path.basename(args.file))[0])
+        part.Shape = read_shape(args.file)
+        document.recompute()
+        add_to_document(result, document, source=(part, f"Face{args.face}"))
+        document.saveAs(os.path.abspath(args.fcstd))
+        print(f"saved {args.fcstd}")
+    finally:
+        FreeCAD.closeDocument(document.Name)
+
+
 def main(argv=None):
     """Entry point; returns the process exit code (2 for bad input)."""
     args = build_parser().parse_args(argv)
     try:
-        return {"demo": run_demo}[args.command](args)
-    except (ValueError, TypeError) as exc:
+        return {"demo": run_demo, "faces": run_faces, "sample": run_sample}[args.command](args)
+    except (ValueError, TypeError, OSError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2

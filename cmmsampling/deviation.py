@@ -17,13 +17,14 @@ DEFAULT_GRID = 60
 class EvaluationGrid:
     """A regular (n_u x n_v) raster of the face's parameter range, with the nodes inside the face.
 
-    uv: (n_u, n_v, 2); mask: (n_u, n_v) bool, True where the node lies on the face.
+    uv: (n_u, n_v, 2); mask: (n_u, n_v) bool, True where the node lies on the face (inside its
+    trimming loops, when a FaceDomain is given; every node otherwise).
     """
 
-    def __init__(self, model, size=DEFAULT_GRID):
+    def __init__(self, model, size=DEFAULT_GRID, domain=None):
         self.size = _grid_size(size)
         self.uv = model.raster(self.size)
-        self.mask = np.ones(self.size, dtype=bool)
+        self.mask = np.ones(self.size, dtype=bool) if domain is None else domain.on_face(self.uv)
         self.cad = model.points(self.uv)
 
     @property

@@ -1,37 +1,198 @@
-"""The part of a face's parameter range that lies on the face.
+"""Where on a face probe points may go: the trimmed domain and the edge offset, in (u, v).
 
-For an untrimmed face this is the rectangle ``bounds``; trimmed faces are classified on a raster
-(see :class:`FaceDomain`). Strategies and the optimisers only ever place points where
-:meth:`FaceDomain.contains` is True.
+A face is a region of its surface's parameter rectangle ``bounds``. For an untrimmed face with no
+edge offset the region is the rectangle itself, tested exactly. Otherwise the rectangle is cut into
+a RASTER x RASTER grid of cells, classified once:
+
+* on the face: the cell centre lies inside the face's trimming loops (each edge's curve on the
+  surface, from OCC, discretised; even-odd rule, so holes need no orientation);
+* feasible: on the face and at least ``edge_offset`` mm (3D) from every edge of the face. The 3D
+  distance is taken from a fine discretisation of the face's wires and made conservative by the
+  discretisation step and half the cell's 3D diagonal, so every point of a feasible cell keeps
+  the offset.
+
+Points outside the feasible cells are moved to the nearest feasible cell centre.
 """
 import numpy as np
+from scipy.ndimage import distance_transform_edt
+from scipy.spatial import cKDTree
+
+RASTER = 256
+LOOP_SAMPLES_PER_EDGE = 200
+AREA_TOLERANCE = 1e-7
 
 
 class FaceDomain:
-    """Parameter domain of a face: the rectangle (u0, u1, v0, v1)."""
+    """The feasible part of a face's parameter rectangle (see the module docstring).
 
-    def __init__(self, bounds):
+    bounds: (u0, u1, v0, v1) of the face; trimmed: the face is not the whole rectangle;
+    edge_offset: mm kept from every edge; lower, upper: (2,) corners of the box holding every
+    feasible point; feasible_area: mm^2 of the feasible cells (the face's area when exact).
+    """
+
+    def __init__(self, bounds, trimmed=False, edge_offset=0.0, on_face=None, feasible=None, area=None):
         self.bounds = tuple(float(b) for b in bounds)
+        self.trimmed = trimmed
+        self.edge_offset = float(edge_offset)
+        self._on_face = on_face
+        self._feasible = feasible
+        self._nearest = None
+        self.feasible_area = area
+        self.lower = np.array([self.bounds[0], self.bounds[2]])
+        self.upper = np.array([self.bounds[1], self.bounds[3]])
+        if feasible is not None and feasible.any():
+            rows, cols = np.nonzero(feasible)
+            cell = (self.upper - self.lower) / np.array(feasible.shape)
+            self.lower = self.lower + np.array([rows.min(), cols.min()]) * cell
+            self.upper = np.array([self.bounds[0], self.bounds[2]]) + (np.array([rows.max(), cols.max()]) + 1) * cell
 
     @property
-    def lower(self):
-        """(2,) lower corner (u0, v0)."""
-        return np.array([self.bounds[0], self.bounds[2]])
+    def exact(self):
+        """True when the domain is the plain parameter rectangle (no raster involved)."""
+        return self._feasible is None
 
     @property
-    def upper(self):
-        """(2,) upper corner (u1, v1)."""
-        return np.array([self.bounds[1], self.bounds[3]])
+    def empty(self):
+        """True when no point of the face keeps the edge offset."""
+        return self._feasible is not None and not self._feasible.any()
+
+    def _cells(self, uv):
+        """Raster cell indices (..., 2) of uv (..., 2), clipped to the raster."""
+        u0, u1, v0, v1 = self.bounds
+        scale = np.array([RASTER / (u1 - u0), RASTER / (v1 - v0)])
+        cells = np.floor((np.asarray(uv, dtype=float) - [u0, v0]) * scale)
+        return np.clip(np.nan_to_num(cells, nan=-1), 0, RASTER - 1).astype(int)
+
+    def _in_rectangle(self, uv):
+        uv = np.asarray(uv, dtype=float)
+        low, high = np.array(self.bounds[0::2]), np.array(self.bounds[1::2])
+        return np.all((uv >= low) & (uv <= high), axis=-1)
+
+    def on_face(self, uv):
+        """True where uv: (..., 2) lies on the face (inside its trimming loops): (...,) bool."""
+        inside = self._in_rectangle(uv)
+        if self._on_face is None:
+            return inside
+        cells = self._cells(uv)
+        return inside & self._on_face[cells[..., 0], cells[..., 1]]
 
     def contains(self, uv):
-        """True where uv: (..., 2) lies in the domain; returns (...,) bool."""
-        uv = np.asarray(uv, dtype=float)
-        return np.all((uv >= self.lower) & (uv <= self.upper), axis=-1)
+        """True where uv: (..., 2) is a feasible probe position: (...,) bool."""
+        inside = self._in_rectangle(uv)
+        if self._feasible is None:
+            return inside
+        cells = self._cells(uv)
+        return inside & self._feasible[cells[..., 0], cells[..., 1]]
 
     def project(self, uv):
-        """Nearest point of the domain for each uv: (..., 2) -> (..., 2)."""
-        return np.clip(uv, self.lower, self.upper)
+        """Nearest feasible point for each uv: (..., 2) -> (..., 2); feasible points stay put."""
+        uv = np.asarray(uv, dtype=float)
+        low, high = np.array(self.bounds[0::2]), np.array(self.bounds[1::2])
+        clipped = np.clip(uv, low, high)
+        if self._feasible is None:
+            return clipped
+        if self._nearest is None:
+            self._nearest = distance_transform_edt(~self._feasible, return_distances=False,
+                                                   return_indices=True)
+        cells = self._cells(clipped)
+        ok = self._feasible[cells[..., 0], cells[..., 1]]
+        target = np.stack([self._nearest[0][cells[..., 0], cells[..., 1]],
+                           self._nearest[1][cells[..., 0], cells[..., 1]]], axis=-1)
+        centres = low + (target + 0.5) * (high - low) / RASTER
+        return np.where(ok[..., None], clipped, centres)
 
     def from_unit(self, unit):
-        """Map points of the unit square, (..., 2) in [0, 1]^2, onto the parameter rectangle."""
+        """Map points of the unit square, (..., 2) in [0, 1]^2, onto the feasible box."""
         return self.lower + np.asarray(unit, dtype=float) * (self.upper - self.lower)
+
+
+def face_domain(model, edge_offset=0.0):
+    """The FaceDomain of a SurfaceModel's face, keeping ``edge_offset`` mm from its edges."""
+    face = model.face
+    trimmed = _is_trimmed(face)
+    if not trimmed and edge_offset <= 0:
+        return FaceDomain(model.bounds, area=float(face.Area))
+    centres = _cell_centres(model.bounds)
+    on_face = _inside_loops(face, model.bounds, centres) if trimmed else np.ones((RASTER, RASTER), bool)
+    points = model.points(centres.reshape(-1, 2)).reshape(RASTER, RASTER, 3)
+    clearance = _edge_clearance(face, points)
+    feasible = on_face & (clearance >= edge_offset)
+    cell_areas = _cell_areas(points)
+    return FaceDomain(model.bounds, trimmed, edge_offset, on_face, feasible,
+                      float(cell_areas[feasible].sum()))
+
+
+def _is_trimmed(face):
+    """True when the face is smaller than its surface over the face's parameter range."""
+    full = face.Surface.toShape(*face.ParameterRange)
+    return abs(full.Area - face.Area) > AREA_TOLERANCE * full.Area or len(face.Wires) > 1
+
+
+def _cell_centres(bounds):
+    """(RASTER, RASTER, 2) centres of the raster cells over the rectangle."""
+    u0, u1, v0, v1 = bounds
+    u = u0 + (np.arange(RASTER) + 0.5) * (u1 - u0) / RASTER
+    v = v0 + (np.arange(RASTER) + 0.5) * (v1 - v0) / RASTER
+    return np.stack(np.meshgrid(u, v, indexing="ij"), axis=-1)
+
+
+def _loops(face):
+    """The face's trimming loops as (u, v) polygons: list of (K, 2) arrays."""
+    loops = []
+    for wire in face.Wires:
+        pieces = []
+        for edge in wire.OrderedEdges:
+            curve, first, last = face.curveOnSurface(edge)[:3]
+            ts = np.linspace(first, last, LOOP_SAMPLES_PER_EDGE)
+            piece = np.array([(p.x, p.y) for p in map(curve.value, ts)])
+            pieces.append(piece[::-1] if edge.Orientation == "Reversed" else piece)
+        loops.append(np.concatenate(pieces))
+    return loops
+
+
+def _inside_loops(face, bounds, centres):
+    """Even-odd classification of the raster cell centres against the trimming loops: (R, R) bool."""
+    u = centres[:, 0, 0]
+    v = centres[0, :, 1]
+    crossings = [[] for _ in v]
+    for loop in _loops(face):
+        a, b = loop, np.roll(loop, -1, axis=0)
+        low, high = np.minimum(a[:, 1], b[:, 1]), np.maximum(a[:, 1], b[:, 1])
+        spans = (low[:, None] <= v[None, :]) & (v[None, :] < high[:, None])
+        seg, col = np.nonzero(spans)
+        t = (v[col] - a[seg, 1]) / (b[seg, 1] - a[seg, 1])
+        at = a[seg, 0] + t * (b[seg, 0] - a[seg, 0])
+        for j in np.unique(col):
+            crossings[j].append(at[col == j])
+    inside = np.zeros((len(u), len(v)), dtype=bool)
+    for j, parts in enumerate(crossings):
+        if parts:
+            xs = np.sort(np.concatenate(parts))
+            inside[:, j] = np.searchsorted(xs, u) % 2 == 1
+    return inside
+
+
+def _edge_clearance(face, points):
+    """Conservative 3D distance (mm) from each raster cell to the face's edges: (R, R).
+
+    Distance from the cell centre to a discretisation of the wires, less the discretisation
+    step and half the cell's 3D diagonal.
+    """
+    step = max(face.BoundBox.DiagonalLength / 1000.0, 1e-6)
+    samples = np.array([tuple(p) for wire in face.Wires for p in wire.discretize(Distance=step)])
+    distance = cKDTree(samples).query(points.reshape(-1, 3))[0].reshape(points.shape[:2])
+    return distance - step - 0.5 * _cell_diagonals(points)
+
+
+def _cell_diagonals(points):
+    """Approximate 3D diagonal of each raster cell from its neighbours' centres: (R, R) mm."""
+    du = np.linalg.norm(np.gradient(points, axis=0), axis=-1)
+    dv = np.linalg.norm(np.gradient(points, axis=1), axis=-1)
+    return np.hypot(du, dv)
+
+
+def _cell_areas(points):
+    """Approximate 3D area of each raster cell: (R, R) mm^2."""
+    su = np.gradient(points, axis=0)
+    sv = np.gradient(points, axis=1)
+    return np.linalg.norm(np.cross(su, sv), axis=-1)

@@ -109,10 +109,11 @@ class DescentResult:
 
 
 def descend(objective, start, lower, upper, min_spacing=0.0, time_limit=None, max_evaluations=None,
-            progress=None):
+            progress=None, project=None):
     """Minimise the maximum deviation from the point set ``start`` (N, 2) inside the box.
 
-    lower, upper: (2,) parameter box; min_spacing: mm between points; time_limit: s;
+    lower, upper: (2,) parameter box; project: maps uv (N, 2) onto the feasible set (every
+    iterate is evaluated there; default: the box itself); min_spacing: mm between points; time_limit: s;
     max_evaluations: surrogate evaluations; progress: callable (evaluation, best_max_mm) returning
     True to stop. Returns a DescentResult (the best feasible point set seen; the start if none
     better).
@@ -129,6 +130,8 @@ def descend(objective, start, lower, upper, min_spacing=0.0, time_limit=None, ma
 
     def fun(x, tau):
         uv = lower + x.reshape(-1, 2) * scale
+        if project is not None:
+            uv = project(uv)
         s = surrogate(objective, uv, tau, min_spacing, penalty)
         state["count"] += 1
         if s.maximum < state["max"] and s.closest >= min_spacing:

@@ -3,7 +3,7 @@ import numpy as np
 
 from .bound import minimax_bound
 from .deviation import DeviationObjective, EvaluationGrid
-from .domain import FaceDomain
+from .domain import face_domain
 from .fitting import SubstituteSpace, default_pole_count
 from .parallel import TwoProcessObjective
 
@@ -17,17 +17,20 @@ class SamplingProblem:
     model: SurfaceModel; n: points wanted; fit_degree, fit_poles: (k_u, k_v), (n_u, n_v) of the
     substitute; smoothing: its second-difference weight; grid: (g_u, g_v) evaluation raster;
     seed: for the random parts of the strategies; workers: processes an optimiser's swarm is
-    spread over (1 or 2).
+    spread over (1 or 2); edge_offset: mm every point keeps from the face's edges; min_spacing:
+    mm between any two points.
     """
 
-    def __init__(self, model, n, fit_degree, fit_poles, smoothing, grid, seed, workers=1):
+    def __init__(self, model, n, fit_degree, fit_poles, smoothing, grid, seed, workers=1,
+                 edge_offset=0.0, min_spacing=0.0):
         self.model = model
         self.n = n
         self.seed = seed
         self.workers = workers
-        self.domain = FaceDomain(model.bounds)
+        self.min_spacing = min_spacing
+        self.domain = face_domain(model, edge_offset)
         self.space = SubstituteSpace(fit_degree, fit_poles, model.bounds, smoothing)
-        self.grid = EvaluationGrid(model, grid)
+        self.grid = EvaluationGrid(model, grid, self.domain)
         self._objective = None
         self._check = None
         self._bounds = None
@@ -47,7 +50,8 @@ class SamplingProblem:
         """
         if self._check is None:
             size = tuple(CHECK_DENSITY * g for g in self.grid.size)
-            self._check = DeviationObjective(self.model, self.space, EvaluationGrid(self.model, size))
+            check_grid = EvaluationGrid(self.model, size, self.domain)
+            self._check = DeviationObjective(self.model, self.space, check_grid)
         return self._check
 
     def bounds(self):

@@ -14,7 +14,7 @@ from .optimal import default_min_spacing, descend
 from .pso import SwarmSettings, particle_swarm
 from .result import SamplingResult
 from .strategies import StrategyOutcome
-from .surface import SurfaceModel
+from .surface import SurfaceModel, as_face
 from .threads import blas_threads
 from .validation import check_choice, check_int, check_pair, check_real, check_uv
 
@@ -50,37 +50,57 @@ def run_pso(problem, progress, population, iterations, w1, w2, c1, c2, velocity_
     seeds = []
     if start_from_uniform:
         seeds = [blind.uniform_parametric(problem).uv, blind.uniform_cartesian(problem).uv]
+    objective = problem.swarm_objective()
+    if problem.min_spacing > 0:
+        objective = SpacingRule(objective, problem.model, problem.min_spacing)
     swarm = particle_swarm(
-        problem.swarm_objective(), problem.domain.lower, problem.domain.upper, problem.n, settings,
+        objective, problem.domain.lower, problem.domain.upper, problem.n, settings,
         seeds=seeds, project=problem.project, progress=progress,
     )
+    if not np.isfinite(swarm.best_value):
+        raise ValueError(
+            f"no particle kept its points {problem.min_spacing:g} mm apart; lower min_spacing or "
+            "use start_from_uniform=True")
     return StrategyOutcome(swarm.best, swarm.history, swarm.evaluations, swarm.cancelled)
 
 
-def run_optimal(problem, progress, min_spacing, start, time_limit, max_evaluations):
+class SpacingRule:
+    """A swarm objective that scores point sets with two points closer than min_spacing mm as inf.
+
+    objective: (P, N, 2) -> (P,); model: evaluates the 3D points.
+    """
+
+    def __init__(self, objective, model, min_spacing):
+        self.objective, self.model, self.min_spacing = objective, model, min_spacing
+
+    def __call__(self, uv):
+        points = self.model.points(uv)
+        gaps = np.linalg.norm(points[:, :, None, :] - points[:, None, :, :], axis=-1)
+        gaps[:, np.arange(uv.shape[1]), np.arange(uv.shape[1])] = np.inf
+        values = np.asarray(self.objective(uv), dtype=float)
+        return np.where(gaps.min(axis=(1, 2)) >= self.min_spacing, values, np.inf)
+
+
+def run_optimal(problem, progress, start, time_limit, max_evaluations):
     """Near-optimal points by gradient descent on a smoothed maximum (see cmmsampling.optimal).
 
-    min_spacing: mm between points (None: a fifth of the even spacing sqrt(area / N));
     start: a strategy name or an (N, 2) uv array; time_limit: s; max_evaluations: surrogate
-    evaluations (None: no limit).
+    evaluations (None: no limit). Points keep problem.min_spacing and the feasible domain.
     """
-    if min_spacing is None:
-        min_spacing = default_min_spacing(problem.model.face.Area, problem.n)
     if isinstance(start, str):
         start_uv = STRATEGIES[start].run(problem, None, **STRATEGIES[start].options).uv
     else:
         start_uv = check_uv(start, problem.n)
     result = descend(problem.objective, problem.project(start_uv), problem.domain.lower,
-                     problem.domain.upper, min_spacing, time_limit, max_evaluations, progress)
+                     problem.domain.upper, problem.min_spacing, time_limit, max_evaluations, progress,
+                     problem.project)
     return StrategyOutcome(result.uv, result.history, result.evaluations, result.cancelled,
-                           details={"min_spacing": min_spacing, "closest": result.closest})
+                           details={"closest": result.closest})
 
 
 def _check_optimal_options(options):
     """Validate the options of the 'optimal' strategy (merged with defaults)."""
     clean = dict(options)
-    if options["min_spacing"] is not None:
-        clean["min_spacing"] = check_real("min_spacing", options["min_spacing"], 0.0)
     if options["time_limit"] is not None:
         clean["time_limit"] = check_real("time_limit", options["time_limit"], above=0.0)
     if options["max_evaluations"] is not None:
@@ -91,8 +111,7 @@ def _check_optimal_options(options):
     return clean
 
 
-OPTIMAL_DEFAULTS = {"min_spacing": None, "start": "uniform_parametric", "time_limit": None,
-                    "max_evaluations": None}
+OPTIMAL_DEFAULTS = {"start": "uniform_parametric", "time_limit": None, "max_evaluations": None}
 
 PSO_DEFAULTS = {
     "population": 25, "iterations": 3000, "w1": 0.5, "w2": 0.0, "c1": 2.0, "c2": 2.0,
@@ -157,7 +176,7 @@ def strategy_options(strategy, options):
 
 
 def make_problem(face, n, fit_degree=DEFAULT_DEGREE, fit_poles=None, smoothing=DEFAULT_SMOOTHING,
-                 grid=DEFAULT_GRID, seed=0, workers=None):
+                 grid=DEFAULT_GRID, seed=0, workers=None, edge_offset=0.0, min_spacing=0.0):
     """Validate the common inputs and build a SamplingProblem (see :func:`sample`)."""
     n = check_int("n", n, MIN_POINTS)
     degree = check_pair("fit_degree", fit_degree, 1)
@@ -171,9 +190,30 @@ def make_problem(face, n, fit_degree=DEFAULT_DEGREE, fit_poles=None, smoothing=D
     grid = check_pair("grid", grid, 2)
     seed = check_int("seed", seed, 0)
     workers = _check_workers(workers)
+    edge_offset = check_real("edge_offset", edge_offset, 0.0)
+    min_spacing = check_real("min_spacing", min_spacing, 0.0)
     model = SurfaceModel.from_face(face)
     _check_area(model.face)
-    return SamplingProblem(model, n, degree, poles, smoothing, grid, seed, workers)
+    problem = SamplingProblem(model, n, degree, poles, smoothing, grid, seed, workers, edge_offset,
+                              min_spacing)
+    _check_room(problem)
+    return problem
+
+
+def _check_room(problem):
+    """ValueError when the face cannot hold N points with the edge offset and spacing asked for."""
+    domain = problem.domain
+    if domain.empty:
+        raise ValueError(
+            f"the face is too small for edge_offset {domain.edge_offset:g} mm: no point of it is that "
+            "far from its edges; lower edge_offset")
+    if problem.min_spacing > 0:
+        room = int(domain.feasible_area / (np.sqrt(3) / 2 * problem.min_spacing ** 2)) + 1
+        if problem.n > room:
+            raise ValueError(
+                f"{problem.n} points {problem.min_spacing:g} mm apart do not fit on the "
+                f"{domain.feasible_area:.4g} mm^2 of the face that keeps edge_offset "
+                f"{domain.edge_offset:g} mm (at most about {room}); lower n or min_spacing")
 
 
 def _check_workers(workers):
@@ -198,7 +238,7 @@ def _check_area(face):
 
 def sample(face, n=81, strategy="pso", *, fit_degree=DEFAULT_DEGREE, fit_poles=None,
            smoothing=DEFAULT_SMOOTHING, grid=DEFAULT_GRID, seed=0, progress=None, occ_check=True,
-           workers=None, **options):
+           workers=None, edge_offset=0.0, min_spacing=None, **options):
     """Place n probe points on a face with a strategy and judge them.
 
     face: a Part.Face (or a Shape holding one face), e.g. ``cmmsampling.reference_face()``;
@@ -209,14 +249,20 @@ def sample(face, n=81, strategy="pso", *, fit_degree=DEFAULT_DEGREE, fit_poles=N
     seed: for random parts; progress: callable (iteration, best_max_mm) for the optimisers, returning
     True to stop (the best so far is kept); occ_check: cross-check the final maximum with OCC;
     workers: processes the optimisers spread each swarm over (1 or 2; None = 2 on a multi-core
-    machine; the results are identical);
+    machine; the results are identical); edge_offset: mm every point keeps from the face's edges
+    (3D; 0, the paper's setting, allows points on the edges); min_spacing: mm between any two
+    points (None: 0, except for "optimal": a fifth of the even spacing sqrt(area / n));
     options: the strategy's own (see ``STRATEGIES[name].options``; PSO: population, iterations, w1,
     w2, c1, c2, velocity_limit, start_from_uniform).
     Returns a SamplingResult.
     """
     check_choice("strategy", strategy, list(STRATEGIES))
     options = strategy_options(strategy, options)
-    problem = make_problem(face, n, fit_degree, fit_poles, smoothing, grid, seed, workers)
+    n = check_int("n", n, MIN_POINTS)
+    if min_spacing is None:
+        min_spacing = default_min_spacing(as_face(face).Area, n) if strategy == "optimal" else 0.0
+    problem = make_problem(face, n, fit_degree, fit_poles, smoothing, grid, seed, workers, edge_offset,
+                           min_spacing)
     start = time.perf_counter()
     with blas_threads(1):
         outcome = STRATEGIES[strategy].run(problem, progress, **options)
@@ -266,6 +312,8 @@ def _common_settings(problem):
         "grid": list(problem.grid.size),
         "seed": problem.seed,
         "workers": problem.workers,
+        "edge_offset": problem.domain.edge_offset,
+        "min_spacing": problem.min_spacing,
     }
 
 

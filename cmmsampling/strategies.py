@@ -62,22 +62,36 @@ def _unit_grid(rows, cols):
     return np.stack(np.meshgrid(u, v, indexing="ij"), axis=-1).reshape(-1, 2)
 
 
+def spaced(points, min_spacing):
+    """Indices of a greedy subset of points (M, 3) mm, in their order, at least min_spacing apart."""
+    if min_spacing <= 0 or len(points) < 2:
+        return np.arange(len(points))
+    kept = [0]
+    for i in range(1, len(points)):
+        if np.min(np.linalg.norm(points[kept] - points[i], axis=1)) >= min_spacing:
+            kept.append(i)
+    return np.array(kept)
+
+
 def _dense_enough(make_candidates, problem, start):
-    """Grow a candidate layout until at least N of its points lie on the face, then thin it.
+    """Grow a candidate layout until N of its points are feasible and spaced, then thin it.
 
     make_candidates(m) -> (M, 2) uv for a layout of about m points; start: first m to try.
+    Feasible: on the face and at least edge_offset from its edges; spaced: greedily, in the
+    layout's order, at least problem.min_spacing mm apart.
     """
     n = problem.n
     m = start
     for _ in range(60):
         uv = make_candidates(m)
         inside = uv[problem.domain.contains(uv)]
+        inside = inside[spaced(problem.model.points(inside), problem.min_spacing)]
         if len(inside) >= n:
             return thin_evenly(inside, n)
         m = int(np.ceil(m * max(1.1, n / max(len(inside), 1))))
     raise ValueError(
-        f"could not place {n} points on the face: too few candidate points fall inside it; "
-        "lower N or check that the face has a usable area"
+        f"could not place {n} points on the face at least {problem.min_spacing:g} mm apart and "
+        f"{problem.domain.edge_offset:g} mm from its edges; lower n, min_spacing or edge_offset"
     )
 
 
@@ -204,8 +218,10 @@ def _patch_scores(model, domain, patches, curvature, raster_per_patch=8):
     without that curvature (a plane, or a cylinder for "gaussian") is weighted by area alone.
     """
     rows, cols = patches
-    uv = model.raster((rows * raster_per_patch, cols * raster_per_patch))
-    flat = uv.reshape(-1, 2)
+    size_u, size_v = rows * raster_per_patch, cols * raster_per_patch
+    unit = np.stack(np.meshgrid((np.arange(size_u) + 0.5) / size_u, (np.arange(size_v) + 0.5) / size_v,
+                                indexing="ij"), axis=-1)
+    flat = domain.from_unit(unit.reshape(-1, 2))
     d = model.derivatives(flat, 1)
     area = np.linalg.norm(np.cross(d[(1, 0)], d[(0, 1)]), axis=1)
     mean, gauss = model.curvatures(flat)
@@ -244,18 +260,21 @@ def curvature_adaptive(problem, curvature="mean"):
 
     The domain is split into patches (about N / 4 of them); each gets points in proportion to the
     integral of its curvature over its area (``curvature`` = "mean" or "gaussian"), plus an area
-    share, and the points are spread inside each patch as a Hammersley set. Points off a trimmed
-    face are moved to the nearest point of the domain.
+    share, and the points are spread inside each patch as a Hammersley set. Points off the
+    feasible domain are dropped and the allocation grown until N remain.
     """
     if curvature not in ("mean", "gaussian"):
         raise ValueError(f"curvature must be 'mean' or 'gaussian', got {curvature!r}")
     model, n = problem.model, problem.n
     du, dv = model.span
     patches = grid_shape(max(1, n // 4), dv / du if du > 0 else 1.0)
-    scores = _patch_scores(model, problem.domain, patches, curvature)
-    counts = allocate(scores.ravel(), n).reshape(scores.shape)
-    uv = problem.domain.from_unit(_points_in_patches(counts, patches))
-    return StrategyOutcome(problem.domain.project(uv), details={"points_per_patch": counts})
+    scores = _patch_scores(model, problem.domain, patches, curvature).ravel()
+
+    def candidates(m):
+        counts = allocate(scores, m).reshape(patches)
+        return problem.domain.from_unit(_points_in_patches(counts, patches))
+
+    return StrategyOutcome(_dense_enough(candidates, problem, n))
 
 
 def curvature_gaussian(problem):
