@@ -26,6 +26,11 @@ def test_pso_with_the_paper_parameters_beats_uniform(paper_runs):
     assert paper_runs["pso"].evaluations == 25 * 3001
 
 
+def test_speed_ups_kept_the_paper_run_result(paper_runs):
+    """The best maximum of the paper's run (seed 0) before any speed-up, commit 23b1c31."""
+    assert paper_runs["pso"].deviation.maximum == pytest.approx(0.8216243154373526, abs=1e-9)
+
+
 def test_uniform_figures_match_the_prototype(paper_runs):
     assert paper_runs["uniform_parametric"].deviation.maximum == pytest.approx(1.574, abs=1e-3)
     assert paper_runs["uniform_cartesian"].deviation.maximum == pytest.approx(1.053, abs=1e-3)

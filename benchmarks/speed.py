@@ -1,0 +1,204 @@
+"""Speed of the fitness evaluation and of the paper's PSO on the reference surface.
+
+Prints, in one run:
+  * the paper's full PSO (N = 81, population 25, 3000 iterations, 60 x 60 grid) with the swarm on
+    two processes and on one: wall time, fitness evaluations per second, best maximum deviation;
+  * the same fitness for the same swarms three ways: batched (this engine), one particle at a time
+    in a Python loop, and through pyswarms' GlobalBestPSO (if installed), with ratios;
+  * time per PSO iteration against N, grid size and substitute pole count;
+  * one against two BLAS threads for the batched fitness;
+  * peak memory (resident set) of this process and of the worker.
+Run with benchmarks/run.sh (which installs pyswarms in a separate virtual environment).
+"""
+import argparse
+import os
+import resource
+import sys
+import time
+
+import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+
+import cmmsampling  # noqa: E402
+from cmmsampling.sampling import make_problem  # noqa: E402
+from cmmsampling.threads import blas_threads, threadpool_limits  # noqa: E402
+
+
+def timed(function, repeat=1):
+    """(seconds per call, last value) of ``function`` called ``repeat`` times."""
+    start = time.perf_counter()
+    for _ in range(repeat):
+        value = function()
+    return (time.perf_counter() - start) / repeat, value
+
+
+def full_runs(face):
+    """The paper's full run on two processes and on one."""
+    print("The paper's PSO: N = 81, population 25, 3000 iterations, 60 x 60 grid, seed 0")
+    print(f"{'processes':>10} {'wall s':>8} {'evals/s':>9} {'best max mm':>18}")
+    for workers in (2, 1):
+        seconds, result = timed(lambda: cmmsampling.sample(face, 81, "pso", occ_check=False, workers=workers))
+        print(f"{workers:>10} {seconds:>8.2f} {result.evaluations / seconds:>9.0f} {result.deviation.maximum:>18.12f}")
+
+
+def swarm_positions(problem, iterations, population=25, seed=1):
+    """Random swarms: (iterations, population, N, 2) inside the face's box."""
+    rng = np.random.default_rng(seed)
+    shape = (iterations, population, problem.n, 2)
+    return problem.domain.lower + rng.random(shape) * (problem.domain.upper - problem.domain.lower)
+
+
+def straightforward_fitness(problem, uv):
+    """The fitness as a plain implementation computes it, one point set uv: (N, 2) at a time.
+
+    The face's points one by one from OpenCASCADE, scipy's B-spline design matrices, the smoothed
+    least-squares fit by np.linalg.lstsq, and the fitted surface on the grid (the CAD grid and the
+    grid's design matrices computed once, as any implementation would).
+    """
+    from scipy.interpolate import BSpline
+
+    space, face = problem.space, problem.model.face
+    points = np.array([tuple(face.valueAt(u, v)) for u, v in uv])
+    bu = BSpline.design_matrix(uv[:, 0], space.uknots, space.degrees[0]).toarray()
+    bv = BSpline.design_matrix(uv[:, 1], space.vknots, space.degrees[1]).toarray()
+    rows = np.einsum("ni,nj->nij", bu, bv).reshape(len(uv), -1)
+    weight = np.sqrt(space.smoothing * len(uv) / space.size)
+    lhs = np.vstack([rows, weight * np.linalg.cholesky(space.regulariser).T])
+    rhs = np.vstack([points, np.zeros((space.size, 3))])
+    poles = np.linalg.lstsq(lhs, rhs, rcond=None)[0].reshape(space.poles + (3,))
+    grid_u, grid_v, cad = _straightforward_grid(problem)
+    surface = np.einsum("ia,abc,jb->ijc", grid_u, poles, grid_v)
+    return np.sqrt(((surface - cad) ** 2).sum(-1)).max()
+
+
+def _straightforward_grid(problem, cache={}):
+    """Grid design matrices and CAD points of the plain implementation, computed once."""
+    if id(problem) not in cache:
+        from scipy.interpolate import BSpline
+
+        space, grid = problem.space, problem.grid
+        u, v = grid.uv[:, 0, 0], grid.uv[0, :, 1]
+        cad = np.array([[tuple(problem.model.face.valueAt(a, b)) for b in v] for a in u])
+        cache[id(problem)] = (BSpline.design_matrix(u, space.uknots, space.degrees[0]).toarray(),
+                              BSpline.design_matrix(v, space.vknots, space.degrees[1]).toarray(), cad)
+    return cache[id(problem)]
+
+
+def three_ways(face, iterations):
+    """The same fitness for the same swarms: batched, looped and through pyswarms."""
+    problem = make_problem(face, 81, workers=1)
+    objective = problem.objective
+    swarms = swarm_positions(problem, iterations)
+    evaluations = swarms.shape[0] * swarms.shape[1]
+    plain = swarms[: max(1, iterations // 10)]
+    with blas_threads(1):
+        batched, _ = timed(lambda: [objective(s) for s in swarms])
+        looped, _ = timed(lambda: [[objective(p[None]) for p in s] for s in swarms])
+        straight, _ = timed(lambda: [[straightforward_fitness(problem, p) for p in s] for s in plain])
+        library = _pyswarms_time(objective, problem, iterations)
+    check = [straightforward_fitness(problem, p) for p in swarms[0, :3]]
+    assert np.allclose(check, objective(swarms[0, :3]), rtol=1e-6), "the plain fitness disagrees"
+    straight *= iterations / len(plain)
+    print(f"\nFitness of {evaluations} point sets (N = 81), {iterations} iterations of 25 particles, one process")
+    print(f"{'way':<44} {'s':>8} {'evals/s':>9} {'x batched':>10}")
+    rows = [("batched (this engine)", batched),
+            ("this engine, one particle at a time", looped),
+            ("plain per-particle (OCC points, scipy, lstsq)", straight)]
+    if library is not None:
+        rows.append(("pyswarms GlobalBestPSO, batched fitness", library))
+    for name, seconds in rows:
+        print(f"{name:<44} {seconds:>8.3f} {evaluations / seconds:>9.0f} {seconds / batched:>10.1f}")
+    print(f"(the plain way timed on {len(plain) * 25} point sets and scaled)")
+    if library is None:
+        print("(pyswarms not installed: run benchmarks/run.sh)")
+
+
+def _pyswarms_time(objective, problem, iterations):
+    """Seconds for pyswarms' GlobalBestPSO with the same fitness, or None without pyswarms."""
+    try:
+        import logging
+
+        import pyswarms
+    except ImportError:
+        return None
+    logging.getLogger("pyswarms").setLevel(logging.ERROR)
+    dimensions = 2 * problem.n
+    bounds = (np.tile(problem.domain.lower, problem.n), np.tile(problem.domain.upper, problem.n))
+    optimizer = pyswarms.single.GlobalBestPSO(25, dimensions, {"c1": 2.0, "c2": 2.0, "w": 0.5}, bounds=bounds)
+    cost = lambda x: objective(x.reshape(len(x), problem.n, 2))  # noqa: E731
+    seconds, _ = timed(lambda: optimizer.optimize(cost, iters=iterations, verbose=False))
+    return seconds
+
+
+def per_iteration(face, n, grid, poles, iterations):
+    """Milliseconds of fitness per PSO iteration (25 particles, one process)."""
+    problem = make_problem(face, n, grid=grid, fit_poles=poles, workers=1)
+    swarms = swarm_positions(problem, iterations)
+    with blas_threads(1):
+        problem.objective(swarms[0])
+        seconds, _ = timed(lambda: [problem.objective(s) for s in swarms])
+    return 1e3 * seconds / iterations
+
+
+def scaling(face, iterations):
+    """Tables of time per iteration against N, grid and pole count."""
+    print("\nTime per iteration (25 particles, one process), ms; default poles grow with N")
+    print(f"{'N':>5} {'poles':>6} {'ms':>8} {'ms/point':>9} {'6x6: ms':>8} {'ms/point':>9}")
+    for n in (25, 49, 81, 144, 256, 400):
+        ms = per_iteration(face, n, 60, None, iterations)
+        fixed = per_iteration(face, n, 60, 6, iterations)
+        poles = cmmsampling.default_pole_count(n)
+        print(f"{n:>5} {poles:>6} {ms:>8.2f} {ms / n:>9.4f} {fixed:>8.2f} {fixed / n:>9.4f}")
+    print(f"{'grid':>5} {'ms':>8}   (N = 81)")
+    for grid in (30, 60, 120):
+        print(f"{grid:>5} {per_iteration(face, 81, grid, None, iterations):>8.2f}")
+    print(f"{'poles':>5} {'ms':>8}   (N = 81, grid 60)")
+    for poles in (4, 6, 8, 10):
+        print(f"{poles:>5} {per_iteration(face, 81, 60, poles, iterations):>8.2f}")
+
+
+def blas_effect(face, iterations):
+    """Batched fitness with one and with two BLAS threads."""
+    if threadpool_limits is None:
+        print("\n(threadpoolctl missing: BLAS threads not compared)")
+        return
+    problem = make_problem(face, 81, workers=1)
+    swarms = swarm_positions(problem, iterations)
+    print("\nBLAS threads for the batched fitness (N = 81, 25 particles)")
+    for threads in (1, 2):
+        with threadpool_limits(limits=threads, user_api="blas"):
+            seconds, _ = timed(lambda: [problem.objective(s) for s in swarms])
+        print(f"{threads:>3} thread(s): {1e3 * seconds / iterations:.2f} ms per iteration")
+
+
+def peak_memory():
+    """Peak resident set of this process and of its finished or running children, MiB."""
+    own = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    children = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
+    from cmmsampling import parallel
+
+    if parallel._worker is not None:
+        with open(f"/proc/{parallel._worker.process.pid}/status") as status:
+            line = next(line for line in status if line.startswith("VmHWM"))
+        children = max(children, int(line.split()[1]) / 1024)
+    print(f"\nPeak memory: {own:.0f} MiB this process, {children:.0f} MiB worker process")
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--iterations", type=int, default=200, help="iterations for the comparisons")
+    parser.add_argument("--skip-full", action="store_true", help="skip the paper's full runs")
+    args = parser.parse_args()
+    face = cmmsampling.reference_face()
+    print(f"numpy {np.__version__}, {os.cpu_count()} cores")
+    if not args.skip_full:
+        full_runs(face)
+    three_ways(face, args.iterations)
+    scaling(face, max(20, args.iterations // 4))
+    blas_effect(face, args.iterations)
+    peak_memory()
+
+
+if __name__ == "__main__":
+    main()
