@@ -5,6 +5,8 @@ import numpy as np
 
 from .surface import substitute_surface
 
+EXACT_FIT = 1e-10
+
 
 @dataclass
 class SamplingResult:
@@ -35,6 +37,13 @@ class SamplingResult:
     cancelled: bool = False
     check: object = None
     problem: object = None
+    notes: list = field(default_factory=list)
+
+    @property
+    def exact(self):
+        """True when the substitute reproduces the face to rounding (e.g. a plane): every point set
+        is then as good as any other."""
+        return self.deviation.maximum <= EXACT_FIT * self.model.face.BoundBox.DiagonalLength
 
     @property
     def n(self):
@@ -61,7 +70,9 @@ class SamplingResult:
 
     def multiple_of_bound(self, check=False):
         """Maximum deviation as a multiple of the certified lower bound (>= 1), on the grid or the
-        check grid."""
+        check grid; 1 when the fit is exact (see :attr:`exact`)."""
+        if self.exact:
+            return 1.0
         bound = self.bounds()["check" if check else "grid"].lower
         maximum = (self.check if check else self.deviation).maximum
         return maximum / bound if bound > 0 else float("inf")

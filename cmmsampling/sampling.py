@@ -340,4 +340,9 @@ def _judge(problem, outcome, strategy, settings, strategy_s, occ_check):
         occ_s = time.perf_counter() - start
     result.timings = {"strategy_s": strategy_s, "evaluation_s": evaluation_s, "occ_check_s": occ_s,
                       "total_s": strategy_s + evaluation_s + occ_s}
+    if result.exact:
+        result.notes.append(
+            f"the substitute reproduces this face exactly (maximum deviation {stats.maximum:.1e} mm, "
+            "rounding only): it lies in the fit's space, e.g. a plane, so any point set is as good "
+            "as another and optimising cannot improve it")
     return result

@@ -15,6 +15,7 @@ from .bspline import radical_inverse
 CARTESIAN_RASTER = 121
 NEWTON_STEPS = 30
 NEWTON_TOLERANCE = 1e-9
+COINCIDENT = 1e-9
 
 
 @dataclass
@@ -78,14 +79,16 @@ def _dense_enough(make_candidates, problem, start):
 
     make_candidates(m) -> (M, 2) uv for a layout of about m points; start: first m to try.
     Feasible: on the face and at least edge_offset from its edges; spaced: greedily, in the
-    layout's order, at least problem.min_spacing mm apart.
+    layout's order, at least problem.min_spacing mm apart, and never coincident (closer than
+    COINCIDENT times the face's size: several (u, v) of a degenerate edge, e.g. a sphere's pole).
     """
     n = problem.n
     m = start
+    spacing = max(problem.min_spacing, COINCIDENT * problem.model.face.BoundBox.DiagonalLength)
     for _ in range(60):
         uv = make_candidates(m)
         inside = uv[problem.domain.contains(uv)]
-        inside = inside[spaced(problem.model.points(inside), problem.min_spacing)]
+        inside = inside[spaced(problem.model.points(inside), spacing)]
         if len(inside) >= n:
             return thin_evenly(inside, n)
         m = int(np.ceil(m * max(1.1, n / max(len(inside), 1))))
