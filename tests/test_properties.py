@@ -1,0 +1,46 @@
+"""Property-based tests over random NURBS faces (hypothesis): every strategy's points are usable."""
+import numpy as np
+from geometry import FreeCAD, Part
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+import cmmsampling
+from cmmsampling.surface import make_bspline_surface
+
+QUICK = {"pso": {"iterations": 4, "population": 4}, "optimal": {"max_evaluations": 15}}
+
+
+@st.composite
+def nurbs_faces(draw):
+    """A random NURBS face: degrees 1-5, 4-12 poles, weights 0.5-2, sometimes a hole cut through."""
+    n_u, n_v = draw(st.integers(4, 12)), draw(st.integers(4, 12))
+    k_u, k_v = draw(st.integers(1, min(5, n_u - 1))), draw(st.integers(1, min(5, n_v - 1)))
+    seed = draw(st.integers(0, 2**31 - 1))
+    rng = np.random.default_rng(seed)
+    x, y = np.meshgrid(np.linspace(0, 80, n_u), np.linspace(0, 60, n_v), indexing="ij")
+    z = rng.normal(0, 4, x.shape)
+    weights = rng.uniform(0.5, 2.0, x.shape) if draw(st.booleans()) else None
+    face = make_bspline_surface(np.stack([x, y, z], -1), (k_u, k_v), weights=weights).toShape()
+    if draw(st.booleans()):
+        centre = FreeCAD.Vector(rng.uniform(20, 60), rng.uniform(15, 45), -100)
+        pieces = face.cut(Part.makeCylinder(rng.uniform(4, 12), 200, centre)).Faces
+        face = max(pieces, key=lambda f: f.Area)
+    return face
+
+
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(face=nurbs_faces(), strategy=st.sampled_from(sorted(cmmsampling.STRATEGIES)), n=st.integers(6, 16))
+def test_any_face_any_strategy_gives_usable_points(tmp_path_factory, face, strategy, n):
+    result = cmmsampling.sample(face, n, strategy, grid=16, occ_check=False, **QUICK.get(strategy, {}))
+    assert result.points.shape == (n, 3) and np.all(np.isfinite(result.points))
+    assert max(face.distToShape(Part.Vertex(*p))[0] for p in result.points) < 1e-6
+    assert np.allclose(np.linalg.norm(result.normals, axis=1), 1.0)
+    occ = np.array([tuple(result.model.face.normalAt(u, v)) for u, v in result.uv])
+    assert np.abs(occ - result.normals).max() < 1e-6
+    assert result.exact or result.deviation.maximum >= result.bounds()["grid"].lower * (1 - 1e-9)
+    path = str(tmp_path_factory.mktemp("export") / "points.csv")
+    cmmsampling.export(result, path)
+    back = cmmsampling.read_points(path)
+    assert back.labels == result.labels
+    assert np.abs(back.points - result.points).max() < 1e-7
+    assert np.abs(back.normals - result.normals).max() < 1e-7
