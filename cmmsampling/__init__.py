@@ -39,6 +39,7 @@ _API = {
     "PointSet": "pointset",
     "short_path": "probe_path",
     "add_to_document": "document",
+    "reevaluate": "document",
 }
 
 __all__ = sorted(_API)

@@ -1,0 +1,35 @@
+"""The CMM Sampling workbench (run by FreeCAD at start-up; the commands load on activation).
+
+FreeCAD runs this file with exec() inside a function: names imported at its top level are not
+visible in the class body or the methods, so each method imports what it needs.
+"""
+import FreeCADGui
+
+
+class CMMSamplingWorkbench(FreeCADGui.Workbench):
+    """CMM Sampling: place probe points on a free-form face, fit the substitute surface and
+    report its deviation from the CAD model."""
+
+    MenuText = "CMM Sampling"
+    ToolTip = ("Place CMM probe points on a free-form face and judge them by the substitute "
+               "surface's deviation")
+
+    def __init__(self):
+        import importlib.util
+        import os
+
+        package = importlib.util.find_spec("cmmsampling").submodule_search_locations[0]
+        self.__class__.Icon = os.path.join(os.path.dirname(package), "icons", "Workbench.svg")
+
+    def Initialize(self):
+        from cmmsampling.gui import commands
+
+        names = commands.register()
+        self.appendToolbar("CMM Sampling", names)
+        self.appendMenu("CMM Sampling", names)
+
+    def GetClassName(self):
+        return "Gui::PythonWorkbench"
+
+
+FreeCADGui.addWorkbench(CMMSamplingWorkbench())

@@ -1,0 +1,472 @@
+"""Sampling results as FreeCAD document objects: probe points, substitute surface, deviation report.
+
+One call adds them, in the GUI, the Python console or headless::
+
+    group = cmmsampling.add_to_document(result, doc, source=(body, "Face3"))
+    points, surface, report = group.Group
+
+``points`` is a Part::FeaturePython holding a compound of N vertices and the per-point data;
+``surface`` the fitted substitute face with its deviation field; ``report`` a spreadsheet.
+After the CAD face changed, :func:`reevaluate` projects the same (u, v) onto it and measures again.
+
+This module never imports the GUI: view providers are attached only when ``FreeCAD.GuiUp``.
+Lengths are in mm, times in s.
+"""
+import json
+
+import numpy as np
+
+from .freecad_env import import_part
+from .pointset import PointSet
+from .sampling import evaluate
+from .surface import SurfaceModel
+
+Part = import_part()
+import FreeCAD  # noqa: E402  (importable once import_part() has set the path)
+
+POINT_TOLERANCE_MM = 1e-7
+FIT_SETTINGS = ("fit_degree", "fit_poles", "smoothing", "grid")
+SUMMARY_FIGURES = (
+    ("MaxDeviation", "maximum", "Largest deviation of the substitute from the face on the grid"),
+    ("MeanDeviation", "mean", "Mean deviation on the grid"),
+    ("RmsDeviation", "rms", "Root-mean-square deviation on the grid"),
+    ("StdDeviation", "std", "Standard deviation of the deviation on the grid"),
+    ("OccMaxDeviation", "occ_maximum", "The maximum again, both surfaces evaluated by OpenCASCADE"),
+)
+
+
+def add_to_document(result, doc, source=None, hide_source=True):
+    """Add a SamplingResult to ``doc`` in one transaction (one Undo removes it all).
+
+    result: a :class:`cmmsampling.SamplingResult`; doc: a FreeCAD document;
+    source: ``(obj, "Face3")``, the document face the result was sampled on, or None;
+    hide_source: hide the source object, on which the substitute surface lies (Undo shows it again).
+    Creates a group "Sampling <label> <face>" holding the probe points, the substitute surface
+    and the deviation report (in that order) and returns the group.
+    """
+    source = _check_source(source, doc)
+    doc.openTransaction("Add sampling result")
+    try:
+        group = doc.addObject("App::DocumentObjectGroup", "Sampling")
+        group.Label = _group_label(result, source)
+        surface = make_substitute_surface(doc)
+        report = doc.addObject("Spreadsheet::Sheet", "DeviationReport")
+        report.Label = "Deviation report"
+        points = make_probe_points(doc, source, surface, report)
+        group.addObjects([points, surface, report])
+        write_result(points, result, dict(result.settings), result.timings.get("total_s", 0.0))
+        if source is not None and hide_source:
+            source[0].Visibility = False
+        doc.recompute()
+    except Exception:
+        doc.abortTransaction()
+        raise
+    doc.commitTransaction()
+    return group
+
+
+def reevaluate(points, occ_check=True):
+    """Measure the probe points again on their (possibly changed) source face.
+
+    points: a probe-points object made by :func:`add_to_document`. Keeps each point's (u, v),
+    projects it onto the face as it is now, refits the substitute with the stored fit and grid
+    settings (no optimisation) and updates the points, the substitute surface and the report in
+    one transaction. Returns the new SamplingResult.
+    Raises ValueError when the source face is gone (the object is orphaned) or was never set.
+    """
+    face, problem = source_face(points)
+    if face is None:
+        raise ValueError(f"cannot re-evaluate {points.Label}: {problem}")
+    settings = json.loads(points.Parameters)
+    uv = np.column_stack([points.U, points.V])
+    fit = {key: settings[key] for key in FIT_SETTINGS if key in settings}
+    result = evaluate(face, uv, strategy=points.Strategy, occ_check=occ_check, **fit)
+    doc = points.Document
+    doc.openTransaction("Re-evaluate probe points")
+    try:
+        write_result(points, result, settings, points.RunTime)
+        doc.recompute()
+    except Exception:
+        doc.abortTransaction()
+        raise
+    doc.commitTransaction()
+    return result
+
+
+def source_face(points):
+    """The probe points' source face as it is now: (Part.Face, None), or (None, why not)."""
+    if points.Source is None:
+        if points.SourceName:
+            return None, f"its source face {points.SourceName} was deleted"
+        return None, "it was made without a source face"
+    obj, names = points.Source
+    name = names[0] if names else ""
+    face = obj.getSubObject(name) if name else None
+    if not isinstance(face, Part.Face):
+        return None, f"{obj.Label} has no {name or 'face'} any more"
+    return face, None
+
+
+def write_result(points, result, settings, run_time_s):
+    """Write a result into the probe points and their linked substitute surface and report.
+
+    settings: the parameters of the original run (JSON-friendly dict); run_time_s: its duration.
+    """
+    point_set = PointSet.from_result(result, points.SourceName)
+    points.Labels = list(point_set.labels)
+    points.Points = [FreeCAD.Vector(*p) for p in point_set.points]
+    points.Normals = [FreeCAD.Vector(*n) for n in point_set.normals]
+    points.U = [float(u) for u in point_set.uv[:, 0]]
+    points.V = [float(v) for v in point_set.uv[:, 1]]
+    points.Deviation = [float(d) for d in point_set.deviation]
+    points.Strategy = result.strategy
+    points.Parameters = json.dumps(settings, default=_json_value)
+    points.RunTime = float(run_time_s)
+    points.Cancelled = bool(result.cancelled)
+    for prop, attribute, _ in SUMMARY_FIGURES:
+        setattr(points, prop, float(getattr(result.deviation, attribute)))
+    if points.Substitute is not None:
+        write_substitute(points.Substitute, result)
+    if points.Report is not None:
+        write_report(points.Report, points)
+
+
+def make_probe_points(doc, source=None, surface=None, report=None):
+    """A probe-points object (Part::FeaturePython), empty until :func:`write_result` fills it."""
+    obj = doc.addObject("Part::FeaturePython", "ProbePoints")
+    ProbePoints(obj)
+    obj.Label = "Probe points"
+    if source is not None:
+        obj.Source = (source[0], [source[1]])
+        obj.SourceName = f"{source[0].Label}:{source[1]}"
+    obj.Substitute = surface
+    obj.Report = report
+    if FreeCAD.GuiUp:
+        from .gui import view_providers
+
+        view_providers.ViewProviderProbePoints(obj.ViewObject)
+    return obj
+
+
+def make_substitute_surface(doc):
+    """A substitute-surface object (Part::FeaturePython), empty until :func:`write_substitute`."""
+    obj = doc.addObject("Part::FeaturePython", "SubstituteSurface")
+    SubstituteSurface(obj)
+    obj.Label = "Substitute surface"
+    if FreeCAD.GuiUp:
+        from .gui import view_providers
+
+        view_providers.ViewProviderSubstituteSurface(obj.ViewObject)
+    return obj
+
+
+def write_substitute(surface, result):
+    """The fitted surface as the object's shape, with the deviation field of the result."""
+    stats = result.deviation
+    surface.Shape = result.substitute.toShape()
+    surface.GridU = [float(u) for u in stats.grid_uv[:, 0, 0]]
+    surface.GridV = [float(v) for v in stats.grid_uv[0, :, 1]]
+    surface.DeviationField = [float(d) for d in np.ravel(stats.field)]
+    surface.MaxDeviation = float(stats.maximum)
+
+
+def write_report(sheet, points):
+    """Fill the spreadsheet with the probe points' summary and per-point table.
+
+    The summary figures get aliases (strategy, n, max_mm, mean_mm, rms_mm, std_mm, occ_max_mm,
+    time_s) for expressions such as ``=DeviationReport.max_mm``.
+    """
+    sheet.clearAll()
+    summary = summary_rows(points)
+    rows = [row[:2] for row in summary] + parameter_rows(points) + [()] + table_rows(points)
+    for row, values in enumerate(rows, start=1):
+        for column, value in zip("ABCDEFGHIJ", values):
+            sheet.set(f"{column}{row}", _cell_text(value))
+    for row, entry in enumerate(summary, start=1):
+        if len(entry) == 3:
+            sheet.setAlias(f"B{row}", entry[2])
+    header = len(rows) - len(points.Labels)
+    sheet.setStyle("A1", "bold")
+    sheet.setStyle(f"A{header}:J{header}", "bold")
+
+
+def summary_rows(points):
+    """The report's summary: rows (name, value[, alias])."""
+    return [
+        ("CMM sampling report",),
+        ("Source", points.SourceName or "(none)"),
+        ("Strategy", points.Strategy, "strategy"),
+        ("Points", len(points.Labels), "n"),
+        ("Max deviation (mm)", points.MaxDeviation.Value, "max_mm"),
+        ("Mean deviation (mm)", points.MeanDeviation.Value, "mean_mm"),
+        ("RMS deviation (mm)", points.RmsDeviation.Value, "rms_mm"),
+        ("Std deviation (mm)", points.StdDeviation.Value, "std_mm"),
+        ("OCC max deviation (mm)", points.OccMaxDeviation.Value, "occ_max_mm"),
+        ("Sampling time (s)", points.RunTime, "time_s"),
+        ("Cancelled", "yes" if points.Cancelled else "no"),
+    ]
+
+
+def parameter_rows(points):
+    """The run's parameters other than strategy and N: rows (name, value)."""
+    settings = json.loads(points.Parameters)
+    return [(key, _parameter_text(value)) for key, value in settings.items()
+            if key not in ("strategy", "n")]
+
+
+def table_rows(points):
+    """The per-point table: a header and rows (label, x, y, z, i, j, k, u, v, deviation)."""
+    header = ("Label", "X (mm)", "Y (mm)", "Z (mm)", "I", "J", "K", "U", "V", "Deviation (mm)")
+    return [header] + [
+        (label, p.x, p.y, p.z, n.x, n.y, n.z, u, v, d)
+        for label, p, n, u, v, d in zip(points.Labels, points.Points, points.Normals,
+                                        points.U, points.V, points.Deviation)
+    ]
+
+
+class ProbePoints:
+    """Proxy of the probe-points object: N labelled points with approach vectors on a face.
+
+    Properties: Labels; Points (mm) and Normals (unit, out of the material); U, V (face
+    parameters); Deviation (mm, substitute to face at each point); Source (the face) and
+    SourceName ('Label:FaceK', kept when the face is deleted);
+    Strategy, Parameters (JSON), RunTime (s), Cancelled; the deviation summary (mm);
+    Substitute and Report (the other two result objects); Orphaned, Outdated, Status.
+    """
+
+    Type = "CMMSampling::ProbePoints"
+
+    def __init__(self, obj):
+        obj.Proxy = self
+        self.add_properties(obj)
+
+    @staticmethod
+    def add_properties(obj):
+        """Create the properties (read-only where they come from a run)."""
+        points = [
+            ("App::PropertyStringList", "Labels", "Point labels P1..PN"),
+            ("App::PropertyVectorList", "Points", "Probe points on the face (mm)"),
+            ("App::PropertyVectorList", "Normals",
+             "Approach vectors: unit normals out of the material (the probe travels along -normal)"),
+            ("App::PropertyFloatList", "U", "Face parameter u of each point"),
+            ("App::PropertyFloatList", "V", "Face parameter v of each point"),
+            ("App::PropertyFloatList", "Deviation",
+             "Distance from the substitute surface to the face at each point (mm)"),
+        ]
+        sampling = [
+            ("App::PropertyString", "Strategy", "Sampling strategy of the run"),
+            ("App::PropertyString", "Parameters", "Every parameter of the run (JSON)"),
+            ("App::PropertyFloat", "RunTime", "Duration of the sampling run (s)"),
+            ("App::PropertyBool", "Cancelled", "The run was stopped early (best points so far)"),
+        ]
+        status = [
+            ("App::PropertyString", "SourceName", "The sampled face when the points were made"),
+            ("App::PropertyBool", "Orphaned", "The source face was deleted"),
+            ("App::PropertyBool", "Outdated",
+             "The source face no longer passes through the points; run Re-evaluate"),
+            ("App::PropertyString", "Status", "Whether the points still match their face"),
+        ]
+        for group, props in (("Probe points", points), ("Sampling", sampling), ("Source", status)):
+            for kind, name, doc in props:
+                obj.addProperty(kind, name, group, doc)
+                obj.setEditorMode(name, 1)
+        for prop, _, doc in SUMMARY_FIGURES:
+            obj.addProperty("App::PropertyLength", prop, "Deviation", doc + " (mm)")
+            obj.setEditorMode(prop, 1)
+        obj.addProperty("App::PropertyLinkSubGlobal", "Source", "Source", "The sampled face")
+        obj.addProperty("App::PropertyLink", "Substitute", "Results", "The substitute surface")
+        obj.addProperty("App::PropertyLink", "Report", "Results", "The deviation report sheet")
+
+    def execute(self, obj):
+        """Shape: a compound of the points as vertices; Status: whether the face still fits."""
+        obj.Shape = Part.makeCompound([Part.Vertex(p) for p in obj.Points])
+        face, problem = source_face(obj)
+        obj.Orphaned = face is None and bool(obj.SourceName)
+        obj.Outdated = face is not None and not _passes_through(face, obj)
+        if obj.Orphaned:
+            obj.Status = f"orphaned: {problem}"
+            FreeCAD.Console.PrintWarning(f"{obj.Label} is orphaned: {problem}\n")
+        elif face is None:
+            obj.Status = problem
+        elif obj.Outdated:
+            obj.Status = "outdated: the source face changed; run Re-evaluate"
+        else:
+            obj.Status = "up to date"
+
+    def onDocumentRestored(self, obj):
+        _view_provider_when_missing(obj)
+
+    def point_set(self, obj):
+        """The probe points as a :class:`cmmsampling.pointset.PointSet`."""
+        settings = json.loads(obj.Parameters or "{}")
+        metadata = {
+            "source": obj.SourceName, **settings,
+            **{key: getattr(obj, prop).Value for prop, key in (
+                ("MaxDeviation", "max_mm"), ("MeanDeviation", "mean_mm"), ("RmsDeviation", "rms_mm"),
+                ("StdDeviation", "std_mm"), ("OccMaxDeviation", "occ_max_mm"))},
+        }
+        return PointSet(
+            labels=list(obj.Labels),
+            points=np.array([tuple(p) for p in obj.Points], dtype=float).reshape(-1, 3),
+            normals=np.array([tuple(n) for n in obj.Normals], dtype=float).reshape(-1, 3),
+            uv=np.column_stack([obj.U, obj.V]).reshape(-1, 2),
+            deviation=np.array(obj.Deviation, dtype=float),
+            metadata=metadata,
+        )
+
+    def __getstate__(self):
+        return {"Type": self.Type}
+
+    def __setstate__(self, state):
+        return None
+
+    def dumps(self):
+        return self.__getstate__()
+
+    def loads(self, state):
+        return self.__setstate__(state)
+
+
+class SubstituteSurface:
+    """Proxy of the substitute surface: the fitted B-spline face and its deviation field.
+
+    Properties: Shape (the fitted face); GridU (g_u), GridV (g_v): the evaluation grid's
+    parameters; DeviationField: g_u * g_v deviations in mm, row-major (u first), NaN off the face;
+    MaxDeviation (mm).
+    """
+
+    Type = "CMMSampling::SubstituteSurface"
+
+    def __init__(self, obj):
+        obj.Proxy = self
+        for kind, name, doc in (
+            ("App::PropertyFloatList", "GridU", "Parameters u of the evaluation grid"),
+            ("App::PropertyFloatList", "GridV", "Parameters v of the evaluation grid"),
+            ("App::PropertyFloatList", "DeviationField",
+             "Deviation from the face at each grid node (mm), u-major, NaN off the face"),
+            ("App::PropertyLength", "MaxDeviation", "Largest deviation on the grid (mm)"),
+        ):
+            obj.addProperty(kind, name, "Deviation", doc)
+            obj.setEditorMode(name, 1)
+
+    def execute(self, obj):
+        """Nothing to rebuild: the shape is written with the result."""
+
+    def onDocumentRestored(self, obj):
+        _view_provider_when_missing(obj)
+
+    def deviation_grid(self, obj):
+        """(GridU (g_u,), GridV (g_v,), field (g_u, g_v) mm) as numpy arrays."""
+        u = np.array(obj.GridU, dtype=float)
+        v = np.array(obj.GridV, dtype=float)
+        return u, v, np.array(obj.DeviationField, dtype=float).reshape(len(u), len(v))
+
+    def __getstate__(self):
+        return {"Type": self.Type}
+
+    def __setstate__(self, state):
+        return None
+
+    def dumps(self):
+        return self.__getstate__()
+
+    def loads(self, state):
+        return self.__setstate__(state)
+
+
+def export(objects, filename):
+    """FreeCAD's File > Export hook (registered in Init.py): write the one probe-points object
+    among ``objects`` (directly or inside a Sampling group) with :func:`cmmsampling.export`; the
+    format follows the file's extension (.dmi/.dmis DMIS, .xyz PC-DMIS XYZIJK, .csv CSV).
+
+    Raises ValueError unless exactly one probe-points object is found.
+    """
+    from .exporting import export as write_points
+
+    found = probe_points_in(objects)
+    if len(found) != 1:
+        raise ValueError(f"select exactly one set of probe points (or its Sampling group) to export, "
+                         f"found {len(found)}")
+    return write_points(found[0], filename)
+
+
+def probe_points_in(objects):
+    """The probe-points objects among ``objects`` and inside those that are groups, once each."""
+    found = []
+    for obj in objects:
+        for candidate in [obj] + list(getattr(obj, "Group", [])):
+            if is_probe_points(candidate) and candidate not in found:
+                found.append(candidate)
+    return found
+
+
+def is_probe_points(obj):
+    """True for a probe-points object made by this module."""
+    return isinstance(getattr(obj, "Proxy", None), ProbePoints)
+
+
+def _view_provider_when_missing(obj):
+    """In the GUI, give an object restored from a document saved headless its view provider."""
+    if FreeCAD.GuiUp:
+        from .gui import view_providers
+
+        view_providers.attach_when_missing(obj)
+
+
+def _passes_through(face, points):
+    """True when the face at the stored (u, v) still gives the stored points."""
+    if not points.Points:
+        return True
+    uv = np.column_stack([points.U, points.V])
+    now = SurfaceModel.from_face(face).points(uv)
+    stored = np.array([tuple(p) for p in points.Points], dtype=float)
+    return bool(np.abs(now - stored).max() <= POINT_TOLERANCE_MM)
+
+
+def _check_source(source, doc):
+    """(obj, "FaceK") checked against doc, or None."""
+    if source is None:
+        return None
+    if not (isinstance(source, (tuple, list)) and len(source) == 2 and isinstance(source[1], str)):
+        raise TypeError(f"source must be (obj, 'FaceK') or None, got {source!r}")
+    obj, name = source
+    if getattr(getattr(obj, "Document", None), "Name", None) != doc.Name:
+        raise ValueError(f"source object {getattr(obj, 'Name', obj)!r} is not in document {doc.Name!r}")
+    if not isinstance(obj.getSubObject(name), Part.Face):
+        raise ValueError(f"source {obj.Label}.{name} is not a face; name one like 'Face1'")
+    return obj, name
+
+
+def _group_label(result, source):
+    """'Sampling <object label> <face>' or 'Sampling <strategy>' without a source."""
+    if source is None:
+        return f"Sampling {result.strategy}"
+    return f"Sampling {source[0].Label} {source[1]}"
+
+
+def _json_value(value):
+    """JSON fallback for numpy scalars and arrays."""
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, np.generic):
+        return value.item()
+    raise TypeError(f"{type(value).__name__} is not JSON-serialisable")
+
+
+def _parameter_text(value):
+    """A run parameter as report text: (u, v) pairs as 'a x b', other lists as JSON."""
+    if isinstance(value, (list, tuple)):
+        if len(value) == 2 and all(isinstance(v, (int, float)) for v in value):
+            return f"{value[0]} x {value[1]}"
+        return json.dumps(value)
+    return value
+
+
+def _cell_text(value):
+    """Spreadsheet cell content: numbers in full precision, text as entered (never a formula)."""
+    if isinstance(value, bool):
+        return "yes" if value else "no"
+    if isinstance(value, (int, float, np.floating, np.integer)):
+        return format(float(value), ".10g")
+    text = str(value)
+    return "'" + text if text.startswith(("=", "'")) else text

@@ -1,0 +1,123 @@
+"""Deviation colours (blue, cyan, green, yellow, red from 0 to the maximum) and their legend.
+
+The legend is a coin3d overlay drawn in the 3D view's corner, like the Inspection workbench's
+colour bar: a column of colour bands with tick labels in mm.
+"""
+import numpy as np
+from pivy import coin
+
+STOPS = np.array([
+    [0.0, 0.0, 1.0],
+    [0.0, 1.0, 1.0],
+    [0.0, 1.0, 0.0],
+    [1.0, 1.0, 0.0],
+    [1.0, 0.0, 0.0],
+])
+OFF_FACE = (0.6, 0.6, 0.6)
+LEGEND_BANDS = 40
+LEGEND_TICKS = 5
+LEGEND_X = (0.86, 0.90)
+LEGEND_Y = (-0.55, 0.55)
+TEXT_COLOUR = (0.0, 0.0, 0.0)
+FONT_SIZE = 14
+
+
+def colours(values, maximum):
+    """RGB in [0, 1] for deviations: values (...) mm -> (..., 3), NaN -> grey.
+
+    0 maps to blue and ``maximum`` (mm, > 0) to red, linearly through cyan, green and yellow.
+    """
+    values = np.asarray(values, dtype=float)
+    scaled = np.clip(np.nan_to_num(values / maximum if maximum > 0 else values * 0), 0, 1)
+    position = scaled * (len(STOPS) - 1)
+    low = np.minimum(position.astype(int), len(STOPS) - 2)
+    weight = (position - low)[..., None]
+    rgb = STOPS[low] * (1 - weight) + STOPS[low + 1] * weight
+    rgb[np.isnan(values)] = OFF_FACE
+    return rgb
+
+
+def tick_labels(maximum, count=LEGEND_TICKS):
+    """count labels from 0 to maximum mm, e.g. ['0.000 mm', ..., '1.053 mm']."""
+    digits = max(0, 3 - int(np.floor(np.log10(maximum)))) if maximum > 0 else 3
+    return [f"{value:.{digits}f} mm" for value in np.linspace(0, maximum, count)]
+
+
+def legend(maximum, title="Deviation"):
+    """A coin overlay (SoAnnotation) with the colour bar from 0 to ``maximum`` mm at the right.
+
+    It has its own orthographic camera (the view's [-1, 1] square), is not pickable and does not
+    count in the scene's bounding box (so "fit all" ignores it).
+    """
+    overlay = coin.SoAnnotation()
+    skip = coin.SoType.fromName("SoSkipBoundingGroup").createInstance()
+    overlay.addChild(skip)
+    camera = coin.SoOrthographicCamera()
+    camera.viewportMapping = coin.SoCamera.LEAVE_ALONE
+    camera.position = (0, 0, 5)
+    camera.height = 2
+    camera.nearDistance = 1
+    camera.farDistance = 10
+    pick = coin.SoPickStyle()
+    pick.style = coin.SoPickStyle.UNPICKABLE
+    light = coin.SoLightModel()
+    light.model = coin.SoLightModel.BASE_COLOR
+    for node in (pick, camera, light, _bar(maximum), _labels(maximum, title)):
+        skip.addChild(node)
+    return overlay
+
+
+def _bar(maximum):
+    """The colour bands: LEGEND_BANDS quads between LEGEND_Y, coloured at their corners."""
+    x0, x1 = LEGEND_X
+    heights = np.linspace(*LEGEND_Y, LEGEND_BANDS + 1)
+    coords = [(x, y, 0.0) for y in heights for x in (x0, x1)]
+    rgb = colours(np.repeat(np.linspace(0, maximum, LEGEND_BANDS + 1), 2), maximum)
+    index = []
+    for band in range(LEGEND_BANDS):
+        a = 2 * band
+        index += [a, a + 1, a + 3, a + 2, -1]
+    node = coin.SoSeparator()
+    material = coin.SoMaterial()
+    material.diffuseColor.setValues(0, len(rgb), [tuple(map(float, c)) for c in rgb])
+    binding = coin.SoMaterialBinding()
+    binding.value = coin.SoMaterialBinding.PER_VERTEX_INDEXED
+    coordinates = coin.SoCoordinate3()
+    coordinates.point.setValues(0, len(coords), coords)
+    faces = coin.SoIndexedFaceSet()
+    faces.coordIndex.setValues(0, len(index), index)
+    faces.materialIndex.setValues(0, len(index), index)
+    for child in (material, binding, coordinates, faces):
+        node.addChild(child)
+    return node
+
+
+def _labels(maximum, title):
+    """Tick labels left of the bar and the title above it, as screen-aligned text."""
+    node = coin.SoSeparator()
+    colour = coin.SoBaseColor()
+    colour.rgb = TEXT_COLOUR
+    font = coin.SoFont()
+    font.name = "Sans"
+    font.size = FONT_SIZE
+    node.addChild(colour)
+    node.addChild(font)
+    heights = np.linspace(*LEGEND_Y, LEGEND_TICKS)
+    for text, y in zip(tick_labels(maximum), heights):
+        node.addChild(text_at(text, (LEGEND_X[0] - 0.01, float(y) - 0.015, 0.0), right=True))
+    node.addChild(text_at(title, (LEGEND_X[1], LEGEND_Y[1] + 0.05, 0.0), right=True))
+    return node
+
+
+def text_at(text, position, right=False):
+    """A separator with screen-aligned text (SoText2) at position (x, y, z)."""
+    node = coin.SoSeparator()
+    move = coin.SoTranslation()
+    move.translation = position
+    label = coin.SoText2()
+    label.string = text
+    if right:
+        label.justification = coin.SoText2.RIGHT
+    node.addChild(move)
+    node.addChild(label)
+    return node

@@ -1,0 +1,193 @@
+"""The workbench's commands. Each is active only when it can act; otherwise its status tip and
+tooltip say why. What they change in the document goes through the console API, echoed in the
+Python console (``Gui.doCommand``)."""
+import os
+
+import FreeCAD
+import FreeCADGui
+from PySide import QtGui
+
+from .. import document
+from . import icon
+from .selection import SelectionError, selected_face
+
+
+def show_reason(name, reason, tip):
+    """Put ``reason`` (or, when None, the normal ``tip``) in the command's status tip and tooltip."""
+    text = tip if reason is None else reason
+    for action in FreeCADGui.Command.get(name).getAction():
+        if action.statusTip() != text:
+            action.setStatusTip(text)
+            action.setToolTip(text)
+
+
+def warn(title, text):
+    """A message box on the main window."""
+    QtGui.QMessageBox.warning(FreeCADGui.getMainWindow(), title, text)
+
+
+class SampleFace:
+    """*Sample face...*: open the task panel for the one selected face."""
+
+    NAME = "CMMSampling_SampleFace"
+    TIP = ("Place CMM probe points on the selected face with a sampling strategy, fit the "
+           "substitute surface and report its deviation (mm)")
+
+    def GetResources(self):
+        return {"Pixmap": icon("SampleFace.svg"), "MenuText": "Sample face...", "ToolTip": self.TIP}
+
+    def reason(self):
+        """Why the command cannot act now, or None."""
+        if FreeCAD.ActiveDocument is None:
+            return "Open a document with a part first."
+        if FreeCADGui.Control.activeDialog():
+            return "Close the open task panel first."
+        try:
+            selected_face(FreeCADGui.Selection.getSelectionEx())
+        except SelectionError as exc:
+            return str(exc)
+        return None
+
+    def IsActive(self):
+        reason = self.reason()
+        show_reason(self.NAME, reason, self.TIP)
+        return reason is None
+
+    def Activated(self):
+        from .task_panel import SampleFaceTaskPanel
+
+        reason = self.reason()
+        if reason is not None:
+            warn("Sample face", reason)
+            return
+        source = selected_face(FreeCADGui.Selection.getSelectionEx())
+        FreeCADGui.Control.showDialog(SampleFaceTaskPanel(source))
+
+
+class Reevaluate:
+    """*Re-evaluate*: measure the selected probe points again on their (changed) source face."""
+
+    NAME = "CMMSampling_Reevaluate"
+    TIP = ("Project the selected probe points (same u, v) onto their source face as it is now, "
+           "refit the substitute surface and update the deviation, without a new optimisation")
+
+    def GetResources(self):
+        return {"Pixmap": icon("Reevaluate.svg"), "MenuText": "Re-evaluate", "ToolTip": self.TIP}
+
+    def reason(self):
+        """Why the command cannot act now, or None."""
+        points = selected_probe_points()
+        if not points:
+            return "Select probe points or their Sampling group to re-evaluate them."
+        problems = []
+        for obj in points:
+            face, why = document.source_face(obj)
+            if face is None:
+                problems.append(f"{obj.Label} cannot be re-evaluated: {why}.")
+        return " ".join(problems) if len(problems) == len(points) else None
+
+    def IsActive(self):
+        reason = self.reason()
+        show_reason(self.NAME, reason, self.TIP)
+        return reason is None
+
+    def Activated(self):
+        reason = self.reason()
+        if reason is not None:
+            warn("Re-evaluate", reason)
+            return
+        FreeCADGui.doCommand("import cmmsampling.document")
+        for points in selected_probe_points():
+            if document.source_face(points)[0] is None:
+                continue
+            try:
+                FreeCADGui.doCommand(
+                    f"cmmsampling.document.reevaluate(App.getDocument({points.Document.Name!r})"
+                    f".getObject({points.Name!r}))")
+            except Exception as exc:
+                warn("Re-evaluate", f"{points.Label}: {exc}")
+
+
+class ExportProbePoints:
+    """*Export probe points...*: write the selected probe points for the CMM (DMIS, XYZ or CSV)."""
+
+    NAME = "CMMSampling_Export"
+    TIP = ("Write the selected probe points with their approach vectors for the CMM: "
+           "DMIS input program, PC-DMIS XYZIJK text or CSV")
+
+    def GetResources(self):
+        return {"Pixmap": icon("Export.svg"), "MenuText": "Export probe points...", "ToolTip": self.TIP}
+
+    def reason(self):
+        """Why the command cannot act now, or None."""
+        points = selected_probe_points()
+        if not points:
+            return "Select the probe points (or their Sampling group) to export."
+        if len(points) > 1:
+            return f"{len(points)} sets of probe points are selected: select one to export."
+        return None
+
+    def IsActive(self):
+        reason = self.reason()
+        show_reason(self.NAME, reason, self.TIP)
+        return reason is None
+
+    def Activated(self):
+        reason = self.reason()
+        if reason is not None:
+            warn("Export probe points", reason)
+            return
+        [points] = selected_probe_points()
+        path = choose_export_path(points)
+        if not path:
+            return
+        FreeCADGui.doCommand("import cmmsampling")
+        try:
+            FreeCADGui.doCommand(
+                f"cmmsampling.export(App.getDocument({points.Document.Name!r})"
+                f".getObject({points.Name!r}), {path!r})")
+        except Exception as exc:
+            warn("Export probe points", str(exc))
+
+
+def export_filters():
+    """File dialog filters, one per export format: [(filter text, extensions)]."""
+    from ..pointfiles import EXTENSIONS, FORMATS
+
+    filters = []
+    for name, description in FORMATS.items():
+        extensions = [e for e, fmt in EXTENSIONS.items() if fmt == name]
+        filters.append((f"{description} ({' '.join('*' + e for e in extensions)})", extensions))
+    return filters
+
+
+def choose_export_path(points):
+    """Ask for the file to write; '' when the user cancels. Without a known extension, the one of
+    the chosen format is added."""
+    filters = export_filters()
+    folder = os.path.dirname(points.Document.FileName) or os.path.expanduser("~")
+    groups = [o.Label for o in points.InList if o.isDerivedFrom("App::DocumentObjectGroup")]
+    start = os.path.join(folder, (groups or [points.Label])[0] + filters[0][1][0])
+    path, chosen = QtGui.QFileDialog.getSaveFileName(
+        FreeCADGui.getMainWindow(), "Export probe points", start, ";;".join(text for text, _ in filters))
+    if not path:
+        return ""
+    known = [e for _, extensions in filters for e in extensions]
+    if os.path.splitext(path)[1].lower() not in known:
+        path += next((extensions[0] for text, extensions in filters if text == chosen), filters[0][1][0])
+    return path
+
+
+def selected_probe_points():
+    """Probe-points objects among the selected objects and inside selected groups."""
+    return document.probe_points_in(FreeCADGui.Selection.getSelection())
+
+
+COMMANDS = (SampleFace, ExportProbePoints, Reevaluate)
+
+
+def register():
+    """Add the commands to FreeCAD; returns their names in toolbar order."""
+    for command in COMMANDS:
+        FreeCADGui.addCommand(command.NAME, command())
+    return [command.NAME for command in COMMANDS]

@@ -1,0 +1,51 @@
+"""Which face the user selected, or a sentence saying what to select instead."""
+import Part
+
+NOTHING = "Nothing is selected: select one face of a part in the 3D view (or a one-face object in the tree)."
+ELEMENT_KINDS = {"Edge": "an edge", "Vertex": "a vertex", "Facet": "a mesh facet"}
+
+
+class SelectionError(ValueError):
+    """The selection is not exactly one face; the message says what to select."""
+
+
+def selected_face(selection):
+    """(obj, "FaceK") for a selection that is exactly one face of a shape.
+
+    selection: Gui.Selection.getSelectionEx() (SelectionObjects with Object, SubElementNames).
+    A whole object counts when its shape has exactly one face. Raises SelectionError otherwise.
+    """
+    if not selection:
+        raise SelectionError(NOTHING)
+    faces = [face for item in selection for face in faces_of(item.Object, item.SubElementNames)]
+    if len(faces) != 1:
+        names = ", ".join(f"{obj.Label}.{name}" for obj, name in faces)
+        raise SelectionError(f"{len(faces)} faces are selected ({names}): select exactly one.")
+    return faces[0]
+
+
+def faces_of(obj, names):
+    """The (obj, "FaceK") named by a selection of obj's elements ``names`` (empty: the object).
+
+    Raises SelectionError for meshes, objects without a shape and elements that are not faces.
+    """
+    if obj.isDerivedFrom("Mesh::Feature") or obj.isDerivedFrom("Points::Feature"):
+        raise SelectionError(
+            f"{obj.Label} is a mesh or point cloud, which has no exact faces: select a face of a part "
+            "(convert a mesh with Part > Create shape from mesh first)."
+        )
+    shape = getattr(obj, "Shape", None)
+    if not isinstance(shape, Part.Shape) or shape.isNull():
+        raise SelectionError(f"{obj.Label} has no shape: select a face of a part.")
+    if not names:
+        if len(shape.Faces) == 1:
+            return [(obj, "Face1")]
+        raise SelectionError(
+            f"{obj.Label} has {len(shape.Faces)} faces: click the one to sample in the 3D view."
+        )
+    for name in names:
+        if not name.startswith("Face"):
+            kind = next((text for prefix, text in ELEMENT_KINDS.items() if name.startswith(prefix)),
+                        "not a face")
+            raise SelectionError(f"{obj.Label}.{name} is {kind}: select a face.")
+    return [(obj, name) for name in names]

@@ -1,0 +1,312 @@
+"""The *Sample face* task panel: face, strategy, N, swarm, fit and grid settings; a background run.
+
+The run is ``cmmsampling.sample(...)`` in a worker thread (:class:`BackgroundSampling`), polled by
+a QTimer; Cancel stops it and leaves the document untouched. The result is written by the GUI
+thread through the console API (``cmmsampling.add_to_document``), echoed in the Python
+console.
+"""
+import __main__
+
+import FreeCAD
+import FreeCADGui
+from PySide import QtCore, QtGui
+
+from .. import sampling
+from ..deviation import DEFAULT_GRID
+from ..fitting import DEFAULT_DEGREE, default_pole_count
+from . import icon, resource, settings
+from .selection import SelectionError, selected_face
+from .worker import BackgroundSampling
+
+POLL_MS = 100
+CANCEL_WAIT_S = 1.0
+ERROR_STYLE = "color: #b00000;"
+COMMON = ("n", "seed", "fit_degree", "auto_poles", "fit_poles_u", "fit_poles_v", "grid")
+OPTION_GROUPS = ("psoGroup", "optimalGroup")
+# Panel stand-ins for options whose default None means automatic or unlimited.
+STAND_INS = {"time_limit": 0.0, "max_evaluations": 0}
+
+
+def option_defaults():
+    """The panel's defaults of the strategies' options by name: the core's (the paper's values
+    for the swarm), with STAND_INS where the core's default is None."""
+    defaults = {}
+    for strategy in sampling.STRATEGIES.values():
+        for name, value in strategy.options.items():
+            value = STAND_INS.get(name) if value is None else value
+            if isinstance(value, (bool, int, float, str)):
+                defaults[name] = value
+    return defaults
+
+
+def panel_defaults():
+    """Every value of the panel with its default: strategy, N, seed, options, fit, grid."""
+    return {
+        "strategy": "pso", "n": 81, "seed": 0, **option_defaults(),
+        "fit_degree": DEFAULT_DEGREE, "auto_poles": True,
+        "fit_poles_u": default_pole_count(81), "fit_poles_v": default_pole_count(81),
+        "grid": DEFAULT_GRID,
+    }
+
+
+def option_argument(name, values):
+    """The value of strategy option ``name`` for sample(), from the panel's values: the limits
+    shown as 0 ("no limit") become None."""
+    if name in STAND_INS:
+        return values[name] or None
+    return values[name]
+
+
+def progress_total(arguments):
+    """(what a progress step is, how many there will be or 0 when unknown) for a run."""
+    if "iterations" in arguments:
+        return "Iteration", arguments["iterations"]
+    return "Evaluation", arguments.get("max_evaluations") or 0
+
+
+class FacePicker:
+    """Selection observer: calls ``on_pick()`` after each selection in the 3D view."""
+
+    def __init__(self, on_pick):
+        self.on_pick = on_pick
+
+    def addSelection(self, doc, obj, sub, point):
+        QtCore.QTimer.singleShot(0, self.on_pick)
+
+
+class SampleFaceTaskPanel:
+    """Task panel of *Sample face*. source: (obj, "FaceK") to start with."""
+
+    def __init__(self, source):
+        self.form = FreeCADGui.PySideUic.loadUi(resource("sample_face.ui"))
+        self.form.setWindowIcon(QtGui.QIcon(icon("SampleFace.svg")))
+        self.source = source
+        self.run = None
+        self.step = ""
+        self.picker = None
+        self.buttons = None
+        self.timer = QtCore.QTimer()
+        self.timer.setInterval(POLL_MS)
+        self.timer.timeout.connect(self.poll)
+        self._fill_strategies()
+        self.set_values(settings.load(panel_defaults()))
+        self.form.strategy.currentIndexChanged.connect(self.update_enabled)
+        self.form.auto_poles.toggled.connect(self.update_enabled)
+        self.form.pickFace.toggled.connect(self.pick_face)
+        self.show_source()
+        self.update_enabled()
+
+    # --- FreeCAD task dialog interface
+    def getStandardButtons(self):
+        return int(QtGui.QDialogButtonBox.Ok | QtGui.QDialogButtonBox.Cancel)
+
+    def modifyStandardButtons(self, box):
+        self.buttons = box
+        ok = box.button(QtGui.QDialogButtonBox.Ok)
+        ok.setText("Sample")
+        ok.setToolTip("Run the strategy; the results are added when it ends")
+
+    def accept(self):
+        """Start the run; the panel stays open until it ends (then :meth:`finish` closes it)."""
+        if self.run is None:
+            self.start()
+        return False
+
+    def reject(self):
+        """Cancel: stop a running swarm (within CANCEL_WAIT_S), change nothing, close."""
+        self.timer.stop()
+        if self.run is not None:
+            self.run.cancel(CANCEL_WAIT_S)
+            self.run = None
+        self.pick_face(False)
+        return True
+
+    # --- values
+    def _fill_strategies(self):
+        """The strategy list (descriptions as tooltips) and the blind ones a descent starts from."""
+        for name, strategy in sampling.STRATEGIES.items():
+            self.form.strategy.addItem(name)
+            self.form.strategy.setItemData(self.form.strategy.count() - 1, strategy.description,
+                                           QtCore.Qt.ToolTipRole)
+            if not strategy.optimiser:
+                self.form.start.addItem(name)
+                self.form.start.setItemData(self.form.start.count() - 1, strategy.description,
+                                            QtCore.Qt.ToolTipRole)
+
+    def widget(self, name):
+        """The form's widget for a value name, or None."""
+        return getattr(self.form, name, None)
+
+    def values(self):
+        """Every value of the panel by name (see :func:`panel_defaults`)."""
+        out = {"strategy": self.form.strategy.currentText()}
+        for name in panel_defaults():
+            widget = self.widget(name)
+            if isinstance(widget, QtGui.QCheckBox):
+                out[name] = widget.isChecked()
+            elif isinstance(widget, (QtGui.QSpinBox, QtGui.QDoubleSpinBox)):
+                out[name] = widget.value()
+            elif isinstance(widget, QtGui.QComboBox) and name != "strategy":
+                out[name] = widget.currentText()
+        return out
+
+    def set_values(self, values):
+        """Show values by name; unknown names and strategies are ignored."""
+        index = self.form.strategy.findText(str(values.get("strategy", "")))
+        if index >= 0:
+            self.form.strategy.setCurrentIndex(index)
+        for name, value in values.items():
+            widget = self.widget(name)
+            if isinstance(widget, QtGui.QCheckBox):
+                widget.setChecked(bool(value))
+            elif isinstance(widget, (QtGui.QSpinBox, QtGui.QDoubleSpinBox)):
+                widget.setValue(value)
+            elif isinstance(widget, QtGui.QComboBox) and name != "strategy":
+                index = widget.findText(str(value))
+                if index >= 0:
+                    widget.setCurrentIndex(index)
+
+    def sample_arguments(self):
+        """The keyword arguments of ``cmmsampling.sample(face, ...)`` for the panel's values."""
+        values = self.values()
+        strategy = sampling.STRATEGIES[values["strategy"]]
+        arguments = {"n": values["n"], "strategy": strategy.name, "seed": values["seed"],
+                     "fit_degree": values["fit_degree"], "grid": values["grid"]}
+        if not values["auto_poles"]:
+            arguments["fit_poles"] = (values["fit_poles_u"], values["fit_poles_v"])
+        arguments.update({name: option_argument(name, values) for name in strategy.options if name in values})
+        return arguments
+
+    def update_enabled(self):
+        """Enable the options the chosen strategy takes (and their groups) and the pole counts
+        unless automatic; nothing while a run is on."""
+        strategy = sampling.STRATEGIES[self.form.strategy.currentText()]
+        self.form.strategyInfo.setText(strategy.description)
+        running = self.run is not None
+        taken = [self.widget(name) for name in strategy.options if self.widget(name) is not None]
+        for name in option_defaults():
+            widget = self.widget(name)
+            if widget is not None:
+                widget.setEnabled(widget in taken and not running)
+        for name in OPTION_GROUPS:
+            group = self.widget(name)
+            group.setEnabled(any(group.isAncestorOf(widget) for widget in taken))
+        for name in COMMON:
+            self.widget(name).setEnabled(not running)
+        manual = not self.form.auto_poles.isChecked() and not running
+        self.form.fit_poles_u.setEnabled(manual)
+        self.form.fit_poles_v.setEnabled(manual)
+        self.form.strategy.setEnabled(not running)
+        self.form.pickFace.setEnabled(not running)
+        if self.buttons is not None:
+            self.buttons.button(QtGui.QDialogButtonBox.Ok).setEnabled(not running)
+
+    # --- face
+    def show_source(self):
+        obj, name = self.source
+        self.form.faceLabel.setText(f"{obj.Label}.{name}")
+        self.form.faceLabel.setStyleSheet("")
+
+    def pick_face(self, on):
+        """Start (on=True) or stop waiting for a face clicked in the 3D view."""
+        if on and self.picker is None:
+            self.picker = FacePicker(self.picked)
+            FreeCADGui.Selection.clearSelection()
+            FreeCADGui.Selection.addObserver(self.picker)
+            self.form.faceLabel.setText("Click a face in the 3D view...")
+        elif not on and self.picker is not None:
+            FreeCADGui.Selection.removeObserver(self.picker)
+            self.picker = None
+            self.show_source()
+        if self.form.pickFace.isChecked() != on:
+            self.form.pickFace.setChecked(on)
+
+    def picked(self):
+        """Take the selected face, or say why the selection is not one."""
+        if self.picker is None:
+            return
+        try:
+            self.source = selected_face(FreeCADGui.Selection.getSelectionEx())
+        except SelectionError as exc:
+            self.form.faceLabel.setText(str(exc))
+            self.form.faceLabel.setStyleSheet(ERROR_STYLE)
+            FreeCADGui.Selection.clearSelection()
+            return
+        self.pick_face(False)
+
+    # --- the run
+    def start(self):
+        """Save the values and start ``cmmsampling.sample`` in the background."""
+        settings.save(self.values())
+        obj, name = self.source
+        face = obj.getSubObject(name)
+        if face is None:
+            self.show_status(f"{obj.Label} has no {name} any more: pick another face.", error=True)
+            return
+        arguments = self.sample_arguments()
+        self.run = BackgroundSampling(face.copy(), arguments)
+        self.step, total = progress_total(arguments)
+        self.form.progress.setRange(0, total)
+        self.form.progress.setValue(0)
+        self.show_status(f"Running {arguments['strategy']} with N = {arguments['n']}...")
+        self.update_enabled()
+        self.run.start()
+        self.timer.start()
+
+    def poll(self):
+        """Show the run's progress; when it has ended, add the result or show the error."""
+        run = self.run
+        if run is None:
+            self.timer.stop()
+            return
+        total = self.form.progress.maximum()
+        if total:
+            self.form.progress.setValue(min(run.iteration, total))
+        if run.iteration:
+            self.show_status(f"{self.step} {run.iteration}{f' of {total}' if total else ''}: "
+                             f"best maximum deviation {run.best_mm:.4f} mm")
+        if run.running:
+            return
+        self.timer.stop()
+        self.run = None
+        self.update_enabled()
+        self.form.progress.setRange(0, 1)
+        if run.error is not None:
+            FreeCAD.Console.PrintError(run.details)
+            self.form.progress.setValue(0)
+            self.show_status(f"{type(run.error).__name__}: {run.error}", error=True)
+            return
+        self.form.progress.setValue(1)
+        self.finish(run)
+
+    def finish(self, run):
+        """Add the result to the document (through the echoed console API) and close; on failure
+        (e.g. the face was deleted meanwhile) say why and stay open."""
+        try:
+            add_result(self.source, run.arguments, run.result)
+        except Exception as exc:  # shown in the panel; the console has the traceback
+            self.show_status(f"The result could not be added: {exc}", error=True)
+            return
+        FreeCADGui.Control.closeDialog()
+
+    def show_status(self, text, error=False):
+        self.form.status.setText(text)
+        self.form.status.setStyleSheet(ERROR_STYLE if error else "")
+
+
+def add_result(source, arguments, result):
+    """Write a finished run into the source's document through the console API.
+
+    The sample() call that ran in the worker thread is echoed as a comment (it is not run again);
+    its result is bound to ``result`` in the console, then ``add_to_document`` runs.
+    """
+    obj, name = source
+    doc = f"App.getDocument({obj.Document.Name!r})"
+    source_expr = f"{doc}.getObject({obj.Name!r})"
+    call = ", ".join(["face"] + [f"{key}={value!r}" for key, value in arguments.items()])
+    FreeCADGui.doCommand("import cmmsampling")
+    FreeCADGui.doCommand(f"face = {source_expr}.getSubObject({name!r})")
+    FreeCADGui.doCommand(f"# result = cmmsampling.sample({call})  # ran in the task panel")
+    __main__.__dict__["result"] = result
+    FreeCADGui.doCommand(
+        f"group = cmmsampling.add_to_document(result, {doc}, source=({source_expr}, {name!r}))")

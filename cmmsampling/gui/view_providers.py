@@ -1,0 +1,257 @@
+"""View providers: probe points with labels and approach vectors, the deviation-coloured substitute.
+
+Attached by :mod:`cmmsampling.document` when ``FreeCAD.GuiUp``; they only draw what the
+document objects hold.
+"""
+import numpy as np
+from pivy import coin
+from PySide import QtCore
+
+from .. import document
+from . import colormap, icon
+
+LABEL_COLOUR = (0.0, 0.0, 0.0)
+APPROACH_COLOUR = (0.75, 0.05, 0.05)
+POINT_COLOUR = (0.75, 0.05, 0.05)
+APPROACH_FRACTION = 0.05
+DEFAULT_APPROACH_MM = 5.0
+POINT_VIEW_PROPERTIES = ("ShowLabels", "ShowApproach", "ApproachLength", "LabelSize")
+
+
+class ViewProviderProbePoints:
+    """Draws the probe points as vertices (the Part view), each with its label P1..PN and its
+    approach vector (a line along the outward normal, ``ApproachLength`` mm long)."""
+
+    def __init__(self, vobj):
+        vobj.addProperty("App::PropertyBool", "ShowLabels", "Probe points", "Show the labels P1..PN")
+        vobj.addProperty("App::PropertyBool", "ShowApproach", "Probe points",
+                         "Show the approach vectors (outward normals)")
+        vobj.addProperty("App::PropertyLength", "ApproachLength", "Probe points",
+                         "Length of the drawn approach vectors (mm)")
+        vobj.addProperty("App::PropertyInteger", "LabelSize", "Probe points", "Label font size (pixels)")
+        vobj.ShowLabels = True
+        vobj.ShowApproach = True
+        vobj.ApproachLength = approach_length(vobj.Object)
+        vobj.LabelSize = 13
+        vobj.PointSize = 6
+        vobj.PointColor = POINT_COLOUR
+        vobj.Proxy = self
+
+    def attach(self, vobj):
+        """Add the annotation (labels, approach lines) below the object's root node."""
+        self.Object = vobj.Object
+        self.switch = coin.SoSwitch()
+        self.annotation = coin.SoSeparator()
+        self.switch.addChild(self.annotation)
+        self.switch.whichChild = 0 if vobj.Visibility else -1
+        vobj.RootNode.addChild(self.switch)
+        self.redraw(vobj)
+
+    def updateData(self, obj, prop):
+        if prop in ("Points", "Normals", "Labels") and obj.ViewObject is not None:
+            self.redraw(obj.ViewObject)
+
+    def onChanged(self, vobj, prop):
+        if prop == "Visibility" and hasattr(self, "switch"):
+            self.switch.whichChild = 0 if vobj.Visibility else -1
+        elif prop in POINT_VIEW_PROPERTIES:
+            self.redraw(vobj)
+
+    def redraw(self, vobj):
+        """Rebuild the labels and approach lines from the object's Points, Normals and Labels."""
+        if not hasattr(self, "annotation") or not all(hasattr(vobj, p) for p in POINT_VIEW_PROPERTIES):
+            return
+        self.annotation.removeAllChildren()
+        obj = vobj.Object
+        points = np.array([tuple(p) for p in obj.Points], dtype=float).reshape(-1, 3)
+        normals = np.array([tuple(n) for n in obj.Normals], dtype=float).reshape(-1, 3)
+        if len(points) == 0 or len(normals) != len(points):
+            return
+        tips = points + normals * float(vobj.ApproachLength.Value)
+        pick = coin.SoPickStyle()
+        pick.style = coin.SoPickStyle.UNPICKABLE
+        self.annotation.addChild(pick)
+        if vobj.ShowApproach:
+            self.annotation.addChild(approach_lines(points, tips))
+        if vobj.ShowLabels:
+            self.annotation.addChild(point_labels(obj.Labels, tips, vobj.LabelSize))
+
+    def getIcon(self):
+        return icon("ProbePoints.svg")
+
+    def __getstate__(self):
+        return None
+
+    def __setstate__(self, state):
+        return None
+
+    def dumps(self):
+        return None
+
+    def loads(self, state):
+        return None
+
+
+class ViewProviderSubstituteSurface:
+    """Draws the substitute surface coloured by its deviation from the CAD face ("Deviation"
+    display mode, the default) with a colour legend in mm; the Part display modes stay available."""
+
+    def __init__(self, vobj):
+        vobj.addProperty("App::PropertyBool", "ShowLegend", "Deviation", "Show the colour legend (mm)")
+        vobj.ShowLegend = True
+        vobj.Proxy = self
+
+    def attach(self, vobj):
+        """Register the "Deviation" display mode."""
+        self.Object = vobj.Object
+        self.coloured = coin.SoSeparator()
+        vobj.addDisplayMode(self.coloured, "Deviation")
+        self.redraw(vobj)
+
+    def getDisplayModes(self, vobj):
+        return ["Deviation"]
+
+    def getDefaultDisplayMode(self):
+        return "Deviation"
+
+    def setDisplayMode(self, mode):
+        return mode
+
+    def updateData(self, obj, prop):
+        if prop in ("Shape", "DeviationField", "Label") and obj.ViewObject is not None:
+            self.redraw(obj.ViewObject)
+
+    def onChanged(self, vobj, prop):
+        if prop == "ShowLegend":
+            self.redraw(vobj)
+
+    def redraw(self, vobj):
+        """Rebuild the coloured grid mesh and the legend from the object's deviation field."""
+        if not hasattr(self, "coloured"):
+            return
+        self.coloured.removeAllChildren()
+        obj = vobj.Object
+        if not obj.Shape.Faces or not obj.DeviationField:
+            return
+        u, v, field = obj.Proxy.deviation_grid(obj)
+        surface = obj.Shape.Faces[0].Surface
+        nodes = np.array([tuple(surface.value(a, b)) for a in u for b in v], dtype=float)
+        maximum = float(np.nanmax(field))
+        self.coloured.addChild(coloured_mesh(nodes, field, maximum))
+        if getattr(vobj, "ShowLegend", True):
+            self.coloured.addChild(colormap.legend(maximum, f"Deviation, {obj.Label}"))
+
+    def getIcon(self):
+        return icon("SubstituteSurface.svg")
+
+    def __getstate__(self):
+        return None
+
+    def __setstate__(self, state):
+        return None
+
+    def dumps(self):
+        return None
+
+    def loads(self, state):
+        return None
+
+
+def attach_when_missing(obj):
+    """Attach the object's view provider once the document has finished loading, unless the
+    document brought one (a document saved without the GUI has none)."""
+    QtCore.QTimer.singleShot(0, lambda: _attach_if_missing(obj))
+
+
+def _attach_if_missing(obj):
+    """Give obj its view provider unless it has one. FreeCAD marks a restored Python view
+    provider without a proxy as attached (with a placeholder proxy), so attach() is called here."""
+    try:
+        vobj = obj.ViewObject
+    except ReferenceError:
+        return
+    own = (ViewProviderProbePoints, ViewProviderSubstituteSurface)
+    if vobj is None or isinstance(getattr(vobj, "Proxy", None), own):
+        return
+    if document.is_probe_points(obj):
+        provider = ViewProviderProbePoints(vobj)
+    elif isinstance(obj.Proxy, document.SubstituteSurface):
+        provider = ViewProviderSubstituteSurface(vobj)
+    else:
+        return
+    if not hasattr(provider, "Object"):
+        provider.attach(vobj)
+    if isinstance(provider, ViewProviderSubstituteSurface):
+        vobj.DisplayMode = vobj.listDisplayModes()
+        vobj.DisplayMode = "Deviation"
+
+
+def approach_length(obj):
+    """Default length of the drawn approach vectors: 5 % of the source face's diagonal (mm)."""
+    face, _ = document.source_face(obj) if document.is_probe_points(obj) else (None, None)
+    if face is None:
+        return DEFAULT_APPROACH_MM
+    return APPROACH_FRACTION * face.BoundBox.DiagonalLength
+
+
+def approach_lines(points, tips):
+    """Line segments point -> tip for (N, 3) points and tips (mm), as one SoLineSet."""
+    node = coin.SoSeparator()
+    colour = coin.SoBaseColor()
+    colour.rgb = APPROACH_COLOUR
+    style = coin.SoDrawStyle()
+    style.lineWidth = 2
+    coords = coin.SoCoordinate3()
+    ends = np.stack([points, tips], axis=1).reshape(-1, 3)
+    coords.point.setValues(0, len(ends), [tuple(map(float, p)) for p in ends])
+    lines = coin.SoLineSet()
+    lines.numVertices.setValues(0, len(points), [2] * len(points))
+    for child in (colour, style, coords, lines):
+        node.addChild(child)
+    return node
+
+
+def point_labels(labels, positions, size):
+    """Screen-aligned labels at (N, 3) positions (mm), font ``size`` pixels."""
+    node = coin.SoSeparator()
+    colour = coin.SoBaseColor()
+    colour.rgb = LABEL_COLOUR
+    font = coin.SoFont()
+    font.name = "Sans"
+    font.size = size
+    node.addChild(colour)
+    node.addChild(font)
+    for label, position in zip(labels, positions):
+        node.addChild(colormap.text_at(label, tuple(map(float, position))))
+    return node
+
+
+def coloured_mesh(nodes, field, maximum):
+    """The grid as a quad mesh coloured per vertex.
+
+    nodes: (g_u * g_v, 3) mm, u-major; field: (g_u, g_v) deviations in mm (NaN off the face,
+    whose quads are left out); maximum: the deviation shown red (mm).
+    """
+    g_u, g_v = field.shape
+    corner = (np.arange(g_u - 1)[:, None] * g_v + np.arange(g_v - 1)[None, :]).ravel()
+    quads = np.stack([corner, corner + g_v, corner + g_v + 1, corner + 1], axis=1)
+    flat = field.ravel()
+    quads = quads[~np.isnan(flat[quads]).any(axis=1)]
+    index = np.hstack([quads, -np.ones((len(quads), 1), dtype=int)]).ravel().tolist()
+    rgb = colormap.colours(flat, maximum)
+    node = coin.SoSeparator()
+    hints = coin.SoShapeHints()
+    hints.vertexOrdering = coin.SoShapeHints.COUNTERCLOCKWISE
+    hints.creaseAngle = 0.8
+    material = coin.SoMaterial()
+    material.diffuseColor.setValues(0, len(rgb), [tuple(map(float, c)) for c in rgb])
+    binding = coin.SoMaterialBinding()
+    binding.value = coin.SoMaterialBinding.PER_VERTEX_INDEXED
+    coords = coin.SoCoordinate3()
+    coords.point.setValues(0, len(nodes), [tuple(map(float, p)) for p in nodes])
+    faces = coin.SoIndexedFaceSet()
+    faces.coordIndex.setValues(0, len(index), index)
+    faces.materialIndex.setValues(0, len(index), index)
+    for child in (hints, material, binding, coords, faces):
+        node.addChild(child)
+    return node

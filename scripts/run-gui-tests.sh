@@ -1,0 +1,27 @@
+#!/usr/bin/env bash
+# Run the GUI tests (tests/gui) inside the real FreeCAD GUI under a virtual X server.
+# The addon is installed into a temporary HOME (a symlink to this checkout), so the user's own
+# FreeCAD configuration is never touched. Extra arguments go to pytest, e.g. -k cancel.
+# Screenshots: artifacts/gui/. Exit code: pytest's.
+set -euo pipefail
+root="$(cd "$(dirname "$0")/.." && pwd)"
+home="$(mktemp -d)"
+trap 'rm -rf "$home"' EXIT
+mkdir -p "$home/.local/share/FreeCAD/Mod"
+ln -s "$root" "$home/.local/share/FreeCAD/Mod/cmmsampling"
+export HOME="$home" XDG_DATA_HOME="$home/.local/share" XDG_CONFIG_HOME="$home/.config"
+export QTWEBENGINE_DISABLE_SANDBOX=1
+pytest_args=""
+if [ "$#" -gt 0 ]; then pytest_args="$(printf "%q " "$@")"; fi
+export CMMSAMPLING_ROOT="$root" CMMSAMPLING_PYTEST_ARGS="$pytest_args"
+export CMMSAMPLING_ARTIFACTS="${CMMSAMPLING_ARTIFACTS:-$root/artifacts/gui}"
+set +e
+timeout --kill-after=10 "${CMMSAMPLING_GUI_TIMEOUT:-900}" \
+  xvfb-run -a -s "-screen 0 1280x1024x24" freecad "$root/tests/gui/run_gui_tests.py" 2>"$home/freecad.stderr"
+code=$?
+set -e
+if [ "$code" -ne 0 ]; then
+  echo "FreeCAD exited with $code; its error output:" >&2
+  grep -v -e "QtWebEngine" -e "command_buffer_proxy" "$home/freecad.stderr" | tail -n 40 >&2 || true
+fi
+exit "$code"

@@ -1,0 +1,56 @@
+"""GUI tests run only inside the FreeCAD GUI (scripts/run-gui-tests.sh); a plain pytest skips
+collecting them. Fixtures: the workbench, documents with the reference face, the screenshot folder."""
+import os
+
+try:
+    import FreeCAD
+except ImportError:
+    FreeCAD = None
+
+if FreeCAD is None or not FreeCAD.GuiUp:
+    collect_ignore_glob = ["test_*.py"]
+else:
+    import FreeCADGui
+    import pytest
+
+    import cmmsampling
+
+    from .helpers import process_events
+
+    ARTIFACTS = os.environ.get(
+        "CMMSAMPLING_ARTIFACTS",
+        os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))),
+                     "artifacts", "gui"),
+    )
+
+    @pytest.fixture(scope="session")
+    def artifacts():
+        """Folder for screenshots."""
+        os.makedirs(ARTIFACTS, exist_ok=True)
+        return ARTIFACTS
+
+    @pytest.fixture(scope="session")
+    def workbench():
+        FreeCADGui.activateWorkbench("CMMSamplingWorkbench")
+        process_events(0.2)
+        return FreeCADGui.activeWorkbench()
+
+    @pytest.fixture
+    def doc(workbench):
+        """A new active document holding the reference face as Part::Feature 'Body'."""
+        d = FreeCAD.newDocument("GuiTest")
+        body = d.addObject("Part::Feature", "Body")
+        body.Shape = cmmsampling.reference_face()
+        d.recompute()
+        FreeCADGui.ActiveDocument.ActiveView.viewIsometric()
+        FreeCADGui.SendMsgToActiveView("ViewFit")
+        FreeCADGui.Selection.clearSelection()
+        name = d.Name
+        yield d
+        if FreeCADGui.Control.activeDialog():
+            FreeCADGui.Control.closeDialog()
+        FreeCADGui.Selection.clearSelection()
+        if name in FreeCAD.listDocuments():
+            FreeCAD.closeDocument(name)
+        process_events(0.1)
+

@@ -1,0 +1,464 @@
+"""The workbench in the real FreeCAD GUI: commands, task panel runs, undo, cancel, save/reopen."""
+import json
+import os
+import subprocess
+import threading
+import time
+
+import FreeCAD
+import FreeCADGui
+import Mesh
+import numpy as np
+import Part
+import pytest
+from PySide import QtCore, QtGui
+
+import cmmsampling
+from cmmsampling import document
+from cmmsampling.gui import colormap, commands, settings, view_providers
+from cmmsampling.surface import make_bspline_surface, reference_poles
+
+from .helpers import (
+    dock_text, main_window, modal_message, process_events, task_button, task_form, texts, wait_until,
+)
+
+OK, CANCEL = QtGui.QDialogButtonBox.Ok, QtGui.QDialogButtonBox.Cancel
+SAMPLE, EXPORT = commands.SampleFace.NAME, commands.ExportProbePoints.NAME
+REEVALUATE = commands.Reevaluate.NAME
+
+
+def open_panel(doc, face="Face1"):
+    """Select the Body's face, run Sample face, return the panel's form."""
+    FreeCADGui.Selection.clearSelection()
+    FreeCADGui.Selection.addSelection(doc.Body, face)
+    FreeCADGui.runCommand(SAMPLE)
+    assert wait_until(lambda: task_form() is not None, 5), commands.SampleFace().reason()
+    return task_form()
+
+
+def fill(form, strategy="pso", **values):
+    """Set the strategy and spin/check boxes of the form by name."""
+    form.strategy.setCurrentIndex(form.strategy.findText(strategy))
+    for name, value in values.items():
+        widget = getattr(form, name)
+        if isinstance(widget, QtGui.QCheckBox):
+            widget.setChecked(value)
+        else:
+            widget.setValue(value)
+
+
+def short_result(doc):
+    return cmmsampling.sample(doc.Body.Shape.Faces[0], 25, "pso", population=8, iterations=20, seed=1)
+
+
+def drawn(obj):
+    """Coin nodes our view provider drew for obj: labels/lines or coloured mesh/legend."""
+    proxy = obj.ViewObject.Proxy
+    node = getattr(proxy, "annotation", None) or getattr(proxy, "coloured", None)
+    return node.getNumChildren() if node is not None else 0
+
+
+def running_workers():
+    """The task panel's worker threads still alive."""
+    return [t for t in threading.enumerate() if t.name == "cmmsampling" and t.is_alive()]
+
+
+def groups(doc):
+    return [o for o in doc.Objects if o.TypeId == "App::DocumentObjectGroup"]
+
+
+def test_workbench_has_its_toolbar_menu_and_icons(workbench):
+    assert workbench.MenuText == "CMM Sampling" and os.path.isfile(workbench.Icon)
+    toolbar = main_window().findChild(QtGui.QToolBar, "CMM Sampling")
+    assert [a.text() for a in toolbar.actions()] == [
+        "Sample face...", "Export probe points...", "Re-evaluate"]
+    menus = [a.text() for a in main_window().menuBar().actions()]
+    assert "CMM Sampling" in menus
+    for name in (SAMPLE, EXPORT, REEVALUATE):
+        assert os.path.isfile(FreeCADGui.Command.get(name).getInfo()["pixmap"])
+    assert "cmmsampling.document" in FreeCAD.getExportType("dmi")
+
+
+def test_colour_map_runs_blue_to_red_with_grey_off_the_face():
+    rgb = colormap.colours([0.0, 0.5, 1.0, float("nan"), 2.0], maximum=1.0)
+    assert np.allclose(rgb[[0, 1, 2, 4]], [[0, 0, 1], [0, 1, 0], [1, 0, 0], [1, 0, 0]])
+    assert np.allclose(rgb[3], colormap.OFF_FACE)
+    assert colormap.tick_labels(1.0533) == ["0.000 mm", "0.263 mm", "0.527 mm", "0.790 mm", "1.053 mm"]
+    assert colormap.tick_labels(0.01234)[-1] == "0.01234 mm"
+
+
+def test_panel_defaults_are_the_papers_and_options_follow_the_strategy(doc):
+    FreeCAD.ParamGet("User parameter:BaseApp/Preferences/Mod").RemGroup("CMMSampling")
+    form = open_panel(doc)
+    assert form.faceLabel.text() == "Body.Face1"
+    expected = {"n": 81, "population": 25, "iterations": 3000, "w1": 0.5, "w2": 0.0, "c1": 2.0,
+                "c2": 2.0, "seed": 0, "fit_degree": 3, "grid": 60}
+    assert {name: getattr(form, name).value() for name in expected} == expected
+    assert form.strategy.currentText() == "pso" and form.start_from_uniform.isChecked()
+    assert [form.strategy.itemText(i) for i in range(form.strategy.count())] == list(cmmsampling.STRATEGIES)
+    for name in expected:
+        assert getattr(form, name).toolTip(), name
+    fill(form, "uniform_parametric")
+    assert not form.population.isEnabled() and not form.psoGroup.isEnabled() and form.n.isEnabled()
+    fill(form, "pso")
+    assert form.population.isEnabled() and form.w1.isEnabled()
+    assert not form.optimalGroup.isEnabled()
+    fill(form, "optimal")
+    assert form.optimalGroup.isEnabled() and not form.psoGroup.isEnabled() and form.time_limit.isEnabled()
+    assert form.start.currentText() == "uniform_parametric"
+    assert [form.start.itemText(i) for i in range(form.start.count())] == [
+        name for name, s in cmmsampling.STRATEGIES.items() if not s.optimiser]
+    fill(form, "pso", auto_poles=True)
+    assert not form.fit_poles_u.isEnabled()
+    fill(form, auto_poles=False)
+    assert form.fit_poles_u.isEnabled() and form.fit_poles_v.isEnabled()
+    task_button(CANCEL).click()
+    assert wait_until(lambda: not FreeCADGui.Control.activeDialog(), 2)
+
+
+def test_the_face_can_be_picked_again_in_the_panel(doc):
+    box = doc.addObject("Part::Feature", "Box")
+    box.Shape = Part.makeBox(30, 20, 10, FreeCAD.Vector(120, 0, 0))
+    doc.recompute()
+    form = open_panel(doc)
+    form.pickFace.click()
+    assert form.faceLabel.text().startswith("Click a face")
+    FreeCADGui.Selection.addSelection(box, "Edge1")
+    process_events(0.2)
+    assert "Box.Edge1 is an edge" in form.faceLabel.text() and form.pickFace.isChecked()
+    FreeCADGui.Selection.addSelection(box, "Face3")
+    process_events(0.2)
+    assert form.faceLabel.text() == "Box.Face3" and not form.pickFace.isChecked()
+    task_button(CANCEL).click()
+
+
+def bad_selections():
+    """(name, select(doc), words of the message)."""
+    def mesh(doc):
+        obj = doc.addObject("Mesh::Feature", "Scan")
+        obj.Mesh = Mesh.createBox(5, 5, 5)
+        doc.recompute()
+        FreeCADGui.Selection.addSelection(obj, "Facet1")
+
+    def box(doc):
+        obj = doc.addObject("Part::Feature", "Box")
+        obj.Shape = Part.makeBox(30, 20, 10)
+        doc.recompute()
+        return obj
+
+    return [
+        ("nothing", lambda doc: None, "Nothing is selected"),
+        ("edge", lambda doc: FreeCADGui.Selection.addSelection(doc.Body, "Edge1"), "Body.Edge1 is an edge"),
+        ("two faces", lambda doc: [FreeCADGui.Selection.addSelection(box(doc), "Face1"),
+                                   FreeCADGui.Selection.addSelection(doc.Box, "Face2")],
+         "2 faces are selected (Box.Face1, Box.Face2): select exactly one"),
+        ("mesh", mesh, "Scan is a mesh"),
+        ("solid", lambda doc: FreeCADGui.Selection.addSelection(box(doc)), "Box has 6 faces"),
+    ]
+
+
+@pytest.mark.parametrize("name, select, message", bad_selections(), ids=[s[0] for s in bad_selections()])
+def test_bad_selection_disables_sample_face_and_says_why(doc, name, select, message):
+    select(doc)
+    process_events(0.1)
+    command = FreeCADGui.Command.get(SAMPLE)
+    assert not command.isActive()
+    assert message in command.getAction()[0].statusTip()
+    shown = modal_message(lambda: commands.SampleFace().Activated())
+    assert shown is not None and message in shown
+    assert not FreeCADGui.Control.activeDialog()
+
+
+def test_one_face_enables_sample_face(doc):
+    FreeCADGui.Selection.addSelection(doc.Body, "Face1")
+    command = FreeCADGui.Command.get(SAMPLE)
+    assert command.isActive()
+    assert command.getAction()[0].statusTip() == commands.SampleFace.TIP
+
+
+def test_short_pso_through_the_panel_then_one_undo(doc, artifacts):
+    form = open_panel(doc)
+    fill(form, "pso", n=25, population=8, iterations=400, seed=2, fit_degree=3, auto_poles=True, grid=40)
+    process_events(0.3)
+    main_window().grab().save(os.path.join(artifacts, "task_panel.png"))
+    form.grab().save(os.path.join(artifacts, "task_panel_form.png"))
+    before = doc.UndoCount
+    task_button(OK).click()
+    seen = []
+    wait_until(lambda: seen.append((form.progress.value(), form.status.text())) or form.progress.value(), 20)
+    assert wait_until(lambda: not FreeCADGui.Control.activeDialog(), 60), form.status.text()
+    assert any(value > 0 and "best maximum deviation" in text for value, text in seen)
+
+    [group] = groups(doc)
+    assert group.Label == "Sampling Body Face1"
+    points, surface, report = group.Group
+    assert len(points.Labels) == 25 and len(points.Shape.Vertexes) == 25
+    parameters = json.loads(points.Parameters)
+    assert (parameters["population"], parameters["iterations"], parameters["seed"]) == (8, 400, 2)
+    assert parameters["grid"] == [40, 40] and points.Status == "up to date"
+    assert report.get("max_mm") == pytest.approx(points.MaxDeviation.Value, rel=1e-9)
+    assert isinstance(points.ViewObject.Proxy, view_providers.ViewProviderProbePoints)
+    assert surface.ViewObject.DisplayMode == "Deviation"
+    assert drawn(points) == 3 and drawn(surface) == 2
+    assert texts(points.ViewObject.Proxy.annotation) == [f"P{i}" for i in range(1, 26)]
+    assert texts(surface.ViewObject.Proxy.coloured) == colormap.tick_labels(surface.MaxDeviation.Value) + [
+        "Deviation, Substitute surface"]
+    assert not doc.Body.ViewObject.Visibility
+    console = dock_text("Python console")
+    assert "# result = cmmsampling.sample(face, n=25, strategy='pso', seed=2" in console
+    assert "cmmsampling.add_to_document(result, App.getDocument('GuiTest')" in console
+    assert settings.load({"n": 0, "iterations": 0})["iterations"] == 400
+
+    view = FreeCADGui.ActiveDocument.ActiveView
+    view.viewIsometric()
+    view.fitAll()
+    process_events(0.2)
+    view.saveImage(os.path.join(artifacts, "view_sampling.png"), 1200, 900, "White")
+
+    assert doc.UndoCount == before + 1
+    FreeCADGui.runCommand("Std_Undo")
+    process_events(0.1)
+    assert [o.Name for o in doc.Objects] == ["Body"] and doc.Body.ViewObject.Visibility
+
+    form = open_panel(doc)
+    shown = (form.n.value(), form.iterations.value(), form.population.value(), form.grid.value())
+    assert shown == (25, 400, 8, 40)
+    task_button(CANCEL).click()
+
+
+def test_optimal_strategy_through_the_panel(doc):
+    form = open_panel(doc)
+    fill(form, "optimal", n=16, seed=0, fit_degree=3, grid=30, auto_poles=True, time_limit=0.0,
+         max_evaluations=40)
+    task_button(OK).click()
+    assert wait_until(lambda: not FreeCADGui.Control.activeDialog(), 60), form.status.text()
+    [group] = groups(doc)
+    points = group.Group[0]
+    parameters = json.loads(points.Parameters)
+    assert points.Strategy == "optimal" and len(points.Labels) == 16
+    assert parameters["max_evaluations"] == 40 and parameters["time_limit"] is None
+    assert parameters["start"] == "uniform_parametric"
+    echo = ("strategy='optimal', seed=0, fit_degree=3, grid=30, start='uniform_parametric', "
+            "time_limit=None, max_evaluations=40)")
+    assert echo in dock_text("Python console")
+
+
+def test_bad_settings_show_the_cores_message_and_change_nothing(doc):
+    form = open_panel(doc)
+    fill(form, "uniform_parametric", n=16, fit_degree=3, auto_poles=False, fit_poles_u=3, fit_poles_v=6)
+    task_button(OK).click()
+    message = "fit_poles along u (3) must be at least fit_degree + 1 (4)"
+    assert wait_until(lambda: message in form.status.text(), 10), form.status.text()
+    assert FreeCADGui.Control.activeDialog() and task_button(OK).isEnabled()
+    assert [o.Name for o in doc.Objects] == ["Body"]
+    task_button(CANCEL).click()
+
+
+def test_cancel_stops_a_long_run_and_leaves_the_document_as_it_was(doc, artifacts):
+    form = open_panel(doc)
+    fill(form, "pso", n=81, population=25, iterations=3000, seed=0, grid=60, auto_poles=True)
+    names, undo = [o.Name for o in doc.Objects], doc.UndoCount
+    ticks = []
+    clock = QtCore.QTimer()
+    clock.setInterval(20)
+    clock.timeout.connect(lambda: ticks.append(time.monotonic()))
+    clock.start()
+    task_button(OK).click()
+    assert wait_until(lambda: form.progress.value() >= 30, 60), form.status.text()
+    process_events(1.0)
+    main_window().grab().save(os.path.join(artifacts, "task_panel_running.png"))
+    form.grab().save(os.path.join(artifacts, "task_panel_running_form.png"))
+    assert not task_button(OK).isEnabled() and not form.n.isEnabled()
+    gaps = np.diff(ticks)
+    assert len(gaps) > 20 and gaps.max() < 0.5, f"GUI blocked for {gaps.max():.2f} s"
+
+    start = time.monotonic()
+    task_button(CANCEL).click()
+    assert wait_until(lambda: not running_workers(), 1.0)
+    assert time.monotonic() - start < 1.0
+    clock.stop()
+    assert wait_until(lambda: not FreeCADGui.Control.activeDialog(), 1)
+    process_events(0.3)
+    assert [o.Name for o in doc.Objects] == names and doc.UndoCount == undo
+    assert not doc.HasPendingTransaction and doc.Body.ViewObject.Visibility
+
+
+def test_reevaluate_command_after_the_face_changed_and_when_orphaned(doc):
+    group = document.add_to_document(short_result(doc), doc, source=(doc.Body, "Face1"))
+    points = group.Group[0]
+    old = points.MaxDeviation.Value
+    command = FreeCADGui.Command.get(REEVALUATE)
+    assert not command.isActive() and "Select probe points" in command.getAction()[0].statusTip()
+    poles = reference_poles()
+    poles[..., 2] *= 1.3
+    doc.Body.Shape = make_bspline_surface(poles, (5, 5)).toShape()
+    doc.recompute()
+    assert points.Outdated
+    FreeCADGui.Selection.addSelection(group)
+    assert command.isActive()
+    FreeCADGui.runCommand(REEVALUATE)
+    process_events(0.2)
+    assert not points.Outdated and abs(points.MaxDeviation.Value - old) > 0.1
+    legend = texts(group.Group[1].ViewObject.Proxy.coloured)
+    assert legend[-2] == colormap.tick_labels(points.MaxDeviation.Value)[-1]
+    assert f"cmmsampling.document.reevaluate(App.getDocument('GuiTest').getObject('{points.Name}'))" in \
+        dock_text("Python console")
+
+    FreeCADGui.Selection.clearSelection()
+    doc.removeObject("Body")
+    doc.recompute()
+    FreeCADGui.Selection.addSelection(points)
+    assert points.Orphaned and not command.isActive()
+    assert "its source face Body:Face1 was deleted" in command.getAction()[0].statusTip()
+
+
+def test_export_command_writes_the_selected_points(doc, tmp_path, monkeypatch):
+    group = document.add_to_document(short_result(doc), doc, source=(doc.Body, "Face1"))
+    command = FreeCADGui.Command.get(EXPORT)
+    assert not command.isActive() and "Select the probe points" in command.getAction()[0].statusTip()
+    FreeCADGui.Selection.addSelection(group)
+    assert command.isActive()
+    target = str(tmp_path / "points.dmi")
+    monkeypatch.setattr(commands, "choose_export_path", lambda points: target)
+    FreeCADGui.runCommand(EXPORT)
+    process_events(0.2)
+    with open(target) as f:
+        text = f.read()
+    assert text.startswith("DMISMN/") and text.count("FEAT/POINT") == 25
+    assert f"cmmsampling.export(App.getDocument('GuiTest').getObject('{group.Group[0].Name}'), " \
+        f"{target!r})" in dock_text("Python console")
+    assert [text for text, _ in commands.export_filters()][0].endswith("(*.dmi *.dmis)")
+
+
+def test_export_dialog_adds_the_extension_of_the_chosen_format(doc, monkeypatch):
+    points = document.add_to_document(short_result(doc), doc, source=(doc.Body, "Face1")).Group[0]
+    xyz = next(text for text, extensions in commands.export_filters() if ".xyz" in extensions)
+    asked = []
+
+    def dialog(parent, title, start, filters):
+        asked.append((start, filters))
+        return "/tmp/probe points", xyz
+
+    monkeypatch.setattr(QtGui.QFileDialog, "getSaveFileName", dialog)
+    assert commands.choose_export_path(points) == "/tmp/probe points.xyz"
+    assert asked[0][0].endswith("Sampling Body Face1.dmi") and xyz in asked[0][1]
+
+
+FRESH_SESSION = """
+import json, os, sys, traceback
+import FreeCAD, FreeCADGui
+from PySide import QtCore, QtGui
+
+def check():
+    out = {}
+    try:
+        doc = FreeCAD.openDocument(os.environ["CMM_DOC"])
+        doc.recompute()
+        report = FreeCADGui.getMainWindow().findChild(QtGui.QTextEdit, "Report view")
+        out = {
+            "workbench": FreeCADGui.activeWorkbench().name(),
+            "commands_loaded": "cmmsampling.gui.commands" in sys.modules,
+            "proxies": {o.Label: [type(getattr(o, "Proxy", None)).__name__,
+                                  type(getattr(o.ViewObject, "Proxy", None)).__name__, o.State]
+                        for o in doc.Objects},
+            "modes": {o.Label: o.ViewObject.DisplayMode for o in doc.Objects},
+            "drawn": [getattr(o.ViewObject.Proxy, "annotation").getNumChildren()
+                      for o in doc.getObjectsByLabel("Probe points")],
+            "report": report.toPlainText() if report else "",
+        }
+    except Exception:
+        out["error"] = traceback.format_exc()
+    with open(os.environ["CMM_OUT"], "w") as f:
+        json.dump(out, f)
+    os._exit(0)
+
+QtCore.QTimer.singleShot(0, check)
+"""
+
+HEADLESS_MAKE = """
+import sys
+sys.path.insert(0, sys.argv[1])
+import cmmsampling.document
+import FreeCAD
+doc = FreeCAD.newDocument("Headless")
+body = doc.addObject("Part::Feature", "Body")
+body.Shape = cmmsampling.reference_face()
+result = cmmsampling.sample(body.Shape.Faces[0], 16, "uniform_parametric")
+cmmsampling.document.add_to_document(result, doc, source=(body, "Face1"))
+doc.saveAs(sys.argv[2])
+"""
+
+HEADLESS_OPEN = """
+import sys
+sys.path.insert(0, sys.argv[1])
+import cmmsampling.document
+import FreeCAD
+points = FreeCAD.openDocument(sys.argv[2]).getObjectsByLabel("Probe points")[0]
+print(type(points.Proxy).__name__, len(points.Proxy.point_set(points)))
+"""
+
+
+def test_save_and_reopen_here_and_in_a_fresh_session(doc, tmp_path, artifacts):
+    group = document.add_to_document(short_result(doc), doc, source=(doc.Body, "Face1"))
+    path, name = str(tmp_path / "sampled.FCStd"), group.Name
+    doc.saveAs(path)
+    FreeCAD.closeDocument(doc.Name)
+    reopened = FreeCAD.openDocument(path)
+    try:
+        points, surface, report = reopened.getObject(name).Group
+        assert isinstance(points.ViewObject.Proxy, view_providers.ViewProviderProbePoints)
+        assert isinstance(surface.ViewObject.Proxy, view_providers.ViewProviderSubstituteSurface)
+        assert surface.ViewObject.DisplayMode == "Deviation"
+        assert drawn(points) == 3 and drawn(surface) == 2
+        assert points.Proxy.point_set(points).labels[-1] == "P25"
+        assert report.get("n") == 25
+    finally:
+        FreeCAD.closeDocument(reopened.Name)
+
+    script = tmp_path / "fresh_session.py"
+    script.write_text(FRESH_SESSION)
+    out = tmp_path / "fresh.json"
+    env = dict(os.environ, CMM_DOC=path, CMM_OUT=str(out))
+    subprocess.run(["freecad", str(script)], env=env, timeout=180, capture_output=True, check=False)
+    fresh = json.loads(out.read_text())
+    assert "error" not in fresh, fresh.get("error")
+    assert fresh["workbench"] != "CMMSamplingWorkbench" and not fresh["commands_loaded"]
+    assert fresh["proxies"]["Probe points"][:2] == ["ProbePoints", "ViewProviderProbePoints"]
+    assert fresh["proxies"]["Substitute surface"][:2] == [
+        "SubstituteSurface", "ViewProviderSubstituteSurface"]
+    assert all("Invalid" not in state for _, _, state in fresh["proxies"].values())
+    assert fresh["modes"]["Substitute surface"] == "Deviation" and fresh["drawn"] == [3]
+    assert "Traceback" not in fresh["report"] and "Exception" not in fresh["report"], fresh["report"]
+
+    headless = run_headless(HEADLESS_OPEN, path)
+    assert headless.stdout.split() == ["ProbePoints", "25"], headless.stderr
+
+
+def test_a_document_made_headless_gets_its_view_providers_in_the_gui(workbench, tmp_path, artifacts):
+    path = str(tmp_path / "headless.FCStd")
+    made = run_headless(HEADLESS_MAKE, path)
+    assert made.returncode == 0, made.stderr
+    doc = FreeCAD.openDocument(path)
+    try:
+        process_events(0.2)
+        points = doc.getObjectsByLabel("Probe points")[0]
+        surface = doc.getObjectsByLabel("Substitute surface")[0]
+        assert isinstance(points.ViewObject.Proxy, view_providers.ViewProviderProbePoints)
+        assert isinstance(surface.ViewObject.Proxy, view_providers.ViewProviderSubstituteSurface)
+        assert surface.ViewObject.DisplayMode == "Deviation" and points.ViewObject.ShowLabels
+        assert drawn(points) == 3 and drawn(surface) == 2
+        view = FreeCADGui.ActiveDocument.ActiveView
+        view.viewIsometric()
+        view.fitAll()
+        process_events(0.2)
+        view.saveImage(os.path.join(artifacts, "view_headless_document.png"), 1000, 750, "White")
+    finally:
+        FreeCAD.closeDocument(doc.Name)
+
+
+def run_headless(script, *arguments):
+    """Run a script with Debian's Python (no GUI), the checkout first on sys.path."""
+    return subprocess.run(
+        ["/usr/bin/python3", "-c", script, os.environ["CMMSAMPLING_ROOT"], *arguments],
+        env={key: value for key, value in os.environ.items() if not key.startswith("PYTHON")},
+        capture_output=True, text=True, timeout=120, check=False)

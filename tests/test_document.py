@@ -1,0 +1,221 @@
+"""The document layer headless: objects, one transaction, save/reopen, re-evaluate, orphans."""
+import json
+
+import numpy as np
+import pytest
+from geometry import FreeCAD, Part
+
+import cmmsampling
+from cmmsampling import document
+from cmmsampling.pointset import PointSet
+from cmmsampling.surface import make_bspline_surface, reference_poles
+
+RUN = {"n": 25, "strategy": "pso", "population": 8, "iterations": 20, "seed": 1}
+
+
+@pytest.fixture(scope="module")
+def result():
+    """A short PSO run on the reference face."""
+    return cmmsampling.sample(cmmsampling.reference_face(), **RUN)
+
+
+@pytest.fixture
+def doc():
+    """A fresh document with undo on and the reference face as Part::Feature 'Body'."""
+    d = FreeCAD.newDocument("SamplingTest")
+    d.UndoMode = 1
+    body = d.addObject("Part::Feature", "Body")
+    body.Shape = cmmsampling.reference_face()
+    d.recompute()
+    name = d.Name
+    yield d
+    if name in FreeCAD.listDocuments():
+        FreeCAD.closeDocument(name)
+
+
+@pytest.fixture
+def group(doc, result):
+    return document.add_to_document(result, doc, source=(doc.Body, "Face1"))
+
+
+def changed_face():
+    """The reference face with its heights scaled by 1.3 (same parameter range)."""
+    poles = reference_poles()
+    poles[..., 2] *= 1.3
+    return make_bspline_surface(poles, (5, 5)).toShape()
+
+
+def vectors(values):
+    return np.array([tuple(v) for v in values], dtype=float)
+
+
+def test_add_to_document_makes_a_group_of_three_in_one_transaction(doc, result):
+    before = doc.UndoCount
+    group = document.add_to_document(result, doc, source=(doc.Body, "Face1"))
+    assert group.TypeId == "App::DocumentObjectGroup" and group.Label == "Sampling Body Face1"
+    points, surface, report = group.Group
+    assert (points.TypeId, surface.TypeId, report.TypeId) == (
+        "Part::FeaturePython", "Part::FeaturePython", "Spreadsheet::Sheet")
+    assert doc.UndoCount == before + 1 and not doc.HasPendingTransaction
+    assert not doc.Body.Visibility
+    doc.undo()
+    assert [o.Name for o in doc.Objects] == ["Body"] and doc.Body.Visibility
+    doc.redo()
+    assert len(doc.Objects) == 5
+
+
+def test_probe_points_hold_the_result(group, result, doc):
+    points = group.Group[0]
+    assert document.is_probe_points(points)
+    assert list(points.Labels) == [f"P{i}" for i in range(1, 26)]
+    assert np.allclose(vectors(points.Points), result.points, atol=1e-12)
+    assert np.allclose(vectors(points.Normals), result.normals, atol=1e-12)
+    assert np.allclose(np.column_stack([points.U, points.V]), result.uv, atol=0)
+    expected = PointSet.from_result(result)
+    assert np.allclose(points.Deviation, expected.deviation, atol=1e-12)
+    assert points.Source == (doc.Body, ["Face1"]) and points.SourceName == "Body:Face1"
+    assert json.loads(points.Parameters) == result.settings
+    assert points.Strategy == "pso" and not points.Cancelled
+    assert points.MaxDeviation.Value == pytest.approx(result.deviation.maximum, rel=1e-12)
+    assert points.OccMaxDeviation.Value == pytest.approx(result.deviation.occ_maximum, rel=1e-12)
+    assert points.Status == "up to date" and not points.Orphaned and not points.Outdated
+    vertexes = points.Shape.Vertexes
+    assert len(vertexes) == 25
+    assert np.allclose([tuple(v.Point) for v in vertexes], result.points, atol=1e-9)
+
+
+def test_point_set_of_the_object(group, result):
+    points = group.Group[0]
+    ps = points.Proxy.point_set(points)
+    expected = PointSet.from_result(result, "Body:Face1")
+    assert ps.labels == expected.labels
+    for name in ("points", "normals", "uv", "deviation"):
+        assert np.allclose(getattr(ps, name), getattr(expected, name), atol=1e-12)
+    assert ps.metadata["source"] == "Body:Face1" and ps.metadata["population"] == 8
+    assert ps.metadata["max_mm"] == pytest.approx(result.deviation.maximum, rel=1e-12)
+
+
+def test_substitute_surface_is_the_fit_with_its_deviation_field(group, result):
+    surface = group.Group[1]
+    fitted = surface.Shape.Faces[0].Surface
+    assert isinstance(fitted, Part.BSplineSurface)
+    assert np.allclose(vectors(p for row in fitted.getPoles() for p in row),
+                       vectors(p for row in result.substitute.getPoles() for p in row), atol=1e-12)
+    u, v, field = surface.Proxy.deviation_grid(surface)
+    assert field.shape == (60, 60) and np.allclose(field, result.deviation.field, atol=0)
+    grid_uv = result.deviation.grid_uv
+    assert np.allclose(u, grid_uv[:, 0, 0]) and np.allclose(v, grid_uv[0, :, 1])
+    assert surface.MaxDeviation.Value == pytest.approx(np.nanmax(field))
+
+
+def test_report_has_summary_and_point_table(group, result):
+    report = group.Group[2]
+    assert report.get("strategy") == "pso" and report.get("n") == 25
+    assert report.get("max_mm") == pytest.approx(result.deviation.maximum, rel=1e-9)
+    assert report.get("occ_max_mm") == pytest.approx(result.deviation.occ_maximum, rel=1e-9)
+    header = next(row for row in range(1, 60) if report.getContents(f"A{row}") == "Label")
+    assert report.getContents(f"J{header}") == "Deviation (mm)"
+    first = [report.get(f"{c}{header + 1}") for c in "ABCDEFGHI"]
+    assert first[0] == "P1"
+    assert np.allclose(first[1:4], result.points[0], atol=1e-8)
+    assert np.allclose(first[7:9], result.uv[0], atol=1e-8)
+    assert report.getContents(f"A{header + 25}") == "P25" and report.getContents(f"A{header + 26}") == ""
+
+
+def test_save_and_reopen_keeps_everything(group, result, doc, tmp_path):
+    path = str(tmp_path / "sampling.FCStd")
+    doc.saveAs(path)
+    FreeCAD.closeDocument(doc.Name)
+    reopened = FreeCAD.openDocument(path)
+    try:
+        group = reopened.getObjectsByLabel("Sampling Body Face1")[0]
+        points, surface, report = group.Group
+        assert isinstance(points.Proxy, document.ProbePoints)
+        assert isinstance(surface.Proxy, document.SubstituteSurface)
+        assert points.Substitute == surface and points.Report == report
+        ps = points.Proxy.point_set(points)
+        assert np.allclose(ps.uv, result.uv, atol=0) and ps.labels[-1] == "P25"
+        assert surface.Proxy.deviation_grid(surface)[2].shape == (60, 60)
+        assert report.get("max_mm") == pytest.approx(result.deviation.maximum, rel=1e-9)
+        points.touch()
+        reopened.recompute()
+        assert points.Status == "up to date" and "Invalid" not in points.State
+    finally:
+        FreeCAD.closeDocument(reopened.Name)
+
+
+def test_changed_face_is_flagged_and_reevaluated_with_the_same_uv(group, result, doc):
+    points, surface, report = group.Group
+    old_max = points.MaxDeviation.Value
+    doc.Body.Shape = changed_face()
+    doc.recompute()
+    assert points.Outdated and points.Status.startswith("outdated")
+    again = document.reevaluate(points)
+    assert np.allclose(np.column_stack([points.U, points.V]), result.uv, atol=0)
+    expected = cmmsampling.evaluate(changed_face(), result.uv, fit_degree=3, fit_poles=(4, 4))
+    assert points.MaxDeviation.Value == pytest.approx(expected.deviation.maximum, rel=1e-9)
+    assert abs(points.MaxDeviation.Value - old_max) > 0.1
+    assert np.allclose(vectors(points.Points), expected.points, atol=1e-9)
+    assert not points.Outdated and points.Status == "up to date"
+    assert points.Strategy == "pso" and json.loads(points.Parameters) == result.settings
+    assert surface.MaxDeviation.Value == pytest.approx(again.deviation.maximum)
+    assert report.get("max_mm") == pytest.approx(again.deviation.maximum, rel=1e-9)
+    doc.undo()
+    assert points.MaxDeviation.Value == pytest.approx(old_max)
+
+
+def test_deleted_source_orphans_the_points_without_errors(group, doc):
+    points = group.Group[0]
+    doc.removeObject("Body")
+    doc.recompute()
+    assert points.Orphaned and points.Status == "orphaned: its source face Body:Face1 was deleted"
+    assert "Invalid" not in points.State and len(points.Shape.Vertexes) == 25
+    with pytest.raises(ValueError, match="Body:Face1 was deleted"):
+        document.reevaluate(points)
+    assert points.Proxy.point_set(points).metadata["source"] == "Body:Face1"
+
+
+def test_vanished_face_name_orphans_the_points(doc):
+    box = doc.addObject("Part::Feature", "Box")
+    box.Shape = Part.makeBox(40, 30, 20)
+    doc.recompute()
+    run = cmmsampling.sample(box.Shape.Faces[2], 9, "uniform_parametric", occ_check=False)
+    points = document.add_to_document(run, doc, source=(box, "Face3")).Group[0]
+    box.Shape = Part.makeBox(40, 30, 20).Faces[0]
+    doc.recompute()
+    assert points.Orphaned and "Box has no Face3" in points.Status
+
+
+def test_source_stays_visible_when_asked(doc, result):
+    document.add_to_document(result, doc, source=(doc.Body, "Face1"), hide_source=False)
+    assert doc.Body.Visibility
+
+
+def test_result_without_source(doc, result):
+    group = document.add_to_document(result, doc)
+    points = group.Group[0]
+    assert group.Label == "Sampling pso" and points.Source is None
+    assert not points.Orphaned and points.Status == "it was made without a source face"
+    with pytest.raises(ValueError, match="without a source face"):
+        document.reevaluate(points)
+
+
+@pytest.mark.parametrize("source, error, message", [
+    (lambda d: ("Body", "Face1"), ValueError, "is not in document"),
+    (lambda d: "Body.Face1", TypeError, "source must be"),
+    (lambda d: (d.Body, "Edge1"), ValueError, "Body.Edge1 is not a face"),
+])
+def test_bad_source_is_refused(doc, result, source, error, message):
+    with pytest.raises(error, match=message):
+        document.add_to_document(result, doc, source=source(doc))
+    assert [o.Name for o in doc.Objects] == ["Body"] and not doc.HasPendingTransaction
+
+
+def test_file_export_hook_writes_the_points_of_a_group(group, tmp_path):
+    path = str(tmp_path / "points.csv")
+    document.export([group], path)
+    with open(path) as f:
+        rows = [line for line in f if not line.startswith("#")]
+    assert rows[0].startswith("label,x,y,z,i,j,k") and len(rows) == 26
+    with pytest.raises(ValueError, match="exactly one set of probe points"):
+        document.export([group.Group[1]], path)
