@@ -40,6 +40,8 @@ _API = {
     "short_path": "probe_path",
     "add_to_document": "document",
     "reevaluate": "document",
+    "compare": "study",
+    "write_report": "report",
 }
 
 __all__ = sorted(_API)

@@ -34,6 +34,9 @@ def build_parser():
                       help="PSO iterations (default 3000, the paper's)")
     demo.add_argument("--population", type=int, default=25, help="PSO particles (default 25, the paper's)")
     demo.add_argument("--seed", type=int, default=0, help="seed of the random parts (default 0)")
+    demo.add_argument("--report", metavar="FOLDER", default="out/report",
+                      help="then compare every strategy over N = 25..144 and write the HTML report "
+                           "with its figures here (default out/report; 'none' skips it, ~3.5 min)")
     faces = commands.add_parser("faces", help="list the faces of a STEP, IGES or BREP file")
     faces.add_argument("file", help="a .step/.stp, .iges/.igs or .brep/.brp file")
     one = commands.add_parser("sample", help="sample one face of a STEP, IGES or BREP file",
@@ -124,7 +127,38 @@ def run_demo(args):
                        "progress": TerminalProgress("PSO", args.iterations)}
         results.append(sample(face, args.points, name, seed=args.seed, **options))
     print(format_table(results))
+    if args.report != "none":
+        _study_report(face, args)
     return 0
+
+
+def _study_report(face, args):
+    """Every strategy over the default N list (the paper's Table 1 and Fig. 9-13) as an HTML report."""
+    from .report import write_report
+    from .study import compare
+
+    progress = StudyProgress()
+    study = compare(face, seeds=(args.seed, args.seed + 1, args.seed + 2, args.seed + 3, args.seed + 4),
+                    pso_options={"iterations": args.iterations, "population": args.population},
+                    progress=progress)
+    progress.finish()
+    print(study.table())
+    print(f"report: {write_report(study, args.report)}")
+
+
+class StudyProgress(TerminalProgress):
+    """Progress of a study on stderr: runs done of all, with what runs now."""
+
+    def __init__(self):
+        super().__init__("study")
+
+    def __call__(self, done, total, message):
+        now = time.monotonic()
+        if now - self._last >= self.every_s:
+            self._last = now
+            self.stream.write(f"\rstudy {done}/{total} {message[:60]:<60}")
+            self.stream.flush()
+        return False
 
 
 def read_shape(path):

@@ -1,0 +1,358 @@
+"""Strategy study: every strategy over a list of point counts N on one face (paper Table 1, Fig. 13).
+
+:func:`compare` runs :func:`cmmsampling.sample` for each N and strategy (seed-dependent strategies
+once per seed), computes the certified lower bound of the maximum deviation once per N on the
+optimisation grid and on the 3x denser check grid, and collects the deviations (mm), the run times
+(s), the ratios to uniform parametric sampling and the multiples of the bound in a :class:`Study`.
+Pure computation; :mod:`cmmsampling.report` draws it.
+"""
+import time
+from dataclasses import dataclass, field, fields, replace
+from typing import NamedTuple
+
+import numpy as np
+
+from .deviation import DEFAULT_GRID
+from .fitting import DEFAULT_DEGREE, DEFAULT_SMOOTHING
+from .sampling import MIN_POINTS, STRATEGIES, make_problem, sample, strategy_options
+from .threads import blas_threads
+from .validation import check_choice, check_int
+
+DEFAULT_NS = (25, 36, 49, 64, 81, 100, 121, 144)
+DEFAULT_SEEDS = (0, 1, 2, 3, 4)
+SEEDED = ("random",)
+BASELINE = "uniform_parametric"
+PREFERRED_FIGURE_N = 81
+OPTIMISER_STEPS = {"pso": "iteration", "optimal": "evaluation"}
+
+
+@dataclass(frozen=True)
+class Run:
+    """One sample() run of a study; deviations in mm, time in s.
+
+    max_mm, mean_mm, rms_mm: on the optimisation grid; check_max_mm: on the check grid;
+    time_s: strategy and evaluation; ratio_max, ratio_mean, ratio_rms: max, mean and RMS over those
+    of the baseline (uniform parametric) at the same N (NaN without a baseline run);
+    bound_multiple, check_bound_multiple: max over the certified lower bound on the grid, check max
+    over the bound on the check grid (>= 1).
+    """
+
+    strategy: str
+    n: int
+    seed: int
+    max_mm: float
+    mean_mm: float
+    rms_mm: float
+    check_max_mm: float
+    time_s: float
+    evaluations: int
+    ratio_max: float = float("nan")
+    ratio_mean: float = float("nan")
+    ratio_rms: float = float("nan")
+    bound_multiple: float = float("nan")
+    check_bound_multiple: float = float("nan")
+
+
+MEASURES = tuple(f.name for f in fields(Run) if f.type is float)
+
+
+class Bound(NamedTuple):
+    """Certified lower bounds of the best maximum deviation any N points can reach, mm:
+    on the optimisation grid and on the check grid."""
+
+    grid: float
+    check: float
+
+
+@dataclass(frozen=True)
+class Aggregate:
+    """The runs of one strategy at one N, summarised over their seeds.
+
+    seeds: the seeds run; mean, std, low, high: {measure: value} over the runs for every name in
+    MEASURES (std 0 for a single run).
+    """
+
+    strategy: str
+    n: int
+    seeds: tuple
+    mean: dict
+    std: dict
+    low: dict
+    high: dict
+
+
+@dataclass
+class Study:
+    """What :func:`compare` measured.
+
+    face: the face studied; ns: point counts; strategies: names, in run order; rows: list of Run
+    (one per strategy, N and seed, in run order); bounds: {n: Bound (mm)}; results: {strategy:
+    SamplingResult} at ``figure_n`` (the first seed's) for the figures; figure_n: that N;
+    settings: every parameter of the study; cancelled: stopped early (rows hold only the runs
+    completed); elapsed_s: wall time (s).
+    """
+
+    face: object
+    ns: tuple
+    strategies: tuple
+    rows: list = field(default_factory=list)
+    bounds: dict = field(default_factory=dict)
+    results: dict = field(default_factory=dict)
+    figure_n: int = None
+    settings: dict = field(default_factory=dict)
+    cancelled: bool = False
+    elapsed_s: float = 0.0
+
+    def runs(self, strategy, n):
+        """The Run records of one strategy at one N (one per seed)."""
+        return [r for r in self.rows if r.strategy == strategy and r.n == n]
+
+    def aggregate(self, strategy, n):
+        """The Aggregate of one strategy at one N, or None where nothing was run."""
+        runs = self.runs(strategy, n)
+        if not runs:
+            return None
+        values = {m: np.array([getattr(r, m) for r in runs], dtype=float) for m in MEASURES}
+        return Aggregate(strategy, n, tuple(r.seed for r in runs),
+                         {m: float(v.mean()) for m, v in values.items()},
+                         {m: float(v.std()) for m, v in values.items()},
+                         {m: float(v.min()) for m, v in values.items()},
+                         {m: float(v.max()) for m, v in values.items()})
+
+    def summary(self):
+        """Aggregates for every N (outer) and strategy (inner) that has runs."""
+        found = (self.aggregate(s, n) for n in self.ns for s in self.strategies)
+        return [a for a in found if a is not None]
+
+    def matrix(self, measure="max_mm", statistic="mean"):
+        """(strategies, ns) array of a measure's statistic ("mean", "std", "low", "high") over seeds;
+        NaN where a strategy was not run at an N."""
+        table = np.full((len(self.strategies), len(self.ns)), np.nan)
+        for i, strategy in enumerate(self.strategies):
+            for j, n in enumerate(self.ns):
+                aggregate = self.aggregate(strategy, n)
+                if aggregate is not None:
+                    table[i, j] = getattr(aggregate, statistic)[measure]
+        return table
+
+    def table(self):
+        """Fixed-width text table: one line per strategy and N, means over seeds (± std of the max
+        where there are several), deviations in mm, ratios to uniform parametric, multiples of the
+        certified bound on the grid and the check grid, time in s."""
+        header = (f"{'strategy':<20} {'N':>4} {'runs':>4} {'max mm':>9} {'± std':>7} {'mean mm':>8} "
+                  f"{'RMS mm':>8} {'check max':>9} {'max/unif':>8} {'mean/unif':>9} {'RMS/unif':>8} "
+                  f"{'x bound':>7} {'x check':>7} {'time s':>7}")
+        lines = [header]
+        for a in self.summary():
+            m = a.mean
+            spread = f"{a.std['max_mm']:>7.4f}" if len(a.seeds) > 1 else f"{'':>7}"
+            lines.append(
+                f"{a.strategy:<20} {a.n:>4} {len(a.seeds):>4} {m['max_mm']:>9.4f} {spread} "
+                f"{m['mean_mm']:>8.4f} {m['rms_mm']:>8.4f} {m['check_max_mm']:>9.4f} "
+                f"{m['ratio_max']:>8.3f} {m['ratio_mean']:>9.3f} {m['ratio_rms']:>8.3f} "
+                f"{m['bound_multiple']:>7.3f} {m['check_bound_multiple']:>7.3f} {m['time_s']:>7.2f}")
+        for n, bound in self.bounds.items():
+            lines.append(f"{'certified bound':<20} {n:>4} {'':>4} {bound.grid:>9.4f} {'':>7} {'':>8} "
+                         f"{'':>8} {bound.check:>9.4f}")
+        if self.cancelled:
+            lines.append("(cancelled: only the runs completed are listed)")
+        return "\n".join(lines)
+
+
+@dataclass(frozen=True)
+class Step:
+    """One unit of work: the bound at N (strategy None) or one run of a strategy at N with a seed."""
+
+    n: int
+    strategy: str = None
+    seed: int = None
+
+    def describe(self):
+        """A short line for progress messages."""
+        if self.strategy is None:
+            return f"N = {self.n}: certified lower bound"
+        return f"N = {self.n}: {self.strategy} (seed {self.seed})"
+
+
+def plan(ns, strategies, seeds, seeded):
+    """The study's steps in order: for each N its bound, then every strategy (seeded ones once per
+    seed, the others with the first seed)."""
+    steps = []
+    for n in ns:
+        steps.append(Step(n))
+        for strategy in strategies:
+            for seed in (seeds if strategy in seeded else seeds[:1]):
+                steps.append(Step(n, strategy, seed))
+    return steps
+
+
+class Relay:
+    """Relays the study's progress to callback(done_steps, total_steps, message) -> True to cancel."""
+
+    def __init__(self, callback, total):
+        self.callback, self.total, self.done = callback, total, 0
+        self.cancelled = False
+
+    def report(self, message):
+        """Tell the callback; remember and return whether it asks to cancel."""
+        if self.callback is not None and self.callback(self.done, self.total, message):
+            self.cancelled = True
+        return self.cancelled
+
+    def optimiser(self, step):
+        """A progress callable (iteration, best_max_mm) for sample(), relaying to the callback."""
+        unit = OPTIMISER_STEPS.get(step.strategy, "step")
+        return lambda count, best: self.report(
+            f"{step.describe()}: {unit} {count}, best max {best:.4f} mm")
+
+
+def compare(face, ns=DEFAULT_NS, strategies=None, *, seeds=DEFAULT_SEEDS, seeded=SEEDED,
+            pso_options=None, optimal_options=None, fit_degree=DEFAULT_DEGREE, fit_poles=None,
+            smoothing=DEFAULT_SMOOTHING, grid=DEFAULT_GRID, figure_n=None, progress=None,
+            workers=None):
+    """Run every strategy over a list of N on one face and collect the trade-off.
+
+    face: a Part.Face (e.g. ``cmmsampling.reference_face()``); ns: point counts (each >= 4);
+    strategies: names from STRATEGIES (None: all, in their order); seeds: seeds of the
+    seed-dependent strategies named in ``seeded`` (default: "random"; add "pso" for the swarm's
+    spread, at 5x its time); the others run once with seeds[0];
+    pso_options, optimal_options: the strategies' own options (defaults: the paper's PSO, 25 x 3000;
+    the optimal strategy's defaults); fit_degree, fit_poles, smoothing, grid: as in sample();
+    figure_n: the N whose results are kept for the figures (default 81 if studied, else the middle
+    N); progress: callable(done_steps, total_steps, message) called before every step (the bound at
+    an N, or one run) and during the optimisers' iterations; returning True cancels: the study
+    returns what was completed, with ``cancelled`` set (a run interrupted is dropped);
+    workers: processes for the optimisers (as in sample()).
+    Returns a Study.
+    """
+    ns = _check_ns(ns)
+    strategies = _check_strategies(strategies)
+    seeds = _check_seeds(seeds)
+    seeded = _check_names("seeded strategy", seeded)
+    options = {"pso": strategy_options("pso", pso_options or {}),
+               "optimal": strategy_options("optimal", optimal_options or {})}
+    figure_n = _check_figure_n(figure_n, ns)
+    if progress is not None and not callable(progress):
+        raise TypeError(f"progress must be callable(done, total, message) or None, got {progress!r}")
+    fit = {"fit_degree": fit_degree, "fit_poles": fit_poles, "smoothing": smoothing, "grid": grid}
+    make_problem(face, ns[0], **fit, workers=workers)
+    study = Study(face, ns, strategies, figure_n=figure_n, settings={
+        "ns": list(ns), "strategies": list(strategies), "seeds": list(seeds), "seeded": list(seeded),
+        "pso_options": options["pso"], "optimal_options": options["optimal"], **fit,
+        "figure_n": figure_n, "baseline": BASELINE, "workers": workers})
+    began = time.perf_counter()
+    _execute(study, plan(ns, strategies, seeds, seeded), options, fit, progress, workers)
+    study.rows = derive(study.rows, study.bounds)
+    study.elapsed_s = time.perf_counter() - began
+    return study
+
+
+def _execute(study, steps, options, fit, callback, workers):
+    """Run the steps into ``study`` (bounds, rows, results); stop when the callback cancels."""
+    relay = Relay(callback, len(steps))
+    for step in steps:
+        if relay.report(step.describe()):
+            break
+        if step.strategy is None:
+            study.bounds[step.n] = certified_bound(study.face, step.n, **fit)
+        else:
+            entry = STRATEGIES[step.strategy]
+            result = sample(study.face, step.n, step.strategy, seed=step.seed, occ_check=False,
+                            workers=workers, progress=relay.optimiser(step) if entry.optimiser else None,
+                            **fit, **options.get(step.strategy, {}))
+            if result.cancelled:
+                break
+            study.rows.append(record(step, result))
+            if step.n == study.figure_n and step.strategy not in study.results:
+                study.results[step.strategy] = result
+        relay.done += 1
+    study.cancelled = relay.cancelled
+    if not relay.cancelled:
+        relay.report("study complete")
+
+
+def certified_bound(face, n, fit_degree=DEFAULT_DEGREE, fit_poles=None, smoothing=DEFAULT_SMOOTHING,
+                    grid=DEFAULT_GRID):
+    """The certified lower bounds at N on the grid and on the check grid: Bound (mm).
+
+    One problem computes both, with the fit and grid settings of :func:`sample`."""
+    problem = make_problem(face, n, fit_degree, fit_poles, smoothing, grid)
+    with blas_threads(1):
+        bounds = problem.bounds()
+    return Bound(bounds["grid"].lower, bounds["check"].lower)
+
+
+def record(step, result):
+    """The Run of one step from its SamplingResult (ratios and multiples left for :func:`derive`)."""
+    d = result.deviation
+    return Run(step.strategy, step.n, step.seed, d.maximum, d.mean, d.rms, result.check.maximum,
+               result.timings["total_s"], result.evaluations)
+
+
+def derive(rows, bounds, baseline=BASELINE):
+    """Rows with ratios to the baseline's mean max/mean/RMS at their N and multiples of the bounds.
+
+    Ratios stay NaN where the baseline was not run at that N, multiples where no bound was computed;
+    a zero bound gives an infinite multiple.
+    """
+    reference = {}
+    for n in {r.n for r in rows}:
+        base = [r for r in rows if r.n == n and r.strategy == baseline]
+        if base:
+            reference[n] = np.mean([[r.max_mm, r.mean_mm, r.rms_mm] for r in base], axis=0)
+    derived = []
+    for r in rows:
+        ratios = reference[r.n] if r.n in reference else np.full(3, np.nan)
+        bound = bounds.get(r.n, Bound(np.nan, np.nan))
+        derived.append(replace(
+            r, ratio_max=_ratio(r.max_mm, ratios[0]), ratio_mean=_ratio(r.mean_mm, ratios[1]),
+            ratio_rms=_ratio(r.rms_mm, ratios[2]), bound_multiple=_ratio(r.max_mm, bound.grid),
+            check_bound_multiple=_ratio(r.check_max_mm, bound.check)))
+    return derived
+
+
+def _ratio(value, reference):
+    """value / reference; NaN for a NaN reference, inf for a zero one."""
+    if np.isnan(reference):
+        return float("nan")
+    return float(value / reference) if reference > 0 else float("inf")
+
+
+def _check_ns(ns):
+    """Sorted distinct point counts, each at least MIN_POINTS; ValueError for none."""
+    values = sorted({check_int("n", n, MIN_POINTS) for n in np.atleast_1d(ns).tolist()})
+    if not values:
+        raise ValueError("ns must name at least one point count, e.g. (25, 49, 81)")
+    return tuple(values)
+
+
+def _check_strategies(strategies):
+    """Strategy names (None: all), at least one."""
+    if strategies is None:
+        return tuple(STRATEGIES)
+    names = _check_names("strategy", strategies)
+    if not names:
+        raise ValueError(f"strategies must name at least one of {', '.join(STRATEGIES)}")
+    return names
+
+
+def _check_names(kind, names):
+    """A strategy name or an iterable of them, each known, without repeats, in the order given."""
+    if isinstance(names, str):
+        names = [names]
+    return tuple(dict.fromkeys(check_choice(kind, name, list(STRATEGIES)) for name in names))
+
+
+def _check_seeds(seeds):
+    """Distinct non-negative whole seeds, at least one."""
+    values = tuple(dict.fromkeys(check_int("seed", s, 0) for s in np.atleast_1d(seeds).tolist()))
+    if not values:
+        raise ValueError("seeds must hold at least one seed, e.g. (0, 1, 2, 3, 4)")
+    return values
+
+
+def _check_figure_n(figure_n, ns):
+    """The N kept for the figures: the one given (must be studied), else 81 or the middle N."""
+    if figure_n is None:
+        return PREFERRED_FIGURE_N if PREFERRED_FIGURE_N in ns else ns[len(ns) // 2]
+    return check_choice("figure_n", check_int("figure_n", figure_n, MIN_POINTS), list(ns))

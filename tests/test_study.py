@@ -1,0 +1,192 @@
+"""The strategy study (compare) and its report (write_report): numbers, seeds, bounds, cancel, figures."""
+import base64
+import re
+
+import numpy as np
+import pytest
+from geometry import Part
+
+import cmmsampling
+from cmmsampling.report import FIGURES, footprint, write_report
+from cmmsampling.study import MEASURES, compare
+from cmmsampling.surface import SurfaceModel
+
+SMALL = {"grid": 20, "pso_options": {"iterations": 20, "population": 10},
+         "optimal_options": {"max_evaluations": 150}, "workers": 1}
+SAMPLE_OPTIONS = {"pso": SMALL["pso_options"], "optimal": SMALL["optimal_options"]}
+
+
+@pytest.fixture(scope="module")
+def calls():
+    return []
+
+
+@pytest.fixture(scope="module")
+def study(reference, calls):
+    """Every strategy at N = 16 and 25 on a 20 x 20 grid; random and PSO over three seeds."""
+    return compare(reference, ns=(25, 16), seeds=(0, 1, 2), seeded=("random", "pso"),
+                   progress=lambda *call: calls.append(call) and False, **SMALL)
+
+
+def separate(reference, n, strategy, seed):
+    """The same run as a plain sample() call."""
+    return cmmsampling.sample(reference, n, strategy, seed=seed, grid=SMALL["grid"], occ_check=False,
+                              workers=1, **SAMPLE_OPTIONS.get(strategy, {}))
+
+
+def row(study, strategy, n, seed):
+    (found,) = [r for r in study.rows if (r.strategy, r.n, r.seed) == (strategy, n, seed)]
+    return found
+
+
+@pytest.mark.parametrize("strategy", sorted(cmmsampling.STRATEGIES))
+def test_every_run_matches_a_separate_sample_call(study, reference, strategy):
+    seeds = (0, 2) if strategy in ("random", "pso") else (0,)
+    for seed in seeds:
+        result, run = separate(reference, 25, strategy, seed), row(study, strategy, 25, seed)
+        assert run.max_mm == pytest.approx(result.deviation.maximum, rel=1e-12)
+        assert run.mean_mm == pytest.approx(result.deviation.mean, rel=1e-12)
+        assert run.rms_mm == pytest.approx(result.deviation.rms, rel=1e-12)
+        assert run.check_max_mm == pytest.approx(result.check.maximum, rel=1e-12)
+        assert run.evaluations == result.evaluations and run.time_s > 0
+
+
+def test_study_layout(study):
+    assert study.ns == (16, 25) and study.strategies == tuple(cmmsampling.STRATEGIES)
+    assert not study.cancelled and study.elapsed_s > 0
+    assert len(study.rows) == 2 * (7 + 3 + 3)
+    assert study.figure_n == 25 and set(study.results) == set(cmmsampling.STRATEGIES)
+    assert all(r.n == 25 for r in study.results.values())
+    assert study.results["random"].deviation.maximum == row(study, "random", 25, 0).max_mm
+
+
+def test_bounds_are_computed_once_per_n_as_lower_bound_does(study, reference):
+    for n in study.ns:
+        grid = cmmsampling.lower_bound(reference, n, grid=SMALL["grid"]).lower
+        check = cmmsampling.lower_bound(reference, n, grid=SMALL["grid"], check=True).lower
+        assert study.bounds[n] == (pytest.approx(grid, rel=1e-12), pytest.approx(check, rel=1e-12))
+
+
+def test_ratios_to_uniform_and_multiples_of_the_bound(study):
+    for run in study.rows:
+        base = row(study, "uniform_parametric", run.n, 0)
+        assert run.ratio_max == pytest.approx(run.max_mm / base.max_mm)
+        assert run.ratio_mean == pytest.approx(run.mean_mm / base.mean_mm)
+        assert run.ratio_rms == pytest.approx(run.rms_mm / base.rms_mm)
+        assert run.bound_multiple == pytest.approx(run.max_mm / study.bounds[run.n].grid)
+        assert run.check_bound_multiple == pytest.approx(run.check_max_mm / study.bounds[run.n].check)
+        assert run.bound_multiple >= 1.0 and run.check_bound_multiple >= 1.0
+    assert row(study, "uniform_parametric", 16, 0).ratio_max == 1.0
+
+
+def test_seeded_strategies_report_mean_and_spread(study):
+    for strategy in ("random", "pso"):
+        aggregate = study.aggregate(strategy, 16)
+        maxima = np.array([row(study, strategy, 16, seed).max_mm for seed in (0, 1, 2)])
+        assert aggregate.seeds == (0, 1, 2)
+        assert aggregate.mean["max_mm"] == pytest.approx(maxima.mean())
+        assert aggregate.std["max_mm"] == pytest.approx(maxima.std()) and aggregate.std["max_mm"] > 0
+        assert aggregate.low["max_mm"] == maxima.min() and aggregate.high["max_mm"] == maxima.max()
+    single = study.aggregate("hammersley", 16)
+    assert single.seeds == (0,) and all(single.std[m] == 0 for m in MEASURES)
+    matrix = study.matrix("max_mm", "std")
+    assert matrix.shape == (9, 2) and matrix[list(study.strategies).index("random"), 0] > 0
+
+
+def test_table_lists_every_strategy_and_n(study):
+    lines = study.table().splitlines()
+    assert len(lines) == 1 + 2 * 9 + 2
+    for strategy in study.strategies:
+        assert sum(line.split()[0] == strategy for line in lines[1:]) == 2
+    random_line = next(line for line in lines if line.startswith("random") and line.split()[1] == "25")
+    aggregate = study.aggregate("random", 25)
+    assert f"{aggregate.mean['max_mm']:.4f}" in random_line
+    assert f"{aggregate.std['max_mm']:.4f}" in random_line
+
+
+def test_progress_reports_every_step_then_completion(study, calls):
+    steps = [c for c in calls if "iteration" not in c[2] and "evaluation" not in c[2]]
+    total = 2 * (1 + 13)
+    assert [c[0] for c in steps] == list(range(total + 1))
+    assert all(c[1] == total for c in calls) and steps[-1][2] == "study complete"
+    assert steps[0][2] == "N = 16: certified lower bound"
+    assert any(re.search(r"pso \(seed 1\): iteration 20, best max \d", c[2]) for c in calls)
+    assert any("optimal (seed 0): evaluation" in c[2] for c in calls)
+    done = [c[0] for c in calls]
+    assert done == sorted(done)
+
+
+def test_cancel_between_runs_returns_what_is_done(reference):
+    cancelled = compare(reference, ns=(16, 25), strategies=("uniform_parametric", "random"), seeds=(0, 1),
+                        progress=lambda done, total, message: done == 4, **SMALL)
+    assert cancelled.cancelled
+    assert [(r.strategy, r.n, r.seed) for r in cancelled.rows] == [
+        ("uniform_parametric", 16, 0), ("random", 16, 0), ("random", 16, 1)]
+    assert list(cancelled.bounds) == [16] and cancelled.results == {}
+    assert cancelled.rows[1].ratio_max == pytest.approx(cancelled.rows[1].max_mm / cancelled.rows[0].max_mm)
+    assert "cancelled" in cancelled.table()
+
+
+def test_cancel_inside_the_swarm_drops_the_interrupted_run(reference):
+    stop = compare(reference, ns=(16,), strategies=("uniform_parametric", "pso", "halton"),
+                   progress=lambda done, total, message: "iteration 5," in message, **SMALL)
+    assert stop.cancelled and [r.strategy for r in stop.rows] == ["uniform_parametric"]
+    assert set(stop.results) == {"uniform_parametric"}
+
+
+def test_report_writes_every_figure_and_embeds_them(study, tmp_path):
+    path = write_report(study, str(tmp_path / "report"))
+    assert path == str(tmp_path / "report" / "report.html")
+    page = open(path, encoding="utf-8").read()
+    embedded = re.findall(r"data:image/png;base64,([A-Za-z0-9+/=]+)", page)
+    assert len(embedded) == len(FIGURES)
+    for (name, _, _), encoded in zip(FIGURES, embedded):
+        png = (tmp_path / "report" / f"{name}.png").read_bytes()
+        assert len(png) > 10000 and png.startswith(b"\x89PNG")
+        assert base64.b64decode(encoded) == png
+    pso = study.aggregate("pso", 25)
+    assert f"{pso.mean['max_mm']:.4f} ± {pso.std['max_mm']:.4f}" in page
+    assert f"{study.bounds[16].grid:.4f}" in page and "PSO (paper)" in page
+
+
+def test_report_of_a_study_cancelled_before_the_figures_n(reference, tmp_path):
+    early = compare(reference, ns=(16, 25), strategies=("uniform_parametric", "hammersley"),
+                    progress=lambda done, total, message: done == 3, **SMALL)
+    path = write_report(early, str(tmp_path))
+    page = open(path, encoding="utf-8").read()
+    assert "cancelled" in page and page.count("data:image/png;base64,") == 1
+    assert (tmp_path / "max_vs_n.png").stat().st_size > 0
+    assert not (tmp_path / "substitutes.png").exists()
+
+
+def test_maps_fall_back_to_parameters_on_a_folded_face(reference, tmp_path):
+    cylinder = Part.makeCylinder(10, 20).Faces[0]
+    model = SurfaceModel.from_face(cylinder)
+    assert footprint(model, model.raster((20, 20))) is None
+    flat = SurfaceModel.from_face(reference)
+    xy, names, _ = footprint(flat, flat.raster((20, 20)))
+    assert names == ("x", "y") and xy.shape == (20, 20, 2)
+    small = compare(cylinder, ns=(16,), strategies=("uniform_parametric", "halton"), **SMALL)
+    write_report(small, str(tmp_path))
+    assert (tmp_path / "deviation_maps.png").stat().st_size > 0
+
+
+@pytest.mark.parametrize("bad, error", [
+    ({"ns": ()}, ValueError),
+    ({"ns": (16, 3)}, ValueError),
+    ({"ns": (16.5,)}, TypeError),
+    ({"strategies": ["uniform", "pso"]}, ValueError),
+    ({"seeds": ()}, ValueError),
+    ({"seeded": ("lucky",)}, ValueError),
+    ({"pso_options": {"swarm": 3}}, TypeError),
+    ({"optimal_options": {"max_evaluations": 0}}, ValueError),
+    ({"figure_n": 30}, ValueError),
+    ({"progress": 5}, TypeError),
+    ({"grid": 1}, ValueError),
+    ({"workers": 3}, ValueError),
+])
+def test_bad_input_fails_before_any_run(reference, bad, error):
+    calls = []
+    with pytest.raises(error):
+        compare(reference, **{"ns": (16,), "progress": lambda *call: calls.append(call), **bad})
+    assert calls == []
