@@ -68,21 +68,21 @@ class FaceDomain:
         low, high = np.array(self.bounds[0::2]), np.array(self.bounds[1::2])
         return np.all((uv >= low) & (uv <= high), axis=-1)
 
-    def on_face(self, uv):
-        """True where uv: (..., 2) lies on the face (inside its trimming loops): (...,) bool."""
+    def _lookup(self, raster, uv):
+        """In the rectangle and, where there is a raster, in a True cell of it: (...,) bool."""
         inside = self._in_rectangle(uv)
-        if self._on_face is None:
+        if raster is None:
             return inside
         cells = self._cells(uv)
-        return inside & self._on_face[cells[..., 0], cells[..., 1]]
+        return inside & raster[cells[..., 0], cells[..., 1]]
+
+    def on_face(self, uv):
+        """True where uv: (..., 2) lies on the face (inside its trimming loops): (...,) bool."""
+        return self._lookup(self._on_face, uv)
 
     def contains(self, uv):
         """True where uv: (..., 2) is a feasible probe position: (...,) bool."""
-        inside = self._in_rectangle(uv)
-        if self._feasible is None:
-            return inside
-        cells = self._cells(uv)
-        return inside & self._feasible[cells[..., 0], cells[..., 1]]
+        return self._lookup(self._feasible, uv)
 
     def project(self, uv):
         """Nearest feasible point for each uv: (..., 2) -> (..., 2); feasible points stay put."""
