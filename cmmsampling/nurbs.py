@@ -8,6 +8,10 @@ import numpy as np
 from .bspline import basis_values_many, dense_from_local, design_matrices
 
 
+DEGENERATE_STEP = 1e-7
+DEGENERATE_RATIO = 1e-8
+
+
 class NurbsPatch:
     """Poles, weights and knots of one surface, with vectorised evaluation.
 
@@ -106,12 +110,31 @@ class NurbsPatch:
     def normals(self, uv):
         """Unit normals pointing out of the material (face orientation respected).
 
-        uv: (..., 2) -> (..., 3). Where the surface is degenerate (zero cross product) the
-        normal is NaN.
+        uv: (..., 2) -> (..., 3). On a degenerate edge (a pole row collapsed to one point, a
+        sphere's pole) su x sv vanishes (below DEGENERATE_RATIO of |su|^2 + |sv|^2); there the normal is the limit from inside the face: it
+        is taken DEGENERATE_STEP of the parameter range across the edge, towards the middle.
         """
         uv = np.asarray(uv, dtype=float)
-        d = self.derivatives(uv.reshape(-1, 2), 1)
-        return unit_normals(d[(1, 0)], d[(0, 1)], self.reversed).reshape(uv.shape[:-1] + (3,))
+        flat = uv.reshape(-1, 2)
+        d = self.derivatives(flat, 1)
+        normals = unit_normals(d[(1, 0)], d[(0, 1)], self.reversed)
+        cross = np.linalg.norm(np.cross(d[(1, 0)], d[(0, 1)]), axis=1)
+        scale = (d[(1, 0)] ** 2).sum(1) + (d[(0, 1)] ** 2).sum(1)
+        degenerate = ~(cross > DEGENERATE_RATIO * scale)
+        if degenerate.any():
+            normals[degenerate] = self.normals(self._off_degenerate_edge(flat[degenerate], d, degenerate))
+        return normals.reshape(uv.shape[:-1] + (3,))
+
+    def _off_degenerate_edge(self, uv, d, degenerate):
+        """uv: (M, 2) on a degenerate edge moved a step across it, towards the middle of the range."""
+        u0, u1, v0, v1 = self.bounds
+        span = np.array([u1 - u0, v1 - v0])
+        middle = np.array([u0 + u1, v0 + v1]) / 2
+        along_v_vanishes = np.linalg.norm(d[(0, 1)][degenerate], axis=1) <= np.linalg.norm(
+            d[(1, 0)][degenerate], axis=1)
+        across = np.where(along_v_vanishes[:, None], [1.0, 0.0], [0.0, 1.0])
+        towards = np.where(middle >= uv, 1.0, -1.0)
+        return uv + DEGENERATE_STEP * span * across * towards
 
     def curvatures(self, uv):
         """Mean and Gaussian curvature at uv: (N, 2) -> (H, K), each (N,), in 1/mm and 1/mm^2.

@@ -1,0 +1,62 @@
+"""Faces that are hard on purpose: a collapsed pole row, poles of a sphere, a full periodic cylinder,
+a plane, a tiny face; each gets usable points or a message saying what to change."""
+import numpy as np
+import pytest
+from geometry import Part
+
+import cmmsampling
+from cmmsampling.surface import SurfaceModel, make_bspline_surface, reference_poles
+
+QUICK = {"pso": {"iterations": 10, "population": 6}, "optimal": {"max_evaluations": 40}}
+
+
+def _collapsed_face():
+    """The reference surface with its first pole row collapsed to one point (a degenerate edge)."""
+    poles = reference_poles().copy()
+    poles[0, :, :] = poles[0, 4, :]
+    return make_bspline_surface(poles, (5, 5)).toShape()
+
+
+def test_normals_on_degenerate_edges_are_the_limit_normals():
+    collapsed = _collapsed_face()
+    model = SurfaceModel.from_face(collapsed)
+    uv = np.array([[0.0, 0.2], [0.0, 0.5], [0.0, 1.0]])
+    occ = np.array([tuple(collapsed.normalAt(u, v)) for u, v in uv])
+    assert np.abs(model.normals(uv) - occ).max() < 1e-5
+    sphere = SurfaceModel.from_face(Part.makeSphere(5).Faces[0])
+    poles = np.array([[1.0, sphere.bounds[3]], [2.0, sphere.bounds[2]]])
+    occ = np.array([tuple(sphere.face.normalAt(u, v)) for u, v in poles])
+    assert np.abs(sphere.normals(poles) - occ).max() < 1e-5
+
+
+@pytest.mark.parametrize("strategy", sorted(cmmsampling.STRATEGIES))
+@pytest.mark.parametrize("make", [_collapsed_face, lambda: Part.makeSphere(5).Faces[0],
+                                  lambda: Part.makeCylinder(10, 20).Faces[0]],
+                         ids=["collapsed_edge", "sphere", "full_cylinder"])
+def test_degenerate_and_periodic_faces_give_usable_points(make, strategy):
+    face = make()
+    result = cmmsampling.sample(face, 16, strategy, grid=24, occ_check=False, **QUICK.get(strategy, {}))
+    assert np.all(np.isfinite(result.points)) and np.all(np.isfinite(result.normals))
+    occ = np.array([tuple(result.model.face.normalAt(u, v)) for u, v in result.uv])
+    assert np.abs(occ - result.normals).max() < 1e-5
+    gaps = np.linalg.norm(result.points[:, None] - result.points[None], axis=-1)
+    np.fill_diagonal(gaps, np.inf)
+    assert gaps.min() > 0
+
+
+@pytest.mark.parametrize("face", [Part.makePlane(50, 30).Faces[0], Part.makePlane(1e-3, 2e-3).Faces[0]],
+                         ids=["plane", "tiny"])
+def test_exact_fits_say_so(face):
+    result = cmmsampling.sample(face, 16, "pso", iterations=5, population=4)
+    assert result.exact and result.multiple_of_bound() == 1.0
+    assert "reproduces this face exactly" in result.notes[0]
+    assert np.isfinite(result.deviation.maximum)
+
+
+def test_nan_and_infinite_input_is_refused(reference):
+    with pytest.raises(ValueError, match="edge_offset must be a finite number"):
+        cmmsampling.sample(reference, 16, "halton", edge_offset=float("inf"))
+    with pytest.raises(ValueError, match="uv contains NaN"):
+        cmmsampling.evaluate(reference, np.full((16, 2), np.nan))
+    with pytest.raises(ValueError, match="uv must be an \\(N, 2\\) array"):
+        cmmsampling.evaluate(reference, np.zeros((16, 3)))
