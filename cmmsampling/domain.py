@@ -113,9 +113,11 @@ def face_domain(model, edge_offset=0.0):
     if not trimmed and edge_offset <= 0:
         return FaceDomain(model.bounds, area=float(face.Area))
     centres = _cell_centres(model.bounds)
-    on_face = _inside_loops(face, model.bounds, centres) if trimmed else np.ones((RASTER, RASTER), bool)
+    step = max(face.BoundBox.DiagonalLength / 1000.0, 1e-6)
+    loops = _loops(face, step)
+    on_face = _inside_loops(loops, centres) if trimmed else np.ones((RASTER, RASTER), bool)
     points = model.points(centres.reshape(-1, 2)).reshape(RASTER, RASTER, 3)
-    clearance = _edge_clearance(face, points)
+    clearance = _edge_clearance(model.points(np.concatenate(loops)), points, step)
     feasible = on_face & (clearance >= edge_offset)
     cell_areas = _cell_areas(points)
     return FaceDomain(model.bounds, trimmed, edge_offset, on_face, feasible,
@@ -136,26 +138,32 @@ def _cell_centres(bounds):
     return np.stack(np.meshgrid(u, v, indexing="ij"), axis=-1)
 
 
-def _loops(face):
-    """The face's trimming loops as (u, v) polygons: list of (K, 2) arrays."""
+def _loops(face, step):
+    """The face's trimming loops as (u, v) polygons: list of (K, 2) arrays.
+
+    Each edge's curve on the surface is sampled at least LOOP_SAMPLES_PER_EDGE times and at most
+    ``step`` mm apart along the edge (3D), so the samples serve the edge clearance too.
+    """
     loops = []
     for wire in face.Wires:
         pieces = []
-        for edge in wire.OrderedEdges:
+        for edge in wire.OrderedEdges or wire.Edges:
             curve, first, last = face.curveOnSurface(edge)[:3]
-            ts = np.linspace(first, last, LOOP_SAMPLES_PER_EDGE)
+            count = max(LOOP_SAMPLES_PER_EDGE, int(np.ceil(edge.Length / step)) + 1)
+            ts = np.linspace(first, last, count)
             piece = np.array([(p.x, p.y) for p in map(curve.value, ts)])
             pieces.append(piece[::-1] if edge.Orientation == "Reversed" else piece)
-        loops.append(np.concatenate(pieces))
+        if pieces:
+            loops.append(np.concatenate(pieces))
     return loops
 
 
-def _inside_loops(face, bounds, centres):
+def _inside_loops(loops, centres):
     """Even-odd classification of the raster cell centres against the trimming loops: (R, R) bool."""
     u = centres[:, 0, 0]
     v = centres[0, :, 1]
     crossings = [[] for _ in v]
-    for loop in _loops(face):
+    for loop in loops:
         a, b = loop, np.roll(loop, -1, axis=0)
         low, high = np.minimum(a[:, 1], b[:, 1]), np.maximum(a[:, 1], b[:, 1])
         spans = (low[:, None] <= v[None, :]) & (v[None, :] < high[:, None])
@@ -172,14 +180,12 @@ def _inside_loops(face, bounds, centres):
     return inside
 
 
-def _edge_clearance(face, points):
+def _edge_clearance(samples, points, step):
     """Conservative 3D distance (mm) from each raster cell to the face's edges: (R, R).
 
-    Distance from the cell centre to a discretisation of the wires, less the discretisation
-    step and half the cell's 3D diagonal.
+    samples: (K, 3) points along the edges at most ``step`` mm apart; points: (R, R, 3) cell
+    centres. The distance to the nearest sample, less the step and half the cell's 3D diagonal.
     """
-    step = max(face.BoundBox.DiagonalLength / 1000.0, 1e-6)
-    samples = np.array([tuple(p) for wire in face.Wires for p in wire.discretize(Distance=step)])
     distance = cKDTree(samples).query(points.reshape(-1, 3))[0].reshape(points.shape[:2])
     return distance - step - 0.5 * _cell_diagonals(points)
 

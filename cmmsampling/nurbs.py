@@ -8,7 +8,7 @@ import numpy as np
 from .bspline import basis_values_many, dense_from_local, design_matrices
 
 
-DEGENERATE_STEP = 1e-7
+DEGENERATE_STEPS = (1e-7, 1e-5, 1e-3)
 DEGENERATE_RATIO = 1e-8
 
 
@@ -111,30 +111,44 @@ class NurbsPatch:
         """Unit normals pointing out of the material (face orientation respected).
 
         uv: (..., 2) -> (..., 3). On a degenerate edge (a pole row collapsed to one point, a
-        sphere's pole) su x sv vanishes (below DEGENERATE_RATIO of |su|^2 + |sv|^2); there the normal is the limit from inside the face: it
-        is taken DEGENERATE_STEP of the parameter range across the edge, towards the middle.
+        sphere's pole) su x sv vanishes (below DEGENERATE_RATIO of |su|^2 + |sv|^2); there the
+        normal is the limit from inside the face, taken a small step across the edge towards the
+        middle of the parameter range (steps DEGENERATE_STEPS of the range, the last one in both
+        directions). Where even that finds no normal it stays NaN.
         """
         uv = np.asarray(uv, dtype=float)
         flat = uv.reshape(-1, 2)
-        d = self.derivatives(flat, 1)
+        normals, degenerate, across = self._plain_normals(flat)
+        for attempt, step in enumerate(DEGENERATE_STEPS):
+            if not degenerate.any():
+                break
+            if attempt == len(DEGENERATE_STEPS) - 1:
+                across = np.ones_like(across)
+            moved = self._towards_middle(flat[degenerate], across[degenerate], step)
+            found, still, _ = self._plain_normals(moved)
+            index = np.flatnonzero(degenerate)
+            normals[index[~still]] = found[~still]
+            degenerate[index[~still]] = False
+        return normals.reshape(uv.shape[:-1] + (3,))
+
+    def _plain_normals(self, uv):
+        """Normals from su x sv at uv: (M, 2) -> (normals (M, 3), degenerate (M,) bool,
+        across (M, 2): the parameter to move along to leave a degenerate edge)."""
+        d = self.derivatives(uv, 1)
         normals = unit_normals(d[(1, 0)], d[(0, 1)], self.reversed)
         cross = np.linalg.norm(np.cross(d[(1, 0)], d[(0, 1)]), axis=1)
         scale = (d[(1, 0)] ** 2).sum(1) + (d[(0, 1)] ** 2).sum(1)
         degenerate = ~(cross > DEGENERATE_RATIO * scale)
-        if degenerate.any():
-            normals[degenerate] = self.normals(self._off_degenerate_edge(flat[degenerate], d, degenerate))
-        return normals.reshape(uv.shape[:-1] + (3,))
+        along_v_vanishes = (d[(0, 1)] ** 2).sum(1) <= (d[(1, 0)] ** 2).sum(1)
+        across = np.where(along_v_vanishes[:, None], [1.0, 0.0], [0.0, 1.0])
+        return normals, degenerate, across
 
-    def _off_degenerate_edge(self, uv, d, degenerate):
-        """uv: (M, 2) on a degenerate edge moved a step across it, towards the middle of the range."""
+    def _towards_middle(self, uv, across, step):
+        """uv: (M, 2) moved ``step`` of the parameter range along ``across`` towards the middle."""
         u0, u1, v0, v1 = self.bounds
         span = np.array([u1 - u0, v1 - v0])
-        middle = np.array([u0 + u1, v0 + v1]) / 2
-        along_v_vanishes = np.linalg.norm(d[(0, 1)][degenerate], axis=1) <= np.linalg.norm(
-            d[(1, 0)][degenerate], axis=1)
-        across = np.where(along_v_vanishes[:, None], [1.0, 0.0], [0.0, 1.0])
-        towards = np.where(middle >= uv, 1.0, -1.0)
-        return uv + DEGENERATE_STEP * span * across * towards
+        towards = np.where(np.array([u0 + u1, v0 + v1]) / 2 >= uv, 1.0, -1.0)
+        return uv + step * span * across * towards
 
     def curvatures(self, uv):
         """Mean and Gaussian curvature at uv: (N, 2) -> (H, K), each (N,), in 1/mm and 1/mm^2.
