@@ -39,8 +39,7 @@ def build_parser():
                            "with its figures here (default out/report; 'none' skips it, ~3.5 min)")
     faces = commands.add_parser("faces", help="list the faces of a STEP, IGES or BREP file")
     faces.add_argument("file", help="a .step/.stp, .iges/.igs or .brep/.brp file")
-    one = commands.add_parser("sample", help="sample one face of a STEP, IGES or BREP file",
-                              formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    one = commands.add_parser("sample", help="sample one face of a STEP, IGES or BREP file")
     _sample_arguments(one)
     return parser
 
@@ -50,25 +49,30 @@ def _sample_arguments(parser):
     parser.add_argument("file", help="a .step/.stp, .iges/.igs or .brep/.brp file (lengths in mm)")
     parser.add_argument("--face", type=int, required=True,
                         help="face number as 'faces' lists it (FreeCAD's FaceN)")
-    parser.add_argument("-n", "--points", type=int, default=49, help="number of probe points")
+    parser.add_argument("-n", "--points", type=int, default=49, help="number of probe points (default 49)")
     parser.add_argument("--strategy", default="optimal", choices=list(STRATEGIES),
-                        help="where the points go; 'optimal' comes closest to the best possible, "
-                             "'pso' is the paper's swarm")
-    parser.add_argument("--edge-offset", type=float, default=CLI_EDGE_OFFSET,
-                        help="mm every point keeps from the face's edges (probe ball radius plus a margin)")
-    parser.add_argument("--min-spacing", type=float, default=None,
-                        help="mm between points (default: 0, or a fifth of the even spacing for 'optimal')")
+                        metavar="STRATEGY",
+                        help="where the points go (default optimal, which comes closest to the best "
+                             f"possible; pso is the paper's swarm): {', '.join(STRATEGIES)}")
+    parser.add_argument("--edge-offset", type=float, default=CLI_EDGE_OFFSET, metavar="MM",
+                        help="distance every point keeps from the face's edges: the probe ball's "
+                             f"radius plus a margin (default {CLI_EDGE_OFFSET} mm; 0 allows edge points)")
+    parser.add_argument("--min-spacing", type=float, default=None, metavar="MM",
+                        help="smallest distance between two points (default 0, or a fifth of the "
+                             "even spacing for optimal)")
     parser.add_argument("--iterations", type=int, help="PSO iterations (default 3000)")
     parser.add_argument("--population", type=int, help="PSO particles (default 25)")
-    parser.add_argument("--time-limit", type=float, help="seconds for the 'optimal' strategy")
-    parser.add_argument("--seed", type=int, default=0, help="seed of the random parts")
+    parser.add_argument("--time-limit", type=float, metavar="S",
+                        help="seconds the optimal strategy may take (default: until it converges)")
+    parser.add_argument("--seed", type=int, default=0, help="seed of the random parts (default 0)")
     parser.add_argument("--out", action="append", default=[], metavar="FILE",
                         help="write the probe points; format from the extension .dmi, .xyz or .csv "
                              "(repeat for several files)")
-    parser.add_argument("--probe-radius", type=float, default=0.0,
-                        help="mm: write ball centres (point + r * normal) instead of contact points")
+    parser.add_argument("--probe-radius", type=float, default=0.0, metavar="MM",
+                        help="write ball centres (point + radius * normal) instead of contact points "
+                             "(default 0: contact points)")
     parser.add_argument("--order", default="as_optimised", choices=["as_optimised", "short_path"],
-                        help="point order in the files; short_path shortens the probe's travel")
+                        help="point order in the files: as optimised (default) or a short probe path")
     parser.add_argument("--fcstd", metavar="FILE", help="also save a FreeCAD document with the results")
 
 
