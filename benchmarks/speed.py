@@ -14,6 +14,7 @@ import argparse
 import os
 import resource
 import sys
+import tempfile
 import time
 
 import numpy as np
@@ -115,7 +116,10 @@ def three_ways(face, iterations):
 
 
 def _pyswarms_time(objective, problem, iterations):
-    """Seconds for pyswarms' GlobalBestPSO with the same fitness, or None without pyswarms."""
+    """Seconds for pyswarms' GlobalBestPSO with the same fitness, or None without pyswarms.
+
+    pyswarms writes a report.log into the working folder; it is made in a temporary one.
+    """
     try:
         import logging
 
@@ -125,7 +129,13 @@ def _pyswarms_time(objective, problem, iterations):
     logging.getLogger("pyswarms").setLevel(logging.ERROR)
     dimensions = 2 * problem.n
     bounds = (np.tile(problem.domain.lower, problem.n), np.tile(problem.domain.upper, problem.n))
-    optimizer = pyswarms.single.GlobalBestPSO(25, dimensions, {"c1": 2.0, "c2": 2.0, "w": 0.5}, bounds=bounds)
+    here = os.getcwd()
+    os.chdir(tempfile.mkdtemp())
+    try:
+        optimizer = pyswarms.single.GlobalBestPSO(25, dimensions, {"c1": 2.0, "c2": 2.0, "w": 0.5},
+                                                  bounds=bounds)
+    finally:
+        os.chdir(here)
     cost = lambda x: objective(x.reshape(len(x), problem.n, 2))  # noqa: E731
     seconds, _ = timed(lambda: optimizer.optimize(cost, iters=iterations, verbose=False))
     return seconds
