@@ -11,6 +11,7 @@ Prints, in one run:
 Run with benchmarks/run.sh (which installs pyswarms in a separate virtual environment).
 """
 import argparse
+import logging
 import os
 import resource
 import sys
@@ -120,20 +121,18 @@ def _pyswarms_time(objective, problem, iterations):
 
     pyswarms writes a report.log into the working folder; it is made in a temporary one.
     """
-    try:
-        import logging
-
-        import pyswarms
-    except ImportError:
-        return None
-    logging.getLogger("pyswarms").setLevel(logging.ERROR)
-    dimensions = 2 * problem.n
-    bounds = (np.tile(problem.domain.lower, problem.n), np.tile(problem.domain.upper, problem.n))
     here = os.getcwd()
     os.chdir(tempfile.mkdtemp())
     try:
+        import pyswarms
+
+        logging.getLogger("pyswarms").setLevel(logging.ERROR)
+        dimensions = 2 * problem.n
+        bounds = (np.tile(problem.domain.lower, problem.n), np.tile(problem.domain.upper, problem.n))
         optimizer = pyswarms.single.GlobalBestPSO(25, dimensions, {"c1": 2.0, "c2": 2.0, "w": 0.5},
                                                   bounds=bounds)
+    except ImportError:
+        return None
     finally:
         os.chdir(here)
     cost = lambda x: objective(x.reshape(len(x), problem.n, 2))  # noqa: E731
