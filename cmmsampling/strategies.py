@@ -74,10 +74,11 @@ def spaced(points, min_spacing):
     return np.array(kept)
 
 
-def _dense_enough(make_candidates, problem, start):
+def _dense_enough(make_candidates, problem, start, keep_first=False):
     """Grow a candidate layout until N of its points are feasible and spaced, then thin it.
 
-    make_candidates(m) -> (M, 2) uv for a layout of about m points; start: first m to try.
+    make_candidates(m) -> (M, 2) uv for a layout of about m points; start: first m to try;
+    keep_first: keep the first N (for a sequence) instead of N spread evenly over the layout.
     Feasible: on the face and at least edge_offset from its edges; spaced: greedily, in the
     layout's order, at least problem.min_spacing mm apart, and never coincident (closer than
     COINCIDENT times the face's size: several (u, v) of a degenerate edge, e.g. a sphere's pole).
@@ -90,7 +91,7 @@ def _dense_enough(make_candidates, problem, start):
         inside = uv[problem.domain.contains(uv)]
         inside = inside[spaced(problem.model.points(inside), spacing)]
         if len(inside) >= n:
-            return thin_evenly(inside, n)
+            return inside[:n] if keep_first else thin_evenly(inside, n)
         m = int(np.ceil(m * max(1.1, n / max(len(inside), 1))))
     raise ValueError(
         f"could not place {n} points on the face at least {problem.min_spacing:g} mm apart and "
@@ -98,18 +99,32 @@ def _dense_enough(make_candidates, problem, start):
     )
 
 
+def snap_near_misses(domain, uv, cell):
+    """Move grid nodes that just miss the feasible domain onto it: (M, 2) -> (M, 2).
+
+    A node is moved to its nearest feasible point when that is at most one grid cell ``cell``
+    (2,) away in (u, v), as next to an edge offset; nodes deep in a hole stay where they are
+    (and are dropped as infeasible). Keeps a grid whole instead of losing a row to thinning.
+    """
+    moved = domain.project(uv)
+    near = np.all(np.abs(moved - uv) <= cell, axis=1) & ~domain.contains(uv)
+    return np.where(near[:, None], moved, uv)
+
+
 def uniform_parametric(problem):
     """Regular grid in (u, v) (paper eq. 5-6), corners included.
 
     The grid has rows x cols >= N nodes with rows / cols following the parameter range's aspect;
-    surplus nodes, and nodes off a trimmed face, are dropped evenly so that exactly N remain.
+    nodes that just miss the feasible domain (next to an edge offset) are moved onto it; surplus
+    nodes, and nodes off a trimmed face, are dropped evenly so that exactly N remain.
     """
     du, dv = problem.model.span
     aspect = dv / du if du > 0 else 1.0
 
     def candidates(m):
         rows, cols = grid_shape(m, aspect)
-        return problem.domain.from_unit(_unit_grid(rows, cols))
+        cell = (problem.domain.upper - problem.domain.lower) / [max(rows - 1, 1), max(cols - 1, 1)]
+        return snap_near_misses(problem.domain, problem.domain.from_unit(_unit_grid(rows, cols)), cell)
 
     return StrategyOutcome(_dense_enough(candidates, problem, problem.n))
 
@@ -175,6 +190,8 @@ def uniform_cartesian(problem):
         targets = low + _unit_grid(rows, cols) * extent
         seeds = raster_uv[tree.query(targets)[1]]
         uv, residual = _solve_footprint(model, frame, targets, seeds)
+        cell = (problem.domain.upper - problem.domain.lower) / [max(rows - 1, 1), max(cols - 1, 1)]
+        uv = snap_near_misses(problem.domain, uv, cell)
         return np.where((residual <= tolerance)[:, None], uv, np.nan)
 
     return StrategyOutcome(_dense_enough(candidates, problem, problem.n))
@@ -200,17 +217,12 @@ def hammersley(problem):
 
 
 def halton(problem):
-    """Halton sequence in (u, v), bases 2 and 3, starting at index 1; off-face points are skipped."""
+    """Halton sequence in (u, v), bases 2 and 3, starting at index 1: its first N feasible, spaced points."""
     def candidates(m):
         i = np.arange(1, m + 1)
         return problem.domain.from_unit(np.column_stack([radical_inverse(i, 2), radical_inverse(i, 3)]))
 
-    n = problem.n
-    uv = candidates(4 * n + 16)
-    inside = uv[problem.domain.contains(uv)]
-    if len(inside) >= n:
-        return StrategyOutcome(inside[:n])
-    return StrategyOutcome(_dense_enough(candidates, problem, 8 * n))
+    return StrategyOutcome(_dense_enough(candidates, problem, 4 * problem.n + 16, keep_first=True))
 
 
 def _patch_scores(model, domain, patches, curvature, raster_per_patch=8):
