@@ -12,7 +12,9 @@ After the CAD face changed, :func:`reevaluate` projects the same (u, v) onto it 
 This module never imports the GUI: view providers are attached only when ``FreeCAD.GuiUp``.
 Lengths are in mm, times in s.
 """
+import contextlib
 import json
+from xml.etree import ElementTree
 
 import numpy as np
 
@@ -41,12 +43,12 @@ def add_to_document(result, doc, source=None, hide_source=True):
     result: a :class:`cmmsampling.SamplingResult`; doc: a FreeCAD document;
     source: ``(obj, "Face3")``, the document face the result was sampled on, or None;
     hide_source: hide the source object, on which the substitute surface lies (Undo shows it again).
-    Creates a group "Sampling <label> <face>" holding the probe points, the substitute surface
-    and the deviation report (in that order) and returns the group.
+    Creates a group "Sampling <label> <face> (<strategy>)" holding the probe points, the substitute
+    surface and the deviation report (in that order) and returns the group.
+    When any step fails, nothing is added (see :func:`transaction`) and the exception is raised.
     """
     source = _check_source(source, doc)
-    doc.openTransaction("Add sampling result")
-    try:
+    with transaction(doc, "Add sampling result"):
         group = doc.addObject("App::DocumentObjectGroup", "Sampling")
         group.Label = _group_label(result, source)
         surface = make_substitute_surface(doc)
@@ -57,12 +59,40 @@ def add_to_document(result, doc, source=None, hide_source=True):
         write_result(points, result, dict(result.settings), result.timings.get("total_s", 0.0))
         if source is not None and hide_source:
             source[0].Visibility = False
-        doc.recompute()
-    except Exception:
+        recompute(doc, [points, surface, report])
+    return group
+
+
+@contextlib.contextmanager
+def transaction(doc, name):
+    """One undoable step named ``name``: commit when the block ends, roll back when it raises.
+
+    On an exception the transaction is aborted, which removes the objects the block added and
+    restores the properties it changed, and the exception is raised again. Undo is switched on for
+    the time of the step when the document has it off (headless documents do), so that the
+    rollback also works there; it is switched off again afterwards.
+    """
+    undo_mode = doc.UndoMode
+    doc.UndoMode = 1
+    doc.openTransaction(name)
+    try:
+        yield
+    except BaseException:
         doc.abortTransaction()
         raise
-    doc.commitTransaction()
-    return group
+    else:
+        doc.commitTransaction()
+    finally:
+        doc.UndoMode = undo_mode
+
+
+def recompute(doc, objects):
+    """Recompute ``doc``; RuntimeError naming the first of ``objects`` whose computation failed
+    (FreeCAD only marks such an object invalid)."""
+    doc.recompute()
+    for obj in objects:
+        if "Invalid" in obj.State:
+            raise RuntimeError(f"{obj.Label} could not be computed: {obj.getStatusString()}")
 
 
 def reevaluate(points, occ_check=True):
@@ -71,7 +101,7 @@ def reevaluate(points, occ_check=True):
     points: a probe-points object made by :func:`add_to_document`. Keeps each point's (u, v),
     projects it onto the face as it is now, refits the substitute with the stored fit and grid
     settings (no optimisation) and updates the points, the substitute surface and the report in
-    one transaction. Returns the new SamplingResult.
+    one transaction (rolled back when a step fails). Returns the new SamplingResult.
     Raises ValueError when the source face is gone (the object is orphaned) or was never set.
     """
     face, problem = source_face(points)
@@ -81,15 +111,9 @@ def reevaluate(points, occ_check=True):
     uv = np.column_stack([points.U, points.V])
     fit = {key: settings[key] for key in FIT_SETTINGS if key in settings}
     result = evaluate(face, uv, strategy=points.Strategy, occ_check=occ_check, **fit)
-    doc = points.Document
-    doc.openTransaction("Re-evaluate probe points")
-    try:
+    with transaction(points.Document, "Re-evaluate probe points"):
         write_result(points, result, settings, points.RunTime)
-        doc.recompute()
-    except Exception:
-        doc.abortTransaction()
-        raise
-    doc.commitTransaction()
+        recompute(points.Document, [o for o in (points, points.Substitute, points.Report) if o is not None])
     return result
 
 
@@ -176,7 +200,7 @@ def write_report(sheet, points):
     The summary figures get aliases (strategy, n, max_mm, mean_mm, rms_mm, std_mm, occ_max_mm,
     time_s) for expressions such as ``=DeviationReport.max_mm``.
     """
-    sheet.clearAll()
+    clear_cells(sheet)
     summary = summary_rows(points)
     rows = [row[:2] for row in summary] + parameter_rows(points) + [()] + table_rows(points)
     for row, values in enumerate(rows, start=1):
@@ -188,6 +212,16 @@ def write_report(sheet, points):
     header = len(rows) - len(points.Labels)
     sheet.setStyle("A1", "bold")
     sheet.setStyle(f"A{header}:J{header}", "bold")
+
+
+def clear_cells(sheet):
+    """Empty every used cell of a spreadsheet (content, alias, style), undoably.
+
+    FreeCAD 0.20's ``Sheet.clearAll()`` is not undoable: an Undo after it restores an empty sheet.
+    Clearing cell by cell is. The used cells are read from the sheet's saved form.
+    """
+    for cell in ElementTree.fromstring(sheet.cells.Content).iter("Cell"):
+        sheet.clear(cell.get("address"))
 
 
 def summary_rows(points):
@@ -430,7 +464,12 @@ def _check_source(source, doc):
     if not (isinstance(source, (tuple, list)) and len(source) == 2 and isinstance(source[1], str)):
         raise TypeError(f"source must be (obj, 'FaceK') or None, got {source!r}")
     obj, name = source
-    if getattr(getattr(obj, "Document", None), "Name", None) != doc.Name:
+    try:
+        document_name = getattr(getattr(obj, "Document", None), "Name", None)
+    except ReferenceError:
+        raise ValueError(f"the source object of {name} was deleted; "
+                         "name a face of an object that is in the document") from None
+    if document_name != doc.Name:
         raise ValueError(f"source object {getattr(obj, 'Name', obj)!r} is not in document {doc.Name!r}")
     if not isinstance(obj.getSubObject(name), Part.Face):
         raise ValueError(f"source {obj.Label}.{name} is not a face; name one like 'Face1'")
@@ -438,10 +477,14 @@ def _check_source(source, doc):
 
 
 def _group_label(result, source):
-    """'Sampling <object label> <face>' or 'Sampling <strategy>' without a source."""
+    """'Sampling <object label> <face> (<strategy>)', or 'Sampling <strategy>' without a source.
+
+    The label never ends in a digit: FreeCAD makes a repeated label unique by replacing its
+    trailing digits, which would turn a second 'Sampling Body Face1' into '... Face002'.
+    """
     if source is None:
         return f"Sampling {result.strategy}"
-    return f"Sampling {source[0].Label} {source[1]}"
+    return f"Sampling {source[0].Label} {source[1]} ({result.strategy})"
 
 
 def _json_value(value):

@@ -52,7 +52,7 @@ def vectors(values):
 def test_add_to_document_makes_a_group_of_three_in_one_transaction(doc, result):
     before = doc.UndoCount
     group = document.add_to_document(result, doc, source=(doc.Body, "Face1"))
-    assert group.TypeId == "App::DocumentObjectGroup" and group.Label == "Sampling Body Face1"
+    assert group.TypeId == "App::DocumentObjectGroup" and group.Label == "Sampling Body Face1 (pso)"
     points, surface, report = group.Group
     assert (points.TypeId, surface.TypeId, report.TypeId) == (
         "Part::FeaturePython", "Part::FeaturePython", "Spreadsheet::Sheet")
@@ -128,7 +128,7 @@ def test_save_and_reopen_keeps_everything(group, result, doc, tmp_path):
     FreeCAD.closeDocument(doc.Name)
     reopened = FreeCAD.openDocument(path)
     try:
-        group = reopened.getObjectsByLabel("Sampling Body Face1")[0]
+        group = reopened.getObjectsByLabel("Sampling Body Face1 (pso)")[0]
         points, surface, report = group.Group
         assert isinstance(points.Proxy, document.ProbePoints)
         assert isinstance(surface.Proxy, document.SubstituteSurface)

@@ -1,4 +1,5 @@
-"""The *Sample face* task panel: face, strategy, N, swarm, fit and grid settings; a background run.
+"""The *Sample face* task panel: face, strategy, N, probe constraints, swarm, fit and grid
+settings; a background run.
 
 The run is ``cmmsampling.sample(...)`` in a worker thread (:class:`BackgroundSampling`), polled by
 a QTimer; Cancel stops it and leaves the document untouched. The result is written by the GUI
@@ -9,9 +10,11 @@ import __main__
 
 import FreeCAD
 import FreeCADGui
+import Part
 from PySide import QtCore, QtGui
 
 from .. import sampling
+from ..cli import CLI_EDGE_OFFSET
 from ..deviation import DEFAULT_GRID
 from ..fitting import DEFAULT_DEGREE, default_pole_count
 from . import icon, resource, settings
@@ -21,10 +24,16 @@ from .worker import BackgroundSampling
 POLL_MS = 100
 CANCEL_WAIT_S = 1.0
 ERROR_STYLE = "color: #b00000;"
-COMMON = ("n", "seed", "fit_degree", "auto_poles", "fit_poles_u", "fit_poles_v", "grid")
+COMMON = ("n", "seed", "edge_offset", "min_spacing", "fit_degree", "auto_poles", "fit_poles_u",
+          "fit_poles_v", "grid")
 OPTION_GROUPS = ("psoGroup", "optimalGroup")
 # Panel stand-ins for options whose default None means automatic or unlimited.
 STAND_INS = {"time_limit": 0.0, "max_evaluations": 0}
+# The minimum spacing shown as "auto" (the spin box's minimum): sample(min_spacing=None).
+AUTO_SPACING = -0.5
+# Narrowest input fields (px): the panel fits the default width of the combo view.
+FIELD_WIDTH = 70
+CHOICE_CHARACTERS = 10
 
 
 def option_defaults():
@@ -40,9 +49,11 @@ def option_defaults():
 
 
 def panel_defaults():
-    """Every value of the panel with its default: strategy, N, seed, options, fit, grid."""
+    """Every value of the panel with its default: strategy, N, seed, probe constraints (the
+    command line's edge offset, mm; automatic spacing), options, fit, grid."""
     return {
-        "strategy": "pso", "n": 81, "seed": 0, **option_defaults(),
+        "strategy": "pso", "n": 81, "seed": 0, "edge_offset": CLI_EDGE_OFFSET,
+        "min_spacing": AUTO_SPACING, **option_defaults(),
         "fit_degree": DEFAULT_DEGREE, "auto_poles": True,
         "fit_poles_u": default_pole_count(81), "fit_poles_v": default_pole_count(81),
         "grid": DEFAULT_GRID,
@@ -55,6 +66,25 @@ def option_argument(name, values):
     if name in STAND_INS:
         return values[name] or None
     return values[name]
+
+
+def spacing_argument(value):
+    """sample()'s min_spacing (mm) for the panel's value: None ("auto") below zero."""
+    return None if value < 0 else value
+
+
+def fit_narrow_dock(form):
+    """Let the form shrink to the default width of FreeCAD's combo view, which clips (it never
+    scrolls sideways): input fields may be FIELD_WIDTH px narrow, choice lists CHOICE_CHARACTERS
+    characters wide, and a form row wraps its field below its label when both do not fit."""
+    for spin in form.findChildren(QtGui.QAbstractSpinBox):
+        spin.setMinimumWidth(FIELD_WIDTH)
+    for choice in form.findChildren(QtGui.QComboBox):
+        choice.setSizeAdjustPolicy(QtGui.QComboBox.AdjustToMinimumContentsLengthWithIcon)
+        choice.setMinimumContentsLength(CHOICE_CHARACTERS)
+    for layout in form.findChildren(QtGui.QFormLayout):
+        layout.setRowWrapPolicy(QtGui.QFormLayout.WrapLongRows)
+    form.layout().setContentsMargins(0, 0, 0, 0)
 
 
 def progress_total(arguments):
@@ -81,6 +111,7 @@ class SampleFaceTaskPanel:
         self.form = FreeCADGui.PySideUic.loadUi(resource("sample_face.ui"))
         self.form.setWindowIcon(QtGui.QIcon(icon("SampleFace.svg")))
         self.source = source
+        self.source_text = source_text(source)
         self.run = None
         self.step = ""
         self.picker = None
@@ -88,11 +119,13 @@ class SampleFaceTaskPanel:
         self.timer = QtCore.QTimer()
         self.timer.setInterval(POLL_MS)
         self.timer.timeout.connect(self.poll)
+        fit_narrow_dock(self.form)
         self._fill_strategies()
         self.set_values(settings.load(panel_defaults()))
         self.form.strategy.currentIndexChanged.connect(self.update_enabled)
         self.form.auto_poles.toggled.connect(self.update_enabled)
         self.form.pickFace.toggled.connect(self.pick_face)
+        self.form.min_spacing.valueChanged.connect(self.snap_spacing)
         self.show_source()
         self.update_enabled()
 
@@ -174,8 +207,15 @@ class SampleFaceTaskPanel:
                      "fit_degree": values["fit_degree"], "grid": values["grid"]}
         if not values["auto_poles"]:
             arguments["fit_poles"] = (values["fit_poles_u"], values["fit_poles_v"])
+        arguments["edge_offset"] = values["edge_offset"]
+        arguments["min_spacing"] = spacing_argument(values["min_spacing"])
         arguments.update({name: option_argument(name, values) for name in strategy.options if name in values})
         return arguments
+
+    def snap_spacing(self, value):
+        """Show a negative minimum spacing, which means automatic, as "auto"."""
+        if AUTO_SPACING < value < 0:
+            self.form.min_spacing.setValue(AUTO_SPACING)
 
     def update_enabled(self):
         """Enable the options the chosen strategy takes (and their groups) and the pole counts
@@ -203,9 +243,22 @@ class SampleFaceTaskPanel:
 
     # --- face
     def show_source(self):
-        obj, name = self.source
-        self.form.faceLabel.setText(f"{obj.Label}.{name}")
+        self.form.faceLabel.setText(self.source_text)
         self.form.faceLabel.setStyleSheet("")
+
+    def source_face(self):
+        """The chosen face as it is now, or None when it (or its object) is gone."""
+        obj, name = self.source
+        try:
+            face = obj.getSubObject(name)
+        except ReferenceError:  # the object was deleted
+            return None
+        return face if isinstance(face, Part.Face) else None
+
+    def source_gone(self):
+        """Say that the chosen face is gone and what to do."""
+        self.show_status(f"{self.source_text} is not in the document any more: pick another face "
+                         "and sample again.", error=True)
 
     def pick_face(self, on):
         """Start (on=True) or stop waiting for a face clicked in the 3D view."""
@@ -227,6 +280,7 @@ class SampleFaceTaskPanel:
             return
         try:
             self.source = selected_face(FreeCADGui.Selection.getSelectionEx())
+            self.source_text = source_text(self.source)
         except SelectionError as exc:
             self.form.faceLabel.setText(str(exc))
             self.form.faceLabel.setStyleSheet(ERROR_STYLE)
@@ -238,10 +292,9 @@ class SampleFaceTaskPanel:
     def start(self):
         """Save the values and start ``cmmsampling.sample`` in the background."""
         settings.save(self.values())
-        obj, name = self.source
-        face = obj.getSubObject(name)
+        face = self.source_face()
         if face is None:
-            self.show_status(f"{obj.Label} has no {name} any more: pick another face.", error=True)
+            self.source_gone()
             return
         arguments = self.sample_arguments()
         self.run = BackgroundSampling(face.copy(), arguments)
@@ -282,6 +335,9 @@ class SampleFaceTaskPanel:
     def finish(self, run):
         """Add the result to the document (through the echoed console API) and close; on failure
         (e.g. the face was deleted meanwhile) say why and stay open."""
+        if self.source_face() is None:
+            self.source_gone()
+            return
         try:
             add_result(self.source, run.arguments, run.result)
         except Exception as exc:  # shown in the panel; the console has the traceback
@@ -292,6 +348,11 @@ class SampleFaceTaskPanel:
     def show_status(self, text, error=False):
         self.form.status.setText(text)
         self.form.status.setStyleSheet(ERROR_STYLE if error else "")
+
+
+def source_text(source):
+    """'Label.FaceK' of a source (obj, "FaceK")."""
+    return f"{source[0].Label}.{source[1]}"
 
 
 def add_result(source, arguments, result):

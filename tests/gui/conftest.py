@@ -14,6 +14,7 @@ else:
     import pytest
 
     import cmmsampling
+    from cmmsampling.gui import settings
 
     from .helpers import process_events
 
@@ -34,6 +35,12 @@ else:
         FreeCADGui.activateWorkbench("CMMSamplingWorkbench")
         process_events(0.2)
         return FreeCADGui.activeWorkbench()
+
+    @pytest.fixture(autouse=True)
+    def panel_defaults():
+        """Every test starts with the panel's defaults: the values stored by earlier runs go."""
+        parent, name = settings.PARAMETER_GROUP.rsplit("/", 1)
+        FreeCAD.ParamGet(parent).RemGroup(name)
 
     @pytest.fixture
     def doc(workbench):

@@ -1,8 +1,15 @@
-"""Qt helpers for the GUI tests: run the event loop, wait for a condition, find widgets."""
+"""Helpers for the GUI tests: run the event loop, wait for a condition, find widgets, open and
+fill the Sample face panel, interrupt its background run."""
+import threading
 import time
 
 import FreeCADGui
 from PySide import QtCore, QtGui
+
+import cmmsampling
+from cmmsampling.gui import commands, worker
+
+SAMPLE = commands.SampleFace.NAME
 
 
 def process_events(seconds):
@@ -30,17 +37,27 @@ def main_window():
     return FreeCADGui.getMainWindow()
 
 
+def widgets():
+    """Every widget of the application.
+
+    Short-lived widgets are looked up here, not with the main window's findChild: PySide keeps
+    what that returns alive with the main window's wrapper, and after Qt has deleted a widget it
+    hands that stale wrapper out again for a new widget at the same address."""
+    return QtGui.QApplication.allWidgets()
+
+
 def task_form():
     """The Sample face task panel's form while it is open, else None."""
-    return main_window().findChild(QtGui.QWidget, "SampleFace")
+    return next((w for w in widgets() if w.objectName() == "SampleFace"), None)
 
 
 def task_button(which):
     """The open task dialog's standard button: which = QtGui.QDialogButtonBox.Ok or .Cancel."""
-    for box in main_window().findChildren(QtGui.QDialogButtonBox):
-        button = box.button(which)
-        if button is not None and box.isVisible():
-            return button
+    for box in widgets():
+        if isinstance(box, QtGui.QDialogButtonBox) and box.isVisible():
+            button = box.button(which)
+            if button is not None:
+                return button
     return None
 
 
@@ -72,6 +89,29 @@ def modal_message(action, timeout_s=10):
     return texts[0] if texts else None
 
 
+def answer_dialog(action, button, timeout_s=10):
+    """Run action(), which opens a modal dialog; press its button with text ``button`` and return
+    the texts of its labels."""
+    seen = []
+    timer = QtCore.QTimer()
+    timer.setInterval(50)
+
+    def press():
+        dialog = QtGui.QApplication.activeModalWidget()
+        if dialog is not None:
+            seen.extend(label.text() for label in dialog.findChildren(QtGui.QLabel))
+            next(b for b in dialog.findChildren(QtGui.QAbstractButton)
+                 if b.text().replace("&", "") == button).click()
+            timer.stop()
+
+    timer.timeout.connect(press)
+    timer.start()
+    QtCore.QTimer.singleShot(int(timeout_s * 1000), timer.stop)
+    action()
+    timer.stop()
+    return " ".join(seen)
+
+
 def texts(node):
     """The strings of every SoText2 below a coin node, in scene order."""
     from pivy import coin
@@ -82,3 +122,84 @@ def texts(node):
     search.apply(node)
     paths = search.getPaths()
     return [paths[i].getTail().string.getValues()[0] for i in range(paths.getLength())]
+
+
+def open_panel(doc, face="Face1"):
+    """Select the Body's face, run Sample face, return the panel's form (a new one: the form of
+    a panel closed before is deleted later, by the event loop)."""
+    assert wait_until(lambda: task_form() is None, 5), "the last panel's form is still there"
+    FreeCADGui.Selection.clearSelection()
+    FreeCADGui.Selection.addSelection(doc.Body, face)
+    FreeCADGui.runCommand(SAMPLE)
+    assert wait_until(lambda: task_form() is not None, 5), commands.SampleFace().reason()
+    return task_form()
+
+
+def fill(form, strategy="pso", **values):
+    """Set the strategy and spin/check boxes of the form by name."""
+    form.strategy.setCurrentIndex(form.strategy.findText(strategy))
+    for name, value in values.items():
+        widget = getattr(form, name)
+        if isinstance(widget, QtGui.QCheckBox):
+            widget.setChecked(value)
+        else:
+            widget.setValue(value)
+
+
+def short_result(doc):
+    """A short PSO run (25 points) on the Body's face."""
+    return cmmsampling.sample(doc.Body.Shape.Faces[0], 25, "pso", population=8, iterations=20, seed=1)
+
+
+def running_workers():
+    """The task panel's worker threads still alive."""
+    return [t for t in threading.enumerate() if t.name == "cmmsampling" and t.is_alive()]
+
+
+def groups(doc):
+    return [o for o in doc.Objects if o.TypeId == "App::DocumentObjectGroup"]
+
+
+def drawn(obj):
+    """Coin nodes our view provider drew for obj: labels/lines or coloured mesh/legend."""
+    proxy = obj.ViewObject.Proxy
+    node = getattr(proxy, "annotation", None) or getattr(proxy, "coloured", None)
+    return node.getNumChildren() if node is not None else 0
+
+
+def interrupt_run(monkeypatch, action, at=None):
+    """Make the panel's next run call action() in its worker thread: before sample() starts
+    (at=None) or in the progress callback of iteration ``at``, before the panel's own callback.
+    action may block (hold the run there) or raise (a fault inside the run)."""
+    sample = worker.sample
+
+    def interrupted(face, progress=None, **arguments):
+        if at is None:
+            action()
+            return sample(face, progress=progress, **arguments)
+
+        def watched(iteration, best_mm):
+            if iteration == at:
+                action()
+            return progress(iteration, best_mm)
+
+        return sample(face, progress=watched, **arguments)
+
+    monkeypatch.setattr(worker, "sample", interrupted)
+
+
+class Hold:
+    """An action for :func:`interrupt_run` that holds the run until released (at most limit_s)."""
+
+    def __init__(self, limit_s=20.0):
+        self.reached = threading.Event()
+        self.released = threading.Event()
+        self.limit_s = limit_s
+
+    def __call__(self):
+        self.reached.set()
+        self.released.wait(self.limit_s)
+
+    def release_after(self, seconds):
+        """Release the run from another thread after ``seconds`` (while the GUI thread waits)."""
+        threading.Timer(seconds, self.released.set).start()

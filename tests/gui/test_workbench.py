@@ -2,7 +2,6 @@
 import json
 import os
 import subprocess
-import threading
 import time
 
 import FreeCAD
@@ -15,56 +14,17 @@ from PySide import QtCore, QtGui
 
 import cmmsampling
 from cmmsampling import document
-from cmmsampling.gui import colormap, commands, settings, view_providers
+from cmmsampling.gui import colormap, commands, settings, task_panel, view_providers
 from cmmsampling.surface import make_bspline_surface, reference_poles
 
 from .helpers import (
-    dock_text, main_window, modal_message, process_events, task_button, task_form, texts, wait_until,
+    dock_text, drawn, fill, groups, main_window, modal_message, open_panel, process_events, running_workers,
+    short_result, task_button, texts, wait_until,
 )
 
 OK, CANCEL = QtGui.QDialogButtonBox.Ok, QtGui.QDialogButtonBox.Cancel
 SAMPLE, EXPORT = commands.SampleFace.NAME, commands.ExportProbePoints.NAME
 REEVALUATE = commands.Reevaluate.NAME
-
-
-def open_panel(doc, face="Face1"):
-    """Select the Body's face, run Sample face, return the panel's form."""
-    FreeCADGui.Selection.clearSelection()
-    FreeCADGui.Selection.addSelection(doc.Body, face)
-    FreeCADGui.runCommand(SAMPLE)
-    assert wait_until(lambda: task_form() is not None, 5), commands.SampleFace().reason()
-    return task_form()
-
-
-def fill(form, strategy="pso", **values):
-    """Set the strategy and spin/check boxes of the form by name."""
-    form.strategy.setCurrentIndex(form.strategy.findText(strategy))
-    for name, value in values.items():
-        widget = getattr(form, name)
-        if isinstance(widget, QtGui.QCheckBox):
-            widget.setChecked(value)
-        else:
-            widget.setValue(value)
-
-
-def short_result(doc):
-    return cmmsampling.sample(doc.Body.Shape.Faces[0], 25, "pso", population=8, iterations=20, seed=1)
-
-
-def drawn(obj):
-    """Coin nodes our view provider drew for obj: labels/lines or coloured mesh/legend."""
-    proxy = obj.ViewObject.Proxy
-    node = getattr(proxy, "annotation", None) or getattr(proxy, "coloured", None)
-    return node.getNumChildren() if node is not None else 0
-
-
-def running_workers():
-    """The task panel's worker threads still alive."""
-    return [t for t in threading.enumerate() if t.name == "cmmsampling" and t.is_alive()]
-
-
-def groups(doc):
-    return [o for o in doc.Objects if o.TypeId == "App::DocumentObjectGroup"]
 
 
 def test_workbench_has_its_toolbar_menu_and_icons(workbench):
@@ -88,12 +48,15 @@ def test_colour_map_runs_blue_to_red_with_grey_off_the_face():
 
 
 def test_panel_defaults_are_the_papers_and_options_follow_the_strategy(doc):
-    FreeCAD.ParamGet("User parameter:BaseApp/Preferences/Mod").RemGroup("CMMSampling")
     form = open_panel(doc)
     assert form.faceLabel.text() == "Body.Face1"
     expected = {"n": 81, "population": 25, "iterations": 3000, "w1": 0.5, "w2": 0.0, "c1": 2.0,
-                "c2": 2.0, "seed": 0, "fit_degree": 3, "grid": 60}
+                "c2": 2.0, "seed": 0, "fit_degree": 3, "grid": 60, "edge_offset": 1.5}
     assert {name: getattr(form, name).value() for name in expected} == expected
+    assert form.min_spacing.text() == "auto"
+    for words in ("useless", "probe ball radius plus a margin", "0 reproduces the paper"):
+        assert words in form.edge_offset.toolTip()
+    assert "auto" in form.min_spacing.toolTip() and "optimal" in form.min_spacing.toolTip()
     assert form.strategy.currentText() == "pso" and form.start_from_uniform.isChecked()
     assert [form.strategy.itemText(i) for i in range(form.strategy.count())] == list(cmmsampling.STRATEGIES)
     for name in expected:
@@ -114,6 +77,31 @@ def test_panel_defaults_are_the_papers_and_options_follow_the_strategy(doc):
     assert form.fit_poles_u.isEnabled() and form.fit_poles_v.isEnabled()
     task_button(CANCEL).click()
     assert wait_until(lambda: not FreeCADGui.Control.activeDialog(), 2)
+
+
+def clipped_widgets(form):
+    """Names of the form's visible widgets that reach past the right edge of what the task view
+    shows of the form (it never scrolls sideways), and that edge in px.
+
+    Only the form's own visible region is used: a PySide wrapper of one of its parents would,
+    when dropped, invalidate the wrappers below it."""
+    edge = form.visibleRegion().boundingRect().right()
+    clipped = [w.objectName() or type(w).__name__ for w in [form] + form.findChildren(QtGui.QWidget)
+               if w.isVisible() and w.window() is main_window()
+               and w.mapTo(form, QtCore.QPoint(w.width() - 1, 0)).x() > edge]
+    return clipped, edge
+
+
+def test_panel_fits_the_default_width_of_the_combo_view(doc, artifacts):
+    form = open_panel(doc)
+    fill(form, "curvature_gaussian", seed=2147483647, n=100000)
+    fill(form, "optimal", edge_offset=1.5)
+    process_events(0.3)
+    clipped, edge = clipped_widgets(form)
+    assert not clipped, f"cut off at {edge} px by the task view: {clipped}"
+    assert form.strategy.width() >= form.strategy.fontMetrics().horizontalAdvance("curvature_g")
+    main_window().grab().save(os.path.join(artifacts, "task_panel_narrow.png"))
+    task_button(CANCEL).click()
 
 
 def test_the_face_can_be_picked_again_in_the_panel(doc):
@@ -190,7 +178,7 @@ def test_short_pso_through_the_panel_then_one_undo(doc, artifacts):
     assert any(value > 0 and "best maximum deviation" in text for value, text in seen)
 
     [group] = groups(doc)
-    assert group.Label == "Sampling Body Face1"
+    assert group.Label == "Sampling Body Face1 (pso)"
     points, surface, report = group.Group
     assert len(points.Labels) == 25 and len(points.Shape.Vertexes) == 25
     parameters = json.loads(points.Parameters)
@@ -216,9 +204,17 @@ def test_short_pso_through_the_panel_then_one_undo(doc, artifacts):
     view.saveImage(os.path.join(artifacts, "view_sampling.png"), 1200, 900, "White")
 
     assert doc.UndoCount == before + 1
+    made = [o.Name for o in doc.Objects]
     FreeCADGui.runCommand("Std_Undo")
     process_events(0.1)
     assert [o.Name for o in doc.Objects] == ["Body"] and doc.Body.ViewObject.Visibility
+    FreeCADGui.runCommand("Std_Redo")
+    process_events(0.1)
+    assert [o.Name for o in doc.Objects] == made and not doc.Body.ViewObject.Visibility
+    assert group.Group == [points, surface, report] and drawn(points) == 3 and drawn(surface) == 2
+    assert report.getContents("B4") == "25" and len(points.Proxy.point_set(points)) == 25
+    FreeCADGui.runCommand("Std_Undo")
+    process_events(0.1)
 
     form = open_panel(doc)
     shown = (form.n.value(), form.iterations.value(), form.population.value(), form.grid.value())
@@ -238,19 +234,65 @@ def test_optimal_strategy_through_the_panel(doc):
     assert points.Strategy == "optimal" and len(points.Labels) == 16
     assert parameters["max_evaluations"] == 40 and parameters["time_limit"] is None
     assert parameters["start"] == "uniform_parametric"
-    echo = ("strategy='optimal', seed=0, fit_degree=3, grid=30, start='uniform_parametric', "
-            "time_limit=None, max_evaluations=40)")
+    echo = ("strategy='optimal', seed=0, fit_degree=3, grid=30, edge_offset=1.5, min_spacing=None, "
+            "start='uniform_parametric', time_limit=None, max_evaluations=40)")
     assert echo in dock_text("Python console")
 
 
-def test_bad_settings_show_the_cores_message_and_change_nothing(doc):
+def test_probe_constraints_keep_points_off_the_edges_and_apart(doc):
     form = open_panel(doc)
-    fill(form, "uniform_parametric", n=16, fit_degree=3, auto_poles=False, fit_poles_u=3, fit_poles_v=6)
+    fill(form, "pso", n=25, population=8, iterations=30, seed=3, grid=40, edge_offset=6.0,
+         min_spacing=9.0)
     task_button(OK).click()
-    message = "fit_poles along u (3) must be at least fit_degree + 1 (4)"
+    assert wait_until(lambda: not FreeCADGui.Control.activeDialog(), 60), form.status.text()
+    [group] = groups(doc)
+    points = group.Group[0]
+    parameters = json.loads(points.Parameters)
+    assert (parameters["edge_offset"], parameters["min_spacing"]) == (6.0, 9.0)
+    assert "grid=40, edge_offset=6.0, min_spacing=9.0, population=8" in dock_text("Python console")
+    face = doc.Body.Shape.Faces[0]
+    edges = Part.Compound(face.Edges)
+    xyz = np.array([tuple(p) for p in points.Points])
+    assert min(edges.distToShape(Part.Vertex(*p))[0] for p in xyz) >= 6.0
+    gaps = np.linalg.norm(xyz[:, None] - xyz[None], axis=-1) + np.diag(np.full(len(xyz), np.inf))
+    assert gaps.min() >= 9.0
+
+    form = open_panel(doc)
+    assert (form.edge_offset.value(), form.min_spacing.value()) == (6.0, 9.0)
+    form.min_spacing.setValue(0.0)
+    form.min_spacing.stepDown()
+    assert form.min_spacing.text() == "auto"
+    form.min_spacing.setValue(-0.2)
+    assert form.min_spacing.text() == "auto"
+    assert form.min_spacing.value() == task_panel.AUTO_SPACING
+    assert task_panel.spacing_argument(form.min_spacing.value()) is None
+    task_button(CANCEL).click()
+
+
+BAD_SETTINGS = {
+    "poles below degree + 1": (
+        dict(n=16, fit_degree=3, auto_poles=False, fit_poles_u=3, fit_poles_v=6),
+        "ValueError: fit_poles along u (3) must be at least fit_degree + 1 (4)"),
+    "face too small for the edge offset": (
+        dict(n=16, edge_offset=60.0),
+        "ValueError: the face is too small for edge_offset 60 mm: no point of it is that far from "
+        "its edges; lower edge_offset"),
+    "too many points for the spacing": (
+        dict(n=200, min_spacing=10.0),
+        "ValueError: 200 points 10 mm apart do not fit on the"),
+}
+
+
+@pytest.mark.parametrize("values, message", BAD_SETTINGS.values(), ids=list(BAD_SETTINGS))
+def test_bad_settings_show_the_cores_message_and_change_nothing(doc, values, message):
+    form = open_panel(doc)
+    fill(form, "uniform_parametric", **values)
+    undo = doc.UndoCount
+    task_button(OK).click()
     assert wait_until(lambda: message in form.status.text(), 10), form.status.text()
-    assert FreeCADGui.Control.activeDialog() and task_button(OK).isEnabled()
-    assert [o.Name for o in doc.Objects] == ["Body"]
+    assert FreeCADGui.Control.activeDialog() and task_button(OK).isEnabled() and form.n.isEnabled()
+    assert [o.Name for o in doc.Objects] == ["Body"] and doc.UndoCount == undo
+    assert not doc.HasPendingTransaction and doc.Body.ViewObject.Visibility
     task_button(CANCEL).click()
 
 
@@ -341,7 +383,7 @@ def test_export_dialog_adds_the_extension_of_the_chosen_format(doc, monkeypatch)
 
     monkeypatch.setattr(QtGui.QFileDialog, "getSaveFileName", dialog)
     assert commands.choose_export_path(points) == "/tmp/probe points.xyz"
-    assert asked[0][0].endswith("Sampling Body Face1.dmi") and xyz in asked[0][1]
+    assert asked[0][0].endswith("Sampling Body Face1 (pso).dmi") and xyz in asked[0][1]
 
 
 FRESH_SESSION = """
