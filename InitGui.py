@@ -22,9 +22,9 @@ class CMMSamplingWorkbench(FreeCADGui.Workbench):
         self.__class__.Icon = os.path.join(os.path.dirname(package), "icons", "Workbench.svg")
 
     def Initialize(self):
-        from cmmsampling.gui import commands
+        from cmmsampling.gui import commands, compare
 
-        names = commands.register()
+        names = commands.register() + [compare.register()]
         self.appendToolbar("CMM Sampling", names)
         self.appendMenu("CMM Sampling", names)
 

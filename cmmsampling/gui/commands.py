@@ -1,6 +1,7 @@
 """The workbench's commands. Each is active only when it can act; otherwise its status tip and
 tooltip say why. What they change in the document goes through the console API, echoed in the
 Python console (``Gui.doCommand``)."""
+import __main__
 import os
 
 import FreeCAD
@@ -9,6 +10,7 @@ from PySide import QtGui
 
 from .. import document
 from . import icon
+from .export_options import ask_export_options, export_keywords, show_export_report
 from .selection import SelectionError, selected_face
 
 
@@ -141,13 +143,18 @@ class ExportProbePoints:
         path = choose_export_path(points)
         if not path:
             return
+        options = ask_export_options(points)
+        if options is None:
+            return
         FreeCADGui.doCommand("import cmmsampling")
         try:
             FreeCADGui.doCommand(
-                f"cmmsampling.export(App.getDocument({points.Document.Name!r})"
-                f".getObject({points.Name!r}), {path!r})")
+                f"report = cmmsampling.export(App.getDocument({points.Document.Name!r})"
+                f".getObject({points.Name!r}), {path!r}{export_keywords(options)})")
         except Exception as exc:
             warn("Export probe points", str(exc))
+            return
+        show_export_report(__main__.report)
 
 
 def export_filters():

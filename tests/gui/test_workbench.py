@@ -31,7 +31,7 @@ def test_workbench_has_its_toolbar_menu_and_icons(workbench):
     assert workbench.MenuText == "CMM Sampling" and os.path.isfile(workbench.Icon)
     toolbar = main_window().findChild(QtGui.QToolBar, "CMM Sampling")
     assert [a.text() for a in toolbar.actions()] == [
-        "Sample face...", "Export probe points...", "Re-evaluate"]
+        "Sample face...", "Export probe points...", "Re-evaluate", "Compare strategies..."]
     menus = [a.text() for a in main_window().menuBar().actions()]
     assert "CMM Sampling" in menus
     for name in (SAMPLE, EXPORT, REEVALUATE):
@@ -362,6 +362,8 @@ def test_export_command_writes_the_selected_points(doc, tmp_path, monkeypatch):
     assert command.isActive()
     target = str(tmp_path / "points.dmi")
     monkeypatch.setattr(commands, "choose_export_path", lambda points: target)
+    monkeypatch.setattr(commands, "ask_export_options",
+                        lambda points: {"frame": None, "probe_radius": 0.0, "order": "as_optimised"})
     FreeCADGui.runCommand(EXPORT)
     process_events(0.2)
     with open(target) as f:

@@ -1,0 +1,443 @@
+"""*Compare strategies*: every chosen strategy over a list of point counts N on the selected face.
+
+The task panel composes a ``cmmsampling.compare(face, ...)`` call; the study and its report
+(``cmmsampling.write_report``) run in a worker thread (:class:`BackgroundComparison`) polled by a
+QTimer, with a progress bar of the study's steps. Cancel stops the study after the step under way
+and keeps what is finished: the partial report is written and opened, and the panel says so.
+Nothing is added to the document: the comparison is a report (HTML and PNG figures), opened in
+FreeCAD's web view. The calls are echoed in the Python console, where ``study`` holds the result.
+"""
+import __main__
+import os
+import threading
+import traceback
+
+import FreeCAD
+import FreeCADGui
+import Part
+from PySide import QtCore, QtGui
+
+from ..deviation import DEFAULT_GRID
+from ..report import write_report
+from ..sampling import PSO_DEFAULTS, STRATEGIES
+from ..study import DEFAULT_NS, DEFAULT_SEEDS, compare
+from . import icon, resource, settings
+from .commands import show_reason, warn
+from .selection import SelectionError, selected_face
+from .task_panel import ERROR_STYLE, POLL_MS, fit_narrow_dock, source_text
+
+# The panel's values are stored under these names with this prefix, apart from Sample face's.
+SETTINGS_PREFIX = "Compare_"
+SPIN_BOXES = ("seeds", "iterations", "population", "grid")
+
+
+def panel_defaults():
+    """The panel's values by name with their defaults: the study's N list and seed count, every
+    strategy, the paper's swarm (population 25, 3000 iterations) and the 60 x 60 grid."""
+    return {
+        "ns": ", ".join(str(n) for n in DEFAULT_NS),
+        "strategies": ", ".join(STRATEGIES),
+        "seeds": len(DEFAULT_SEEDS),
+        "iterations": PSO_DEFAULTS["iterations"],
+        "population": PSO_DEFAULTS["population"],
+        "grid": DEFAULT_GRID,
+    }
+
+
+def load_values():
+    """The values stored by the last comparison, else the defaults."""
+    stored = settings.load({SETTINGS_PREFIX + name: value for name, value in panel_defaults().items()})
+    return {name[len(SETTINGS_PREFIX):]: value for name, value in stored.items()}
+
+
+def save_values(values):
+    settings.save({SETTINGS_PREFIX + name: value for name, value in values.items()})
+
+
+def parse_ns(text):
+    """The point counts typed in the N field: whole numbers separated by commas or spaces.
+
+    Returns a tuple of int (compare() checks that each is at least 4); ValueError saying what to
+    type otherwise."""
+    words = text.replace(",", " ").split()
+    try:
+        return tuple(int(word) for word in words)
+    except ValueError:
+        raise ValueError(f"The point counts N must be whole numbers separated by commas, e.g. "
+                         f"25, 49, 81 (not {text.strip()!r}).") from None
+
+
+def compare_arguments(values):
+    """The keyword arguments of ``cmmsampling.compare(face, ...)`` for the panel's values: seeds
+    0 .. k-1 for the random strategy, the swarm's population and iterations."""
+    return {
+        "ns": parse_ns(values["ns"]),
+        "strategies": tuple(name for name in values["strategies"].split(", ") if name),
+        "seeds": tuple(range(values["seeds"])),
+        "pso_options": {"iterations": values["iterations"], "population": values["population"]},
+        "grid": values["grid"],
+    }
+
+
+def default_folder(doc):
+    """Where the report goes by default: ``<document's folder>/<file name>_comparison``, or
+    ``~/<document name>_comparison`` for a document never saved."""
+    if doc.FileName:
+        stem = os.path.splitext(os.path.basename(doc.FileName))[0]
+        return os.path.join(os.path.dirname(doc.FileName), f"{stem}_comparison")
+    return os.path.join(os.path.expanduser("~"), f"{doc.Name}_comparison")
+
+
+def open_report(path):
+    """Show an HTML file in FreeCAD's web view (the Web module), else in the system's browser."""
+    url = QtCore.QUrl.fromLocalFile(os.path.abspath(path))
+    try:
+        import WebGui
+    except ImportError:
+        QtGui.QDesktopServices.openUrl(url)
+        return
+    WebGui.openBrowser(url.toString())
+
+
+class BackgroundComparison:
+    """Runs ``compare(face, progress=..., **arguments)`` and then, when at least one run finished,
+    ``write_report(study, folder)`` in a daemon thread.
+
+    The GUI thread polls ``done``/``total`` (study steps) and ``message``, ``running``, then
+    ``study`` and ``report`` (path of report.html, or None) or ``error``/``details`` (the
+    traceback text); ``cancel()`` makes the progress callback ask the study to stop: a swarm or
+    descent stops within one iteration (its run is dropped), a bound or a blind strategy ends
+    first. The thread never touches the document.
+    """
+
+    def __init__(self, face, arguments, folder):
+        self.face = face
+        self.arguments = dict(arguments)
+        self.folder = folder
+        self.done = 0
+        self.total = 0
+        self.message = "Starting..."
+        self.study = None
+        self.report = None
+        self.error = None
+        self.details = ""
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, name="cmmsampling-compare", daemon=True)
+
+    def start(self):
+        self._thread.start()
+
+    @property
+    def running(self):
+        return self._thread.is_alive()
+
+    @property
+    def cancelled(self):
+        return self._stop.is_set()
+
+    def cancel(self):
+        """Ask the study to stop; it ends (and the report is written) in the thread."""
+        self._stop.set()
+
+    def _progress(self, done, total, message):
+        self.done, self.total, self.message = done, total, message
+        return self.cancelled
+
+    def _run(self):
+        try:
+            self.study = compare(self.face, progress=self._progress, **self.arguments)
+            if self.study.rows:
+                self.message = "Writing the report..."
+                self.report = write_report(self.study, self.folder)
+        except Exception as exc:  # reported to the user by the GUI thread
+            self.error = exc
+            self.details = traceback.format_exc()
+
+
+class CompareTaskPanel:
+    """Task panel of *Compare strategies*. source: (obj, "FaceK")."""
+
+    def __init__(self, source):
+        self.form = FreeCADGui.PySideUic.loadUi(resource("compare.ui"))
+        self.form.setWindowIcon(QtGui.QIcon(icon("Compare.svg")))
+        self.source = source
+        self.face = face_expression(source)
+        self.run = None
+        self.buttons = None
+        self.timer = QtCore.QTimer()
+        self.timer.setInterval(POLL_MS)
+        self.timer.timeout.connect(self.poll)
+        fit_narrow_dock(self.form)
+        self._fill_strategies()
+        self.set_values(load_values())
+        self.form.faceLabel.setText(source_text(source))
+        self.form.folder.setText(default_folder(source[0].Document))
+        self.form.progress.setTextVisible(False)
+        self.form.browse.clicked.connect(self.browse)
+        self.form.strategies.itemChanged.connect(self.update_enabled)
+        self.update_enabled()
+
+    # --- FreeCAD task dialog interface
+    def getStandardButtons(self):
+        return int(QtGui.QDialogButtonBox.Ok | QtGui.QDialogButtonBox.Cancel)
+
+    def modifyStandardButtons(self, box):
+        self.buttons = box
+        ok = box.button(QtGui.QDialogButtonBox.Ok)
+        ok.setText("Compare")
+        ok.setToolTip("Run the study; the report opens when it ends")
+        self.update_enabled()
+
+    def accept(self):
+        """Start the study; the panel stays open until it ends."""
+        if self.run is None:
+            self.start()
+        return False
+
+    def reject(self):
+        """While a study runs: ask it to stop and keep the panel open (the finished runs are
+        reported when it has stopped, see :class:`BackgroundComparison`). Otherwise close."""
+        if self.run is not None:
+            self.run.cancel()
+            self.show_status("Cancelling: the step under way ends or stops first; the finished "
+                             "runs are kept and reported.")
+            return False
+        self.timer.stop()
+        return True
+
+    # --- values
+    def _fill_strategies(self):
+        """One checkable line per strategy, its description as tooltip; the list shows them all
+        once the panel is shown (when the rows' height is known)."""
+        strategies = self.form.strategies
+        for name, strategy in STRATEGIES.items():
+            item = QtGui.QListWidgetItem(name, strategies)
+            item.setFlags(item.flags() | QtCore.Qt.ItemIsUserCheckable)
+            item.setCheckState(QtCore.Qt.Unchecked)
+            item.setToolTip(strategy.description)
+        QtCore.QTimer.singleShot(0, self.fit_strategy_list)
+
+    def fit_strategy_list(self):
+        """Make the strategy list as tall as its rows, so that it never scrolls."""
+        strategies = self.form.strategies
+        strategies.setFixedHeight(strategies.sizeHintForRow(0) * strategies.count()
+                                  + 2 * strategies.frameWidth())
+
+    def items(self):
+        """The strategy list's items, in STRATEGIES order."""
+        return [self.form.strategies.item(i) for i in range(self.form.strategies.count())]
+
+    def checked(self):
+        """Names of the checked strategies, in STRATEGIES order."""
+        return [item.text() for item in self.items() if item.checkState() == QtCore.Qt.Checked]
+
+    def values(self):
+        """The panel's values by name (see :func:`panel_defaults`)."""
+        out = {"ns": self.form.ns.text(), "strategies": ", ".join(self.checked())}
+        out.update({name: getattr(self.form, name).value() for name in SPIN_BOXES})
+        return out
+
+    def set_values(self, values):
+        """Show values by name; unknown strategy names are ignored."""
+        self.form.ns.setText(values["ns"])
+        self.form.ns.setCursorPosition(0)
+        chosen = values["strategies"].split(", ")
+        for item in self.items():
+            item.setCheckState(QtCore.Qt.Checked if item.text() in chosen else QtCore.Qt.Unchecked)
+        for name in SPIN_BOXES:
+            getattr(self.form, name).setValue(values[name])
+
+    def update_enabled(self):
+        """Enable the seeds with the random strategy and the swarm's settings with pso; nothing
+        (but Cancel) while a study runs."""
+        idle = self.run is None
+        chosen = self.checked()
+        for widget in (self.form.ns, self.form.strategies, self.form.grid, self.form.folder,
+                       self.form.browse):
+            widget.setEnabled(idle)
+        self.form.seeds.setEnabled(idle and "random" in chosen)
+        for widget in (self.form.iterations, self.form.population):
+            widget.setEnabled(idle and "pso" in chosen)
+        if self.buttons is not None:
+            self.buttons.button(QtGui.QDialogButtonBox.Ok).setEnabled(idle)
+
+    def folder(self):
+        """The report folder typed, as an absolute path ('' when none is typed)."""
+        text = self.form.folder.text().strip()
+        return os.path.abspath(os.path.expanduser(text)) if text else ""
+
+    def browse(self):
+        """Choose the report folder in a folder dialog."""
+        chosen = QtGui.QFileDialog.getExistingDirectory(
+            FreeCADGui.getMainWindow(), "Report folder", self.folder() or os.path.expanduser("~"))
+        if chosen:
+            self.form.folder.setText(chosen)
+
+    def source_face(self):
+        """The chosen face as it is now, or None when it (or its object) is gone."""
+        obj, name = self.source
+        try:
+            face = obj.getSubObject(name)
+        except ReferenceError:  # the object was deleted
+            return None
+        return face if isinstance(face, Part.Face) else None
+
+    # --- the run
+    def start(self):
+        """Check the values, save them and start the study in the background."""
+        values = self.values()
+        try:
+            arguments = compare_arguments(values)
+        except ValueError as exc:
+            self.show_status(str(exc), error=True)
+            return
+        folder = self.folder()
+        if not folder:
+            self.show_status("Type or browse the folder the report is written to.", error=True)
+            return
+        face = self.source_face()
+        if face is None:
+            self.show_status(f"{source_text(self.source)} is not in the document any more.", error=True)
+            return
+        try:
+            os.makedirs(folder, exist_ok=True)
+        except OSError as exc:
+            self.show_status(f"The report folder cannot be made: {exc}", error=True)
+            return
+        save_values(values)
+        self.run = BackgroundComparison(face.copy(), arguments, folder)
+        self.form.progress.setRange(0, 0)
+        self.form.progress.setTextVisible(True)
+        self.show_status(self.run.message)
+        self.update_enabled()
+        self.run.start()
+        self.timer.start()
+
+    def poll(self):
+        """Show the study's progress; when it has ended, echo it and open its report, or show
+        the error."""
+        run = self.run
+        if run is None:
+            self.timer.stop()
+            return
+        if run.total:
+            self.form.progress.setRange(0, run.total)
+            self.form.progress.setValue(run.done)
+        if run.running:
+            if not run.cancelled:
+                self.show_status(run.message)
+            return
+        self.timer.stop()
+        self.run = None
+        self.update_enabled()
+        if run.error is not None:
+            self.failed(run)
+            return
+        self.finish(run)
+
+    def failed(self, run):
+        """Show why the study or its report failed; a study that ran is kept in the console."""
+        FreeCAD.Console.PrintError(run.details)
+        error = f"{type(run.error).__name__}: {run.error}"
+        if run.study is None:
+            self.show_status(error, error=True)
+            return
+        echo_study(self.face, run.arguments, run.folder, run.study, None,
+                   alive=self.source_face() is not None)
+        self.show_status(f"The report could not be written ({error}). The study is kept in the "
+                         "Python console as study: write it with cmmsampling.write_report(study, "
+                         "folder).", error=True)
+
+    def finish(self, run):
+        """Echo the study, open its report; close when complete, say what was kept when cancelled."""
+        study = run.study
+        echo_study(self.face, run.arguments, run.folder, study, run.report,
+                   alive=self.source_face() is not None)
+        if run.report is not None:
+            FreeCAD.Console.PrintMessage(f"Strategy comparison, {len(study.rows)} runs in "
+                                         f"{study.elapsed_s:.0f} s: {run.report}\n")
+            open_report(run.report)
+        if not study.cancelled:
+            FreeCADGui.Control.closeDialog()
+            return
+        if run.report is None:
+            self.show_status(f"Cancelled after {run.done} of {run.total} steps, before any run "
+                             "finished: no report was written.")
+        else:
+            self.show_status(f"Cancelled after {run.done} of {run.total} steps. The partial "
+                             f"report ({len(study.rows)} runs) is open; it is report.html in the "
+                             "report folder.")
+
+    def show_status(self, text, error=False):
+        self.form.status.setText(text)
+        self.form.status.setStyleSheet(ERROR_STYLE if error else "")
+
+
+def face_expression(source):
+    """The console expression of a face (obj, "FaceK"), e.g.
+    "App.getDocument('D').getObject('Body').getSubObject('Face1')"."""
+    obj, name = source
+    return f"App.getDocument({obj.Document.Name!r}).getObject({obj.Name!r}).getSubObject({name!r})"
+
+
+def echo_study(face, arguments, folder, study, report, alive=True):
+    """Echo a study that ran in the panel in the Python console and bind it to ``study`` there.
+
+    face: the face's console expression (:func:`face_expression`), bound to ``face`` unless its
+    object was deleted meanwhile (alive False); the compare() and write_report() calls are echoed
+    as comments (they ran in the worker thread).
+    """
+    note = "ran in the task panel"
+    if study.cancelled:
+        note += f", cancelled after {len(study.rows)} runs"
+    call = ", ".join(["face"] + [f"{key}={value!r}" for key, value in arguments.items()])
+    FreeCADGui.doCommand("import cmmsampling")
+    FreeCADGui.doCommand(f"face = {face}" if alive else f"# face = {face}  # deleted since")
+    FreeCADGui.doCommand(f"# study = cmmsampling.compare({call})  # {note}")
+    __main__.__dict__["study"] = study
+    if report is not None:
+        FreeCADGui.doCommand(f"# cmmsampling.write_report(study, {folder!r})  # ran in the task panel")
+
+
+class CompareStrategies:
+    """*Compare strategies...*: open the comparison panel for the one selected face."""
+
+    NAME = "CMMSampling_Compare"
+    TIP = ("Run the sampling strategies over a list of point counts N on the selected face and "
+           "write an HTML report: maximum deviation (mm) against N with the certified lower bound, "
+           "the paper's figures and tables")
+
+    def GetResources(self):
+        return {"Pixmap": icon("Compare.svg"), "MenuText": "Compare strategies...", "ToolTip": self.TIP}
+
+    def reason(self):
+        """Why the command cannot act now, or None."""
+        if FreeCAD.ActiveDocument is None:
+            return "Open a document with a part first."
+        if FreeCADGui.Control.activeDialog():
+            return "Close the open task panel first."
+        try:
+            selected_face(FreeCADGui.Selection.getSelectionEx())
+        except SelectionError as exc:
+            return str(exc)
+        return None
+
+    def IsActive(self):
+        reason = self.reason()
+        show_reason(self.NAME, reason, self.TIP)
+        return reason is None
+
+    def Activated(self):
+        reason = self.reason()
+        if reason is not None:
+            warn("Compare strategies", reason)
+            return
+        source = selected_face(FreeCADGui.Selection.getSelectionEx())
+        FreeCADGui.Control.showDialog(CompareTaskPanel(source))
+
+
+def register():
+    """Add the command to FreeCAD (once); returns its name."""
+    if CompareStrategies.NAME not in FreeCADGui.listCommands():
+        FreeCADGui.addCommand(CompareStrategies.NAME, CompareStrategies())
+    return CompareStrategies.NAME

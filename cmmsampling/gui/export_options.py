@@ -1,0 +1,160 @@
+"""The options every export format honours, asked in a small dialog before probe points are written.
+
+The frame of the coordinates (the document's global frame, or a local coordinate system of the
+document: the part's measurement frame), the probe radius (0: contact points on the face; r > 0:
+probe-ball centres p + r n, stated in the file) and the point order (as optimised, or a short probe
+path). :func:`ask_export_options` returns them in the form the Export command writes into its
+echoed ``cmmsampling.export(...)`` call (:func:`export_keywords`); :func:`show_export_report`
+tells the user what was written. The values persist in the workbench's parameter group.
+"""
+import FreeCAD
+import FreeCADGui
+from PySide import QtCore, QtGui
+
+from ..exporting import ORDERS
+from . import icon, settings
+
+GLOBAL = "Global (document)"
+# Document objects that are coordinate systems; types unknown to this FreeCAD are never matched.
+FRAME_TYPES = ("PartDesign::CoordinateSystem", "Part::LocalCoordinateSystem", "App::Placement")
+ORDER_TEXTS = {"as_optimised": "As optimised",
+               "short_path": "Short probe path (nearest neighbour + 2-opt)"}
+DEFAULTS = {"ExportFrame": "", "ExportProbeRadius": 0.0, "ExportOrder": "as_optimised"}
+MAX_RADIUS_MM = 100.0
+RADIUS_DECIMALS = 3
+STATUS_MS = 20000
+
+
+def frame_objects(doc):
+    """The document's coordinate systems (FRAME_TYPES), in document order."""
+    return [obj for obj in doc.Objects if any(obj.isDerivedFrom(kind) for kind in FRAME_TYPES)]
+
+
+def frame_expression(obj):
+    """The console expression of a document object, e.g. "App.getDocument('D').getObject('LCS')"."""
+    return f"App.getDocument({obj.Document.Name!r}).getObject({obj.Name!r})"
+
+
+def frame_tip(obj):
+    """A frame's type, origin (mm) and axes in global coordinates, for its tooltip."""
+    placement = obj.getGlobalPlacement()
+    rotation = placement.Rotation
+    axes = ", ".join(f"{name} ({v.x:.4g}, {v.y:.4g}, {v.z:.4g})" for name, v in zip(
+        "xyz", (rotation.multVec(FreeCAD.Vector(*axis)) for axis in ((1, 0, 0), (0, 1, 0), (0, 0, 1)))))
+    origin = placement.Base
+    return (f"{obj.Label} ({obj.TypeId}): origin ({origin.x:.4g}, {origin.y:.4g}, {origin.z:.4g}) mm, "
+            f"axes {axes} in the document's global frame")
+
+
+def export_keywords(options):
+    """The options of :func:`ask_export_options` as keyword text for the echoed export call, e.g.
+    ", frame=App.getDocument('D').getObject('LCS'), probe_radius=1.5, order='short_path'";
+    the defaults (global frame, contact points, as optimised) are left out."""
+    words = []
+    if options["frame"] is not None:
+        words.append(f"frame={options['frame']}")
+    if options["probe_radius"] > 0:
+        words.append(f"probe_radius={options['probe_radius']!r}")
+    if options["order"] != "as_optimised":
+        words.append(f"order={options['order']!r}")
+    return "".join(f", {word}" for word in words)
+
+
+def report_line(report):
+    """One line on what an export wrote (an ExportReport); with a short probe path, what it saved."""
+    line = str(report)
+    if report.order == "short_path" and report.length_before > 0:
+        line += (f": the short path saves {report.saving:.1f} mm "
+                 f"({100 * report.saving / report.length_before:.0f} %)")
+    return line
+
+
+def show_export_report(report):
+    """Tell the user what an export wrote: in the Report view and the status bar."""
+    line = report_line(report)
+    FreeCAD.Console.PrintMessage(line + "\n")
+    FreeCADGui.getMainWindow().statusBar().showMessage(line, STATUS_MS)
+
+
+class ExportOptionsDialog(QtGui.QDialog):
+    """The export options for probe points of a document, starting from the stored values.
+    title: what is exported, for the window title."""
+
+    def __init__(self, doc, title, parent=None):
+        super().__init__(parent)
+        self.setObjectName("ExportOptions")
+        self.setWindowTitle(f"Export options: {title}")
+        self.setWindowIcon(QtGui.QIcon(icon("Export.svg")))
+        self.doc = doc
+        stored = settings.load(DEFAULTS)
+        layout = QtGui.QFormLayout(self)
+        self.frame = QtGui.QComboBox(self)
+        self.frame.setObjectName("frame")
+        self.frame.addItem(GLOBAL, None)
+        self.frame.setItemData(0, "Coordinates in the document's global frame: the face's "
+                                  "placement applied.", QtCore.Qt.ToolTipRole)
+        for obj in frame_objects(doc):
+            self.frame.addItem(obj.Label, obj.Name)
+            self.frame.setItemData(self.frame.count() - 1, frame_tip(obj), QtCore.Qt.ToolTipRole)
+            if obj.Name == stored["ExportFrame"]:
+                self.frame.setCurrentIndex(self.frame.count() - 1)
+        self.frame.setToolTip(
+            "The coordinate system the points and approach vectors are written in: the document's "
+            "global frame, or a coordinate system of the document (a datum coordinate system or a "
+            "placement: the part's measurement frame). Its origin and axes are stated in the file.")
+        layout.addRow("Coordinates", self.frame)
+        self.probe_radius = QtGui.QDoubleSpinBox(self)
+        self.probe_radius.setObjectName("probe_radius")
+        self.probe_radius.setRange(0.0, MAX_RADIUS_MM)
+        self.probe_radius.setDecimals(RADIUS_DECIMALS)
+        self.probe_radius.setSuffix(" mm")
+        self.probe_radius.setSpecialValueText("0 mm: contact points")
+        self.probe_radius.setValue(stored["ExportProbeRadius"])
+        self.probe_radius.setToolTip(
+            "Probe-ball radius r: above 0 the file holds ball centres p + r n (n the outward "
+            "approach vector), and says so in its header (DMIS, CSV; an XYZ file has none: keep the "
+            "radius with it). 0: the contact points on the face.")
+        layout.addRow("Probe radius", self.probe_radius)
+        self.order = QtGui.QComboBox(self)
+        self.order.setObjectName("order")
+        for name in ORDERS:
+            self.order.addItem(ORDER_TEXTS[name], name)
+        self.order.setCurrentIndex(max(self.order.findData(stored["ExportOrder"]), 0))
+        self.order.setToolTip(
+            "As optimised: the order of the sampling result (P1, P2, ...). Short probe path: the "
+            "points reordered along a short open path in 3D (nearest neighbour, then 2-opt), never "
+            "longer than the original; the saving is reported after the export.")
+        layout.addRow("Point order", self.order)
+        buttons = QtGui.QDialogButtonBox(QtGui.QDialogButtonBox.Ok | QtGui.QDialogButtonBox.Cancel,
+                                         parent=self)
+        buttons.accepted.connect(self.accept)
+        buttons.rejected.connect(self.reject)
+        layout.addRow(buttons)
+
+    def options(self):
+        """{"frame": console expression of the frame or None (global), "probe_radius": mm,
+        "order": "as_optimised" or "short_path"}."""
+        name = self.frame.currentData()
+        return {"frame": None if name is None else frame_expression(self.doc.getObject(name)),
+                "probe_radius": self.probe_radius.value(), "order": self.order.currentData()}
+
+    def stored(self):
+        """The values to keep for the next export."""
+        return {"ExportFrame": self.frame.currentData() or "",
+                "ExportProbeRadius": self.probe_radius.value(), "ExportOrder": self.order.currentData()}
+
+
+def ask_export_options(points):
+    """Ask the export options for a probe-points object; None when the user cancels.
+
+    Returns {"frame": e.g. "App.getDocument('D').getObject('LCS')" or None, "probe_radius": mm,
+    "order": "as_optimised" or "short_path"}; see :func:`export_keywords`."""
+    groups = [o.Label for o in points.InList if o.isDerivedFrom("App::DocumentObjectGroup")]
+    dialog = ExportOptionsDialog(points.Document, (groups or [points.Label])[0], FreeCADGui.getMainWindow())
+    try:
+        if dialog.exec_() != QtGui.QDialog.Accepted:
+            return None
+        settings.save(dialog.stored())
+        return dialog.options()
+    finally:
+        dialog.deleteLater()

@@ -1,0 +1,446 @@
+"""Compare strategies (task panel, background study, report, cancel) and the export options dialog
+(frame, probe radius, order) in the real FreeCAD GUI."""
+import __main__
+import gc
+import os
+import threading
+import weakref
+
+import FreeCAD
+import FreeCADGui
+import numpy as np
+import Part
+import pytest
+from PySide import QtCore, QtGui
+
+import cmmsampling
+from cmmsampling import document
+from cmmsampling.gui import compare as compare_panel
+from cmmsampling.gui import export_options, settings
+from cmmsampling.probe_path import path_length
+
+from .helpers import dock_text, main_window, process_events, task_button, wait_until
+
+OK, CANCEL = QtGui.QDialogButtonBox.Ok, QtGui.QDialogButtonBox.Cancel
+# A comparison small enough for a shared two-core machine: 2 N x 2 strategies, 6 steps.
+TINY = {"ns": "16, 25", "strategies": "uniform_parametric, pso", "seeds": 1, "iterations": 20,
+        "population": 6, "grid": 20}
+TINY_CALL = ("cmmsampling.compare(face, ns=(16, 25), strategies=('uniform_parametric', 'pso'), "
+             "seeds=(0,), pso_options={'iterations': 20, 'population': 6}, grid=20)")
+
+
+@pytest.fixture(autouse=True)
+def stored_values_cleared():
+    """Every test starts from the defaults: the values stored by earlier runs go."""
+    parent, name = settings.PARAMETER_GROUP.rsplit("/", 1)
+    FreeCAD.ParamGet(parent).RemGroup(name)
+
+
+@pytest.fixture
+def command(workbench):
+    """The Compare strategies command, with a toolbar button (whose status tip says why it is
+    inactive): registered and put on a toolbar of its own here until the workbench does both."""
+    name = compare_panel.register()
+    if not FreeCADGui.Command.get(name).getAction():
+        workbench.appendToolbar("CMM Sampling comparison", [name])
+        workbench.reloadActive()
+    return name
+
+
+@pytest.fixture
+def opened(monkeypatch):
+    """The reports the panel opens (paths), instead of opening them."""
+    paths = []
+    monkeypatch.setattr(compare_panel, "open_report", paths.append)
+    return paths
+
+
+class Hold:
+    """Holds the study in its progress callback at a step until released (at most limit_s)."""
+
+    def __init__(self, limit_s=30.0):
+        self.reached = threading.Event()
+        self.released = threading.Event()
+        self.limit_s = limit_s
+
+    def __call__(self):
+        self.reached.set()
+        self.released.wait(self.limit_s)
+
+
+def hold_study_at(monkeypatch, step):
+    """Make the panel's next study stop in its worker thread when ``step`` steps are done (after
+    the panel has seen that), until the returned Hold is released."""
+    hold = Hold()
+    run = compare_panel.compare
+
+    def held(face, progress=None, **arguments):
+        def watched(done, total, message):
+            if done == step and not hold.reached.is_set():
+                progress(done, total, message)
+                hold()
+            return progress(done, total, message)
+
+        return run(face, progress=watched, **arguments)
+
+    monkeypatch.setattr(compare_panel, "compare", held)
+    return hold
+
+
+def compare_form():
+    return main_window().findChild(QtGui.QWidget, "CompareStrategies")
+
+
+def open_compare(doc, face="Face1"):
+    """Select the Body's face, run Compare strategies, return the panel's form."""
+    assert wait_until(lambda: compare_form() is None, 5), "the last panel's form is still there"
+    FreeCADGui.Selection.clearSelection()
+    FreeCADGui.Selection.addSelection(doc.Body, face)
+    FreeCADGui.runCommand(compare_panel.CompareStrategies.NAME)
+    assert wait_until(lambda: compare_form() is not None, 5), compare_panel.CompareStrategies().reason()
+    return compare_form()
+
+
+def items(form):
+    return [form.strategies.item(i) for i in range(form.strategies.count())]
+
+
+def checked(form):
+    return [item.text() for item in items(form) if item.checkState() == QtCore.Qt.Checked]
+
+
+def fill(form, folder=None, **values):
+    """Type the N list, check the named strategies, set the spin boxes and the folder."""
+    if "ns" in values:
+        form.ns.setText(values.pop("ns"))
+    if "strategies" in values:
+        chosen = values.pop("strategies").split(", ")
+        for item in items(form):
+            item.setCheckState(QtCore.Qt.Checked if item.text() in chosen else QtCore.Qt.Unchecked)
+    for name, value in values.items():
+        getattr(form, name).setValue(value)
+    if folder is not None:
+        form.folder.setText(folder)
+
+
+def test_compare_is_active_for_one_face_and_says_why_otherwise(doc, command):
+    action = FreeCADGui.Command.get(command)
+    assert not action.isActive()
+    assert action.getAction()[0].statusTip().startswith("Nothing is selected")
+    box = doc.addObject("Part::Feature", "Box")
+    box.Shape = Part.makeBox(10, 10, 10, FreeCAD.Vector(150, 0, 0))
+    doc.recompute()
+    FreeCADGui.Selection.addSelection(box)
+    assert not action.isActive()
+    assert "Box has 6 faces: click the one to sample" in action.getAction()[0].statusTip()
+    FreeCADGui.Selection.clearSelection()
+    FreeCADGui.Selection.addSelection(doc.Body, "Face1")
+    assert action.isActive()
+    assert action.getAction()[0].statusTip() == compare_panel.CompareStrategies.TIP
+    assert os.path.isfile(action.getInfo()["pixmap"])
+
+
+def test_a_closed_panel_leaves_no_panel_and_no_thread_behind(doc, command, opened, tmp_path, monkeypatch):
+    panels = []
+
+    class Recorded(compare_panel.CompareTaskPanel):
+        def __init__(self, source):
+            super().__init__(source)
+            panels.append(weakref.ref(self))
+
+    monkeypatch.setattr(compare_panel, "CompareTaskPanel", Recorded)
+    form = open_compare(doc)
+    fill(form, folder=str(tmp_path), **TINY)
+    task_button(OK).click()
+    assert wait_until(lambda: not FreeCADGui.Control.activeDialog(), 60), form.status.text()
+    open_compare(doc)
+    task_button(CANCEL).click()
+    assert wait_until(lambda: not FreeCADGui.Control.activeDialog(), 2)
+    del form
+    process_events(0.3)
+    gc.collect()
+    assert len(panels) == 2 and [panel() for panel in panels] == [None, None]
+    assert not [t for t in threading.enumerate() if t.name == "cmmsampling-compare" and t.is_alive()]
+
+
+def test_panel_defaults_are_the_papers_study_and_options_follow_the_strategies(doc, command, tmp_path,
+                                                                              artifacts):
+    form = open_compare(doc)
+    process_events(0.2)
+    form.grab().save(os.path.join(artifacts, "compare_form.png"))
+    assert form.faceLabel.text() == "Body.Face1"
+    assert form.ns.text() == "25, 36, 49, 64, 81, 100, 121, 144"
+    assert checked(form) == list(cmmsampling.STRATEGIES)
+    assert [form.seeds.value(), form.iterations.value(), form.population.value(), form.grid.value()] == [
+        5, 3000, 25, 60]
+    assert form.folder.text() == os.path.join(os.path.expanduser("~"), f"{doc.Name}_comparison")
+    assert all(item.toolTip() for item in items(form))
+    assert form.seeds.isEnabled() and form.iterations.isEnabled()
+    fill(form, strategies="uniform_parametric, optimal")
+    assert not form.seeds.isEnabled() and not form.iterations.isEnabled() and not form.population.isEnabled()
+    assert task_button(OK).text() == "Compare"
+    task_button(CANCEL).click()
+    assert wait_until(lambda: not FreeCADGui.Control.activeDialog(), 2)
+    doc.saveAs(str(tmp_path / "bracket.FCStd"))
+    assert compare_panel.default_folder(doc) == str(tmp_path / "bracket_comparison")
+
+
+def test_tiny_comparison_runs_in_the_background_and_opens_its_report(doc, command, opened, tmp_path,
+                                                                     artifacts, monkeypatch):
+    hold = hold_study_at(monkeypatch, 3)
+    form = open_compare(doc)
+    folder = str(tmp_path / "comparison")
+    fill(form, folder=folder, **TINY)
+    names, undo = [o.Name for o in doc.Objects], doc.UndoCount
+    task_button(OK).click()
+    assert wait_until(hold.reached.is_set, 60), form.status.text()
+    assert wait_until(lambda: form.progress.value() == 3, 2), form.status.text()
+    assert form.progress.maximum() == 6 and form.progress.text() == "3 / 6 steps"
+    assert form.status.text() == "N = 25: certified lower bound"
+    assert not task_button(OK).isEnabled() and not form.ns.isEnabled() and not form.strategies.isEnabled()
+    main_window().grab().save(os.path.join(artifacts, "compare_running.png"))
+    form.grab().save(os.path.join(artifacts, "compare_running_form.png"))
+    hold.released.set()
+
+    assert wait_until(lambda: not FreeCADGui.Control.activeDialog(), 120), form.status.text()
+    report = os.path.join(folder, "report.html")
+    assert opened == [report]
+    for name in ("report.html", "max_vs_n.png", "substitutes.png", "deviation_maps.png"):
+        assert os.path.getsize(os.path.join(folder, name)) > 1000, name
+    study = __main__.study
+    assert not study.cancelled and len(study.rows) == 4 and sorted(study.bounds) == [16, 25]
+    console = dock_text("Python console")
+    assert f"# study = {TINY_CALL}  # ran in the task panel" in console
+    assert f"# cmmsampling.write_report(study, {folder!r})  # ran in the task panel" in console
+    assert f"face = App.getDocument({doc.Name!r}).getObject('Body').getSubObject('Face1')" in console
+    assert [o.Name for o in doc.Objects] == names and doc.UndoCount == undo
+    assert compare_panel.load_values() == TINY
+
+
+def test_cancel_midway_keeps_the_finished_runs_in_a_partial_report(doc, command, opened, tmp_path,
+                                                                   artifacts, monkeypatch):
+    hold = hold_study_at(monkeypatch, 3)
+    form = open_compare(doc)
+    folder = str(tmp_path / "partial")
+    fill(form, folder=folder, **TINY)
+    task_button(OK).click()
+    assert wait_until(hold.reached.is_set, 60), form.status.text()
+    task_button(CANCEL).click()
+    assert FreeCADGui.Control.activeDialog() and form.status.text().startswith("Cancelling")
+    hold.released.set()
+
+    assert wait_until(lambda: task_button(OK).isEnabled(), 60), form.status.text()
+    assert FreeCADGui.Control.activeDialog()
+    report = os.path.join(folder, "report.html")
+    assert form.status.text() == ("Cancelled after 3 of 6 steps. The partial report (2 runs) is open; "
+                                  "it is report.html in the report folder.")
+    assert opened == [report]
+    with open(report, encoding="utf-8") as page:
+        assert "The study was cancelled: only the runs completed are shown." in page.read()
+    assert wait_until(lambda: "Strategy comparison, 2 runs in " in dock_text("Report view"), 2)
+    assert report in dock_text("Report view")
+    form.grab().save(os.path.join(artifacts, "compare_cancelled_form.png"))
+    study = __main__.study
+    assert study.cancelled and [(r.strategy, r.n) for r in study.rows] == [
+        ("uniform_parametric", 16), ("pso", 16)]
+    assert f"# study = {TINY_CALL}  # ran in the task panel, cancelled after 2 runs" in \
+        dock_text("Python console")
+    task_button(CANCEL).click()
+    assert wait_until(lambda: not FreeCADGui.Control.activeDialog(), 2)
+
+
+def test_a_face_deleted_during_the_study_is_still_reported(doc, command, opened, tmp_path, monkeypatch):
+    hold = hold_study_at(monkeypatch, 3)
+    form = open_compare(doc)
+    fill(form, folder=str(tmp_path), **TINY)
+    task_button(OK).click()
+    assert wait_until(hold.reached.is_set, 60), form.status.text()
+    doc.removeObject("Body")
+    doc.recompute()
+    hold.released.set()
+    assert wait_until(lambda: not FreeCADGui.Control.activeDialog(), 60), form.status.text()
+    assert opened == [os.path.join(str(tmp_path), "report.html")] and len(__main__.study.rows) == 4
+    assert f"# face = App.getDocument({doc.Name!r}).getObject('Body').getSubObject('Face1')  # deleted " \
+        "since" in dock_text("Python console")
+
+
+def test_bad_settings_are_refused_with_what_to_change(doc, command, opened, tmp_path):
+    form = open_compare(doc)
+    fill(form, folder=str(tmp_path / "report"), **dict(TINY, ns="16, twenty"))
+    task_button(OK).click()
+    assert form.status.text().startswith("The point counts N must be whole numbers")
+    assert task_button(OK).isEnabled() and form.ns.isEnabled() and not os.path.exists(tmp_path / "report")
+    (tmp_path / "a file").write_text("")
+    fill(form, ns="16, 25", folder=str(tmp_path / "a file" / "report"))
+    task_button(OK).click()
+    assert form.status.text().startswith("The report folder cannot be made: ")
+    fill(form, ns="3, 16", folder=str(tmp_path / "report"))
+    task_button(OK).click()
+    assert wait_until(lambda: "ValueError" in form.status.text(), 10), form.status.text()
+    assert "n must be at least 4, got 3" in form.status.text() and task_button(OK).isEnabled()
+    assert opened == [] and os.listdir(tmp_path / "report") == []
+    task_button(CANCEL).click()
+
+
+def test_a_report_that_cannot_be_written_keeps_the_study_in_the_console(doc, command, opened, tmp_path,
+                                                                       monkeypatch):
+    def refuse(study, folder):
+        raise PermissionError(f"cannot write into {folder}")
+
+    monkeypatch.setattr(compare_panel, "write_report", refuse)
+    __main__.__dict__.pop("study", None)
+    form = open_compare(doc)
+    fill(form, folder=str(tmp_path), **TINY)
+    task_button(OK).click()
+    assert wait_until(lambda: "could not be written" in form.status.text(), 60), form.status.text()
+    assert form.status.text().startswith(
+        f"The report could not be written (PermissionError: cannot write into {tmp_path}). The "
+        "study is kept in the Python console as study")
+    assert len(__main__.study.rows) == 4 and opened == [] and FreeCADGui.Control.activeDialog()
+    task_button(CANCEL).click()
+
+
+def browser_views():
+    area = main_window().findChild(QtGui.QMdiArea)
+    return [w for w in area.subWindowList() if w.widget().metaObject().className() == "WebGui::BrowserView"]
+
+
+def test_the_report_opens_in_freecads_web_view(workbench, tmp_path):
+    page = tmp_path / "report.html"
+    page.write_text("<html><head><title>Report</title></head><body>Table 1</body></html>")
+    before = browser_views()
+    compare_panel.open_report(str(page))
+    assert wait_until(lambda: len(browser_views()) == len(before) + 1, 10)
+    opened_view = next(w for w in browser_views() if w not in before)
+    opened_view.close()
+    process_events(0.2)
+
+
+def run_dialog(action, handle, timeout_s=10):
+    """Run action(), which opens the export options dialog modally; handle(dialog) is called with
+    it open and must close it. A dialog still open after timeout_s is rejected."""
+    timer = QtCore.QTimer()
+    timer.setInterval(50)
+
+    def poll():
+        dialog = QtGui.QApplication.activeModalWidget()
+        if isinstance(dialog, export_options.ExportOptionsDialog):
+            timer.stop()
+            try:
+                handle(dialog)
+            finally:
+                if dialog.isVisible():
+                    dialog.reject()
+
+    def give_up():
+        timer.stop()
+        dialog = QtGui.QApplication.activeModalWidget()
+        if dialog is not None:
+            dialog.reject()
+
+    timer.timeout.connect(poll)
+    timer.start()
+    QtCore.QTimer.singleShot(int(timeout_s * 1000), give_up)
+    return action()
+
+
+def probe_points(doc):
+    """Probe points of a Halton set (25 points, in no short order) on the Body's face."""
+    result = cmmsampling.sample(doc.Body.Shape.Faces[0], 25, "halton")
+    return document.add_to_document(result, doc, source=(doc.Body, "Face1")).Group[0]
+
+
+def coordinate_systems(doc):
+    """A datum coordinate system inside a moved PartDesign body, and a placement object."""
+    body = doc.addObject("PartDesign::Body", "PartBody")
+    body.Placement = FreeCAD.Placement(FreeCAD.Vector(10, -20, 5), FreeCAD.Rotation(30, 0, 0))
+    lcs = body.newObject("PartDesign::CoordinateSystem", "LCS")
+    lcs.Label = "Measurement frame"
+    lcs.Placement = FreeCAD.Placement(FreeCAD.Vector(50, 40, 3),
+                                      FreeCAD.Rotation(FreeCAD.Vector(1, 1, 0), 40))
+    doc.addObject("App::Placement", "Fixture")
+    doc.recompute()
+    return lcs
+
+
+def test_export_options_write_ball_centres_in_a_local_frame_along_a_short_path(doc, tmp_path, artifacts):
+    points = probe_points(doc)
+    lcs = coordinate_systems(doc)
+    seen = {}
+
+    def choose(dialog):
+        seen["title"] = dialog.windowTitle()
+        seen["frames"] = [dialog.frame.itemText(i) for i in range(dialog.frame.count())]
+        seen["tip"] = dialog.frame.itemData(1, QtCore.Qt.ToolTipRole)
+        dialog.frame.setCurrentIndex(dialog.frame.findText("Measurement frame"))
+        dialog.probe_radius.setValue(1.5)
+        dialog.order.setCurrentIndex(dialog.order.findData("short_path"))
+        dialog.grab().save(os.path.join(artifacts, "export_options.png"))
+        dialog.accept()
+
+    options = run_dialog(lambda: export_options.ask_export_options(points), choose)
+    assert seen["title"] == "Export options: Sampling Body Face1 (halton)"
+    assert seen["frames"] == ["Global (document)", "Measurement frame", "Fixture"]
+    assert "PartDesign::CoordinateSystem" in seen["tip"] and "origin (" in seen["tip"]
+    assert options == {"frame": f"App.getDocument({doc.Name!r}).getObject('LCS')", "probe_radius": 1.5,
+                       "order": "short_path"}
+
+    target = str(tmp_path / "points.csv")
+    call = (f"report = cmmsampling.export(App.getDocument({doc.Name!r}).getObject({points.Name!r}), "
+            f"{target!r}{export_options.export_keywords(options)})")
+    assert call.endswith(f", frame=App.getDocument({doc.Name!r}).getObject('LCS'), probe_radius=1.5, "
+                         "order='short_path')")
+    FreeCADGui.doCommand("import cmmsampling")
+    FreeCADGui.doCommand(call)
+    report = __main__.report
+    export_options.show_export_report(report)
+    line = main_window().statusBar().currentMessage()
+    assert line.startswith(f"25 points to {target} (csv, local frame, probe radius 1.5 mm)")
+    assert f"the short path saves {report.saving:.1f} mm" in line and report.saving > 0
+
+    written = cmmsampling.read_points(target)
+    source = points.Proxy.point_set(points)
+    placement = lcs.getGlobalPlacement()
+    assert not placement.isIdentity() and placement != lcs.Placement
+    inverse = placement.inverse()
+    rotation = inverse.Rotation
+    where = {label: i for i, label in enumerate(source.labels)}
+    order = [where[label] for label in written.labels]
+    assert sorted(order) == list(range(25)) and order != list(range(25))
+    centres = source.points[order] + 1.5 * source.normals[order]
+    expected = np.array([tuple(inverse.multVec(FreeCAD.Vector(*p))) for p in centres])
+    normals = np.array([tuple(rotation.multVec(FreeCAD.Vector(*n))) for n in source.normals[order]])
+    assert np.abs(written.points - expected).max() < 1e-6
+    assert np.abs(written.normals - normals).max() < 1e-8
+    assert written.metadata["frame"] == "local" and written.metadata["frame_name"] == "Measurement frame"
+    assert written.metadata["probe_radius_mm"] == 1.5 and written.metadata["order"] == "short_path"
+    assert abs(path_length(written.points) - report.length_after) < 1e-5
+
+
+def test_export_options_persist_and_cancel_returns_none(doc):
+    points = probe_points(doc)
+    coordinate_systems(doc)
+    assert export_options.export_keywords(
+        {"frame": None, "probe_radius": 0.0, "order": "as_optimised"}) == ""
+    settings.save({"ExportFrame": "LCS", "ExportProbeRadius": 2.0, "ExportOrder": "short_path"})
+    seen = []
+
+    def look(dialog):
+        seen.append((dialog.frame.currentText(), dialog.probe_radius.value(), dialog.order.currentData()))
+        dialog.reject()
+
+    assert run_dialog(lambda: export_options.ask_export_options(points), look) is None
+    assert seen == [("Measurement frame", 2.0, "short_path")]
+    doc.removeObject("LCS")
+    doc.recompute()
+
+    def defaults(dialog):
+        seen.append((dialog.frame.currentText(), dialog.probe_radius.text()))
+        dialog.probe_radius.setValue(0.0)
+        dialog.accept()
+
+    options = run_dialog(lambda: export_options.ask_export_options(points), defaults)
+    assert seen[1] == ("Global (document)", "2.000 mm")
+    assert options == {"frame": None, "probe_radius": 0.0, "order": "short_path"}
+    assert settings.load(export_options.DEFAULTS) == {
+        "ExportFrame": "", "ExportProbeRadius": 0.0, "ExportOrder": "short_path"}
