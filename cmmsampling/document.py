@@ -258,7 +258,26 @@ def table_rows(points):
     ]
 
 
-class ProbePoints:
+class TypedProxy:
+    """A document-object proxy that saves only its Type with the document (FreeCAD 0.20 and
+    0.21+ names)."""
+
+    Type = ""
+
+    def __getstate__(self):
+        return {"Type": self.Type}
+
+    def __setstate__(self, state):
+        return None
+
+    def dumps(self):
+        return self.__getstate__()
+
+    def loads(self, state):
+        return self.__setstate__(state)
+
+
+class ProbePoints(TypedProxy):
     """Proxy of the probe-points object: N labelled points with approach vectors on a face.
 
     Properties: Labels; Points (mm) and Normals (unit, out of the material); U, V (face
@@ -348,20 +367,8 @@ class ProbePoints:
             metadata=metadata,
         )
 
-    def __getstate__(self):
-        return {"Type": self.Type}
 
-    def __setstate__(self, state):
-        return None
-
-    def dumps(self):
-        return self.__getstate__()
-
-    def loads(self, state):
-        return self.__setstate__(state)
-
-
-class SubstituteSurface:
+class SubstituteSurface(TypedProxy):
     """Proxy of the substitute surface: the fitted B-spline face and its deviation field.
 
     Properties: Shape (the fitted face); GridU (g_u), GridV (g_v): the evaluation grid's
@@ -394,18 +401,6 @@ class SubstituteSurface:
         u = np.array(obj.GridU, dtype=float)
         v = np.array(obj.GridV, dtype=float)
         return u, v, np.array(obj.DeviationField, dtype=float).reshape(len(u), len(v))
-
-    def __getstate__(self):
-        return {"Type": self.Type}
-
-    def __setstate__(self, state):
-        return None
-
-    def dumps(self):
-        return self.__getstate__()
-
-    def loads(self, state):
-        return self.__setstate__(state)
 
 
 def export(objects, filename):

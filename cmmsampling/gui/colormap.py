@@ -92,16 +92,23 @@ def _bar(maximum):
     return node
 
 
-def _labels(maximum, title):
-    """Tick labels left of the bar and the title above it, as screen-aligned text."""
+def text_node(rgb, size):
+    """A separator whose text children are drawn in colour ``rgb`` with the Sans font, ``size``
+    pixels."""
     node = coin.SoSeparator()
     colour = coin.SoBaseColor()
-    colour.rgb = TEXT_COLOUR
+    colour.rgb = rgb
     font = coin.SoFont()
     font.name = "Sans"
-    font.size = FONT_SIZE
+    font.size = size
     node.addChild(colour)
     node.addChild(font)
+    return node
+
+
+def _labels(maximum, title):
+    """Tick labels left of the bar and the title above it, as screen-aligned text."""
+    node = text_node(TEXT_COLOUR, FONT_SIZE)
     heights = np.linspace(*LEGEND_Y, LEGEND_TICKS)
     for text, y in zip(tick_labels(maximum), heights):
         node.addChild(text_at(text, (LEGEND_X[0] - 0.01, float(y) - 0.015, 0.0), right=True))

@@ -28,15 +28,39 @@ def warn(title, text):
     QtGui.QMessageBox.warning(FreeCADGui.getMainWindow(), title, text)
 
 
-class SampleFace:
-    """*Sample face...*: open the task panel for the one selected face."""
+class GuardedCommand:
+    """A command that acts only when :meth:`reason` is None: while it cannot act, its status tip
+    and tooltip say why, and activating it anyway shows that in a message box titled TITLE.
+    Subclasses give NAME, TITLE, MENU, ICON, TIP, :meth:`reason` and :meth:`act`."""
 
-    NAME = "CMMSampling_SampleFace"
-    TIP = ("Place CMM probe points on the selected face with a sampling strategy, fit the "
-           "substitute surface and report its deviation (mm)")
+    NAME = TITLE = MENU = ICON = TIP = ""
 
     def GetResources(self):
-        return {"Pixmap": icon("SampleFace.svg"), "MenuText": "Sample face...", "ToolTip": self.TIP}
+        return {"Pixmap": icon(self.ICON), "MenuText": self.MENU, "ToolTip": self.TIP}
+
+    def reason(self):
+        """Why the command cannot act now, or None."""
+        raise NotImplementedError
+
+    def act(self):
+        """What the command does once :meth:`reason` is None."""
+        raise NotImplementedError
+
+    def IsActive(self):
+        reason = self.reason()
+        show_reason(self.NAME, reason, self.TIP)
+        return reason is None
+
+    def Activated(self):
+        reason = self.reason()
+        if reason is not None:
+            warn(self.TITLE, reason)
+            return
+        self.act()
+
+
+class FaceCommand(GuardedCommand):
+    """A command that opens a task panel for the one selected face of an open document."""
 
     def reason(self):
         """Why the command cannot act now, or None."""
@@ -50,31 +74,40 @@ class SampleFace:
             return str(exc)
         return None
 
-    def IsActive(self):
-        reason = self.reason()
-        show_reason(self.NAME, reason, self.TIP)
-        return reason is None
+    def panel(self, source):
+        """The task panel for source, (obj, "FaceK")."""
+        raise NotImplementedError
 
-    def Activated(self):
+    def act(self):
+        source = selected_face(FreeCADGui.Selection.getSelectionEx())
+        FreeCADGui.Control.showDialog(self.panel(source))
+
+
+class SampleFace(FaceCommand):
+    """*Sample face...*: open the task panel for the one selected face."""
+
+    NAME = "CMMSampling_SampleFace"
+    TITLE = "Sample face"
+    MENU = "Sample face..."
+    ICON = "SampleFace.svg"
+    TIP = ("Place CMM probe points on the selected face with a sampling strategy, fit the "
+           "substitute surface and report its deviation (mm)")
+
+    def panel(self, source):
         from .task_panel import SampleFaceTaskPanel
 
-        reason = self.reason()
-        if reason is not None:
-            warn("Sample face", reason)
-            return
-        source = selected_face(FreeCADGui.Selection.getSelectionEx())
-        FreeCADGui.Control.showDialog(SampleFaceTaskPanel(source))
+        return SampleFaceTaskPanel(source)
 
 
-class Reevaluate:
+class Reevaluate(GuardedCommand):
     """*Re-evaluate*: measure the selected probe points again on their (changed) source face."""
 
     NAME = "CMMSampling_Reevaluate"
+    TITLE = "Re-evaluate"
+    MENU = "Re-evaluate"
+    ICON = "Reevaluate.svg"
     TIP = ("Project the selected probe points (same u, v) onto their source face as it is now, "
            "refit the substitute surface and update the deviation, without a new optimisation")
-
-    def GetResources(self):
-        return {"Pixmap": icon("Reevaluate.svg"), "MenuText": "Re-evaluate", "ToolTip": self.TIP}
 
     def reason(self):
         """Why the command cannot act now, or None."""
@@ -88,16 +121,7 @@ class Reevaluate:
                 problems.append(f"{obj.Label} cannot be re-evaluated: {why}.")
         return " ".join(problems) if len(problems) == len(points) else None
 
-    def IsActive(self):
-        reason = self.reason()
-        show_reason(self.NAME, reason, self.TIP)
-        return reason is None
-
-    def Activated(self):
-        reason = self.reason()
-        if reason is not None:
-            warn("Re-evaluate", reason)
-            return
+    def act(self):
         FreeCADGui.doCommand("import cmmsampling.document")
         for points in selected_probe_points():
             if document.source_face(points)[0] is None:
@@ -110,15 +134,15 @@ class Reevaluate:
                 warn("Re-evaluate", f"{points.Label}: {exc}")
 
 
-class ExportProbePoints:
+class ExportProbePoints(GuardedCommand):
     """*Export probe points...*: write the selected probe points for the CMM (DMIS, XYZ or CSV)."""
 
     NAME = "CMMSampling_Export"
+    TITLE = "Export probe points"
+    MENU = "Export probe points..."
+    ICON = "Export.svg"
     TIP = ("Write the selected probe points with their approach vectors for the CMM: "
            "DMIS input program, PC-DMIS XYZIJK text or CSV")
-
-    def GetResources(self):
-        return {"Pixmap": icon("Export.svg"), "MenuText": "Export probe points...", "ToolTip": self.TIP}
 
     def reason(self):
         """Why the command cannot act now, or None."""
@@ -129,16 +153,7 @@ class ExportProbePoints:
             return f"{len(points)} sets of probe points are selected: select one to export."
         return None
 
-    def IsActive(self):
-        reason = self.reason()
-        show_reason(self.NAME, reason, self.TIP)
-        return reason is None
-
-    def Activated(self):
-        reason = self.reason()
-        if reason is not None:
-            warn("Export probe points", reason)
-            return
+    def act(self):
         [points] = selected_probe_points()
         path = choose_export_path(points)
         if not path:

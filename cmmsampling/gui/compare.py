@@ -9,12 +9,9 @@ FreeCAD's web view. The calls are echoed in the Python console, where ``study`` 
 """
 import __main__
 import os
-import threading
-import traceback
 
 import FreeCAD
 import FreeCADGui
-import Part
 from PySide import QtCore, QtGui
 
 from ..deviation import DEFAULT_GRID
@@ -22,9 +19,9 @@ from ..report import write_report
 from ..sampling import PSO_DEFAULTS, STRATEGIES
 from ..study import DEFAULT_NS, DEFAULT_SEEDS, compare
 from . import icon, resource, settings
-from .commands import show_reason, warn
-from .selection import SelectionError, selected_face
-from .task_panel import ERROR_STYLE, POLL_MS, fit_narrow_dock, source_text
+from .commands import FaceCommand
+from .task_panel import ERROR_STYLE, POLL_MS, BackgroundRunPanel, fit_narrow_dock, source_text
+from .worker import BackgroundTask
 
 # The panel's values are stored under these names with this prefix, apart from Sample face's.
 SETTINGS_PREFIX = "Compare_"
@@ -99,7 +96,7 @@ def open_report(path):
     WebGui.openBrowser(url.toString())
 
 
-class BackgroundComparison:
+class BackgroundComparison(BackgroundTask):
     """Runs ``compare(face, progress=..., **arguments)`` and then, when at least one run finished,
     ``write_report(study, folder)`` in a daemon thread.
 
@@ -111,6 +108,7 @@ class BackgroundComparison:
     """
 
     def __init__(self, face, arguments, folder):
+        super().__init__("cmmsampling-compare")
         self.face = face
         self.arguments = dict(arguments)
         self.folder = folder
@@ -119,21 +117,6 @@ class BackgroundComparison:
         self.message = "Starting..."
         self.study = None
         self.report = None
-        self.error = None
-        self.details = ""
-        self._stop = threading.Event()
-        self._thread = threading.Thread(target=self._run, name="cmmsampling-compare", daemon=True)
-
-    def start(self):
-        self._thread.start()
-
-    @property
-    def running(self):
-        return self._thread.is_alive()
-
-    @property
-    def cancelled(self):
-        return self._stop.is_set()
 
     def cancel(self):
         """Ask the study to stop; it ends (and the report is written) in the thread."""
@@ -143,19 +126,18 @@ class BackgroundComparison:
         self.done, self.total, self.message = done, total, message
         return self.cancelled
 
-    def _run(self):
-        try:
-            self.study = compare(self.face, progress=self._progress, **self.arguments)
-            if self.study.rows:
-                self.message = "Writing the report..."
-                self.report = write_report(self.study, self.folder)
-        except Exception as exc:  # reported to the user by the GUI thread
-            self.error = exc
-            self.details = traceback.format_exc()
+    def _work(self):
+        self.study = compare(self.face, progress=self._progress, **self.arguments)
+        if self.study.rows:
+            self.message = "Writing the report..."
+            self.report = write_report(self.study, self.folder)
 
 
-class CompareTaskPanel:
+class CompareTaskPanel(BackgroundRunPanel):
     """Task panel of *Compare strategies*. source: (obj, "FaceK")."""
+
+    OK_TEXT = "Compare"
+    OK_TIP = "Run the study; the report opens when it ends"
 
     def __init__(self, source):
         self.form = FreeCADGui.PySideUic.loadUi(resource("compare.ui"))
@@ -178,21 +160,9 @@ class CompareTaskPanel:
         self.update_enabled()
 
     # --- FreeCAD task dialog interface
-    def getStandardButtons(self):
-        return int(QtGui.QDialogButtonBox.Ok | QtGui.QDialogButtonBox.Cancel)
-
     def modifyStandardButtons(self, box):
-        self.buttons = box
-        ok = box.button(QtGui.QDialogButtonBox.Ok)
-        ok.setText("Compare")
-        ok.setToolTip("Run the study; the report opens when it ends")
+        super().modifyStandardButtons(box)
         self.update_enabled()
-
-    def accept(self):
-        """Start the study; the panel stays open until it ends."""
-        if self.run is None:
-            self.start()
-        return False
 
     def reject(self):
         """While a study runs: ask it to stop and keep the panel open (the finished runs are
@@ -272,15 +242,6 @@ class CompareTaskPanel:
             FreeCADGui.getMainWindow(), "Report folder", self.folder() or os.path.expanduser("~"))
         if chosen:
             self.form.folder.setText(chosen)
-
-    def source_face(self):
-        """The chosen face as it is now, or None when it (or its object) is gone."""
-        obj, name = self.source
-        try:
-            face = obj.getSubObject(name)
-        except ReferenceError:  # the object was deleted
-            return None
-        return face if isinstance(face, Part.Face) else None
 
     # --- the run
     def start(self):
@@ -399,41 +360,19 @@ def echo_study(face, arguments, folder, study, report, alive=True):
         FreeCADGui.doCommand(f"# cmmsampling.write_report(study, {folder!r})  # ran in the task panel")
 
 
-class CompareStrategies:
+class CompareStrategies(FaceCommand):
     """*Compare strategies...*: open the comparison panel for the one selected face."""
 
     NAME = "CMMSampling_Compare"
+    TITLE = "Compare strategies"
+    MENU = "Compare strategies..."
+    ICON = "Compare.svg"
     TIP = ("Run the sampling strategies over a list of point counts N on the selected face and "
            "write an HTML report: maximum deviation (mm) against N with the certified lower bound, "
            "the paper's figures and tables")
 
-    def GetResources(self):
-        return {"Pixmap": icon("Compare.svg"), "MenuText": "Compare strategies...", "ToolTip": self.TIP}
-
-    def reason(self):
-        """Why the command cannot act now, or None."""
-        if FreeCAD.ActiveDocument is None:
-            return "Open a document with a part first."
-        if FreeCADGui.Control.activeDialog():
-            return "Close the open task panel first."
-        try:
-            selected_face(FreeCADGui.Selection.getSelectionEx())
-        except SelectionError as exc:
-            return str(exc)
-        return None
-
-    def IsActive(self):
-        reason = self.reason()
-        show_reason(self.NAME, reason, self.TIP)
-        return reason is None
-
-    def Activated(self):
-        reason = self.reason()
-        if reason is not None:
-            warn("Compare strategies", reason)
-            return
-        source = selected_face(FreeCADGui.Selection.getSelectionEx())
-        FreeCADGui.Control.showDialog(CompareTaskPanel(source))
+    def panel(self, source):
+        return CompareTaskPanel(source)
 
 
 def register():

@@ -104,8 +104,44 @@ class FacePicker:
         QtCore.QTimer.singleShot(0, self.on_pick)
 
 
-class SampleFaceTaskPanel:
-    """Task panel of *Sample face*. source: (obj, "FaceK") to start with."""
+class BackgroundRunPanel:
+    """A panel for a chosen face (``self.source``: (obj, "FaceK")) whose OK starts a background
+    run (``self.start()``, stored in ``self.run``): its task-dialog buttons, OK labelled OK_TEXT
+    with the tooltip OK_TIP and Cancel, and the face as it is now."""
+
+    OK_TEXT = OK_TIP = ""
+
+    def getStandardButtons(self):
+        return int(QtGui.QDialogButtonBox.Ok | QtGui.QDialogButtonBox.Cancel)
+
+    def modifyStandardButtons(self, box):
+        self.buttons = box
+        ok = box.button(QtGui.QDialogButtonBox.Ok)
+        ok.setText(self.OK_TEXT)
+        ok.setToolTip(self.OK_TIP)
+
+    def accept(self):
+        """Start the run unless one is under way; the panel stays open until it ends."""
+        if self.run is None:
+            self.start()
+        return False
+
+    def source_face(self):
+        """The chosen face as it is now, or None when it (or its object) is gone."""
+        obj, name = self.source
+        try:
+            face = obj.getSubObject(name)
+        except ReferenceError:  # the object was deleted
+            return None
+        return face if isinstance(face, Part.Face) else None
+
+
+class SampleFaceTaskPanel(BackgroundRunPanel):
+    """Task panel of *Sample face*. source: (obj, "FaceK") to start with. When the run ends,
+    :meth:`finish` closes it."""
+
+    OK_TEXT = "Sample"
+    OK_TIP = "Run the strategy; the results are added when it ends"
 
     def __init__(self, source):
         self.form = FreeCADGui.PySideUic.loadUi(resource("sample_face.ui"))
@@ -130,21 +166,6 @@ class SampleFaceTaskPanel:
         self.update_enabled()
 
     # --- FreeCAD task dialog interface
-    def getStandardButtons(self):
-        return int(QtGui.QDialogButtonBox.Ok | QtGui.QDialogButtonBox.Cancel)
-
-    def modifyStandardButtons(self, box):
-        self.buttons = box
-        ok = box.button(QtGui.QDialogButtonBox.Ok)
-        ok.setText("Sample")
-        ok.setToolTip("Run the strategy; the results are added when it ends")
-
-    def accept(self):
-        """Start the run; the panel stays open until it ends (then :meth:`finish` closes it)."""
-        if self.run is None:
-            self.start()
-        return False
-
     def reject(self):
         """Cancel: stop a running swarm (within CANCEL_WAIT_S), change nothing, close."""
         self.timer.stop()
@@ -245,15 +266,6 @@ class SampleFaceTaskPanel:
     def show_source(self):
         self.form.faceLabel.setText(self.source_text)
         self.form.faceLabel.setStyleSheet("")
-
-    def source_face(self):
-        """The chosen face as it is now, or None when it (or its object) is gone."""
-        obj, name = self.source
-        try:
-            face = obj.getSubObject(name)
-        except ReferenceError:  # the object was deleted
-            return None
-        return face if isinstance(face, Part.Face) else None
 
     def source_gone(self):
         """Say that the chosen face is gone and what to do."""

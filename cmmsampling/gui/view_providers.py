@@ -18,7 +18,23 @@ DEFAULT_APPROACH_MM = 5.0
 POINT_VIEW_PROPERTIES = ("ShowLabels", "ShowApproach", "ApproachLength", "LabelSize")
 
 
-class ViewProviderProbePoints:
+class Stateless:
+    """A view provider that saves nothing with the document (FreeCAD 0.20 and 0.21+ names)."""
+
+    def __getstate__(self):
+        return None
+
+    def __setstate__(self, state):
+        return None
+
+    def dumps(self):
+        return None
+
+    def loads(self, state):
+        return None
+
+
+class ViewProviderProbePoints(Stateless):
     """Draws the probe points as vertices (the Part view), each with its label P1..PN and its
     approach vector (a line along the outward normal, ``ApproachLength`` mm long)."""
 
@@ -79,20 +95,8 @@ class ViewProviderProbePoints:
     def getIcon(self):
         return icon("ProbePoints.svg")
 
-    def __getstate__(self):
-        return None
 
-    def __setstate__(self, state):
-        return None
-
-    def dumps(self):
-        return None
-
-    def loads(self, state):
-        return None
-
-
-class ViewProviderSubstituteSurface:
+class ViewProviderSubstituteSurface(Stateless):
     """Draws the substitute surface coloured by its deviation from the CAD face ("Deviation"
     display mode, the default) with a colour legend in mm; the Part display modes stay available."""
 
@@ -143,18 +147,6 @@ class ViewProviderSubstituteSurface:
 
     def getIcon(self):
         return icon("SubstituteSurface.svg")
-
-    def __getstate__(self):
-        return None
-
-    def __setstate__(self, state):
-        return None
-
-    def dumps(self):
-        return None
-
-    def loads(self, state):
-        return None
 
 
 def attach_when_missing(obj):
@@ -213,14 +205,7 @@ def approach_lines(points, tips):
 
 def point_labels(labels, positions, size):
     """Screen-aligned labels at (N, 3) positions (mm), font ``size`` pixels."""
-    node = coin.SoSeparator()
-    colour = coin.SoBaseColor()
-    colour.rgb = LABEL_COLOUR
-    font = coin.SoFont()
-    font.name = "Sans"
-    font.size = size
-    node.addChild(colour)
-    node.addChild(font)
+    node = colormap.text_node(LABEL_COLOUR, size)
     for label, position in zip(labels, positions):
         node.addChild(colormap.text_at(label, tuple(map(float, position))))
     return node

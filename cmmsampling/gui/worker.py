@@ -1,29 +1,24 @@
-"""cmmsampling.sample() in a background thread, with progress and cancel for the GUI thread."""
+"""Background jobs for the GUI thread: cmmsampling.sample() in a daemon thread, with progress and
+cancel, and the :class:`BackgroundTask` base that other long jobs (the comparison) share."""
 import threading
 import traceback
 
 from ..sampling import sample
 
 
-class BackgroundSampling:
-    """Runs ``sample(face, progress=..., **arguments)`` in a daemon thread.
+class BackgroundTask:
+    """A job run once by ``_work()`` in a daemon thread named ``name``.
 
-    The GUI thread polls ``iteration`` and ``best_mm`` (the swarm's best maximum deviation so
-    far, mm), ``running``, then ``result`` or ``error``/``details`` (the traceback text);
-    ``cancel()`` makes the progress callback ask the optimiser to stop. The thread never touches
-    the document: writing the result is the GUI thread's job.
+    The GUI thread polls ``running``, then the job's results or ``error``/``details`` (the
+    traceback text); ``cancelled`` is set by the subclass's ``cancel``, which its progress
+    callback reports to the job. The thread never touches the document.
     """
 
-    def __init__(self, face, arguments):
-        self.face = face
-        self.arguments = dict(arguments)
-        self.iteration = 0
-        self.best_mm = float("nan")
-        self.result = None
+    def __init__(self, name):
         self.error = None
         self.details = ""
         self._stop = threading.Event()
-        self._thread = threading.Thread(target=self._run, name="cmmsampling", daemon=True)
+        self._thread = threading.Thread(target=self._run, name=name, daemon=True)
 
     def start(self):
         self._thread.start()
@@ -36,6 +31,35 @@ class BackgroundSampling:
     def cancelled(self):
         return self._stop.is_set()
 
+    def _work(self):
+        """The job itself, run in the thread; subclasses store its results on self."""
+        raise NotImplementedError
+
+    def _run(self):
+        try:
+            self._work()
+        except Exception as exc:  # reported to the user by the GUI thread
+            self.error = exc
+            self.details = traceback.format_exc()
+
+
+class BackgroundSampling(BackgroundTask):
+    """Runs ``sample(face, progress=..., **arguments)`` in a daemon thread.
+
+    The GUI thread polls ``iteration`` and ``best_mm`` (the swarm's best maximum deviation so
+    far, mm), ``running``, then ``result`` or ``error``/``details`` (the traceback text);
+    ``cancel()`` makes the progress callback ask the optimiser to stop. The thread never touches
+    the document: writing the result is the GUI thread's job.
+    """
+
+    def __init__(self, face, arguments):
+        super().__init__("cmmsampling")
+        self.face = face
+        self.arguments = dict(arguments)
+        self.iteration = 0
+        self.best_mm = float("nan")
+        self.result = None
+
     def cancel(self, wait_s):
         """Ask the run to stop and wait up to wait_s seconds; True when it has stopped."""
         self._stop.set()
@@ -45,11 +69,7 @@ class BackgroundSampling:
     def _progress(self, iteration, best_mm):
         self.iteration = iteration
         self.best_mm = best_mm
-        return self._stop.is_set()
+        return self.cancelled
 
-    def _run(self):
-        try:
-            self.result = sample(self.face, progress=self._progress, **self.arguments)
-        except Exception as exc:  # reported to the user by the GUI thread
-            self.error = exc
-            self.details = traceback.format_exc()
+    def _work(self):
+        self.result = sample(self.face, progress=self._progress, **self.arguments)

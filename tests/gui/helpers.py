@@ -90,19 +90,26 @@ def modal_message(action, timeout_s=10):
 
 
 def answer_dialog(action, button, timeout_s=10):
-    """Run action(), which opens a modal dialog; press its button with text ``button`` and return
-    the texts of its labels."""
+    """Run action(), which opens a modal dialog; once the dialog shows its text, press its button
+    with text ``button`` and return the texts it showed."""
     seen = []
     timer = QtCore.QTimer()
     timer.setInterval(50)
 
     def press():
         dialog = QtGui.QApplication.activeModalWidget()
-        if dialog is not None:
-            seen.extend(label.text() for label in dialog.findChildren(QtGui.QLabel))
-            next(b for b in dialog.findChildren(QtGui.QAbstractButton)
-                 if b.text().replace("&", "") == button).click()
-            timer.stop()
+        if dialog is None or not dialog.isVisible():
+            return
+        shown = [label.text() for label in dialog.findChildren(QtGui.QLabel) if label.text()]
+        if isinstance(dialog, QtGui.QMessageBox) and dialog.text():
+            shown.append(dialog.text())
+        buttons = [b for b in dialog.findChildren(QtGui.QAbstractButton)
+                   if b.text().replace("&", "") == button]
+        if not shown or not buttons:
+            return
+        seen.extend(shown)
+        timer.stop()
+        buttons[0].click()
 
     timer.timeout.connect(press)
     timer.start()
@@ -189,7 +196,8 @@ def interrupt_run(monkeypatch, action, at=None):
 
 
 class Hold:
-    """An action for :func:`interrupt_run` that holds the run until released (at most limit_s)."""
+    """An action that holds a run (see :func:`interrupt_run`) or a study in its worker thread
+    until released (at most limit_s)."""
 
     def __init__(self, limit_s=20.0):
         self.reached = threading.Event()

@@ -19,7 +19,7 @@ from cmmsampling.gui import compare as compare_panel
 from cmmsampling.gui import export_options, settings
 from cmmsampling.probe_path import path_length
 
-from .helpers import dock_text, main_window, process_events, task_button, wait_until
+from .helpers import Hold, dock_text, main_window, process_events, task_button, wait_until
 
 OK, CANCEL = QtGui.QDialogButtonBox.Ok, QtGui.QDialogButtonBox.Cancel
 # A comparison small enough for a shared two-core machine: 2 N x 2 strategies, 6 steps.
@@ -55,23 +55,10 @@ def opened(monkeypatch):
     return paths
 
 
-class Hold:
-    """Holds the study in its progress callback at a step until released (at most limit_s)."""
-
-    def __init__(self, limit_s=30.0):
-        self.reached = threading.Event()
-        self.released = threading.Event()
-        self.limit_s = limit_s
-
-    def __call__(self):
-        self.reached.set()
-        self.released.wait(self.limit_s)
-
-
 def hold_study_at(monkeypatch, step):
     """Make the panel's next study stop in its worker thread when ``step`` steps are done (after
     the panel has seen that), until the returned Hold is released."""
-    hold = Hold()
+    hold = Hold(limit_s=30.0)
     run = compare_panel.compare
 
     def held(face, progress=None, **arguments):
