@@ -12,6 +12,23 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 TESTDATA = os.path.join(os.path.dirname(ROOT), "shared", "testdata")
 
 
+def reference_document(name, undo_mode):
+    """A fresh FreeCAD document with the reference face as Part::Feature 'Body'; undo_mode 1 or 0."""
+    import cmmsampling
+
+    document = FreeCAD.newDocument(name)
+    document.UndoMode = undo_mode
+    document.addObject("Part::Feature", "Body").Shape = cmmsampling.reference_face()
+    document.recompute()
+    return document
+
+
+def closed(document_name):
+    """Close the document of that name if it is still open."""
+    if document_name in FreeCAD.listDocuments():
+        FreeCAD.closeDocument(document_name)
+
+
 def rational_patch_face(seed=3):
     """A rational bicubic NURBS patch (5 x 4 poles, weights 0.5..2) as a Part.Face."""
     from cmmsampling.surface import make_bspline_surface

@@ -3,7 +3,7 @@ import json
 
 import numpy as np
 import pytest
-from geometry import FreeCAD, Part
+from geometry import FreeCAD, Part, closed, reference_document
 
 import cmmsampling
 from cmmsampling import document
@@ -22,15 +22,10 @@ def result():
 @pytest.fixture
 def doc():
     """A fresh document with undo on and the reference face as Part::Feature 'Body'."""
-    d = FreeCAD.newDocument("SamplingTest")
-    d.UndoMode = 1
-    body = d.addObject("Part::Feature", "Body")
-    body.Shape = cmmsampling.reference_face()
-    d.recompute()
+    d = reference_document("SamplingTest", 1)
     name = d.Name
     yield d
-    if name in FreeCAD.listDocuments():
-        FreeCAD.closeDocument(name)
+    closed(name)
 
 
 @pytest.fixture

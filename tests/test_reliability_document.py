@@ -6,7 +6,7 @@ points survive saving and reopening.
 """
 import numpy as np
 import pytest
-from geometry import FreeCAD, Part
+from geometry import FreeCAD, Part, closed, reference_document
 
 import cmmsampling
 from cmmsampling import document
@@ -28,15 +28,10 @@ def result():
 @pytest.fixture(params=[1, 0], ids=["undo on", "undo off"])
 def doc(request):
     """A fresh document (undo on, or off as in headless documents) with the reference face 'Body'."""
-    d = FreeCAD.newDocument("Reliability")
-    d.UndoMode = request.param
-    body = d.addObject("Part::Feature", "Body")
-    body.Shape = cmmsampling.reference_face()
-    d.recompute()
+    d = reference_document("Reliability", request.param)
     name = d.Name
     yield d
-    if name in FreeCAD.listDocuments():
-        FreeCAD.closeDocument(name)
+    closed(name)
 
 
 def names(doc):

@@ -18,9 +18,9 @@ from ..deviation import DEFAULT_GRID
 from ..report import write_report
 from ..sampling import PSO_DEFAULTS, STRATEGIES
 from ..study import DEFAULT_NS, DEFAULT_SEEDS, compare
-from . import icon, resource, settings
+from . import settings
 from .commands import FaceCommand
-from .task_panel import ERROR_STYLE, POLL_MS, BackgroundRunPanel, fit_narrow_dock, source_text
+from .task_panel import ERROR_STYLE, BackgroundRunPanel, source_text
 from .worker import BackgroundTask
 
 # The panel's values are stored under these names with this prefix, apart from Sample face's.
@@ -140,16 +140,8 @@ class CompareTaskPanel(BackgroundRunPanel):
     OK_TIP = "Run the study; the report opens when it ends"
 
     def __init__(self, source):
-        self.form = FreeCADGui.PySideUic.loadUi(resource("compare.ui"))
-        self.form.setWindowIcon(QtGui.QIcon(icon("Compare.svg")))
-        self.source = source
+        self._set_up("compare.ui", "Compare.svg", source)
         self.face = face_expression(source)
-        self.run = None
-        self.buttons = None
-        self.timer = QtCore.QTimer()
-        self.timer.setInterval(POLL_MS)
-        self.timer.timeout.connect(self.poll)
-        fit_narrow_dock(self.form)
         self._fill_strategies()
         self.set_values(load_values())
         self.form.faceLabel.setText(source_text(source))

@@ -111,6 +111,18 @@ class BackgroundRunPanel:
 
     OK_TEXT = OK_TIP = ""
 
+    def _set_up(self, ui_file, icon_file, source):
+        """Load the form and its icon, keep the face, and make the timer that polls the run."""
+        self.form = FreeCADGui.PySideUic.loadUi(resource(ui_file))
+        self.form.setWindowIcon(QtGui.QIcon(icon(icon_file)))
+        self.source = source
+        self.run = None
+        self.buttons = None
+        self.timer = QtCore.QTimer()
+        self.timer.setInterval(POLL_MS)
+        self.timer.timeout.connect(self.poll)
+        fit_narrow_dock(self.form)
+
     def getStandardButtons(self):
         return int(QtGui.QDialogButtonBox.Ok | QtGui.QDialogButtonBox.Cancel)
 
@@ -144,18 +156,10 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
     OK_TIP = "Run the strategy; the results are added when it ends"
 
     def __init__(self, source):
-        self.form = FreeCADGui.PySideUic.loadUi(resource("sample_face.ui"))
-        self.form.setWindowIcon(QtGui.QIcon(icon("SampleFace.svg")))
-        self.source = source
+        self._set_up("sample_face.ui", "SampleFace.svg", source)
         self.source_text = source_text(source)
-        self.run = None
         self.step = ""
         self.picker = None
-        self.buttons = None
-        self.timer = QtCore.QTimer()
-        self.timer.setInterval(POLL_MS)
-        self.timer.timeout.connect(self.poll)
-        fit_narrow_dock(self.form)
         self._fill_strategies()
         self.set_values(settings.load(panel_defaults()))
         self.form.strategy.currentIndexChanged.connect(self.update_enabled)
