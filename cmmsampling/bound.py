@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .bspline import design_matrices
+from .bspline import design_matrices, kron_rows
 
 DEFAULT_TOLERANCE = 1e-4
 DEFAULT_ITERATIONS = 4000
@@ -51,8 +51,7 @@ class _GridResiduals:
     def rows(self, nodes):
         """Collocation rows (len(nodes), n_u * n_v) at flat node indices."""
         count_v = self.along_v.shape[0]
-        return (self.along_u[nodes // count_v][:, :, None] * self.along_v[nodes % count_v][:, None, :]
-                ).reshape(len(nodes), -1)
+        return kron_rows(self.along_u[nodes // count_v], self.along_v[nodes % count_v])
 
     def everywhere(self, poles):
         """Squared residuals at every node inside the face: (K,) mm^2, for poles (n_u * n_v, 3)."""

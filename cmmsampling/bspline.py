@@ -116,6 +116,11 @@ def dense_from_local(span, values, degree, n):
     return out
 
 
+def kron_rows(along_u, along_v):
+    """Row-wise Kronecker products of dense bases: (N, n_u), (N, n_v) -> (N, n_u * n_v)."""
+    return (along_u[:, :, None] * along_v[:, None, :]).reshape(along_u.shape[0], -1)
+
+
 def tensor_rows_from_local(local_u, local_v, degrees, poles):
     """Rows kron(N(u_i), N(v_i)): (N, n_u * n_v) from local values along u and v.
 

@@ -19,6 +19,8 @@ import numpy as np
 from scipy.optimize import minimize
 from scipy.special import logsumexp, softmax
 
+from .bspline import kron_rows
+
 KAPPAS = (10.0, 30.0, 100.0, 300.0, 1000.0, 3000.0)
 STAGE_ITERATIONS = 400
 SPACING_FRACTION = 0.2
@@ -54,9 +56,7 @@ def surrogate(objective, uv, tau, min_spacing=0.0, penalty=0.0):
     d = model.derivatives(uv, 1)
     q, q_u, q_v = d[(0, 0)], d[(1, 0)], d[(0, 1)]
     bu, bv = space.bases(uv, 1)
-    rows = (bu[0][:, :, None] * bv[0][:, None, :]).reshape(len(uv), -1)
-    rows_u = (bu[1][:, :, None] * bv[0][:, None, :]).reshape(len(uv), -1)
-    rows_v = (bu[0][:, :, None] * bv[1][:, None, :]).reshape(len(uv), -1)
+    rows, rows_u, rows_v = kron_rows(bu[0], bv[0]), kron_rows(bu[1], bv[0]), kron_rows(bu[0], bv[1])
     lhs = space.normal_matrix(rows)
     poles = np.linalg.solve(lhs, rows.T @ q)
     error, distance, inside = objective.grid_error(poles)
