@@ -4,6 +4,8 @@ Pure numpy. Knot vectors are full (every knot repeated by its multiplicity), as
 ``scipy.interpolate.BSpline`` takes them. The algorithms are those of Piegl and
 Tiller, *The NURBS Book*, A2.1-A2.3, run over whole arrays of parameters at once.
 """
+import functools
+
 import numpy as np
 
 
@@ -33,7 +35,7 @@ def find_spans(t, degree, x):
     so the right end of the domain belongs to the last span.
     """
     n = len(t) - degree - 1
-    return np.clip(np.searchsorted(t, x, side="right") - 1, degree, n - 1)
+    return degree + np.searchsorted(t[degree + 1:n], x, side="right")
 
 
 def _basis_table(t, degree, x, span):
@@ -61,81 +63,128 @@ def _basis_table(t, degree, x, span):
     return ndu
 
 
-def basis_values_many(channels):
-    """Non-zero basis values of several knot vectors at once, in one Cox-de Boor pass.
+def basis_values(t, degree, x):
+    """Non-zero basis values at many parameters (Cox-de Boor, The NURBS Book A2.2).
 
-    channels: list of (t, k, x): full knot vector t, degree k and parameters x: (N_c,).
-    Each degree step runs once for all basis indices r and all channels not yet at their degree,
-    so the Python work does not grow with the number of channels.
-    Returns a list of (span (N_c,), values (k + 1, N_c)) in the order of channels; row r of values
-    belongs to basis function span - k + r.
+    t: full knot vector; degree: k; x: (...) parameters.
+    Returns (span (...), values (k + 1, ...)); row r of values belongs to basis function span - k + r.
     """
-    order = sorted(range(len(channels)), key=lambda c: -channels[c][1])
-    spans, knots, xs, shifted = {}, [], [], []
-    shift = 0
-    for c in order:
-        t, k, x = channels[c]
-        x = np.asarray(x, dtype=float).ravel()
-        spans[c] = find_spans(t, k, x)
-        knots.append(t)
-        xs.append(x)
-        shifted.append(spans[c] + shift)
-        shift += len(t)
-    knots, x, span = np.concatenate(knots), np.concatenate(xs), np.concatenate(shifted)
-    ends = np.cumsum([len(v) for v in xs])
-    starts = ends - [len(v) for v in xs]
-    degrees = [channels[c][1] for c in order]
-    offsets = np.arange(1, degrees[0] + 1)[:, None]
-    left = x - knots[np.clip(span + 1 - offsets, 0, len(knots) - 1)]
-    right = knots[np.clip(span + offsets, 0, len(knots) - 1)] - x
-    values = np.ones((1, x.shape[0]))
-    results = {}
-    for j in range(1, degrees[0] + 2):
-        for i, k in enumerate(degrees):
-            if k == j - 1:
-                results[order[i]] = values[:, starts[i]:ends[i]]
-        if j > degrees[0]:
-            break
-        active = ends[sum(k >= j for k in degrees) - 1]
-        to_right = right[:j, :active]
-        to_left = left[j - 1::-1, :active]
-        temp = values[:, :active] / (to_right + to_left)
-        values = np.empty((j + 1, active))
+    x = np.asarray(x, dtype=float)
+    span = find_spans(t, degree, x)
+    offsets = np.arange(1, degree + 1).reshape((-1,) + (1,) * x.ndim)
+    left = x - t[span + 1 - offsets]
+    right = t[span + offsets] - x
+    values = np.ones((1,) + x.shape)
+    for j in range(1, degree + 1):
+        to_right = right[:j]
+        to_left = left[j - 1::-1]
+        temp = values / (to_right + to_left)
+        values = np.empty((j + 1,) + x.shape)
         values[:j] = to_right * temp
         values[j] = 0.0
         values[1:] += to_left * temp
-    return [(spans[c], results[c]) for c in range(len(channels))]
+    return span, values
+
+
+POLYNOMIAL_TABLE_LIMIT = 2048
+
+
+class KnotBasis:
+    """All basis functions of one knot vector, evaluated densely at many parameters at once.
+
+    t: full knot vector of n + k + 1 knots; degree: k. On knot span j the k + 1 non-zero basis
+    functions are polynomials of degree k in the local parameter s = (x - t_j) / (t_{j+1} - t_j),
+    s in [0, 1]. Their power-basis coefficients are tabulated once, from the exact derivatives at
+    the span's left knot (a Taylor expansion). Evaluation is then one matrix product of the
+    span-selected powers of s with the table: a few numpy operations whatever the degree. When
+    the table has more than POLYNOMIAL_TABLE_LIMIT entries (many spans), the product would cost
+    more than the recursion, and the Cox-de Boor recursion runs instead.
+    """
+
+    def __init__(self, t, degree):
+        self.knots = np.asarray(t, dtype=float)
+        self.degree = int(degree)
+        self.count = len(self.knots) - self.degree - 1
+        k, n = self.degree, self.count
+        self._spans = n - k
+        self._inner = self.knots[k + 1:n]
+        self.polynomial = self._spans * (k + 1) * n <= POLYNOMIAL_TABLE_LIMIT
+        if self.polynomial:
+            self._left = self.knots[k:n]
+            width = self.knots[k + 1:n + 1] - self._left
+            self._inverse_width = np.divide(1.0, width, out=np.zeros_like(width), where=width > 0)
+            self._table = _span_polynomials(self.knots, k, width)
+
+    def values(self, x):
+        """Dense basis values, basis index before the points: x (..., N) -> (..., n, N).
+
+        Entry [..., j, m] is N_j(x[..., m]). Each leading index is one matrix product of the same
+        shape, so a point set's values do not depend on how many sets are evaluated with it.
+        """
+        x = np.asarray(x, dtype=float)
+        flat = x.reshape(-1, x.shape[-1]) if x.ndim else x.reshape(1, 1)
+        if self.polynomial:
+            dense = np.matmul(self._table, self._selected_powers(flat))
+        else:
+            dense = dense_from_local(*basis_values(self.knots, self.degree, flat), self.degree, self.count)
+        return dense.reshape(x.shape[:-1] + (self.count, flat.shape[-1]))
+
+    def _selected_powers(self, x):
+        """Powers s^0..s^k of the local parameter, placed in the rows of each point's span.
+
+        x: (B, N) -> (B, spans * (k + 1), N), zero outside the point's span.
+        """
+        span = np.searchsorted(self._inner, x, side="right")
+        local = (x - self._left[span]) * self._inverse_width[span]
+        order = self.degree + 1
+        powers = np.empty((x.shape[0], order, x.shape[1]))
+        powers[:, 0] = 1.0
+        powers[:, 1] = local
+        for p in range(2, order):
+            np.multiply(powers[:, p - 1], local, out=powers[:, p])
+        return _scatter_rows(powers, span * order, self._spans * order)
+
+
+def _scatter_rows(values, first_row, rows):
+    """Zero array (B, rows, N) with values: (B, r, N) in rows first_row (B, N) .. first_row + r - 1."""
+    batch, count, n = values.shape
+    out = np.zeros((batch, rows, n))
+    flat = _scatter_offsets(batch, count, n, rows) + (first_row * n)[:, None, :]
+    out.ravel()[flat.ravel()] = values.ravel()
+    return out
+
+
+@functools.lru_cache(maxsize=16)
+def _scatter_offsets(batch, count, n, rows):
+    """Flat offsets (B, r, N) of rows 0..r-1 of every point in a (B, rows, N) array."""
+    return (np.arange(batch) * rows * n)[:, None, None] + (n * np.arange(count))[:, None] + np.arange(n)
+
+
+def _span_polynomials(t, degree, width):
+    """(n, spans * (k + 1)) power-basis coefficients of every basis function on every span.
+
+    Column j * (k + 1) + p holds the coefficient of s^p on span k + j, s the local parameter
+    scaled to [0, 1] by the span's width: (n,) widths of spans k..n-1, zero-width spans left 0.
+    """
+    k = degree
+    n = len(t) - k - 1
+    spans = np.flatnonzero(width > 0)
+    table = np.zeros((n, n - k, k + 1))
+    span, ders = basis_derivatives(t, k, t[k + spans], k)
+    scale = width[spans] ** np.arange(k + 1)[:, None] / np.cumprod([1.0] + list(range(1, k + 1)))[:, None]
+    for r in range(k + 1):
+        table[span - k + r, spans] = (ders[:, r] * scale).T
+    return table.reshape(n, -1)
 
 
 def dense_from_local(span, values, degree, n):
-    """Dense (N, n) collocation matrix from local values: (k + 1, N) at span: (N,)."""
-    count = span.shape[0]
-    out = np.zeros((count, n))
-    flat = (np.arange(count) * n + span - degree)[None, :] + np.arange(degree + 1)[:, None]
-    out.ravel()[flat.ravel()] = values.ravel()
-    return out
+    """Dense basis values from local ones: values (k + 1, B, N) at span (B, N) -> (B, n, N)."""
+    return _scatter_rows(np.moveaxis(values, 0, 1), span - degree, n)
 
 
 def kron_rows(along_u, along_v):
     """Row-wise Kronecker products of dense bases: (N, n_u), (N, n_v) -> (N, n_u * n_v)."""
     return (along_u[:, :, None] * along_v[:, None, :]).reshape(along_u.shape[0], -1)
-
-
-def tensor_rows_from_local(local_u, local_v, degrees, poles):
-    """Rows kron(N(u_i), N(v_i)): (N, n_u * n_v) from local values along u and v.
-
-    local_u, local_v: (span, values) pairs as :func:`basis_values_many` returns them;
-    degrees: (k_u, k_v); poles: (n_u, n_v). Column a * n_v + b belongs to basis pair (a, b).
-    """
-    (span_u, along_u), (span_v, along_v) = local_u, local_v
-    (ku, kv), (n_u, n_v) = degrees, poles
-    count = span_u.shape[0]
-    products = along_u[:, None, :] * along_v[None, :, :]
-    first = np.arange(count) * (n_u * n_v) + (span_u - ku) * n_v + span_v - kv
-    offsets = (np.arange(ku + 1)[:, None] * n_v + np.arange(kv + 1)[None, :])[:, :, None]
-    rows = np.zeros((count, n_u * n_v))
-    rows.ravel()[(first + offsets).ravel()] = products.ravel()
-    return rows
 
 
 def _derivatives_from_table(ndu, degree, n_derivatives):
@@ -184,7 +233,7 @@ def basis_derivatives(t, degree, x, n_derivatives=0):
     """
     x = np.asarray(x, dtype=float).ravel()
     if n_derivatives == 0:
-        span, values = basis_values_many([(t, degree, x)])[0]
+        span, values = basis_values(t, degree, x)
         return span, values[None]
     span = find_spans(t, degree, x)
     return span, _derivatives_from_table(_basis_table(t, degree, x, span), degree, n_derivatives)
@@ -198,7 +247,8 @@ def design_matrices(t, degree, x, n_derivatives=0):
     """
     x = np.asarray(x, dtype=float).ravel()
     span, ders = basis_derivatives(t, degree, x, n_derivatives)
-    return np.stack([dense_from_local(span, d, degree, len(t) - degree - 1) for d in ders])
+    n = len(t) - degree - 1
+    return np.stack([dense_from_local(span[None], d[:, None], degree, n)[0].T for d in ders])
 
 
 def second_difference_matrix(n):

@@ -9,7 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .bspline import basis_values_many, design_matrices
+from .bspline import design_matrices
 
 DEFAULT_GRID = 60
 
@@ -62,27 +62,21 @@ class DeviationObjective:
     def fit(self, uv):
         """Substitute poles for point sets at uv: (..., N, 2) -> (..., n_u, n_v, 3).
 
-        The CAD points and the fit's collocation rows come from one basis evaluation pass.
+        Points and basis rows are laid out coordinate (or basis) before the points, so that every
+        elementwise step runs along the points, and each point set is computed the same way
+        whatever the size of the batch.
         """
         uv = np.asarray(uv, dtype=float)
-        flat = uv.reshape(-1, 2)
-        cad_u, cad_v, fit_u, fit_v = basis_values_many(
-            self.model.basis_channels(flat) + self.space.basis_channels(flat))
-        points = self.model.points_from_local(cad_u, cad_v).reshape(uv.shape[:-1] + (3,))
-        rows = self.space.rows_from_local(fit_u, fit_v).reshape(uv.shape[:-1] + (self.space.size,))
-        return self.space.solve(rows, points)
+        u, v = np.ascontiguousarray(uv[..., 0]), np.ascontiguousarray(uv[..., 1])
+        points = self.model.points_by_coordinate(u, v)
+        return self.space.solve(self.space.columns_by_basis(u, v), points)
 
     def squared_field(self, poles):
         """Squared deviation on the grid for poles (P, n_u, n_v, 3) -> (P, g_u, g_v) mm^2."""
-        count = poles.shape[0]
         by_coord = np.ascontiguousarray(poles.transpose(0, 3, 1, 2))
         surface = np.matmul(np.matmul(self._grid_u, by_coord), self._grid_v_t)
         surface -= self._cad
-        np.square(surface, out=surface)
-        squared = surface[:, 0]
-        squared += surface[:, 1]
-        squared += surface[:, 2]
-        return squared.reshape(count, *self._cad.shape[1:])
+        return np.einsum("pcij,pcij->pij", surface, surface)
 
     def grid_error(self, poles):
         """Error S - F on the grid for one substitute, poles (n_u * n_v, 3) or (n_u, n_v, 3).

@@ -88,7 +88,7 @@ class FaceDomain:
         """Nearest feasible point for each uv: (..., 2) -> (..., 2); feasible points stay put."""
         uv = np.asarray(uv, dtype=float)
         low, high = np.array(self.bounds[0::2]), np.array(self.bounds[1::2])
-        clipped = np.clip(uv, low, high)
+        clipped = np.minimum(np.maximum(uv, low), high)
         if self._feasible is None:
             return clipped
         if self._nearest is None:

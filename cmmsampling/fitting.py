@@ -13,10 +13,7 @@ depend on N. Many point sets are fitted in one call.
 """
 import numpy as np
 
-from .bspline import (
-    basis_values_many, clamped_uniform_knots, design_matrices, second_difference_matrix,
-    tensor_rows_from_local,
-)
+from .bspline import KnotBasis, clamped_uniform_knots, design_matrices, second_difference_matrix
 
 DEFAULT_DEGREE = 3
 DEFAULT_SMOOTHING = 1e-8
@@ -46,6 +43,8 @@ class SubstituteSpace:
         self.uknots = clamped_uniform_knots(self.degrees[0], self.poles[0], u0, u1)
         self.vknots = clamped_uniform_knots(self.degrees[1], self.poles[1], v0, v1)
         self.regulariser = _regulariser(self.poles)
+        self.u_basis = KnotBasis(self.uknots, self.degrees[0])
+        self.v_basis = KnotBasis(self.vknots, self.degrees[1])
 
     @property
     def size(self):
@@ -61,35 +60,29 @@ class SubstituteSpace:
         return (design_matrices(self.uknots, self.degrees[0], uv[:, 0], n_derivatives),
                 design_matrices(self.vknots, self.degrees[1], uv[:, 1], n_derivatives))
 
-    def basis_channels(self, uv):
-        """The (knots, degree, parameters) along u and v for uv: (N, 2), for basis_values_many."""
-        return [(self.uknots, self.degrees[0], uv[:, 0]), (self.vknots, self.degrees[1], uv[:, 1])]
+    def columns_by_basis(self, u, v):
+        """The fit's design matrix transposed, B^T: u, v (..., N) parameters -> (..., n_u * n_v, N).
 
-    def rows_from_local(self, local_u, local_v):
-        """Rows kron(N(u), N(v)): (N, n_u * n_v) from local basis values along u and v."""
-        return tensor_rows_from_local(local_u, local_v, self.degrees, self.poles)
+        Row a * n_v + b holds N_a(u) N_b(v), the product of the bases along u and v.
+        """
+        along_u, along_v = self.u_basis.values(u), self.v_basis.values(v)
+        products = along_u[..., :, None, :] * along_v[..., None, :, :]
+        return products.reshape(products.shape[:-3] + (self.size, products.shape[-1]))
 
-    def collocation(self, uv):
-        """Rows kron(N(u), N(v)) of the fit: uv (..., N, 2) -> (..., N, n_u * n_v)."""
-        uv = np.asarray(uv, dtype=float)
-        flat = uv.reshape(-1, 2)
-        rows = self.rows_from_local(*basis_values_many(self.basis_channels(flat)))
-        return rows.reshape(uv.shape[:-1] + (self.size,))
+    def normal_matrix(self, columns):
+        """B^T B + lam R from the transposed design matrices, columns: (..., M, N) -> (..., M, M)."""
+        n_points = columns.shape[-1]
+        gram = np.matmul(columns, np.swapaxes(columns, -1, -2))
+        gram += (self.smoothing * n_points / self.size) * self.regulariser
+        return gram
 
-    def normal_matrix(self, rows):
-        """B^T B + lam R for rows: (P, N, M) -> (P, M, M)."""
-        n_points = rows.shape[-2]
-        gram = np.matmul(np.swapaxes(rows, -1, -2), rows)
-        return gram + (self.smoothing * n_points / self.size) * self.regulariser
-
-    def solve(self, rows, points):
-        """Least-squares poles from collocation rows (..., N, M) and points (..., N, 3) mm.
+    def solve(self, columns, points):
+        """Least-squares poles from B^T: (..., M, N) and the points coordinate first (..., 3, N) mm.
 
         Returns poles (..., n_u, n_v, 3) mm.
         """
-        points = np.asarray(points, dtype=float)
-        rhs = np.matmul(np.swapaxes(rows, -1, -2), points)
-        poles = np.linalg.solve(self.normal_matrix(rows), rhs)
+        rhs = np.matmul(columns, np.swapaxes(points, -1, -2))
+        poles = np.linalg.solve(self.normal_matrix(columns), rhs)
         return poles.reshape(points.shape[:-2] + self.poles + (3,))
 
     def fit(self, uv, points):
@@ -98,7 +91,9 @@ class SubstituteSpace:
         uv: (P, N, 2) or (N, 2) parameters; points: matching (..., N, 3) mm.
         Returns poles (..., n_u, n_v, 3) mm.
         """
-        return self.solve(self.collocation(uv), points)
+        uv = np.asarray(uv, dtype=float)
+        columns = self.columns_by_basis(uv[..., 0], uv[..., 1])
+        return self.solve(columns, np.swapaxes(np.asarray(points, dtype=float), -1, -2))
 
     def evaluate(self, poles, uv):
         """Substitute points at uv: poles (n_u, n_v, 3), uv (..., 2) -> (..., 3) mm."""

@@ -5,7 +5,7 @@ Pure numpy: no FreeCAD import, so worker processes can load it quickly. Units ar
 """
 import numpy as np
 
-from .bspline import basis_values_many, dense_from_local, design_matrices
+from .bspline import KnotBasis, design_matrices
 
 
 DEGENERATE_STEPS = (1e-7, 1e-5, 1e-3)
@@ -29,10 +29,13 @@ class NurbsPatch:
         self.bounds = tuple(float(b) for b in bounds)
         self.reversed = bool(reversed_face)
         self.rational = not np.allclose(self.weights, self.weights.flat[0], rtol=0, atol=1e-14)
-        self._plain = self.poles.reshape(self.poles.shape[0], -1).copy()
         self._homogeneous = np.concatenate(
             [self.poles * self.weights[..., None], self.weights[..., None]], axis=2
         )
+        self.u_basis = KnotBasis(self.uknots, self.degrees[0])
+        self.v_basis = KnotBasis(self.vknots, self.degrees[1])
+        by_v = self._homogeneous if self.rational else self.poles
+        self._by_v = np.ascontiguousarray(by_v.transpose(1, 2, 0)).reshape(-1, by_v.shape[0])
 
     def patch(self):
         """This surface as a plain NurbsPatch (what a worker process needs)."""
@@ -84,27 +87,25 @@ class NurbsPatch:
             ) / w[(0, 0)]
         return s
 
-    def basis_channels(self, uv):
-        """The (knots, degree, parameters) along u and v for uv: (N, 2), for basis_values_many."""
-        return [(self.uknots, self.degrees[0], uv[:, 0]), (self.vknots, self.degrees[1], uv[:, 1])]
+    def points_by_coordinate(self, u, v):
+        """Surface points, coordinate before the points: u, v (..., N) parameters -> (..., 3, N) mm.
 
-    def points_from_local(self, local_u, local_v):
-        """Surface points (N, 3) mm from the local basis values along u and v at N parameters."""
-        n_u, n_v = self.weights.shape
-        bu = dense_from_local(*local_u, self.degrees[0], n_u)
-        bv = dense_from_local(*local_v, self.degrees[1], n_v)
+        The poles are first contracted with the u basis (one matrix product per leading index),
+        then each point's v basis weighs its column of the result.
+        """
+        along_u = np.matmul(self._by_v, self.u_basis.values(u))
+        bv = self.v_basis.values(v)
+        along_u = along_u.reshape(bv.shape[:-2] + (bv.shape[-2], -1, bv.shape[-1]))
+        combined = np.einsum("...jcm,...jm->...cm", along_u, bv)
         if self.rational:
-            along_u = (bu @ self._homogeneous.reshape(n_u, -1)).reshape(-1, n_v, 4)
-            h = np.matmul(bv[:, None, :], along_u)[:, 0]
-            return h[:, :3] / h[:, 3:]
-        along_u = (bu @ self._plain).reshape(-1, n_v, 3)
-        return np.matmul(bv[:, None, :], along_u)[:, 0]
+            return combined[..., :3, :] / combined[..., 3:, :]
+        return combined
 
     def points(self, uv):
         """Surface points, uv: (..., 2) -> (..., 3) mm."""
         uv = np.asarray(uv, dtype=float)
         flat = uv.reshape(-1, 2)
-        xyz = self.points_from_local(*basis_values_many(self.basis_channels(flat)))
+        xyz = self.points_by_coordinate(flat[:, 0], flat[:, 1]).T
         return xyz.reshape(uv.shape[:-1] + (3,))
 
     def normals(self, uv):

@@ -72,7 +72,7 @@ def particle_swarm(objective, lower, upper, n_points, settings, seeds=(), projec
     """
     lower = np.asarray(lower, dtype=float)
     upper = np.asarray(upper, dtype=float)
-    project = project or (lambda x: np.clip(x, lower, upper))
+    project = project or (lambda x: np.minimum(np.maximum(x, lower), upper))
     rng = np.random.default_rng(settings.seed)
     positions, velocities, limit = _initial_swarm(rng, lower, upper, n_points, settings, seeds)
     positions = project(positions)
@@ -88,7 +88,8 @@ def particle_swarm(objective, lower, upper, n_points, settings, seeds=(), projec
         r2 = rng.random(positions.shape)
         velocities *= inertia(iteration, settings)
         velocities += settings.c1 * r1 * (personal - positions) + settings.c2 * r2 * (best - positions)
-        np.clip(velocities, -limit, limit, out=velocities)
+        np.maximum(velocities, -limit, out=velocities)
+        np.minimum(velocities, limit, out=velocities)
         moved = positions + velocities
         positions = project(moved)
         velocities[positions != moved] = 0.0
