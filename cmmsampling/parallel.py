@@ -4,7 +4,9 @@ The swarm's many small numpy operations hold the GIL, so threads do not help; a 
 does. The worker is a plain ``python -m cmmsampling.worker`` started once (with Debian's Python,
 also from inside FreeCAD, whose ``sys.executable`` is the FreeCAD binary) and kept for the
 session. Each particle's fitness is computed exactly as in one process, so results are identical.
-If the worker cannot be started or fails, evaluation continues in this process alone.
+While a run goes on, both sides poll for the other's message instead of blocking (see
+:func:`cmmsampling.worker.wait_for`). If the worker cannot be started or fails, evaluation
+continues in this process alone.
 """
 import atexit
 import itertools
@@ -14,6 +16,8 @@ import sys
 from multiprocessing.connection import Connection
 
 import numpy as np
+
+from .worker import wait_for
 
 MIN_PARTICLES = 4
 _tokens = itertools.count()
@@ -50,6 +54,7 @@ class Worker:
 
     def receive(self):
         """The worker's reply payload; RuntimeError when it reports a failure."""
+        wait_for(self._incoming)
         status, payload = self._incoming.recv()
         if status != "ok":
             raise RuntimeError(f"worker process failed:\n{payload}")

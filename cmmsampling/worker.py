@@ -5,8 +5,23 @@ is sent, until the parent closes the pipe. Requests: ("load", token, objective),
 ("eval", token, uv (P, N, 2)). Replies: ("ok", values (P,)) or ("error", message).
 """
 import sys
+import time
 import traceback
 from multiprocessing.connection import Connection
+
+SPIN_SECONDS = 0.05
+
+
+def wait_for(connection, seconds=SPIN_SECONDS):
+    """Wait until ``connection`` has data, polling without sleeping for up to ``seconds`` first.
+
+    A swarm's requests and replies follow each other about every millisecond. A process that
+    blocks on a pipe is woken slowly on a virtual machine, and runs slower for a while after it,
+    so both sides poll while a run is going on; after ``seconds`` of silence they block (recv).
+    """
+    end = time.perf_counter() + seconds
+    while not connection.poll(0) and time.perf_counter() < end:
+        pass
 
 
 def serve(incoming, outgoing):
@@ -14,6 +29,7 @@ def serve(incoming, outgoing):
     objectives = {}
     while True:
         try:
+            wait_for(incoming)
             request = incoming.recv()
         except (EOFError, OSError):
             return
