@@ -61,6 +61,19 @@ def _initial_swarm(rng, lower, upper, n_points, settings, seeds):
     return positions, velocities, limit
 
 
+def _attraction(positions, personal, best, r1, r2, settings):
+    """c1 r1 (pbest - x) + c2 r2 (gbest - x) for the whole swarm, computed in r1 and r2 in place.
+
+    positions, personal, r1, r2: (P, N, 2); best: (N, 2). Returns r1.
+    """
+    r1 *= settings.c1
+    r1 *= personal - positions
+    r2 *= settings.c2
+    r2 *= best - positions
+    r1 += r2
+    return r1
+
+
 def particle_swarm(objective, lower, upper, n_points, settings, seeds=(), project=None, progress=None):
     """Minimise objective over sets of n_points points in the box [lower, upper].
 
@@ -84,10 +97,9 @@ def particle_swarm(objective, lower, upper, n_points, settings, seeds=(), projec
     cancelled = False
     done = 0
     for iteration in range(1, settings.iterations + 1):
-        r1 = rng.random(positions.shape)
-        r2 = rng.random(positions.shape)
+        r1, r2 = rng.random((2,) + positions.shape)
         velocities *= inertia(iteration, settings)
-        velocities += settings.c1 * r1 * (personal - positions) + settings.c2 * r2 * (best - positions)
+        velocities += _attraction(positions, personal, best, r1, r2, settings)
         np.maximum(velocities, -limit, out=velocities)
         np.minimum(velocities, limit, out=velocities)
         moved = positions + velocities
