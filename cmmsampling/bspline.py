@@ -164,7 +164,8 @@ def _span_polynomials(t, degree, width):
     """(n, spans * (k + 1)) power-basis coefficients of every basis function on every span.
 
     Column j * (k + 1) + p holds the coefficient of s^p on span k + j, s the local parameter
-    scaled to [0, 1] by the span's width: (n,) widths of spans k..n-1, zero-width spans left 0.
+    scaled to [0, 1] by the span's width; width: (n - k,) widths of spans k..n-1 (zero-width
+    spans, never selected, are left 0).
     """
     k = degree
     n = len(t) - k - 1

@@ -57,3 +57,17 @@ def test_workers_option_is_checked(reference):
         cmmsampling.sample(reference, 25, "pso", iterations=1, workers=3)
     with pytest.raises(ValueError, match="workers must be at least 1"):
         cmmsampling.sample(reference, 25, "pso", iterations=1, workers=0)
+
+
+def test_waiting_polls_then_gives_way_to_a_blocking_receive():
+    """wait_for returns once data is there, and after its polling time when none comes."""
+    from multiprocessing import Pipe
+
+    from cmmsampling.worker import wait_for
+
+    here, there = Pipe()
+    wait_for(here, seconds=0.01)
+    assert not here.poll(0)
+    there.send("reply")
+    wait_for(here, seconds=60)
+    assert here.recv() == "reply"

@@ -38,12 +38,22 @@ def main_window():
 
 
 def widgets():
-    """Every widget of the application.
+    """Every live widget of the application.
 
     Short-lived widgets are looked up here, not with the main window's findChild: PySide keeps
     what that returns alive with the main window's wrapper, and after Qt has deleted a widget it
-    hands that stale wrapper out again for a new widget at the same address."""
-    return QtGui.QApplication.allWidgets()
+    hands that stale wrapper out again for a new widget at the same address. allWidgets() can
+    also hand out such a stale wrapper; those are left out (using one raises RuntimeError)."""
+    return [w for w in QtGui.QApplication.allWidgets() if _alive(w)]
+
+
+def _alive(widget):
+    """False for a PySide wrapper whose Qt widget has been deleted."""
+    try:
+        widget.objectName()
+    except RuntimeError:
+        return False
+    return True
 
 
 def task_form():
