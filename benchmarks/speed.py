@@ -131,7 +131,8 @@ def three_ways(face, iterations):
 def _pyswarms_time(objective, problem, iterations):
     """Seconds for pyswarms' GlobalBestPSO with the same fitness, or None without pyswarms.
 
-    pyswarms writes a report.log into the working folder; it is made in a temporary one.
+    pyswarms writes a report.log into the working folder when it is imported and when it runs;
+    both happen in a temporary folder.
     """
     here = os.getcwd()
     os.chdir(tempfile.mkdtemp())
@@ -143,13 +144,13 @@ def _pyswarms_time(objective, problem, iterations):
         bounds = (np.tile(problem.domain.lower, problem.n), np.tile(problem.domain.upper, problem.n))
         optimizer = pyswarms.single.GlobalBestPSO(25, dimensions, {"c1": 2.0, "c2": 2.0, "w": 0.5},
                                                   bounds=bounds)
+        cost = lambda x: objective(x.reshape(len(x), problem.n, 2))  # noqa: E731
+        seconds, _ = timed(lambda: optimizer.optimize(cost, iters=iterations, verbose=False))
+        return seconds
     except ImportError:
         return None
     finally:
         os.chdir(here)
-    cost = lambda x: objective(x.reshape(len(x), problem.n, 2))  # noqa: E731
-    seconds, _ = timed(lambda: optimizer.optimize(cost, iters=iterations, verbose=False))
-    return seconds
 
 
 def per_iteration(face, n, grid, poles, iterations):
