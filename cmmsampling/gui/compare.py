@@ -290,8 +290,7 @@ class CompareTaskPanel(BackgroundRunPanel):
 
     def failed(self, run):
         """Show why the study or its report failed; a study that ran is kept in the console."""
-        FreeCAD.Console.PrintError(run.details)
-        error = f"{type(run.error).__name__}: {run.error}"
+        error = self.report_failure(run)
         if run.study is None:
             self.show_status(error, error=True)
             return

@@ -126,6 +126,21 @@ class BackgroundRunPanel:
     def getStandardButtons(self):
         return int(QtGui.QDialogButtonBox.Ok | QtGui.QDialogButtonBox.Cancel)
 
+    @staticmethod
+    def report_failure(run):
+        """Put a failed run in the Report view and return 'Type: message' for the panel.
+
+        A refused input (ValueError, TypeError: the engine's message names what to change) is
+        one line; anything else comes with its traceback. The traceback always goes to the log.
+        """
+        message = f"{type(run.error).__name__}: {run.error}"
+        if isinstance(run.error, (ValueError, TypeError)):
+            FreeCAD.Console.PrintError(f"cmmsampling: {message}\n")
+            FreeCAD.Console.PrintLog(run.details)
+        else:
+            FreeCAD.Console.PrintError(run.details)
+        return message
+
     def modifyStandardButtons(self, box):
         self.buttons = box
         ok = box.button(QtGui.QDialogButtonBox.Ok)
@@ -341,9 +356,8 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
         self.update_enabled()
         self.form.progress.setRange(0, 1)
         if run.error is not None:
-            FreeCAD.Console.PrintError(run.details)
             self.form.progress.setValue(0)
-            self.show_status(f"{type(run.error).__name__}: {run.error}", error=True)
+            self.show_status(self.report_failure(run), error=True)
             return
         self.form.progress.setValue(1)
         self.finish(run)

@@ -61,12 +61,14 @@ def test_a_fault_inside_a_run_is_shown_and_changes_nothing(doc, monkeypatch):
     form = open_panel(doc)
     fill(form, "pso", **SHORT_RUN)
     before = untouched(doc)
+    reported = len(dock_text("Report view"))
     task_button(OK).click()
     message = "SimulatedFault: simulated fault in iteration 5"
     assert wait_until(lambda: message in form.status.text(), 30), form.status.text()
     assert untouched(doc) == before and not running_workers()
     assert task_button(OK).isEnabled() and form.n.isEnabled()
-    assert wait_until(lambda: "simulated fault in iteration 5" in dock_text("Report view"), 2)
+    assert wait_until(lambda: "simulated fault in iteration 5" in dock_text("Report view")[reported:], 2)
+    assert "Traceback (most recent call last)" in dock_text("Report view")[reported:], "an unexpected fault keeps its traceback"
 
     monkeypatch.undo()
     task_button(OK).click()

@@ -288,8 +288,11 @@ def test_bad_settings_show_the_cores_message_and_change_nothing(doc, values, mes
     form = open_panel(doc)
     fill(form, "uniform_parametric", **values)
     undo = doc.UndoCount
+    reported = len(dock_text("Report view"))
     task_button(OK).click()
     assert wait_until(lambda: message in form.status.text(), 10), form.status.text()
+    assert wait_until(lambda: f"cmmsampling: {message}" in dock_text("Report view")[reported:], 2)
+    assert "Traceback" not in dock_text("Report view")[reported:]
     assert FreeCADGui.Control.activeDialog() and task_button(OK).isEnabled() and form.n.isEnabled()
     assert [o.Name for o in doc.Objects] == ["Body"] and doc.UndoCount == undo
     assert not doc.HasPendingTransaction and doc.Body.ViewObject.Visibility
