@@ -98,12 +98,17 @@ class ViewProviderProbePoints(Stateless):
 
 class ViewProviderSubstituteSurface(Stateless):
     """Draws the substitute surface coloured by its deviation from the CAD face ("Deviation"
-    display mode, the default) with a colour legend in mm; the Part display modes stay available."""
+    display mode, the default) with a colour legend in mm; the Part display modes stay available.
+
+    The legends of all substitutes sit in the same corner of the 3D view, so one is shown at a
+    time: a new substitute's legend, or one switched on with ShowLegend, hides the others'.
+    """
 
     def __init__(self, vobj):
         vobj.addProperty("App::PropertyBool", "ShowLegend", "Deviation", "Show the colour legend (mm)")
         vobj.ShowLegend = True
         vobj.Proxy = self
+        hide_other_legends(vobj.Object)
 
     def attach(self, vobj):
         """Register the "Deviation" display mode."""
@@ -127,6 +132,8 @@ class ViewProviderSubstituteSurface(Stateless):
 
     def onChanged(self, vobj, prop):
         if prop == "ShowLegend":
+            if vobj.ShowLegend and not vobj.Object.Document.Restoring:
+                hide_other_legends(vobj.Object)
             self.redraw(vobj)
 
     def redraw(self, vobj):
@@ -147,6 +154,16 @@ class ViewProviderSubstituteSurface(Stateless):
 
     def getIcon(self):
         return icon("SubstituteSurface.svg")
+
+
+def hide_other_legends(obj):
+    """Switch off ShowLegend on every other substitute surface in obj's document."""
+    for other in obj.Document.Objects:
+        if other is obj or not isinstance(getattr(other, "Proxy", None), document.SubstituteSurface):
+            continue
+        view = other.ViewObject
+        if view is not None and getattr(view, "ShowLegend", False):
+            view.ShowLegend = False
 
 
 def attach_when_missing(obj):

@@ -357,6 +357,29 @@ def test_reevaluate_command_after_the_face_changed_and_when_orphaned(doc):
     assert "its source face Body:Face1 was deleted" in command.getAction()[0].statusTip()
 
 
+def test_one_deviation_legend_at_a_time(doc, artifacts):
+    """The legends share the view's corner: the newest result's shows, switching one on hides
+    the others', and a legend can be switched off altogether."""
+    first, second = (document.add_to_document(short_result(doc), doc, source=(doc.Body, "Face1")).Group[1]
+                     for _ in range(2))
+    second.Placement.Base = FreeCAD.Vector(0, 0, 40)
+    view = FreeCADGui.ActiveDocument.ActiveView
+    view.viewIsometric()
+    view.fitAll()
+    process_events(0.2)
+    view.saveImage(os.path.join(artifacts, "view_two_results.png"), 1200, 900, "White")
+
+    def shown():
+        return [bool(s.ViewObject.ShowLegend) and "Deviation, " + s.Label in texts(s.ViewObject.Proxy.coloured)
+                for s in (first, second)]
+
+    assert shown() == [False, True]
+    first.ViewObject.ShowLegend = True
+    assert shown() == [True, False]
+    first.ViewObject.ShowLegend = False
+    assert shown() == [False, False] and drawn(first) == 1
+
+
 def test_export_command_writes_the_selected_points(doc, tmp_path, monkeypatch):
     group = document.add_to_document(short_result(doc), doc, source=(doc.Body, "Face1"))
     command = FreeCADGui.Command.get(EXPORT)
