@@ -69,7 +69,7 @@ class DeviationObjective:
         uv = np.asarray(uv, dtype=float)
         u, v = np.ascontiguousarray(uv[..., 0]), np.ascontiguousarray(uv[..., 1])
         points = self.model.points_by_coordinate(u, v)
-        return self.space.solve(self.space.columns_by_basis(u, v), points)
+        return self.space.solve(self.space.u_basis.values(u), self.space.v_basis.values(v), points)
 
     def squared_field(self, poles):
         """Squared deviation on the grid for poles (P, n_u, n_v, 3) -> (P, g_u, g_v) mm^2."""

@@ -45,6 +45,7 @@ class SubstituteSpace:
         self.regulariser = _regulariser(self.poles)
         self.u_basis = KnotBasis(self.uknots, self.degrees[0])
         self.v_basis = KnotBasis(self.vknots, self.degrees[1])
+        self._gram_index = _gram_index(self.poles, self.degrees)
 
     @property
     def size(self):
@@ -60,29 +61,34 @@ class SubstituteSpace:
         return (design_matrices(self.uknots, self.degrees[0], uv[:, 0], n_derivatives),
                 design_matrices(self.vknots, self.degrees[1], uv[:, 1], n_derivatives))
 
-    def columns_by_basis(self, u, v):
-        """The fit's design matrix transposed, B^T: u, v (..., N) parameters -> (..., n_u * n_v, N).
+    def normal_matrix(self, along_u, along_v):
+        """B^T B + lam R from the bases along u and v: (..., n_u, N), (..., n_v, N) -> (..., M, M).
 
-        Row a * n_v + b holds N_a(u) N_b(v), the product of the bases along u and v.
+        B's row for point i is kron(N(u_i), N(v_i)), so (B^T B)[(a, b), (c, d)] is the sum over the
+        points of N_a N_c (u) times N_b N_d (v). Products of basis functions more than a degree
+        apart vanish, so only the band pairs (a, c) and (b, d) are formed, and one matrix
+        product of the two pair-product arrays gives every non-zero entry.
         """
-        along_u, along_v = self.u_basis.values(u), self.v_basis.values(v)
-        products = along_u[..., :, None, :] * along_v[..., None, :, :]
-        return products.reshape(products.shape[:-3] + (self.size, products.shape[-1]))
-
-    def normal_matrix(self, columns):
-        """B^T B + lam R from the transposed design matrices, columns: (..., M, N) -> (..., M, M)."""
-        n_points = columns.shape[-1]
-        gram = np.matmul(columns, np.swapaxes(columns, -1, -2))
-        gram += (self.smoothing * n_points / self.size) * self.regulariser
+        pairs = np.matmul(_band_products(along_u, self.degrees[0]),
+                          np.swapaxes(_band_products(along_v, self.degrees[1]), -1, -2))
+        flat = pairs.reshape(pairs.shape[:-2] + (-1,))
+        padded = np.concatenate([flat, np.zeros(flat.shape[:-1] + (1,))], axis=-1)
+        gram = np.take(padded, self._gram_index, axis=-1)
+        gram += (self.smoothing * along_u.shape[-1] / self.size) * self.regulariser
         return gram
 
-    def solve(self, columns, points):
-        """Least-squares poles from B^T: (..., M, N) and the points coordinate first (..., 3, N) mm.
+    def right_hand_side(self, along_u, along_v, points):
+        """B^T Q from the bases (..., n_u, N), (..., n_v, N) and points (..., 3, N) mm -> (..., M, 3)."""
+        weighted = along_v[..., :, None, :] * points[..., None, :, :]
+        weighted = weighted.reshape(weighted.shape[:-3] + (-1, weighted.shape[-1]))
+        rhs = np.matmul(along_u, np.swapaxes(weighted, -1, -2))
+        return rhs.reshape(rhs.shape[:-2] + (self.size, 3))
 
-        Returns poles (..., n_u, n_v, 3) mm.
-        """
-        rhs = np.matmul(columns, np.swapaxes(points, -1, -2))
-        poles = np.linalg.solve(self.normal_matrix(columns), rhs)
+    def solve(self, along_u, along_v, points):
+        """Least-squares poles from the bases along u and v, (..., n_u, N) and (..., n_v, N), and
+        the points coordinate first, (..., 3, N) mm. Returns poles (..., n_u, n_v, 3) mm."""
+        poles = np.linalg.solve(self.normal_matrix(along_u, along_v),
+                                self.right_hand_side(along_u, along_v, points))
         return poles.reshape(points.shape[:-2] + self.poles + (3,))
 
     def fit(self, uv, points):
@@ -92,8 +98,8 @@ class SubstituteSpace:
         Returns poles (..., n_u, n_v, 3) mm.
         """
         uv = np.asarray(uv, dtype=float)
-        columns = self.columns_by_basis(uv[..., 0], uv[..., 1])
-        return self.solve(columns, np.swapaxes(np.asarray(points, dtype=float), -1, -2))
+        along_u, along_v = self.u_basis.values(uv[..., 0]), self.v_basis.values(uv[..., 1])
+        return self.solve(along_u, along_v, np.swapaxes(np.asarray(points, dtype=float), -1, -2))
 
     def evaluate(self, poles, uv):
         """Substitute points at uv: poles (n_u, n_v, 3), uv (..., 2) -> (..., 3) mm."""
@@ -110,3 +116,38 @@ def _regulariser(poles):
     dv = second_difference_matrix(n_v)
     r = np.kron(du.T @ du, np.eye(n_v)) + np.kron(np.eye(n_u), dv.T @ dv)
     return r + RIDGE * np.eye(n_u * n_v)
+
+
+def _band_products(bases, degree):
+    """Products N_a N_c of the band pairs a <= c <= a + k: bases (..., n, N) -> (..., L, N).
+
+    Rows run by offset c - a = 0..k, then by a; L = sum over the offsets of n - offset.
+    """
+    count = bases.shape[-2]
+    return np.concatenate([bases[..., :count - d, :] * bases[..., d:, :] for d in range(degree + 1)],
+                          axis=-2)
+
+
+def _band_pair_rows(count, degree):
+    """(count, count) row of the pair (a, c) in :func:`_band_products`, -1 for pairs too far apart."""
+    first = np.concatenate([np.arange(count - d) for d in range(degree + 1)])
+    second = first + np.concatenate([np.full(count - d, d) for d in range(degree + 1)])
+    rows = np.full((count, count), -1)
+    rows[first, second] = rows[second, first] = np.arange(first.size)
+    return rows
+
+
+def _gram_index(poles, degrees):
+    """(M, M) position of each normal-matrix entry in the flattened pair-product matrix.
+
+    Entry [(a, b), (c, d)] is pair product [row(a, c), row(b, d)]; pairs too far apart point
+    one past the end, where :meth:`SubstituteSpace.normal_matrix` puts a zero.
+    """
+    rows_u = _band_pair_rows(poles[0], degrees[0])
+    rows_v = _band_pair_rows(poles[1], degrees[1])
+    count_v = int(rows_v.max()) + 1
+    pair_u = rows_u[:, None, :, None]
+    pair_v = rows_v[None, :, None, :]
+    index = np.where((pair_u >= 0) & (pair_v >= 0), pair_u * count_v + pair_v,
+                     (int(rows_u.max()) + 1) * count_v)
+    return index.reshape(poles[0] * poles[1], poles[0] * poles[1])

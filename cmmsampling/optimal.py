@@ -57,7 +57,7 @@ def surrogate(objective, uv, tau, min_spacing=0.0, penalty=0.0):
     q, q_u, q_v = d[(0, 0)], d[(1, 0)], d[(0, 1)]
     bu, bv = space.bases(uv, 1)
     rows, rows_u, rows_v = kron_rows(bu[0], bv[0]), kron_rows(bu[1], bv[0]), kron_rows(bu[0], bv[1])
-    lhs = space.normal_matrix(rows.T)
+    lhs = space.normal_matrix(bu[0].T, bv[0].T)
     poles = np.linalg.solve(lhs, rows.T @ q)
     error, distance, inside = objective.grid_error(poles)
     scaled = tau * distance[inside]

@@ -85,3 +85,18 @@ def test_objective_field_and_max_agree_with_occ(reference):
 @pytest.mark.parametrize("n, expected", [(25, 4), (49, 5), (81, 6), (144, 8), (400, 13), (4, 4)])
 def test_default_pole_count(n, expected):
     assert default_pole_count(n) == expected
+
+
+@pytest.mark.parametrize("degrees, poles", [((3, 3), (6, 6)), ((3, 2), (13, 5)), ((5, 1), (6, 9)), ((2, 3), (3, 4))])
+def test_band_normal_matrix_equals_the_dense_one(degrees, poles):
+    """B^T B from band pair products against the dense product of the Kronecker rows."""
+    space = SubstituteSpace(degrees, poles, (0.0, 2.0, -1.0, 1.0), smoothing=0.0)
+    uv = np.random.default_rng(3).random((4, 40, 2)) * [2.0, 2.0] - [0.0, 1.0]
+    along_u, along_v = space.u_basis.values(uv[..., 0]), space.v_basis.values(uv[..., 1])
+    rows = along_u[:, :, None, :] * along_v[:, None, :, :]
+    rows = rows.reshape(4, space.size, 40)
+    dense = np.matmul(rows, np.swapaxes(rows, -1, -2))
+    assert np.allclose(space.normal_matrix(along_u, along_v), dense, rtol=0, atol=1e-13)
+    points = np.random.default_rng(4).normal(size=(4, 3, 40))
+    assert np.allclose(space.right_hand_side(along_u, along_v, points),
+                       np.matmul(rows, np.swapaxes(points, -1, -2)), rtol=0, atol=1e-12)
