@@ -95,7 +95,8 @@ class NurbsPatch:
         """
         along_u = np.matmul(self._by_v, self.u_basis.values(u))
         bv = self.v_basis.values(v)
-        along_u = along_u.reshape(bv.shape[:-2] + (bv.shape[-2], -1, bv.shape[-1]))
+        width = self._by_v.shape[0] // bv.shape[-2]
+        along_u = along_u.reshape(bv.shape[:-2] + (bv.shape[-2], width, bv.shape[-1]))
         combined = np.einsum("...jcm,...jm->...cm", along_u, bv)
         if self.rational:
             return combined[..., :3, :] / combined[..., 3:, :]

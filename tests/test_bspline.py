@@ -10,6 +10,9 @@ KNOT_VECTORS = {
     "quintic shifted": (clamped_uniform_knots(5, 9, -2.0, 7.0), 5),
     "double interior knot": (np.array([0, 0, 0, 0, 0.1, 0.35, 0.35, 0.7, 1, 1, 1, 1.0]), 3),
     "discontinuous linear": (np.array([0, 0, 1, 2, 2, 3, 3.0]), 1),
+    "piecewise constant": (np.array([0, 0.3, 0.7, 1.0]), 0),
+    "degree 8, one span": (clamped_uniform_knots(8, 9), 8),
+    "degree 21, one span": (clamped_uniform_knots(21, 22), 21),
     "many spans": (clamped_uniform_knots(3, 60), 3),
 }
 
@@ -26,9 +29,18 @@ def test_basis_values_match_scipy(name):
 
 
 def test_both_routes_are_exercised():
-    """The table route for few spans, the recursion for many (where the table would cost more)."""
+    """The table route for few spans and low degrees, the recursion for many spans (where the
+    table would cost more) and high degrees (where the power basis loses accuracy)."""
     assert KnotBasis(*KNOT_VECTORS["quintic shifted"]).polynomial
+    assert KnotBasis(*KNOT_VECTORS["degree 8, one span"]).polynomial
     assert not KnotBasis(*KNOT_VECTORS["many spans"]).polynomial
+    assert not KnotBasis(*KNOT_VECTORS["degree 21, one span"]).polynomial
+
+
+@pytest.mark.parametrize("shape", [(0,), (2, 0), (0, 5)])
+def test_no_parameters_give_empty_values(shape):
+    basis = KnotBasis(*KNOT_VECTORS["cubic uniform"])
+    assert basis.values(np.zeros(shape)).shape == shape[:-1] + (basis.count, shape[-1])
 
 
 @pytest.mark.parametrize("name", ["cubic uniform", "many spans"])

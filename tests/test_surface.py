@@ -23,6 +23,13 @@ def test_points_match_occ(name):
     assert np.abs(ours - on_face).max() <= 1e-9 * _scale(model)
 
 
+def test_no_parameters_give_no_points(reference):
+    """An empty (u, v) set (a strategy's candidates can all fall off the face) is no error."""
+    model = SurfaceModel.from_face(reference)
+    assert model.points(np.zeros((0, 2))).shape == (0, 3)
+    assert model.points(np.zeros((3, 0, 2))).shape == (3, 0, 3)
+
+
 @pytest.mark.parametrize("name", sorted(FACES))
 def test_normals_match_occ_face_orientation(name):
     model = SurfaceModel.from_face(FACES[name])
