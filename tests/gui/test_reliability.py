@@ -118,8 +118,11 @@ def clipboard():
 
 def test_copy_and_paste_of_a_group_gives_a_consistent_copy(doc, clipboard):
     group = document.add_to_document(short_result(doc), doc, source=(doc.Body, "Face1"))
+    process_events(0.2)
     FreeCADGui.Selection.clearSelection()
     FreeCADGui.Selection.addSelection(group)
+    assert [o.Name for o in FreeCADGui.Selection.getSelection()] == [group.Name]
+    assert FreeCADGui.Command.get("Std_Copy").isActive()
     asked = answer_dialog(lambda: FreeCADGui.runCommand("Std_Copy"), "OK")
     assert "dependencies" in asked
     FreeCADGui.Selection.clearSelection()
