@@ -1,8 +1,9 @@
-"""Vectorised B-spline basis functions (Cox-de Boor) and tensor-product helpers.
+"""Vectorised B-spline basis functions and tensor-product helpers.
 
 Pure numpy. Knot vectors are full (every knot repeated by its multiplicity), as
-``scipy.interpolate.BSpline`` takes them. The algorithms are those of Piegl and
-Tiller, *The NURBS Book*, A2.1-A2.3, run over whole arrays of parameters at once.
+``scipy.interpolate.BSpline`` takes them. :class:`KnotBasis` evaluates whole bases from
+per-span polynomial tables; the recursions are those of Piegl and Tiller, *The NURBS Book*,
+A2.1-A2.3, run over whole arrays of parameters at once.
 """
 import functools
 
