@@ -29,13 +29,6 @@ TINY_CALL = ("cmmsampling.compare(face, ns=(16, 25), strategies=('uniform_parame
              "seeds=(0,), pso_options={'iterations': 20, 'population': 6}, grid=20)")
 
 
-@pytest.fixture(autouse=True)
-def stored_values_cleared():
-    """Every test starts from the defaults: the values stored by earlier runs go."""
-    parent, name = settings.PARAMETER_GROUP.rsplit("/", 1)
-    FreeCAD.ParamGet(parent).RemGroup(name)
-
-
 @pytest.fixture
 def command(workbench):
     """The Compare strategies command, with a toolbar button (whose status tip says why it is
@@ -76,6 +69,17 @@ def hold_study_at(monkeypatch, step):
 
 def compare_form():
     return main_window().findChild(QtGui.QWidget, "CompareStrategies")
+
+
+def start_held_study(doc, monkeypatch, folder):
+    """Open Compare strategies on the tiny study writing to ``folder``, press OK and wait until
+    the study is held after 3 steps. Returns (hold, form)."""
+    hold = hold_study_at(monkeypatch, 3)
+    form = open_compare(doc)
+    fill(form, folder=folder, **TINY)
+    task_button(OK).click()
+    assert wait_until(hold.reached.is_set, 60), form.status.text()
+    return hold, form
 
 
 def open_compare(doc, face="Face1"):
@@ -174,13 +178,9 @@ def test_panel_defaults_are_the_papers_study_and_options_follow_the_strategies(d
 
 def test_tiny_comparison_runs_in_the_background_and_opens_its_report(doc, command, opened, tmp_path,
                                                                      artifacts, monkeypatch):
-    hold = hold_study_at(monkeypatch, 3)
-    form = open_compare(doc)
     folder = str(tmp_path / "comparison")
-    fill(form, folder=folder, **TINY)
     names, undo = [o.Name for o in doc.Objects], doc.UndoCount
-    task_button(OK).click()
-    assert wait_until(hold.reached.is_set, 60), form.status.text()
+    hold, form = start_held_study(doc, monkeypatch, folder)
     assert wait_until(lambda: form.progress.value() == 3, 2), form.status.text()
     assert form.progress.maximum() == 6 and form.progress.text() == "3 / 6 steps"
     assert form.status.text() == "N = 25: certified lower bound"
@@ -206,12 +206,8 @@ def test_tiny_comparison_runs_in_the_background_and_opens_its_report(doc, comman
 
 def test_cancel_midway_keeps_the_finished_runs_in_a_partial_report(doc, command, opened, tmp_path,
                                                                    artifacts, monkeypatch):
-    hold = hold_study_at(monkeypatch, 3)
-    form = open_compare(doc)
     folder = str(tmp_path / "partial")
-    fill(form, folder=folder, **TINY)
-    task_button(OK).click()
-    assert wait_until(hold.reached.is_set, 60), form.status.text()
+    hold, form = start_held_study(doc, monkeypatch, folder)
     task_button(CANCEL).click()
     assert FreeCADGui.Control.activeDialog() and form.status.text().startswith("Cancelling")
     hold.released.set()
@@ -237,11 +233,7 @@ def test_cancel_midway_keeps_the_finished_runs_in_a_partial_report(doc, command,
 
 
 def test_a_face_deleted_during_the_study_is_still_reported(doc, command, opened, tmp_path, monkeypatch):
-    hold = hold_study_at(monkeypatch, 3)
-    form = open_compare(doc)
-    fill(form, folder=str(tmp_path), **TINY)
-    task_button(OK).click()
-    assert wait_until(hold.reached.is_set, 60), form.status.text()
+    hold, form = start_held_study(doc, monkeypatch, str(tmp_path))
     doc.removeObject("Body")
     doc.recompute()
     hold.released.set()

@@ -222,15 +222,22 @@ def test_short_pso_through_the_panel_then_one_undo(doc, artifacts):
     task_button(CANCEL).click()
 
 
-def test_optimal_strategy_through_the_panel(doc):
+def sample_through_the_panel(doc, strategy, **values):
+    """Fill the panel, press Sample and wait until it closes on one new result.
+    Returns (probe points, their parameters as a dict)."""
     form = open_panel(doc)
-    fill(form, "optimal", n=16, seed=0, fit_degree=3, grid=30, auto_poles=True, time_limit=0.0,
-         max_evaluations=40)
+    fill(form, strategy, **values)
     task_button(OK).click()
     assert wait_until(lambda: not FreeCADGui.Control.activeDialog(), 60), form.status.text()
     [group] = groups(doc)
     points = group.Group[0]
-    parameters = json.loads(points.Parameters)
+    return points, json.loads(points.Parameters)
+
+
+def test_optimal_strategy_through_the_panel(doc):
+    points, parameters = sample_through_the_panel(
+        doc, "optimal", n=16, seed=0, fit_degree=3, grid=30, auto_poles=True, time_limit=0.0,
+        max_evaluations=40)
     assert points.Strategy == "optimal" and len(points.Labels) == 16
     assert parameters["max_evaluations"] == 40 and parameters["time_limit"] is None
     assert parameters["start"] == "uniform_parametric"
@@ -240,14 +247,9 @@ def test_optimal_strategy_through_the_panel(doc):
 
 
 def test_probe_constraints_keep_points_off_the_edges_and_apart(doc):
-    form = open_panel(doc)
-    fill(form, "pso", n=25, population=8, iterations=30, seed=3, grid=40, edge_offset=6.0,
-         min_spacing=9.0)
-    task_button(OK).click()
-    assert wait_until(lambda: not FreeCADGui.Control.activeDialog(), 60), form.status.text()
-    [group] = groups(doc)
-    points = group.Group[0]
-    parameters = json.loads(points.Parameters)
+    points, parameters = sample_through_the_panel(
+        doc, "pso", n=25, population=8, iterations=30, seed=3, grid=40, edge_offset=6.0,
+        min_spacing=9.0)
     assert (parameters["edge_offset"], parameters["min_spacing"]) == (6.0, 9.0)
     assert "grid=40, edge_offset=6.0, min_spacing=9.0, population=8" in dock_text("Python console")
     face = doc.Body.Shape.Faces[0]
