@@ -188,6 +188,13 @@ def dense_from_local(span, values, degree, n):
     return _scatter_rows(np.moveaxis(values, 0, 1), span - degree, n)
 
 
+def greville_abscissae(t, degree):
+    """Greville abscissae of a full knot vector: the mean of each pole's k interior knots, (n,)."""
+    t = np.asarray(t, dtype=float)
+    count = len(t) - degree - 1
+    return np.array([t[i + 1:i + degree + 1].mean() for i in range(count)])
+
+
 def kron_rows(along_u, along_v):
     """Row-wise Kronecker products of dense bases: (N, n_u), (N, n_v) -> (N, n_u * n_v)."""
     return (along_u[:, :, None] * along_v[:, None, :]).reshape(along_u.shape[0], -1)

@@ -1,5 +1,5 @@
-"""Independent check of a result with OpenCASCADE: both surfaces evaluated by OCC, and OCC's
-closest-point distance from the substitute to the CAD face."""
+"""Independent check of a result with OpenCASCADE: its closest-point distance from the face's
+nodes to the substitute surface, at the nodes of largest deviation."""
 import numpy as np
 
 from .freecad_env import import_part
@@ -9,16 +9,16 @@ Part = import_part()
 OCC_DISTANCE_NODES = 50
 
 
-def occ_cross_check(stats, substitute, face):
-    """Fill stats.occ_maximum and stats.occ_distance_maximum using OpenCASCADE only.
+def occ_cross_check(stats, substitute):
+    """Fill stats.occ_maximum using OpenCASCADE only: the largest of its closest-point distances
+    from the nodes to the substitute, over the OCC_DISTANCE_NODES nodes of largest |d|.
 
-    substitute: the fitted Part.BSplineSurface; face: the CAD Part.Face (its (u, v) are the grid's).
+    stats: DeviationStats; substitute: the fitted Part.BSplineSurface over the range the
+    deviation is measured on (cmmsampling.surface.substitute_surface with ``extended``).
     """
-    nodes = stats.grid_uv[~np.isnan(stats.field)]
-    cad = face.Surface
-    gaps = np.array([(substitute.value(u, v) - cad.value(u, v)).Length for u, v in nodes])
-    stats.occ_maximum = float(gaps.max())
-    worst = nodes[np.argsort(gaps)[-OCC_DISTANCE_NODES:]]
-    distances = [face.distToShape(Part.Vertex(substitute.value(u, v)))[0] for u, v in worst]
-    stats.occ_distance_maximum = float(max(distances))
+    counted = ~np.isnan(stats.field)
+    nodes = stats.nodes[counted]
+    worst = nodes[np.argsort(stats.field[counted])[-OCC_DISTANCE_NODES:]]
+    shape = substitute.toShape()
+    stats.occ_maximum = float(max(shape.distToShape(Part.Vertex(*map(float, p)))[0] for p in worst))
     return stats

@@ -29,11 +29,13 @@ import FreeCAD  # noqa: E402  (importable once import_part() has set the path)
 POINT_TOLERANCE_MM = 1e-7
 FIT_SETTINGS = ("fit_degree", "fit_poles", "smoothing", "grid")
 SUMMARY_FIGURES = (
-    ("MaxDeviation", "maximum", "Largest deviation of the substitute from the face on the grid"),
-    ("MeanDeviation", "mean", "Mean deviation on the grid"),
-    ("RmsDeviation", "rms", "Root-mean-square deviation on the grid"),
-    ("StdDeviation", "std", "Standard deviation of the deviation on the grid"),
-    ("OccMaxDeviation", "occ_maximum", "The maximum again, both surfaces evaluated by OpenCASCADE"),
+    ("MaxDeviation", "maximum",
+     "Largest distance in space from the face to the substitute, over the grid's nodes on the face"),
+    ("MeanDeviation", "mean", "Mean distance from the face to the substitute at the nodes"),
+    ("RmsDeviation", "rms", "Root-mean-square distance at the nodes"),
+    ("StdDeviation", "std", "Standard deviation of the distance at the nodes"),
+    ("OccMaxDeviation", "occ_maximum",
+     "The maximum again: OpenCASCADE's closest-point distance at the nodes of largest deviation"),
 )
 
 

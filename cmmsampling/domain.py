@@ -5,7 +5,9 @@ edge offset the region is the rectangle itself, tested exactly. Otherwise the re
 a RASTER x RASTER grid of cells, classified once:
 
 * on the face: the cell centre lies inside the face's trimming loops (each edge's curve on the
-  surface, from OCC, discretised; even-odd rule, so holes need no orientation);
+  surface, from OCC, discretised; even-odd rule, so holes need no orientation). A point within
+  NEAR_CELLS // 2 cells of a cell that a loop passes through is tested against the discretised
+  loops themselves;
 * feasible: on the face and at least ``edge_offset`` mm (3D) from every edge of the face. The 3D
   distance is taken from a fine discretisation of the face's wires and made conservative by the
   discretisation step and half the cell's 3D diagonal, so every point of a feasible cell keeps
@@ -14,12 +16,13 @@ a RASTER x RASTER grid of cells, classified once:
 Points outside the feasible cells are moved to the nearest feasible cell centre.
 """
 import numpy as np
-from scipy.ndimage import distance_transform_edt
+from scipy.ndimage import distance_transform_edt, maximum_filter
 from scipy.spatial import cKDTree
 
 RASTER = 256
 LOOP_SAMPLES_PER_EDGE = 200
 AREA_TOLERANCE = 1e-7
+NEAR_CELLS = 5
 
 
 class FaceDomain:
@@ -30,11 +33,19 @@ class FaceDomain:
     feasible point; feasible_area: mm^2 of the feasible cells (the face's area when exact).
     """
 
-    def __init__(self, bounds, trimmed=False, edge_offset=0.0, on_face=None, feasible=None, area=None):
+    def __init__(self, bounds, trimmed=False, edge_offset=0.0, on_face=None, feasible=None, area=None,
+                 loops=None):
         self.bounds = tuple(float(b) for b in bounds)
         self.trimmed = trimmed
         self.edge_offset = float(edge_offset)
         self._on_face = on_face
+        self._loops = loops if trimmed else None
+        self._near_loops = None
+        if self._loops is not None:
+            touched = np.zeros((RASTER, RASTER), dtype=bool)
+            cells = self._cells(np.concatenate(self._loops))
+            touched[cells[:, 0], cells[:, 1]] = True
+            self._near_loops = maximum_filter(touched, size=NEAR_CELLS)
         self._feasible = feasible
         self._nearest = None
         self.feasible_area = area
@@ -77,8 +88,19 @@ class FaceDomain:
         return inside & raster[cells[..., 0], cells[..., 1]]
 
     def on_face(self, uv):
-        """True where uv: (..., 2) lies on the face (inside its trimming loops): (...,) bool."""
-        return self._lookup(self._on_face, uv)
+        """True where uv: (..., 2) lies on the face (inside its trimming loops): (...,) bool.
+
+        Points in raster cells near a trimming loop are tested against the loops themselves
+        (even-odd rule on the sampled loops), so none is misclassified by a cell's size.
+        """
+        uv = np.asarray(uv, dtype=float)
+        inside = self._lookup(self._on_face, uv)
+        if self._loops is None:
+            return inside
+        cells = self._cells(uv)
+        near = self._in_rectangle(uv) & self._near_loops[cells[..., 0], cells[..., 1]]
+        inside[near] = inside_loops(self._loops, uv[near])
+        return inside
 
     def contains(self, uv):
         """True where uv: (..., 2) is a feasible probe position: (...,) bool."""
@@ -121,7 +143,7 @@ def face_domain(model, edge_offset=0.0):
     feasible = on_face & (clearance >= edge_offset)
     cell_areas = _cell_areas(points)
     return FaceDomain(model.bounds, trimmed, edge_offset, on_face, feasible,
-                      float(cell_areas[feasible].sum()))
+                      float(cell_areas[feasible].sum()), loops)
 
 
 def _is_trimmed(face):
@@ -177,6 +199,22 @@ def _inside_loops(loops, centres):
         if parts:
             xs = np.sort(np.concatenate(parts))
             inside[:, j] = np.searchsorted(xs, u) % 2 == 1
+    return inside
+
+
+def inside_loops(loops, uv, block=4096):
+    """Even-odd test of points uv (M, 2) against the loops (list of (K, 2) closed polygons): (M,) bool."""
+    starts = np.concatenate(loops)
+    ends = np.concatenate([np.roll(loop, -1, axis=0) for loop in loops])
+    spanning = starts[:, 1] != ends[:, 1]
+    starts, ends = starts[spanning], ends[spanning]
+    slope = (ends[:, 0] - starts[:, 0]) / (ends[:, 1] - starts[:, 1])
+    inside = np.zeros(len(uv), dtype=bool)
+    for first in range(0, len(uv), block):
+        u, v = uv[first:first + block, 0, None], uv[first:first + block, 1, None]
+        crosses = (starts[:, 1] <= v) != (ends[:, 1] <= v)
+        at = starts[:, 0] + (v - starts[:, 1]) * slope
+        inside[first:first + block] = (crosses & (at > u)).sum(axis=1) % 2 == 1
     return inside
 
 

@@ -13,7 +13,7 @@ depend on N. Many point sets are fitted in one call.
 """
 import numpy as np
 
-from .bspline import KnotBasis, clamped_uniform_knots, design_matrices, second_difference_matrix
+from .bspline import KnotBasis, clamped_uniform_knots, design_matrices, kron_rows, second_difference_matrix
 
 DEFAULT_DEGREE = 3
 DEFAULT_SMOOTHING = 1e-8
@@ -151,3 +151,34 @@ def _gram_index(poles, degrees):
     index = np.where((pair_u >= 0) & (pair_v >= 0), pair_u * count_v + pair_v,
                      (int(rows_u.max()) + 1) * count_v)
     return index.reshape(poles[0] * poles[1], poles[0] * poles[1])
+
+
+EXTENSION = 0.1
+
+
+class FittedSurface:
+    """A substitute surface: poles (n_u, n_v, 3) mm in a SubstituteSpace, evaluated at any uv.
+
+    bounds: the space's parameter rectangle widened by EXTENSION of its size on every side; beyond
+    the rectangle the surface continues its end spans' polynomials (its natural extension), so
+    that a substitute whose parametrisation runs a little short of the face's edge still reaches it.
+    """
+
+    def __init__(self, space, poles):
+        self.space = space
+        self.poles = np.asarray(poles, dtype=float)
+        u0, u1, v0, v1 = space.bounds
+        du, dv = EXTENSION * (u1 - u0), EXTENSION * (v1 - v0)
+        self.bounds = (u0 - du, u1 + du, v0 - dv, v1 + dv)
+        self._flat = self.poles.reshape(-1, 3)
+
+    def points(self, uv):
+        """Surface points: uv (M, 2) -> (M, 3) mm."""
+        return self.space.evaluate(self.poles, uv)
+
+    def derivatives(self, uv, order=1):
+        """Point and first partial derivatives: {(0, 0), (1, 0), (0, 1): (M, 3)}; order is 1."""
+        bu, bv = self.space.bases(uv, 1)
+        return {(0, 0): kron_rows(bu[0], bv[0]) @ self._flat,
+                (1, 0): kron_rows(bu[1], bv[0]) @ self._flat,
+                (0, 1): kron_rows(bu[0], bv[1]) @ self._flat}

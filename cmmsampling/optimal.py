@@ -2,14 +2,17 @@
 
 For a point set uv: (N, 2) the substitute's poles C solve (B^T B + lam R) C = B^T Q with Q the face's
 points at uv. The surrogate is the log-sum-exp  f = log(sum_g exp(tau d_g)) / tau  of the grid
-deviations d_g = |S(g) - F(g)|, which tends to max_g d_g as tau grows. Its gradient with respect
-to every (u_i, v_i) follows from one adjoint solve A Z = G^T (s E / d) (s: the softmax weights):
+deviations d_g (the magnitudes of the expansion d2 of cmmsampling.deviation), which tends to
+max_g d_g as tau grows. Its gradient with respect to every (u_i, v_i) follows from one adjoint
+solve A Z = G^T (s E / d) (s: the softmax weights; E: d2 times its gradient with respect to S(g)):
 
     df/du_i = r_i . (dB_i/du Z) + y_i . (dQ_i/du - dB_i/du C),    r = Q - B C,  y = B Z,
 
 and likewise for v. L-BFGS-B minimises it over the (u, v) box in stages of rising tau
 (tau = kappa / current maximum, kappa from 10 to 3000), each stage started at the best point set so
-far. Every evaluation is judged by the true maximum; the best point set that keeps the points at
+far. The deviations d_g are the second-order expansion d2 (cmmsampling.deviation); every
+CHUNK_ITERATIONS iterations the best iterate is judged by the exact geometric maximum, and only
+exact improvements are kept. The best point set that keeps the points at
 least ``min_spacing`` mm apart is returned. A quadratic penalty on closer pairs steers the descent.
 """
 import time
@@ -20,19 +23,32 @@ from scipy.optimize import minimize
 from scipy.special import logsumexp, softmax
 
 from .bspline import kron_rows
+from .deviation import Linearisation
 
 KAPPAS = (10.0, 30.0, 100.0, 300.0, 1000.0, 3000.0)
-STAGE_ITERATIONS = 400
-SPACING_FRACTION = 0.2
+STAGE_ITERATIONS = 800
+CHUNK_ITERATIONS = 400
+MIN_CHUNK_ITERATIONS = 5
+SPACING_FRACTION = 0.1
+MIN_SPACING_FLOOR = 0.005
+PACKING = np.sqrt(3) / 2
 
 
 class Stop(Exception):
     """Raised inside the objective to end the descent (budget spent or cancelled)."""
 
 
-def default_min_spacing(area, n):
-    """A fifth of the spacing of N points spread evenly over a face of ``area`` mm^2: mm."""
-    return SPACING_FRACTION * float(np.sqrt(area / n))
+def default_min_spacing(area, n, feasible_area=None):
+    """The default distance every strategy keeps between points, mm.
+
+    A tenth of the spacing of N points spread evenly over a face of ``area`` mm^2, at least
+    MIN_SPACING_FLOOR (5 um); where the feasible part of the face (``feasible_area`` mm^2, after
+    the edge offset) cannot hold N points that far apart, half the spacing that fits there.
+    """
+    spacing = max(SPACING_FRACTION * float(np.sqrt(area / n)), MIN_SPACING_FLOOR)
+    if feasible_area is not None:
+        spacing = min(spacing, 0.5 * float(np.sqrt(feasible_area / (PACKING * n))))
+    return spacing
 
 
 @dataclass
@@ -108,36 +124,46 @@ class DescentResult:
     closest: float
 
 
-def descend(objective, start, lower, upper, min_spacing=0.0, time_limit=None, max_evaluations=None,
-            progress=None, project=None):
+def descend(objective, start, lower, upper, judge, min_spacing=0.0, time_limit=None,
+            max_evaluations=None, progress=None, project=None):
     """Minimise the maximum deviation from the point set ``start`` (N, 2) inside the box.
 
+    objective: DeviationObjective (its nodes);
+    judge: uv (N, 2) -> (exact signed deviations (g_u, g_v) mm at the objective's nodes, NaN where
+    a node does not count; the substitute's poles (n_u, n_v, 3); its closest points' parameters
+    (g_u, g_v, 2));
     lower, upper: (2,) parameter box; project: maps uv (N, 2) onto the feasible set (every
     iterate is evaluated there; default: the box itself); min_spacing: mm between points; time_limit: s;
     max_evaluations: surrogate evaluations; progress: callable (evaluation, best_max_mm) returning
-    True to stop. Returns a DescentResult (the best feasible point set seen; the start if none
-    better).
+    True to stop. Returns a DescentResult: the point set of smallest exact maximum seen among those
+    that keep min_spacing (the start if none is better).
+
+    The descent runs in chunks of L-BFGS-B iterations from the best point set so far, on the exact
+    deviations linearised about its substitute (cmmsampling.deviation.Linearisation: exact there
+    in value and gradient); the chunk's best iterate is then judged exactly and accepted only if
+    it is better. Chunks shrink after a failure and grow after a success (:func:`_stage`).
     """
     lower, upper = np.asarray(lower, float), np.asarray(upper, float)
     scale = upper - lower
     start = np.asarray(start, dtype=float)
-    state = {"uv": start.copy(), "max": np.inf, "closest": np.inf, "count": 0, "history": []}
     began = time.perf_counter()
     first = surrogate(objective, start, 1.0, min_spacing, 0.0)
-    if first.closest >= min_spacing:
-        state.update(uv=start.copy(), max=first.maximum, closest=first.closest)
-    penalty = 100.0 * first.maximum / max(min_spacing, 1e-12) ** 2
+    best = {"uv": start.copy(), "closest": first.closest}
+    _take(best, start, judge(start), objective)
+    start_max = best["max"]
+    state = {"count": 0, "history": [], "cancelled": False}
+    penalty = 100.0 * start_max / max(min_spacing, 1e-12) ** 2
 
-    def fun(x, tau):
+    def fun(x, tau, chunk):
         uv = lower + x.reshape(-1, 2) * scale
         if project is not None:
             uv = project(uv)
-        s = surrogate(objective, uv, tau, min_spacing, penalty)
+        s = surrogate(best["model"], uv, tau, min_spacing, penalty)
         state["count"] += 1
-        if s.maximum < state["max"] and s.closest >= min_spacing:
-            state.update(uv=uv.copy(), max=s.maximum, closest=s.closest)
-        state["history"].append(state["max"])
-        stopped = progress is not None and progress(state["count"], state["max"])
+        if s.maximum < chunk["max"] and s.closest >= min_spacing:
+            chunk.update(uv=uv.copy(), max=s.maximum, closest=s.closest)
+        state["history"].append(best["max"])
+        stopped = progress is not None and progress(state["count"], best["max"])
         out_of_budget = (max_evaluations is not None and state["count"] >= max_evaluations) or (
             time_limit is not None and time.perf_counter() - began >= time_limit)
         if stopped or out_of_budget:
@@ -145,15 +171,54 @@ def descend(objective, start, lower, upper, min_spacing=0.0, time_limit=None, ma
             raise Stop
         return s.value, (s.gradient * scale).ravel()
 
-    cancelled = False
-    for kappa in KAPPAS:
-        tau = kappa / max(state["max"] if np.isfinite(state["max"]) else first.maximum, 1e-12)
+    def run_chunk(tau, length):
+        """One chunk of ``length`` iterations from the best point set; True when it improved on it."""
+        chunk = {"uv": None, "max": np.inf, "closest": np.inf}
         try:
-            minimize(fun, ((state["uv"] - lower) / scale).ravel(), args=(tau,), jac=True,
+            minimize(fun, ((best["uv"] - lower) / scale).ravel(), args=(tau, chunk), jac=True,
                      method="L-BFGS-B", bounds=[(0.0, 1.0)] * start.size,
-                     options={"maxiter": STAGE_ITERATIONS, "ftol": 1e-15, "gtol": 1e-12})
-        except Stop:
-            cancelled = state.get("cancelled", False)
-            break
-    return DescentResult(state["uv"], state["max"], np.array(state["history"]), state["count"],
-                         cancelled, state["closest"])
+                     options={"maxiter": length, "ftol": 1e-15, "gtol": 1e-12})
+        finally:
+            if not state["cancelled"]:
+                _accept(chunk, best, judge, objective)
+        return best["uv"] is chunk["uv"]
+
+    try:
+        for kappa in KAPPAS:
+            _stage(lambda length: run_chunk(kappa / max(best["max"], 1e-12), length))
+    except Stop:
+        pass
+    return DescentResult(best["uv"], best["max"], np.array(state["history"]), state["count"],
+                         state["cancelled"], best["closest"])
+
+
+def _stage(run_chunk):
+    """One stage: chunks of up to CHUNK_ITERATIONS iterations, halved after a chunk that does not
+    improve (the linearisation was trusted too far) and doubled after one that does, until
+    STAGE_ITERATIONS are spent or a chunk of MIN_CHUNK_ITERATIONS fails."""
+    length, spent = CHUNK_ITERATIONS, 0
+    while spent < STAGE_ITERATIONS:
+        improved = run_chunk(length)
+        spent += length
+        if not improved and length <= MIN_CHUNK_ITERATIONS:
+            return
+        length = min(2 * length, CHUNK_ITERATIONS) if improved else max(length // 2, MIN_CHUNK_ITERATIONS)
+
+
+def _accept(chunk, best, judge, objective):
+    """Judge the chunk's best iterate exactly; take it when it is better."""
+    if chunk["uv"] is None:
+        return
+    judged = judge(chunk["uv"])
+    if np.nanmax(np.abs(judged[0])) < best["max"]:
+        _take(best, chunk["uv"], judged, objective, chunk["closest"])
+
+
+def _take(best, uv, judged, objective, closest=None):
+    """Make uv (N, 2) the best point set, judged = (exact deviations (g_u, g_v) mm, poles, closest
+    points' parameters) of its substitute, and linearise the deviations about it."""
+    signed, poles, closest_points = judged
+    best.update(uv=uv, max=float(np.nanmax(np.abs(signed))),
+                model=Linearisation(objective, poles, signed, closest_points))
+    if closest is not None:
+        best["closest"] = closest

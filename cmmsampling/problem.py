@@ -2,9 +2,9 @@
 import numpy as np
 
 from .bound import minimax_bound
-from .deviation import DeviationObjective, EvaluationGrid
+from .deviation import DeviationStats, EvaluationGrid, deviation_objective, substitute_distances
 from .domain import face_domain
-from .fitting import SubstituteSpace, default_pole_count
+from .fitting import FittedSurface, SubstituteSpace, default_pole_count
 from .parallel import TwoProcessObjective
 
 
@@ -30,16 +30,16 @@ class SamplingProblem:
         self.min_spacing = min_spacing
         self.domain = face_domain(model, edge_offset)
         self.space = SubstituteSpace(fit_degree, fit_poles, model.bounds, smoothing)
-        self.grid = EvaluationGrid(model, grid, self.domain)
+        self.grid = EvaluationGrid(model, grid)
         self._objective = None
         self._check = None
         self._bounds = None
 
     @property
     def objective(self):
-        """The batched maximum-deviation objective (built on first use)."""
+        """The batched maximum-deviation objective on the grid's nodes (built on first use)."""
         if self._objective is None:
-            self._objective = DeviationObjective(self.model, self.space, self.grid)
+            self._objective = self._reference_objective(self.grid)
         return self._objective
 
     @property
@@ -50,22 +50,59 @@ class SamplingProblem:
         """
         if self._check is None:
             size = tuple(CHECK_DENSITY * g for g in self.grid.size)
-            check_grid = EvaluationGrid(self.model, size, self.domain)
-            self._check = DeviationObjective(self.model, self.space, check_grid)
+            self._check = self._reference_objective(EvaluationGrid(self.model, size))
         return self._check
 
-    def bounds(self):
-        """Certified lower bounds (MinimaxBound, mm) on the grid and on the check grid, computed once.
+    def _reference_objective(self, grid):
+        """A DeviationObjective on ``grid``, its nodes the feet of the reference fit's grid points."""
+        return deviation_objective(self.model, self.space, grid, self.domain.on_face)
 
-        Returns {"grid": MinimaxBound, "check": MinimaxBound}.
+    def distances(self, poles, check=False):
+        """Exact signed deviations (g_u, g_v) mm of a substitute at the nodes of the grid or check
+        grid (NaN where a node does not count), and the objective whose nodes they are."""
+        objective = self.check_objective if check else self.objective
+        return self._closest(objective, poles)[0], objective
+
+    def _closest(self, objective, poles):
+        """(signed deviations (g_u, g_v) mm, closest points' parameters (g_u, g_v, 2)) of a substitute."""
+        return substitute_distances(FittedSurface(self.space, poles), objective.feet, objective.grid.uv)
+
+    def exact(self, uv):
+        """The substitute fitted at uv (N, 2), judged on the grid: (exact signed deviations
+        (g_u, g_v) mm, NaN where a node does not count; its poles (n_u, n_v, 3); its closest
+        points' parameters (g_u, g_v, 2))."""
+        poles = self.objective.fit(np.asarray(uv, dtype=float)[None])[0]
+        signed, closest = self._closest(self.objective, poles)
+        return signed, poles, closest
+
+    def exact_maximum(self, uv):
+        """Exact maximum deviation (mm) of the substitute fitted at uv (N, 2), on the grid."""
+        return float(np.nanmax(np.abs(self.exact(uv)[0])))
+
+    def deviation(self, poles, check=False):
+        """Exact deviation statistics (DeviationStats, mm) of a substitute on the grid or check grid."""
+        signed, objective = self.distances(poles, check)
+        return DeviationStats.from_signed(signed, objective)
+
+    def bounds(self, poles=None):
+        """Local bounds (MinimaxBound, mm) about a substitute on the grid and on the check grid:
+        the least maximum deviation that moving its poles along its normals could reach (see
+        cmmsampling.bound). poles: (n_u, n_v, 3) mm, default the reference fit's (then computed
+        once). Returns {"grid": MinimaxBound, "check": MinimaxBound}.
         """
+        if poles is not None:
+            return {"grid": minimax_bound(self.objective, poles),
+                    "check": minimax_bound(self.check_objective, poles)}
         if self._bounds is None:
-            self._bounds = {"grid": minimax_bound(self.space, self.grid),
-                            "check": minimax_bound(self.space, self.check_objective.grid)}
+            reference = self.objective.reference_poles()
+            self._bounds = {"grid": minimax_bound(self.objective, reference),
+                            "check": minimax_bound(self.check_objective, reference)}
         return self._bounds
 
     def swarm_objective(self):
-        """The objective for whole swarms: split over two processes when workers == 2."""
+        """The objective for whole swarms, keeping min_spacing: split over two processes when
+        workers == 2."""
+        self.objective.min_spacing = self.min_spacing
         if self.workers == 2:
             return TwoProcessObjective(self.objective)
         return self.objective

@@ -3,7 +3,7 @@
 :func:`write_report` draws a :class:`cmmsampling.study.Study` (from :func:`cmmsampling.compare`):
 the substitute geometry with the probe points of every strategy (paper Fig. 4, 5, 8), the deviation
 maps on the face (Fig. 9), the optimisers' best maximum deviation per iteration (Fig. 10), deviation
-histograms (Fig. 11, 12), maximum deviation against N with the certified lower bound (Fig. 13) and
+histograms (Fig. 11, 12), maximum deviation against N with the local bound (Fig. 13) and
 the tables (Table 1). Figures are drawn on matplotlib's Agg canvas without pyplot, so a GUI's own
 matplotlib backend is left alone. All lengths in mm.
 """
@@ -72,10 +72,8 @@ def _ordered_results(study):
 
 
 def substitute_points(result):
-    """The substitute surface on the evaluation grid: (g_u, g_v, 3) mm (face points plus the fit's error)."""
-    objective = result.problem.objective
-    error = objective.grid_error(result.poles)[0]
-    return objective.grid.cad + error.transpose(1, 2, 0)
+    """The substitute surface on the evaluation raster: (g_u, g_v, 3) mm."""
+    return result.space.evaluate(result.poles, result.deviation.grid_uv)
 
 
 def footprint(model, uv):
@@ -162,7 +160,7 @@ def figure_deviation_maps(study):
 
 def figure_convergence(study):
     """Paper Fig. 10: best maximum deviation (mm) per PSO iteration and per evaluation of the
-    optimal strategy, with the uniform strategies and the certified lower bound for reference."""
+    optimal strategy, with the uniform strategies and the local bound for reference."""
     entries = [(s, r) for s, r in _ordered_results(study) if r.history is not None and len(r.history)]
     if not entries:
         return None
@@ -177,7 +175,7 @@ def figure_convergence(study):
                 ax.axhline(study.results[reference].deviation.maximum, color=colour(reference),
                            linestyle=":", label=label(reference))
         if bound is not None:
-            ax.axhline(bound.grid, color="black", linestyle="--", label="certified lower bound")
+            ax.axhline(bound.grid, color="black", linestyle="--", label="local bound about the best")
         ax.set_xscale("log")
         ax.set_xlabel(OPTIMISER_AXES.get(strategy, "iteration"))
         ax.set_ylabel("best maximum deviation (mm)")
@@ -217,7 +215,7 @@ def figure_histograms(study):
 
 
 def figure_max_vs_n(study):
-    """Paper Fig. 13: maximum deviation (mm), its multiple of the certified lower bound and the run
+    """Paper Fig. 13: maximum deviation (mm), its multiple of the local bound and the run
     time (s) against N for every strategy; seeded strategies as the mean over their seeds with a band
     from the smallest to the largest."""
     if not study.rows:
@@ -225,10 +223,10 @@ def figure_max_vs_n(study):
     ns = np.array(study.ns)
     fig = Figure(figsize=(16.5, 5.2), layout="constrained")
     axes = fig.subplots(1, 3)
-    panels = (("max_mm", "maximum deviation (mm)"), ("bound_multiple", "max deviation / certified bound"),
+    panels = (("max_mm", "maximum deviation (mm)"), ("bound_multiple", "max deviation / local bound"),
               ("time_s", "run time (s)"))
     _draw_bounds(axes[0], study)
-    axes[1].axhline(1.0, color="black", linestyle="--", label="certified lower bound")
+    axes[1].axhline(1.0, color="black", linestyle="--", label="local bound about the best")
     for ax, (measure, title) in zip(axes, panels):
         for i, strategy in enumerate(study.strategies):
             _plot_series(ax, ns, study, i, strategy, measure)
@@ -272,12 +270,12 @@ def _plot_series(ax, ns, study, index, strategy, measure):
 
 
 def _draw_bounds(ax, study):
-    """The certified lower bounds (grid and check grid) against N."""
+    """The local bounds about the best substitute (grid and check grid) against N."""
     if not study.bounds:
         return
     ns = sorted(study.bounds)
     ax.plot(ns, [study.bounds[n].grid for n in ns], color="black", linestyle="--", linewidth=2,
-            label="certified lower bound")
+            label="local bound about the best")
     ax.plot(ns, [study.bounds[n].check for n in ns], color="black", linestyle=":", linewidth=2,
             label="lower bound, check grid")
 
@@ -290,11 +288,11 @@ FIGURES = (
      "Deviation of each substitute from the CAD face over the face (paper Fig. 9); colour bars in mm."),
     ("convergence", figure_convergence,
      "Best maximum deviation found so far by the optimisers (paper Fig. 10), with the uniform "
-     "strategies and the certified lower bound for reference."),
+     "strategies and the local bound about the best substitute for reference."),
     ("histograms", figure_histograms,
      "Distribution of the deviation over the evaluation grid's nodes (paper Fig. 11, 12)."),
     ("max_vs_n", figure_max_vs_n,
-     "Maximum deviation, its multiple of the certified lower bound, and run time against the number "
+     "Maximum deviation, its multiple of the local bound, and run time against the number "
      "of probe points (paper Fig. 13). Strategies run over several seeds show the mean over the seeds "
      "and a band from the smallest to the largest."),
 )
@@ -366,12 +364,15 @@ def report_html(study, figures):
         parts.append("<p class='warning'>The study was cancelled: only the runs completed are shown.</p>")
     parts += ["<h2>Table 1: maximum deviation (mm) per strategy and number of probe points</h2>",
               _matrix_html(study),
-              "<p>± : standard deviation over the seeds. Bold: the smallest maximum at each N. The lower "
-              "bounds are certified: no point set reaches less.</p>",
+              "<p>± : standard deviation over the seeds. Bold: the smallest maximum at each N. "
+              "Deviation: the closest-point distance in space from the face to the substitute. Local "
+              "bound: the least maximum that reshaping the best substitute at that N along its normals "
+              "could reach; it certifies how far that substitute is from a local optimum, not that no "
+              "other point set does better.</p>",
               "<h2>All measures</h2>",
               "<p>Means over the seeds (± standard deviation). Ratios are to "
               f"{label(study.settings['baseline'])} sampling "
-              "at the same N; multiples are of the certified lower bound at that N.</p>",
+              "at the same N; multiples are of the local bound at that N.</p>",
               _summary_html(study), "<h2>Figures</h2>"]
     for name, caption, png in figures:
         if png is None:
@@ -419,7 +420,7 @@ def _pair(value):
 
 def _matrix_html(study):
     """Strategies x N of the mean maximum deviation (± std over seeds), the best per N in bold,
-    and the certified lower bounds below."""
+    and the local bounds below."""
     mean, std = study.matrix("max_mm"), study.matrix("max_mm", "std")
     best = np.nanmin(np.where(np.isnan(mean), np.inf, mean), axis=0)
     head = "".join(f"<th>N = {n}</th>" for n in study.ns)
@@ -433,7 +434,7 @@ def _matrix_html(study):
                 text += f" ± {std[i, j]:.4f}"
             cells.append(f"<td{' class=best' if mean[i, j] == best[j] else ''}>{text}</td>")
         rows.append(f"<tr><td>{html.escape(label(strategy))}</td>{''.join(cells)}</tr>")
-    for name, kind in (("certified lower bound", "grid"), ("lower bound, check grid", "check")):
+    for name, kind in (("local bound about the best", "grid"), ("local bound, check grid", "check")):
         cells = "".join(f"<td>{getattr(study.bounds[n], kind):.4f}</td>" if n in study.bounds else "<td></td>"
                         for n in study.ns)
         rows.append(f"<tr class='bound'><td>{name}</td>{cells}</tr>")

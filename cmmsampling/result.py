@@ -15,7 +15,7 @@ class SamplingResult:
     strategy: its name; n: number of points; uv: (N, 2) on ``model.face``; points: (N, 3) mm;
     normals: (N, 3) unit vectors out of the material (the probe approaches along -normal);
     poles: (n_u, n_v, 3) mm, the substitute's poles; space: its SubstituteSpace;
-    deviation: DeviationStats on the evaluation grid; history: best maximum deviation (mm) per
+    deviation: DeviationStats at the nodes of the evaluation grid (cmmsampling.deviation); history: best maximum deviation (mm) per
     iteration for the optimisers, else None; evaluations: fitness evaluations;
     timings: seconds per phase; settings: every parameter of the run; cancelled: stopped early;
     check: DeviationStats on the check grid (3x denser than the grid optimised on);
@@ -38,6 +38,7 @@ class SamplingResult:
     check: object = None
     problem: object = None
     notes: list = field(default_factory=list)
+    _bounds: dict = field(default=None, repr=False)
 
     @property
     def exact(self):
@@ -61,16 +62,20 @@ class SamplingResult:
         return substitute_surface(self.space, self.poles)
 
     def bounds(self):
-        """Certified lower bounds of the best maximum deviation any N points could reach, mm.
+        """Local bounds about this result's substitute, mm: the least maximum deviation that
+        moving its poles along its normals could reach (cmmsampling.bound).
 
         {"grid": MinimaxBound on the evaluation grid, "check": on the check grid}; computed on first
-        call for this face, N, fit and grid (about a second or more), then cached.
+        call (about a second), then kept.
         """
-        return self.problem.bounds()
+        if self._bounds is None:
+            self._bounds = self.problem.bounds(self.poles)
+        return self._bounds
 
     def multiple_of_bound(self, check=False):
-        """Maximum deviation as a multiple of the certified lower bound (>= 1), on the grid or the
-        check grid; 1 when the fit is exact (see :attr:`exact`)."""
+        """Maximum deviation as a multiple of the local bound about this substitute (about 1 when
+        no reshaping of it along its normals lowers its maximum; see :meth:`bounds`), on the grid
+        or the check grid; 1 when the fit is exact (see :attr:`exact`)."""
         if self.exact:
             return 1.0
         bound = self.bounds()["check" if check else "grid"].lower
@@ -93,7 +98,6 @@ class SamplingResult:
             "rms_mm": d.rms,
             "std_mm": d.std,
             "occ_max_mm": d.occ_maximum,
-            "occ_distance_max_mm": d.occ_distance_maximum,
             "check_max_mm": self.check.maximum if self.check is not None else float("nan"),
             "time_s": self.timings.get("total_s", float("nan")),
             "evaluations": self.evaluations,

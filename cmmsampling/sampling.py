@@ -7,18 +7,19 @@ import numpy as np
 
 from . import strategies as blind
 from .crosscheck import occ_cross_check
-from .deviation import DEFAULT_GRID, DeviationStats
+from .deviation import DEFAULT_GRID
 from .fitting import DEFAULT_DEGREE, DEFAULT_SMOOTHING
 from .problem import SamplingProblem, resolve_fit_poles
 from .optimal import default_min_spacing, descend
 from .pso import SwarmSettings, particle_swarm
 from .result import SamplingResult
 from .strategies import StrategyOutcome
-from .surface import SurfaceModel, as_face
+from .surface import SurfaceModel, as_face, substitute_surface
 from .threads import blas_threads
 from .validation import check_choice, check_int, check_pair, check_real, check_uv
 
 MIN_POINTS = 4
+SIGNIFICANT_MM = 1e-9
 MIN_AREA_RATIO = 1e-12
 
 
@@ -43,16 +44,16 @@ def run_pso(problem, progress, population, iterations, w1, w2, c1, c2, velocity_
             start_from_uniform):
     """The paper's PSO (eq. 7-9) on the problem's maximum-deviation objective.
 
-    With start_from_uniform, particles 0 and 1 start at the uniform parametric and uniform
-    Cartesian layouts, so the result is never worse than either.
+    The swarm scores point sets by the expanded deviation (cmmsampling.deviation). With
+    start_from_uniform, particles 0 and 1 start at the uniform parametric and uniform Cartesian
+    layouts, and the swarm's best is judged against them by the exact deviation, so the result
+    is never worse than either.
     """
     settings = SwarmSettings(population, iterations, w1, w2, c1, c2, velocity_limit, problem.seed)
     seeds = []
     if start_from_uniform:
         seeds = [blind.uniform_parametric(problem).uv, blind.uniform_cartesian(problem).uv]
     objective = problem.swarm_objective()
-    if problem.min_spacing > 0:
-        objective = SpacingRule(objective, problem.model, problem.min_spacing)
     swarm = particle_swarm(
         objective, problem.domain.lower, problem.domain.upper, problem.n, settings,
         seeds=seeds, project=problem.project, progress=progress,
@@ -61,41 +62,50 @@ def run_pso(problem, progress, population, iterations, w1, w2, c1, c2, velocity_
         raise ValueError(
             f"no particle kept its points {problem.min_spacing:g} mm apart; lower min_spacing or "
             "use start_from_uniform=True")
-    return StrategyOutcome(swarm.best, swarm.history, swarm.evaluations, swarm.cancelled)
+    best, notes = _best_exact(problem, swarm.best, seeds)
+    return StrategyOutcome(best, swarm.history, swarm.evaluations, swarm.cancelled, notes=notes)
 
 
-class SpacingRule:
-    """A swarm objective that scores point sets with two points closer than min_spacing mm as inf.
+def _best_exact(problem, found, seeds):
+    """The swarm's best point set, or a seed layout where that is better by the exact deviation.
 
-    objective: (P, N, 2) -> (P,); model: evaluates the 3D points.
+    found: (N, 2); seeds: the uniform parametric and Cartesian layouts (or none).
+    Returns (uv (N, 2), notes).
     """
-
-    def __init__(self, objective, model, min_spacing):
-        self.objective, self.model, self.min_spacing = objective, model, min_spacing
-
-    def __call__(self, uv):
-        points = self.model.points(uv)
-        gaps = np.linalg.norm(points[:, :, None, :] - points[:, None, :, :], axis=-1)
-        gaps[:, np.arange(uv.shape[1]), np.arange(uv.shape[1])] = np.inf
-        values = np.asarray(self.objective(uv), dtype=float)
-        return np.where(gaps.min(axis=(1, 2)) >= self.min_spacing, values, np.inf)
+    names = ("uniform parametric", "uniform Cartesian")
+    maxima = [problem.exact_maximum(uv) for uv in [found, *seeds]]
+    best = int(np.argmin(maxima))
+    if maxima[best] >= maxima[0] - SIGNIFICANT_MM:
+        return found, []
+    return seeds[best - 1], [f"the swarm ended no better than its {names[best - 1]} start "
+                             f"({maxima[best]:.4g} mm against {maxima[0]:.4g} mm); that layout is returned"]
 
 
 def run_optimal(problem, progress, start, time_limit, max_evaluations):
     """Near-optimal points by gradient descent on a smoothed maximum (see cmmsampling.optimal).
 
     start: a strategy name or an (N, 2) uv array; time_limit: s; max_evaluations: surrogate
-    evaluations (None: no limit). Points keep problem.min_spacing and the feasible domain.
+    evaluations (None: no limit). Points keep problem.min_spacing and the feasible domain: a
+    start that does not is repaired first (its crowded points moved to free places). The result
+    is never worse than the start; ``notes`` say what was done.
     """
     if isinstance(start, str):
         start_uv = STRATEGIES[start].run(problem, None, **STRATEGIES[start].options).uv
     else:
         start_uv = check_uv(start, problem.n)
-    result = descend(problem.objective, problem.project(start_uv), problem.domain.lower,
-                     problem.domain.upper, problem.min_spacing, time_limit, max_evaluations, progress,
-                     problem.project)
+    start_uv, moved = blind.respace(problem, problem.project(start_uv))
+    objective = problem.objective
+    result = descend(objective, start_uv, problem.domain.lower, problem.domain.upper,
+                     problem.exact, problem.min_spacing, time_limit, max_evaluations,
+                     progress, problem.project)
+    notes = []
+    if moved:
+        notes.append(f"the start had points closer than min_spacing {problem.min_spacing:.3g} mm: "
+                     f"{moved} of them were moved to free places before the descent")
+    if result.uv is start_uv and not result.cancelled:
+        notes.append("the descent found no point set better than its start; the start is returned")
     return StrategyOutcome(result.uv, result.history, result.evaluations, result.cancelled,
-                           details={"closest": result.closest})
+                           details={"closest": result.closest}, notes=notes)
 
 
 def _check_optimal_options(options):
@@ -135,7 +145,7 @@ STRATEGIES = {
         Strategy("pso", run_pso, "the paper's particle swarm optimisation of the maximum deviation",
                  PSO_DEFAULTS, optimiser=True),
         Strategy("optimal", run_optimal,
-                 "gradient descent on a smoothed maximum deviation, close to the certified bound",
+                 "gradient descent on a smoothed maximum deviation, to a local optimum",
                  OPTIMAL_DEFAULTS, optimiser=True),
     )
 }
@@ -177,7 +187,11 @@ def strategy_options(strategy, options):
 
 def make_problem(face, n, fit_degree=DEFAULT_DEGREE, fit_poles=None, smoothing=DEFAULT_SMOOTHING,
                  grid=DEFAULT_GRID, seed=0, workers=None, edge_offset=0.0, min_spacing=0.0):
-    """Validate the common inputs and build a SamplingProblem (see :func:`sample`)."""
+    """Validate the common inputs and build a SamplingProblem (see :func:`sample`).
+
+    min_spacing None: the default (cmmsampling.optimal.default_min_spacing), lowered where the
+    face's feasible part cannot hold N points that far apart.
+    """
     n = check_int("n", n, MIN_POINTS)
     degree = check_pair("fit_degree", fit_degree, 1)
     poles = resolve_fit_poles(None if fit_poles is None else check_pair("fit_poles", fit_poles, 2), n, degree)
@@ -191,11 +205,14 @@ def make_problem(face, n, fit_degree=DEFAULT_DEGREE, fit_poles=None, smoothing=D
     seed = check_int("seed", seed, 0)
     workers = _check_workers(workers)
     edge_offset = check_real("edge_offset", edge_offset, 0.0)
-    min_spacing = check_real("min_spacing", min_spacing, 0.0)
+    if min_spacing is not None:
+        min_spacing = check_real("min_spacing", min_spacing, 0.0)
     model = SurfaceModel.from_face(face)
     _check_area(model.face)
     problem = SamplingProblem(model, n, degree, poles, smoothing, grid, seed, workers, edge_offset,
-                              min_spacing)
+                              min_spacing or 0.0)
+    if min_spacing is None:
+        problem.min_spacing = default_min_spacing(model.face.Area, n, problem.domain.feasible_area)
     _check_room(problem)
     return problem
 
@@ -251,7 +268,8 @@ def sample(face, n=81, strategy="pso", *, fit_degree=DEFAULT_DEGREE, fit_poles=N
     workers: processes the optimisers spread each swarm over (1 or 2; None = 2 on a multi-core
     machine; the results are identical); edge_offset: mm every point keeps from the face's edges
     (3D; 0, the paper's setting, allows points on the edges); min_spacing: mm between any two
-    points (None: 0, except for "optimal": a fifth of the even spacing sqrt(area / n));
+    points (None: a tenth of the even spacing sqrt(area / n), at least 5 um, lowered where the
+    face cannot hold N points that far apart; 0 allows any);
     options: the strategy's own (see ``STRATEGIES[name].options``; PSO: population, iterations, w1,
     w2, c1, c2, velocity_limit, start_from_uniform).
     Returns a SamplingResult.
@@ -259,8 +277,6 @@ def sample(face, n=81, strategy="pso", *, fit_degree=DEFAULT_DEGREE, fit_poles=N
     check_choice("strategy", strategy, list(STRATEGIES))
     options = strategy_options(strategy, options)
     n = check_int("n", n, MIN_POINTS)
-    if min_spacing is None:
-        min_spacing = default_min_spacing(as_face(face).Area, n) if strategy == "optimal" else 0.0
     problem = make_problem(face, n, fit_degree, fit_poles, smoothing, grid, seed, workers, edge_offset,
                            min_spacing)
     start = time.perf_counter()
@@ -322,21 +338,20 @@ def _judge(problem, outcome, strategy, settings, strategy_s, occ_check):
     start = time.perf_counter()
     uv = np.asarray(outcome.uv, dtype=float)
     with blas_threads(1):
-        field_mm, poles = problem.objective.field(uv)
-        check_mm = problem.check_objective.field(uv)[0]
-    stats = DeviationStats.from_field(field_mm, problem.grid)
-    check = DeviationStats.from_field(check_mm, problem.check_objective.grid)
+        poles = problem.objective.fit(uv[None])[0]
+        stats = problem.deviation(poles)
+        check = problem.deviation(poles, check=True)
     evaluation_s = time.perf_counter() - start
     result = SamplingResult(
         strategy=strategy, uv=uv, points=problem.model.points(uv), normals=problem.model.normals(uv),
         poles=poles, space=problem.space, deviation=stats, model=problem.model,
         history=outcome.history, evaluations=outcome.evaluations, settings=settings,
-        cancelled=outcome.cancelled, check=check, problem=problem,
+        cancelled=outcome.cancelled, check=check, problem=problem, notes=list(outcome.notes),
     )
     occ_s = 0.0
     if occ_check:
         start = time.perf_counter()
-        occ_cross_check(stats, result.substitute, problem.model.face)
+        occ_cross_check(stats, substitute_surface(problem.space, poles, extended=True))
         occ_s = time.perf_counter() - start
     result.timings = {"strategy_s": strategy_s, "evaluation_s": evaluation_s, "occ_check_s": occ_s,
                       "total_s": strategy_s + evaluation_s + occ_s}

@@ -23,7 +23,8 @@ class StrategyOutcome:
     """What a strategy returns.
 
     uv: (N, 2) parameters on the face; history: best maximum deviation (mm) per iteration for
-    the optimisers, else None; evaluations: fitness evaluations spent; cancelled: stopped early.
+    the optimisers, else None; evaluations: fitness evaluations spent; cancelled: stopped early;
+    details: figures for the settings; notes: sentences for the user about what was done.
     """
 
     uv: np.ndarray
@@ -31,6 +32,7 @@ class StrategyOutcome:
     evaluations: int = 0
     cancelled: bool = False
     details: dict = field(default_factory=dict)
+    notes: list = field(default_factory=list)
 
 
 def grid_shape(n, aspect=1.0):
@@ -72,6 +74,39 @@ def spaced(points, min_spacing):
         if np.min(np.linalg.norm(points[kept] - points[i], axis=1)) >= min_spacing:
             kept.append(i)
     return np.array(kept)
+
+
+def respace(problem, uv):
+    """Move the points of uv (N, 2) that crowd others (closer than problem.min_spacing) to free places.
+
+    The points are kept greedily in their order; each crowded one goes to the feasible candidate
+    (a dense Halton set of the domain) nearest to it in 3D that keeps min_spacing from the others.
+    Returns (uv (N, 2), number of points moved). ValueError when no free place is left.
+    """
+    points = problem.model.points(uv)
+    kept = spaced(points, problem.min_spacing)
+    if len(kept) == len(uv):
+        return uv, 0
+    candidates = _feasible_candidates(problem, 64 * len(uv))
+    places = problem.model.points(candidates)
+    uv = uv.copy()
+    taken = points[kept]
+    for i in np.setdiff1d(np.arange(len(uv)), kept):
+        free = np.linalg.norm(places[:, None, :] - taken[None, :, :], axis=-1).min(1) >= problem.min_spacing
+        if not free.any():
+            raise ValueError(f"no room to keep {len(uv)} points {problem.min_spacing:g} mm apart; "
+                             "lower n or min_spacing")
+        choice = np.flatnonzero(free)[np.argmin(np.linalg.norm(places[free] - points[i], axis=1))]
+        uv[i] = candidates[choice]
+        taken = np.vstack([taken, places[choice]])
+    return uv, len(uv) - len(kept)
+
+
+def _feasible_candidates(problem, count):
+    """About ``count`` feasible (u, v) of the domain from a Halton set: (M, 2)."""
+    index = np.arange(1, 4 * count + 1)
+    uv = problem.domain.from_unit(np.column_stack([radical_inverse(index, 2), radical_inverse(index, 3)]))
+    return uv[problem.domain.contains(uv)][:count]
 
 
 def _dense_enough(make_candidates, problem, start, keep_first=False):

@@ -1,7 +1,8 @@
 """Strategy study: every strategy over a list of point counts N on one face (paper Table 1, Fig. 13).
 
 :func:`compare` runs :func:`cmmsampling.sample` for each N and strategy (seed-dependent strategies
-once per seed), computes the certified lower bound of the maximum deviation once per N on the
+once per seed), computes once per N the local bound about the best substitute found at that N (the
+least maximum deviation that reshaping it along its normals could reach, cmmsampling.bound) on the
 optimisation grid and on the 3x denser check grid, and collects the deviations (mm), the run times
 (s), the ratios to uniform parametric sampling and the multiples of the bound in a :class:`Study`.
 Pure computation; :mod:`cmmsampling.report` draws it.
@@ -33,8 +34,8 @@ class Run:
     max_mm, mean_mm, rms_mm: on the optimisation grid; check_max_mm: on the check grid;
     time_s: strategy and evaluation; ratio_max, ratio_mean, ratio_rms: max, mean and RMS over those
     of the baseline (uniform parametric) at the same N (NaN without a baseline run);
-    bound_multiple, check_bound_multiple: max over the certified lower bound on the grid, check max
-    over the bound on the check grid (>= 1).
+    bound_multiple, check_bound_multiple: max over the N's local bound on the grid, check max
+    over the bound on the check grid.
     """
 
     strategy: str
@@ -57,8 +58,8 @@ MEASURES = tuple(f.name for f in fields(Run) if f.type is float)
 
 
 class Bound(NamedTuple):
-    """Certified lower bounds of the best maximum deviation any N points can reach, mm:
-    on the optimisation grid and on the check grid."""
+    """Local bounds about the best substitute found at an N, mm: on the optimisation grid and on
+    the check grid (see :func:`local_bound`)."""
 
     grid: float
     check: float
@@ -86,7 +87,9 @@ class Study:
     """What :func:`compare` measured.
 
     face: the face studied; ns: point counts; strategies: names, in run order; rows: list of Run
-    (one per strategy, N and seed, in run order); bounds: {n: Bound (mm)}; results: {strategy:
+    (one per strategy, N and seed, in run order); bounds: {n: Bound (mm)}; bound_about: {n:
+    (strategy, seed)} the run whose substitute each bound is about (the smallest check-grid
+    maximum at that N); results: {strategy:
     SamplingResult} at ``figure_n`` (the first seed's) for the figures; figure_n: that N;
     settings: every parameter of the study; cancelled: stopped early (rows hold only the runs
     completed); elapsed_s: wall time (s).
@@ -97,6 +100,7 @@ class Study:
     strategies: tuple
     rows: list = field(default_factory=list)
     bounds: dict = field(default_factory=dict)
+    bound_about: dict = field(default_factory=dict)
     results: dict = field(default_factory=dict)
     figure_n: int = None
     settings: dict = field(default_factory=dict)
@@ -138,7 +142,7 @@ class Study:
     def table(self):
         """Fixed-width text table: one line per strategy and N, means over seeds (± std of the max
         where there are several), deviations in mm, ratios to uniform parametric, multiples of the
-        certified bound on the grid and the check grid, time in s."""
+        local bound on the grid and the check grid, time in s."""
         header = (f"{'strategy':<20} {'N':>4} {'runs':>4} {'max mm':>9} {'± std':>7} {'mean mm':>8} "
                   f"{'RMS mm':>8} {'check max':>9} {'max/unif':>8} {'mean/unif':>9} {'RMS/unif':>8} "
                   f"{'x bound':>7} {'x check':>7} {'time s':>7}")
@@ -152,7 +156,7 @@ class Study:
                 f"{m['ratio_max']:>8.3f} {m['ratio_mean']:>9.3f} {m['ratio_rms']:>8.3f} "
                 f"{m['bound_multiple']:>7.3f} {m['check_bound_multiple']:>7.3f} {m['time_s']:>7.2f}")
         for n, bound in self.bounds.items():
-            lines.append(f"{'certified bound':<20} {n:>4} {'':>4} {bound.grid:>9.4f} {'':>7} {'':>8} "
+            lines.append(f"{'local bound':<20} {n:>4} {'':>4} {bound.grid:>9.4f} {'':>7} {'':>8} "
                          f"{'':>8} {bound.check:>9.4f}")
         if self.cancelled:
             lines.append("(cancelled: only the runs completed are listed)")
@@ -161,7 +165,7 @@ class Study:
 
 @dataclass(frozen=True)
 class Step:
-    """One unit of work: the bound at N (strategy None) or one run of a strategy at N with a seed."""
+    """One unit of work: one run of a strategy at N with a seed, or the bound at N (strategy None)."""
 
     n: int
     strategy: str = None
@@ -170,19 +174,19 @@ class Step:
     def describe(self):
         """A short line for progress messages."""
         if self.strategy is None:
-            return f"N = {self.n}: certified lower bound"
+            return f"N = {self.n}: local bound about the best"
         return f"N = {self.n}: {self.strategy} (seed {self.seed})"
 
 
 def plan(ns, strategies, seeds, seeded):
-    """The study's steps in order: for each N its bound, then every strategy (seeded ones once per
-    seed, the others with the first seed)."""
+    """The study's steps in order: for each N every strategy (seeded ones once per seed, the
+    others with the first seed), then the bound about the best of them."""
     steps = []
     for n in ns:
-        steps.append(Step(n))
         for strategy in strategies:
             for seed in (seeds if strategy in seeded else seeds[:1]):
                 steps.append(Step(n, strategy, seed))
+        steps.append(Step(n))
     return steps
 
 
@@ -219,8 +223,8 @@ def compare(face, ns=DEFAULT_NS, strategies=None, *, seeds=DEFAULT_SEEDS, seeded
     pso_options, optimal_options: the strategies' own options (defaults: the paper's PSO, 25 x 3000;
     the optimal strategy's defaults); fit_degree, fit_poles, smoothing, grid: as in sample();
     figure_n: the N whose results are kept for the figures (default 81 if studied, else the middle
-    N); progress: callable(done_steps, total_steps, message) called before every step (the bound at
-    an N, or one run) and during the optimisers' iterations; returning True cancels: the study
+    N); progress: callable(done_steps, total_steps, message) called before every step (one run, or
+    the bound at an N) and during the optimisers' iterations; returning True cancels: the study
     returns what was completed, with ``cancelled`` set (a run interrupted is dropped);
     workers: processes for the optimisers (as in sample()).
     Returns a Study.
@@ -250,11 +254,14 @@ def compare(face, ns=DEFAULT_NS, strategies=None, *, seeds=DEFAULT_SEEDS, seeded
 def _execute(study, steps, options, fit, callback, workers):
     """Run the steps into ``study`` (bounds, rows, results); stop when the callback cancels."""
     relay = Relay(callback, len(steps))
+    best = {}
     for step in steps:
         if relay.report(step.describe()):
             break
         if step.strategy is None:
-            study.bounds[step.n] = certified_bound(study.face, step.n, **fit)
+            about = best.pop(step.n)
+            study.bounds[step.n] = local_bound(about)
+            study.bound_about[step.n] = (about.strategy, about.settings["seed"])
         else:
             entry = STRATEGIES[step.strategy]
             result = sample(study.face, step.n, step.strategy, seed=step.seed, occ_check=False,
@@ -263,6 +270,8 @@ def _execute(study, steps, options, fit, callback, workers):
             if result.cancelled:
                 break
             study.rows.append(record(step, result))
+            if step.n not in best or result.check.maximum < best[step.n].check.maximum:
+                best[step.n] = result
             if step.n == study.figure_n and step.strategy not in study.results:
                 study.results[step.strategy] = result
         relay.done += 1
@@ -271,14 +280,13 @@ def _execute(study, steps, options, fit, callback, workers):
         relay.report("study complete")
 
 
-def certified_bound(face, n, fit_degree=DEFAULT_DEGREE, fit_poles=None, smoothing=DEFAULT_SMOOTHING,
-                    grid=DEFAULT_GRID):
-    """The certified lower bounds at N on the grid and on the check grid: Bound (mm).
+def local_bound(result):
+    """The local bounds about a result's substitute on the grid and on the check grid: Bound (mm).
 
-    One problem computes both, with the fit and grid settings of :func:`sample`."""
-    problem = make_problem(face, n, fit_degree, fit_poles, smoothing, grid)
+    The least maximum deviation that moving its poles along its normals could reach
+    (:meth:`cmmsampling.result.SamplingResult.bounds`)."""
     with blas_threads(1):
-        bounds = problem.bounds()
+        bounds = result.bounds()
     return Bound(bounds["grid"].lower, bounds["check"].lower)
 
 

@@ -67,6 +67,8 @@ def plain(value):
         return value.Name
     if isinstance(value, (list, tuple)):
         return [plain(v) for v in value]
+    if isinstance(value, float) and value != value:
+        return "nan"
     if isinstance(value, (bool, int, float, str, type(None))):
         return value
     return type(value).__name__

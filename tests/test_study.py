@@ -60,11 +60,17 @@ def test_study_layout(study):
     assert study.results["random"].deviation.maximum == row(study, "random", 25, 0).max_mm
 
 
-def test_bounds_are_computed_once_per_n_as_lower_bound_does(study, reference):
+def test_bounds_are_about_the_best_run_at_each_n(study, reference):
     for n in study.ns:
-        grid = cmmsampling.lower_bound(reference, n, grid=SMALL["grid"]).lower
-        check = cmmsampling.lower_bound(reference, n, grid=SMALL["grid"], check=True).lower
-        assert study.bounds[n] == (pytest.approx(grid, rel=1e-12), pytest.approx(check, rel=1e-12))
+        strategy, seed = study.bound_about[n]
+        best = min((r for r in study.rows if r.n == n), key=lambda r: r.check_max_mm)
+        assert (best.strategy, best.seed) == (strategy, seed)
+        again = cmmsampling.sample(reference, n, strategy, seed=seed, occ_check=False, workers=1,
+                                   grid=SMALL["grid"], **SAMPLE_OPTIONS.get(strategy, {}))
+        bounds = again.bounds()
+        assert study.bounds[n] == (pytest.approx(bounds["grid"].lower, rel=1e-9),
+                                   pytest.approx(bounds["check"].lower, rel=1e-9))
+        assert study.bounds[n].grid <= best.max_mm * (1 + 1e-6)
 
 
 def test_ratios_to_uniform_and_multiples_of_the_bound(study):
@@ -109,7 +115,7 @@ def test_progress_reports_every_step_then_completion(study, calls):
     total = 2 * (1 + 13)
     assert [c[0] for c in steps] == list(range(total + 1))
     assert all(c[1] == total for c in calls) and steps[-1][2] == "study complete"
-    assert steps[0][2] == "N = 16: certified lower bound"
+    assert steps[13][2] == "N = 16: local bound about the best"
     assert any(re.search(r"pso \(seed 1\): iteration 20, best max \d", c[2]) for c in calls)
     assert any("optimal (seed 0): evaluation" in c[2] for c in calls)
     done = [c[0] for c in calls]

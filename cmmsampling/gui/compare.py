@@ -359,7 +359,7 @@ class CompareStrategies(FaceCommand):
     MENU = "Compare strategies..."
     ICON = "Compare.svg"
     TIP = ("Run the sampling strategies over a list of point counts N on the selected face and "
-           "write an HTML report: maximum deviation (mm) against N with the certified lower bound, "
+           "write an HTML report: maximum deviation (mm) against N with the local bound, "
            "the paper's figures and tables")
 
     def panel(self, source):
