@@ -29,12 +29,14 @@ Pure numpy: the objective can be shipped to a worker process.
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from .bspline import design_matrices
 
 DEFAULT_GRID = 60
 FOOT_ITERATIONS = 60
 FOOT_STEP_TOLERANCE = 1e-10
+SEARCH_SAMPLES = 48
 
 
 class EvaluationGrid:
@@ -108,17 +110,31 @@ def substitute_distances(surface, nodes, start):
     """Exact signed distances d (see the module docstring) from the nodes to a substitute.
 
     surface: FittedSurface; nodes: Feet (the face's nodes, (g_u, g_v, ...)); start: (g_u, g_v, 2)
-    first guesses of the closest points' parameters on the substitute. Returns (d (g_u, g_v) mm,
+    first guesses of the closest points' parameters on the substitute (a second search starts at
+    the nearest of SEARCH_SAMPLES^2 points of the surface, for a substitute that comes back near
+    itself, as on a closed face). Returns (d (g_u, g_v) mm,
     NaN where the node does not count, p (g_u, g_v, 2) the closest points' parameters). The
     substitute is taken with its natural extension (``surface.bounds``); a node it does not reach
     even so is measured to the extension's boundary.
     """
     targets = nodes.points.reshape(-1, 3)
     uv = _closest_parameters(surface, targets, np.asarray(start, dtype=float).reshape(-1, 2))
+    nearest = _closest_parameters(surface, targets, _nearest_samples(surface, targets))
+    closer = ((surface.points(nearest) - targets) ** 2).sum(1) < ((surface.points(uv) - targets) ** 2).sum(1)
+    uv[closer] = nearest[closer]
     offset = surface.points(uv) - targets
     side = np.where((offset * nodes.normals.reshape(-1, 3)).sum(1) < 0, -1.0, 1.0)
     signed = np.where(nodes.counted.ravel(), side * np.linalg.norm(offset, axis=1), np.nan)
     return signed.reshape(nodes.counted.shape), uv.reshape(start.shape)
+
+
+def _nearest_samples(surface, targets):
+    """Parameters (K, 2) of the nearest of a SEARCH_SAMPLES^2 raster of the surface's range to
+    each target (K, 3)."""
+    u0, u1, v0, v1 = surface.bounds
+    grid = np.stack(np.meshgrid(np.linspace(u0, u1, SEARCH_SAMPLES), np.linspace(v0, v1, SEARCH_SAMPLES),
+                                indexing="ij"), -1).reshape(-1, 2)
+    return grid[cKDTree(surface.points(grid)).query(targets)[1]]
 
 
 def _closest_parameters(model, targets, uv):
@@ -168,9 +184,8 @@ class DeviationObjective:
     model: the CAD truth (a SurfaceModel or NurbsPatch; only its NurbsPatch is kept, so the
     objective pickles without FreeCAD objects); space: SubstituteSpace; grid: EvaluationGrid;
     feet: Feet of a reference substitute (see :meth:`expand`), or None to expand later.
-    order: 2 (default) uses the second-order expansion d2, 1 its first-order part n . e;
-    min_spacing: mm, point sets with closer points score inf (default 0: none). Calling it with
-    uv: (P, N, 2) returns (P,) maximum expanded deviations in mm.
+    order: 2 (default) uses the second-order expansion d2, 1 its first-order part n . e. Calling
+    it with uv: (P, N, 2) returns (P,) maximum expanded deviations in mm.
     """
 
     def __init__(self, model, space, grid, feet):
@@ -183,8 +198,8 @@ class DeviationObjective:
         self.grid_v_t = design_matrices(space.vknots, space.degrees[1], v)[0].T.copy()
         self.evaluations = 0
         self.order = 2
-        self.min_spacing = 0.0
         self.feet = None
+        self._scratch = None
         if feet is not None:
             self.expand(feet)
 
@@ -216,38 +231,56 @@ class DeviationObjective:
         elementwise step runs along the points, and each point set is computed the same way
         whatever the size of the batch.
         """
-        return self._fit_points(uv)[0]
-
-    def _fit_points(self, uv):
-        """Poles (..., n_u, n_v, 3) of the fits at uv (..., N, 2) and the face's points there,
-        coordinate first (..., 3, N) mm."""
         uv = np.asarray(uv, dtype=float)
         u, v = np.ascontiguousarray(uv[..., 0]), np.ascontiguousarray(uv[..., 1])
         points = self.model.points_by_coordinate(u, v)
-        return self.space.solve(self.space.u_basis.values(u), self.space.v_basis.values(v), points), points
+        return self.space.solve(self.space.u_basis.values(u), self.space.v_basis.values(v), points)
 
-    def surface(self, poles):
-        """Substitute points on the grid: poles (..., n_u, n_v, 3) -> (..., 3, g_u, g_v) mm."""
+    def surface(self, poles, scratch=None):
+        """Substitute points on the grid: poles (..., n_u, n_v, 3) -> (..., 3, g_u, g_v) mm.
+
+        scratch: a Scratch of this batch's shape to compute in (then its ``surface`` is returned).
+        """
         by_coord = np.ascontiguousarray(np.moveaxis(np.asarray(poles), -1, -3))
-        return np.matmul(np.matmul(self.grid_u, by_coord), self.grid_v_t)
+        if scratch is None:
+            return np.matmul(np.matmul(self.grid_u, by_coord), self.grid_v_t)
+        np.matmul(self.grid_u, by_coord, out=scratch.along_u)
+        return np.matmul(scratch.along_u, self.grid_v_t, out=scratch.surface)
 
     def expanded_field(self, poles):
         """Signed deviation on the grid's nodes, expanded about the raster.
 
         poles (..., n_u, n_v, 3) -> (..., g_u, g_v) mm: d2 = n . e - e^T K e / 2 with
-        e = S(h) - F_g (see the module docstring); only n . e when ``order`` is 1. Computed in
-        place on whole-grid arrays: a swarm's temporaries are large.
+        e = S(h) - F_g (see the module docstring); only n . e when ``order`` is 1. A swarm's
+        arrays are large: they are computed in place in buffers kept between calls (allocating
+        them anew each time costs more than the arithmetic).
         """
-        error = self.surface(poles)
+        return self._expanded_in_scratch(np.asarray(poles)).copy()
+
+    def _expanded_in_scratch(self, poles):
+        """:meth:`expanded_field` computed in the batch's Scratch (overwritten by the next call)."""
+        scratch = self._scratch_for(poles.shape[:-3])
+        error = self.surface(poles, scratch)
         error -= self._foot_points
-        field = np.einsum("...cij,cij->...ij", error, self._normals)
+        field = np.einsum("...cij,cij->...ij", error, self._normals, out=scratch.field)
         if self.order == 2:
             for half, direction in zip(self._halves, self._directions):
-                along = np.einsum("...cij,cij->...ij", error, direction)
+                along = np.einsum("...cij,cij->...ij", error, direction, out=scratch.along)
                 along *= along
                 along *= half
                 field -= along
         return field
+
+    def _scratch_for(self, batch):
+        """The Scratch for a batch shape, made on first use (and again when the shape changes)."""
+        if self._scratch is None or self._scratch.batch != batch:
+            self._scratch = Scratch(batch, self.space.poles, self.grid.size)
+        return self._scratch
+
+    def __getstate__(self):
+        state = dict(self.__dict__)
+        state["_scratch"] = None
+        return state
 
     def grid_error(self, poles):
         """The expanded deviation of one substitute and its gradient, for the adjoint gradient.
@@ -270,16 +303,18 @@ class DeviationObjective:
         return pulled.transpose(1, 2, 0).reshape(-1, 3)
 
     def __call__(self, uv):
-        """Maximum expanded deviation of each point set's substitute: uv (P, N, 2) -> (P,) mm;
-        inf for a point set with two points closer than ``min_spacing`` mm."""
+        """Maximum expanded deviation of each point set's substitute: uv (P, N, 2) -> (P,) mm."""
         uv = np.asarray(uv, dtype=float)
-        poles, points = self._fit_points(uv)
-        field = self.expanded_field(poles).reshape(uv.shape[0], -1)
+        field = self._expanded_in_scratch(self.fit(uv)).reshape(uv.shape[0], -1)
         self.evaluations += uv.shape[0]
-        values = np.abs(field[:, self._counted]).max(axis=1)
-        if self.min_spacing > 0:
-            values[closest_squared(points) < self.min_spacing ** 2] = np.inf
-        return values
+        return np.abs(field, out=field).max(axis=1, where=self._counted, initial=-np.inf)
+
+    def spaced(self, uv, min_spacing):
+        """True for the point sets uv (P, N, 2) whose points keep ``min_spacing`` mm: (P,) bool."""
+        uv = np.asarray(uv, dtype=float)
+        points = self.model.points_by_coordinate(np.ascontiguousarray(uv[..., 0]),
+                                                 np.ascontiguousarray(uv[..., 1]))
+        return closest_squared(points) >= min_spacing ** 2
 
     def reference_poles(self):
         """The substitute fitted to the face's points at every grid node: (n_u, n_v, 3) mm.
@@ -332,6 +367,17 @@ def curvature_matrices(model, uv, normals):
     second = np.stack([d[(2, 0)], d[(1, 1)], d[(1, 1)], d[(0, 2)]], axis=1).reshape(-1, 2, 2, 3)
     form = (second * normals[:, None, None, :]).sum(-1)
     return np.swapaxes(shift, -1, -2) @ form @ shift
+
+
+class Scratch:
+    """Work arrays of the swarm objective for one batch shape (see DeviationObjective.expanded_field)."""
+
+    def __init__(self, batch, poles, grid):
+        self.batch = tuple(batch)
+        self.along_u = np.empty(self.batch + (3, grid[0], poles[1]))
+        self.surface = np.empty(self.batch + (3,) + tuple(grid))
+        self.field = np.empty(self.batch + tuple(grid))
+        self.along = np.empty(self.batch + tuple(grid))
 
 
 class Linearisation:

@@ -1,19 +1,20 @@
 """Near-optimal probe points: gradient descent on a smooth surrogate of the maximum deviation.
 
 For a point set uv: (N, 2) the substitute's poles C solve (B^T B + lam R) C = B^T Q with Q the face's
-points at uv. The surrogate is the log-sum-exp  f = log(sum_g exp(tau d_g)) / tau  of the grid
-deviations d_g (the magnitudes of the expansion d2 of cmmsampling.deviation), which tends to
-max_g d_g as tau grows. Its gradient with respect to every (u_i, v_i) follows from one adjoint
-solve A Z = G^T (s E / d) (s: the softmax weights; E: d2 times its gradient with respect to S(g)):
+points at uv. The surrogate is the log-sum-exp  f = log(sum_g exp(tau d_g)) / tau  of the node
+deviations d_g, which tends to max_g d_g as tau grows. The d_g are the exact deviations of the
+best point set so far, linearised about its substitute (cmmsampling.deviation.Linearisation:
+exact there in value and gradient). The gradient of f with respect to every (u_i, v_i) follows
+from one adjoint solve A Z = B_g^T (s E / d) (s: the softmax weights; E: d_g times its direction):
 
     df/du_i = r_i . (dB_i/du Z) + y_i . (dQ_i/du - dB_i/du C),    r = Q - B C,  y = B Z,
 
 and likewise for v. L-BFGS-B minimises it over the (u, v) box in stages of rising tau
-(tau = kappa / current maximum, kappa from 10 to 3000), each stage started at the best point set so
-far. The deviations d_g are the second-order expansion d2 (cmmsampling.deviation); every
-CHUNK_ITERATIONS iterations the best iterate is judged by the exact geometric maximum, and only
-exact improvements are kept. The best point set that keeps the points at
-least ``min_spacing`` mm apart is returned. A quadratic penalty on closer pairs steers the descent.
+(tau = kappa / current maximum, kappa from 10 to 10000), each in chunks from the best point set
+so far: a chunk's best iterate is judged by the exact maximum and kept only if it is better,
+and the linearisation then moves there (:func:`descend`). The best point set that keeps the
+points at least ``min_spacing`` mm apart is returned; a quadratic penalty on closer pairs steers
+the descent.
 """
 import time
 from dataclasses import dataclass
@@ -25,7 +26,7 @@ from scipy.special import logsumexp, softmax
 from .bspline import kron_rows
 from .deviation import Linearisation
 
-KAPPAS = (10.0, 30.0, 100.0, 300.0, 1000.0, 3000.0)
+KAPPAS = (10.0, 30.0, 100.0, 300.0, 1000.0, 3000.0, 10000.0)
 STAGE_ITERATIONS = 800
 CHUNK_ITERATIONS = 400
 MIN_CHUNK_ITERATIONS = 5
@@ -64,7 +65,8 @@ class Surrogate:
 def surrogate(objective, uv, tau, min_spacing=0.0, penalty=0.0):
     """Log-sum-exp surrogate of the maximum deviation and its exact gradient.
 
-    objective: DeviationObjective; uv: (N, 2); tau: 1/mm; min_spacing: mm; penalty: weight (mm per
+    objective: DeviationObjective or Linearisation (model, space, grid_error, grid_transpose);
+    uv: (N, 2); tau: 1/mm; min_spacing: mm; penalty: weight (mm per
     mm^2 of violation) of sum over pairs closer than min_spacing of (min_spacing - distance)^2.
     Returns a Surrogate with gradient (N, 2) in mm per parameter unit.
     """

@@ -100,12 +100,14 @@ class SamplingProblem:
         return self._bounds
 
     def swarm_objective(self):
-        """The objective for whole swarms, keeping min_spacing: split over two processes when
-        workers == 2."""
-        self.objective.min_spacing = self.min_spacing
+        """The objective for whole swarms: split over two processes when workers == 2."""
         if self.workers == 2:
             return TwoProcessObjective(self.objective)
         return self.objective
+
+    def spaced(self, uv):
+        """True for the point sets uv (P, N, 2) that keep min_spacing: (P,) bool."""
+        return self.objective.spaced(uv, self.min_spacing)
 
     def project(self, uv):
         """Map uv: (..., 2) onto the face's domain."""

@@ -74,13 +74,26 @@ def _attraction(positions, personal, best, r1, r2, settings):
     return r1
 
 
-def particle_swarm(objective, lower, upper, n_points, settings, seeds=(), project=None, progress=None):
+def _screened(values, positions, personal_values, admissible):
+    """values (P,) with inf where a position that would improve its personal best is inadmissible."""
+    if admissible is None:
+        return values
+    candidates = np.flatnonzero(values < personal_values)
+    if len(candidates):
+        values[candidates[~admissible(positions[candidates])]] = np.inf
+    return values
+
+
+def particle_swarm(objective, lower, upper, n_points, settings, seeds=(), project=None, progress=None,
+                   admissible=None):
     """Minimise objective over sets of n_points points in the box [lower, upper].
 
     objective: callable (P, N, 2) -> (P,); lower, upper: (2,) box corners; settings: SwarmSettings;
     seeds: layouts (N, 2) that start as particles 0, 1, ...; project: callable (P, N, 2) -> (P, N, 2)
     mapping positions onto the feasible set (default: clip to the box); progress: callable
-    (iteration, best_value), called after every iteration, returning True to stop.
+    (iteration, best_value), called after every iteration, returning True to stop;
+    admissible: callable (M, N, 2) -> (M,) bool, a constraint checked only for the positions
+    that would become a personal best (inadmissible ones never do), so that it costs little.
     Returns SwarmResult; when stopped early it holds the best found so far.
     """
     lower = np.asarray(lower, dtype=float)
@@ -89,7 +102,7 @@ def particle_swarm(objective, lower, upper, n_points, settings, seeds=(), projec
     rng = np.random.default_rng(settings.seed)
     positions, velocities, limit = _initial_swarm(rng, lower, upper, n_points, settings, seeds)
     positions = project(positions)
-    values = objective(positions)
+    values = _screened(objective(positions), positions, np.full(len(positions), np.inf), admissible)
     personal, personal_values = positions.copy(), values.copy()
     leader = int(np.argmin(values))
     best, best_value = positions[leader].copy(), float(values[leader])
@@ -105,7 +118,7 @@ def particle_swarm(objective, lower, upper, n_points, settings, seeds=(), projec
         moved = positions + velocities
         positions = project(moved)
         velocities[positions != moved] = 0.0
-        values = objective(positions)
+        values = _screened(objective(positions), positions, personal_values, admissible)
         improved = values < personal_values
         personal[improved] = positions[improved]
         personal_values[improved] = values[improved]

@@ -362,6 +362,9 @@ def report_html(study, figures):
              "<h1>Sampling strategies compared</h1>", _settings_html(study)]
     if study.cancelled:
         parts.append("<p class='warning'>The study was cancelled: only the runs completed are shown.</p>")
+    for (strategy, n), message in study.refused.items():
+        parts.append(f"<p class='warning'>{html.escape(label(strategy))} at N = {n} was refused: "
+                     f"{html.escape(message)}</p>")
     parts += ["<h2>Table 1: maximum deviation (mm) per strategy and number of probe points</h2>",
               _matrix_html(study),
               "<p>± : standard deviation over the seeds. Bold: the smallest maximum at each N. "

@@ -46,17 +46,16 @@ def run_pso(problem, progress, population, iterations, w1, w2, c1, c2, velocity_
 
     The swarm scores point sets by the expanded deviation (cmmsampling.deviation). With
     start_from_uniform, particles 0 and 1 start at the uniform parametric and uniform Cartesian
-    layouts, and the swarm's best is judged against them by the exact deviation, so the result
-    is never worse than either.
+    layouts (the latter where it covers the face), and the swarm's best is judged against them by
+    the exact deviation, so the result is never worse than either.
     """
     settings = SwarmSettings(population, iterations, w1, w2, c1, c2, velocity_limit, problem.seed)
-    seeds = []
-    if start_from_uniform:
-        seeds = [blind.uniform_parametric(problem).uv, blind.uniform_cartesian(problem).uv]
+    seeds = _uniform_seeds(problem) if start_from_uniform else {}
     objective = problem.swarm_objective()
     swarm = particle_swarm(
         objective, problem.domain.lower, problem.domain.upper, problem.n, settings,
-        seeds=seeds, project=problem.project, progress=progress,
+        seeds=list(seeds.values()), project=problem.project, progress=progress,
+        admissible=problem.spaced if problem.min_spacing > 0 else None,
     )
     if not np.isfinite(swarm.best_value):
         raise ValueError(
@@ -66,31 +65,44 @@ def run_pso(problem, progress, population, iterations, w1, w2, c1, c2, velocity_
     return StrategyOutcome(best, swarm.history, swarm.evaluations, swarm.cancelled, notes=notes)
 
 
+def _uniform_seeds(problem):
+    """{name: uv (N, 2)} of the uniform layouts that fit the face (uniform Cartesian may refuse)."""
+    seeds = {"uniform parametric": blind.uniform_parametric(problem).uv}
+    try:
+        seeds["uniform Cartesian"] = blind.uniform_cartesian(problem).uv
+    except ValueError:
+        pass
+    return seeds
+
+
 def _best_exact(problem, found, seeds):
     """The swarm's best point set, or a seed layout where that is better by the exact deviation.
 
-    found: (N, 2); seeds: the uniform parametric and Cartesian layouts (or none).
+    found: (N, 2); seeds: {name: (N, 2)} the uniform layouts it started from (or none).
     Returns (uv (N, 2), notes).
     """
-    names = ("uniform parametric", "uniform Cartesian")
-    maxima = [problem.exact_maximum(uv) for uv in [found, *seeds]]
+    names = list(seeds)
+    maxima = [problem.exact_maximum(uv) for uv in [found, *seeds.values()]]
     best = int(np.argmin(maxima))
     if maxima[best] >= maxima[0] - SIGNIFICANT_MM:
         return found, []
-    return seeds[best - 1], [f"the swarm ended no better than its {names[best - 1]} start "
-                             f"({maxima[best]:.4g} mm against {maxima[0]:.4g} mm); that layout is returned"]
+    return seeds[names[best - 1]], [f"the swarm ended no better than its {names[best - 1]} start "
+                                    f"({maxima[best]:.4g} mm against {maxima[0]:.4g} mm); that layout is returned"]
 
 
 def run_optimal(problem, progress, start, time_limit, max_evaluations):
     """Near-optimal points by gradient descent on a smoothed maximum (see cmmsampling.optimal).
 
-    start: a strategy name or an (N, 2) uv array; time_limit: s; max_evaluations: surrogate
-    evaluations (None: no limit). Points keep problem.min_spacing and the feasible domain: a
-    start that does not is repaired first (its crowded points moved to free places). The result
-    is never worse than the start; ``notes`` say what was done.
+    start: "best" (the best of BEST_STARTS by the exact deviation), a strategy name or an (N, 2)
+    uv array; time_limit: s; max_evaluations: surrogate evaluations (None: no limit). Points keep
+    problem.min_spacing and the feasible domain: a start that does not is repaired first (its
+    crowded points moved to free places). The result is never worse than the start; ``notes`` say
+    what was done.
     """
+    notes = []
     if isinstance(start, str):
-        start_uv = STRATEGIES[start].run(problem, None, **STRATEGIES[start].options).uv
+        start_uv, name = _start_layout(problem, start)
+        notes.append(f"started from the {name} layout")
     else:
         start_uv = check_uv(start, problem.n)
     start_uv, moved = blind.respace(problem, problem.project(start_uv))
@@ -98,7 +110,6 @@ def run_optimal(problem, progress, start, time_limit, max_evaluations):
     result = descend(objective, start_uv, problem.domain.lower, problem.domain.upper,
                      problem.exact, problem.min_spacing, time_limit, max_evaluations,
                      progress, problem.project)
-    notes = []
     if moved:
         notes.append(f"the start had points closer than min_spacing {problem.min_spacing:.3g} mm: "
                      f"{moved} of them were moved to free places before the descent")
@@ -106,6 +117,23 @@ def run_optimal(problem, progress, start, time_limit, max_evaluations):
         notes.append("the descent found no point set better than its start; the start is returned")
     return StrategyOutcome(result.uv, result.history, result.evaluations, result.cancelled,
                            details={"closest": result.closest}, notes=notes)
+
+
+def _start_layout(problem, start):
+    """(uv (N, 2), name) of the start named ``start``; for "best", the BEST_STARTS layout of
+    smallest exact maximum deviation (layouts a strategy refuses for this face are skipped)."""
+    names = BEST_STARTS if start == "best" else (start,)
+    layouts = {}
+    for name in names:
+        try:
+            layouts[name] = STRATEGIES[name].run(problem, None, **STRATEGIES[name].options).uv
+        except ValueError:
+            if len(names) == 1:
+                raise
+    if len(layouts) == 1:
+        return next(iter(layouts.values())), next(iter(layouts))
+    name = min(layouts, key=lambda key: problem.exact_maximum(layouts[key]))
+    return layouts[name], name
 
 
 def _check_optimal_options(options):
@@ -116,12 +144,13 @@ def _check_optimal_options(options):
     if options["max_evaluations"] is not None:
         clean["max_evaluations"] = check_int("max_evaluations", options["max_evaluations"], 1)
     if isinstance(options["start"], str):
-        starts = [name for name in STRATEGIES if name != "optimal"]
+        starts = ["best"] + [name for name in STRATEGIES if name != "optimal"]
         check_choice("start", options["start"], starts)
     return clean
 
 
-OPTIMAL_DEFAULTS = {"start": "uniform_parametric", "time_limit": None, "max_evaluations": None}
+OPTIMAL_DEFAULTS = {"start": "best", "time_limit": None, "max_evaluations": None}
+BEST_STARTS = ("uniform_parametric", "uniform_cartesian", "halton", "hammersley")
 
 PSO_DEFAULTS = {
     "population": 25, "iterations": 3000, "w1": 0.5, "w2": 0.0, "c1": 2.0, "c2": 2.0,

@@ -16,6 +16,7 @@ CARTESIAN_RASTER = 121
 NEWTON_STEPS = 30
 NEWTON_TOLERANCE = 1e-9
 COINCIDENT = 1e-9
+COVERAGE = 1.6
 
 
 @dataclass
@@ -149,12 +150,13 @@ def snap_near_misses(domain, uv, cell):
 def uniform_parametric(problem):
     """Regular grid in (u, v) (paper eq. 5-6), corners included.
 
-    The grid has rows x cols >= N nodes with rows / cols following the parameter range's aspect;
-    nodes that just miss the feasible domain (next to an edge offset) are moved onto it; surplus
-    nodes, and nodes off a trimmed face, are dropped evenly so that exactly N remain.
+    The grid has rows x cols >= N nodes with rows / cols following the face's aspect (its mean
+    lengths along u and v in space, so that a cylinder's circumference gets as many points per mm
+    as its height); nodes that just miss the feasible domain (next to an edge offset) are moved
+    onto it; rows that fall onto one another (a seam, a collapsed edge) keep one point per place;
+    surplus nodes, and nodes off a trimmed face, are dropped evenly so that exactly N remain.
     """
-    du, dv = problem.model.span
-    aspect = dv / du if du > 0 else 1.0
+    aspect = spatial_aspect(problem.model)
 
     def candidates(m):
         rows, cols = grid_shape(m, aspect)
@@ -162,6 +164,16 @@ def uniform_parametric(problem):
         return snap_near_misses(problem.domain, problem.domain.from_unit(_unit_grid(rows, cols)), cell)
 
     return StrategyOutcome(_dense_enough(candidates, problem, problem.n))
+
+
+def spatial_aspect(model, raster=9):
+    """Mean length of the face along v over its mean length along u (both in mm)."""
+    uv = model.raster((raster, raster)).reshape(-1, 2)
+    d = model.derivatives(uv, 1)
+    du, dv = model.span
+    along_u = np.linalg.norm(d[(1, 0)], axis=1).mean() * du
+    along_v = np.linalg.norm(d[(0, 1)], axis=1).mean() * dv
+    return along_v / along_u if along_u > 0 and along_v > 0 else 1.0
 
 
 def projection_frame(model, raster=CARTESIAN_RASTER):
@@ -229,7 +241,26 @@ def uniform_cartesian(problem):
         uv = snap_near_misses(problem.domain, uv, cell)
         return np.where((residual <= tolerance)[:, None], uv, np.nan)
 
-    return StrategyOutcome(_dense_enough(candidates, problem, problem.n))
+    uv = _dense_enough(candidates, problem, problem.n)
+    _check_coverage(problem, model.points(raster_uv), model.points(uv), "xyz"[int(np.argmax(frame[2]))])
+    return StrategyOutcome(uv)
+
+
+def _check_coverage(problem, face_points, points, axis):
+    """ValueError when some of the face lies farther than COVERAGE times the even spacing from
+    every point: the footprint grid missed a steep part, where a fit would extrapolate.
+
+    face_points: (M, 3) mm spread over the feasible face; points: (N, 3) mm the layout; axis: the
+    machine axis the footprint is seen along.
+    """
+    even = float(np.sqrt(problem.domain.feasible_area / problem.n))
+    gap = float(cKDTree(points).query(face_points)[0].max())
+    if gap > COVERAGE * even:
+        raise ValueError(
+            f"uniform_cartesian leaves part of the face without points: a spot {gap:.3g} mm from the "
+            f"nearest one, where {problem.n} points spread evenly are {even:.3g} mm apart (the face is "
+            f"steep as seen along the machine {axis.upper()} axis, so the footprint grid misses it, and "
+            "a fit there would extrapolate); use uniform_parametric, halton or an optimiser for this face")
 
 
 def random_uniform(problem):

@@ -89,7 +89,8 @@ class Study:
     face: the face studied; ns: point counts; strategies: names, in run order; rows: list of Run
     (one per strategy, N and seed, in run order); bounds: {n: Bound (mm)}; bound_about: {n:
     (strategy, seed)} the run whose substitute each bound is about (the smallest check-grid
-    maximum at that N); results: {strategy:
+    maximum at that N); refused: {(strategy, n): message} the runs a strategy refused (e.g.
+    uniform Cartesian on a face its footprint grid cannot cover); results: {strategy:
     SamplingResult} at ``figure_n`` (the first seed's) for the figures; figure_n: that N;
     settings: every parameter of the study; cancelled: stopped early (rows hold only the runs
     completed); elapsed_s: wall time (s).
@@ -101,6 +102,7 @@ class Study:
     rows: list = field(default_factory=list)
     bounds: dict = field(default_factory=dict)
     bound_about: dict = field(default_factory=dict)
+    refused: dict = field(default_factory=dict)
     results: dict = field(default_factory=dict)
     figure_n: int = None
     settings: dict = field(default_factory=dict)
@@ -264,9 +266,15 @@ def _execute(study, steps, options, fit, callback, workers):
             study.bound_about[step.n] = (about.strategy, about.settings["seed"])
         else:
             entry = STRATEGIES[step.strategy]
-            result = sample(study.face, step.n, step.strategy, seed=step.seed, occ_check=False,
-                            workers=workers, progress=relay.optimiser(step) if entry.optimiser else None,
-                            **fit, **options.get(step.strategy, {}))
+            try:
+                result = sample(study.face, step.n, step.strategy, seed=step.seed, occ_check=False,
+                                workers=workers,
+                                progress=relay.optimiser(step) if entry.optimiser else None,
+                                **fit, **options.get(step.strategy, {}))
+            except ValueError as refusal:
+                study.refused[(step.strategy, step.n)] = str(refusal)
+                relay.done += 1
+                continue
             if result.cancelled:
                 break
             study.rows.append(record(step, result))
