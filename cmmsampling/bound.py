@@ -26,8 +26,9 @@ from .bspline import greville_abscissae, kron_rows
 from .deviation import substitute_distances
 from .fitting import FittedSurface
 
-DEFAULT_TOLERANCE = 1e-4
+DEFAULT_TOLERANCE = 1e-3
 DEFAULT_ITERATIONS = 4000
+ACTIVE_WEIGHT = 1e-6
 
 
 @dataclass
@@ -118,7 +119,7 @@ def minimax_bound(objective, reference, tolerance=DEFAULT_TOLERANCE, iterations=
     reference surface, 2 oscillated); check_every: iterations between evaluations on the whole grid.
     Returns a MinimaxBound (mm).
 
-    The reweighting runs on an active set: nodes whose weight falls below 1e-16 of the largest get
+    The reweighting runs on an active set: nodes whose weight falls below ACTIVE_WEIGHT of the largest get
     weight exactly 0 and leave it, and at every whole-grid check the nodes whose residual exceeds
     the active set's largest come back in. Weights on any subset give a valid lower bound.
     """
@@ -142,7 +143,7 @@ def minimax_bound(objective, reference, tolerance=DEFAULT_TOLERANCE, iterations=
                 break
             nodes, weights, rows, squared = _exchange(residuals, nodes, weights, rows, squared, everywhere)
         weights = weights * squared ** (beta / 2)
-        keep = weights > 1e-16 * weights.max()
+        keep = weights > ACTIVE_WEIGHT * weights.max()
         nodes, weights, rows = nodes[keep], weights[keep] / weights[keep].sum(), rows[keep]
     return MinimaxBound(lower, upper, done, upper - lower <= tolerance * upper, objective.grid.size,
                         residuals.poles(best))

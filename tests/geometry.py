@@ -2,11 +2,13 @@
 import os
 
 import numpy as np
+import pytest
 
 from cmmsampling.freecad_env import import_part
 
 Part = import_part()
 import FreeCAD  # noqa: E402,F401  (importable once import_part() has set the path)
+from cmmsampling.surface import make_bspline_surface  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 TESTDATA = os.path.join(os.path.dirname(ROOT), "shared", "testdata")
@@ -31,14 +33,48 @@ def closed(document_name):
 
 def rational_patch_face(seed=3):
     """A rational bicubic NURBS patch (5 x 4 poles, weights 0.5..2) as a Part.Face."""
-    from cmmsampling.surface import make_bspline_surface
-
     rng = np.random.default_rng(seed)
     x, y = np.meshgrid(np.linspace(0, 40, 5), np.linspace(0, 30, 4), indexing="ij")
     z = 5 * np.sin(x / 13) * np.cos(y / 11) + rng.normal(0, 1, x.shape)
     weights = rng.uniform(0.5, 2.0, x.shape)
     surface = make_bspline_surface(np.stack([x, y, z], -1), (3, 3), weights=weights)
     return surface.toShape()
+
+
+def rational_saddle(seed=1):
+    """A rational bicubic saddle, 7 x 7 poles over 100 x 100 mm, weights 0.4..2.5."""
+    rng = np.random.default_rng(seed)
+    x, y = np.meshgrid(np.linspace(0, 100, 7), np.linspace(0, 100, 7), indexing="ij")
+    z = 20 * ((x - 50) ** 2 - (y - 50) ** 2) / 2500
+    return make_bspline_surface(np.stack([x, y, z], -1), (3, 3),
+                                weights=rng.uniform(0.4, 2.5, x.shape)).toShape()
+
+
+def strip_face():
+    """A curved strip 60 mm long and 2 mm wide (a blade-like face)."""
+    x, y = np.meshgrid(np.linspace(0, 60, 7), np.linspace(0, 2, 4), indexing="ij")
+    z = 6 * np.sin(x / 12) + 0.8 * y * np.cos(x / 9)
+    return make_bspline_surface(np.stack([x, y, z], -1), (3, 3)).toShape()
+
+
+def holed_face():
+    """A wavy 100 x 100 mm B-spline plate with a 16 mm hole cut through it (trimmed)."""
+    x, y = np.meshgrid(np.linspace(0, 100, 6), np.linspace(0, 100, 6), indexing="ij")
+    z = 8 * np.sin(x / 30) * np.cos(y / 25)
+    plate = make_bspline_surface(np.stack([x, y, z], -1), (3, 3)).toShape()
+    hole = Part.makeCylinder(8, 100, FreeCAD.Vector(40, 55, -50))
+    return plate.cut(hole).Faces[0]
+
+
+def cartesian_refuses(strategy, closed, run):
+    """For uniform Cartesian on a closed face (its far side hides behind its near side in every
+    machine view, so the footprint grid misses it) check that run() is refused and return True;
+    otherwise return False and leave the run to the caller."""
+    if strategy != "uniform_cartesian" or not closed:
+        return False
+    with pytest.raises(ValueError, match="leaves part of the face without points"):
+        run()
+    return True
 
 
 def uv_samples(model, count=40, seed=0):

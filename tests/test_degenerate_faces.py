@@ -2,7 +2,7 @@
 a plane, a tiny face; each gets usable points or a message saying what to change."""
 import numpy as np
 import pytest
-from geometry import Part
+from geometry import Part, cartesian_refuses
 
 import cmmsampling
 from cmmsampling.surface import SurfaceModel, make_bspline_surface, reference_poles
@@ -35,7 +35,10 @@ def test_normals_on_degenerate_edges_are_the_limit_normals():
                          ids=["collapsed_edge", "sphere", "full_cylinder"])
 def test_degenerate_and_periodic_faces_give_usable_points(make, strategy):
     face = make()
-    result = cmmsampling.sample(face, 16, strategy, grid=24, occ_check=False, **QUICK.get(strategy, {}))
+    run = lambda: cmmsampling.sample(face, 16, strategy, grid=24, occ_check=False, **QUICK.get(strategy, {}))  # noqa: E731
+    if cartesian_refuses(strategy, isinstance(face.Surface, Part.Cylinder), run):
+        return
+    result = run()
     assert np.all(np.isfinite(result.points)) and np.all(np.isfinite(result.normals))
     occ = np.array([tuple(result.model.face.normalAt(u, v)) for u, v in result.uv])
     assert np.abs(occ - result.normals).max() < 1e-5

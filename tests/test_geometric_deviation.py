@@ -9,37 +9,11 @@ import os
 
 import numpy as np
 import pytest
-from geometry import TESTDATA, FreeCAD, Part
+from geometry import TESTDATA, Part, holed_face, rational_saddle, strip_face
 
 import cmmsampling
 from cmmsampling.optimal import default_min_spacing
 from cmmsampling.sampling import make_problem
-from cmmsampling.surface import make_bspline_surface
-
-
-def rational_saddle(seed=1):
-    """A rational bicubic saddle, 7 x 7 poles over 100 x 100 mm, weights 0.4..2.5."""
-    rng = np.random.default_rng(seed)
-    x, y = np.meshgrid(np.linspace(0, 100, 7), np.linspace(0, 100, 7), indexing="ij")
-    z = 20 * ((x - 50) ** 2 - (y - 50) ** 2) / 2500
-    return make_bspline_surface(np.stack([x, y, z], -1), (3, 3),
-                                weights=rng.uniform(0.4, 2.5, x.shape)).toShape()
-
-
-def strip_face():
-    """A curved strip 60 mm long and 2 mm wide (a blade-like face)."""
-    x, y = np.meshgrid(np.linspace(0, 60, 7), np.linspace(0, 2, 4), indexing="ij")
-    z = 6 * np.sin(x / 12) + 0.8 * y * np.cos(x / 9)
-    return make_bspline_surface(np.stack([x, y, z], -1), (3, 3)).toShape()
-
-
-def holed_face():
-    """A wavy 100 x 100 mm B-spline plate with a 16 mm hole cut through it (trimmed)."""
-    x, y = np.meshgrid(np.linspace(0, 100, 6), np.linspace(0, 100, 6), indexing="ij")
-    z = 8 * np.sin(x / 30) * np.cos(y / 25)
-    plate = make_bspline_surface(np.stack([x, y, z], -1), (3, 3)).toShape()
-    hole = Part.makeCylinder(8, 100, FreeCAD.Vector(40, 55, -50))
-    return plate.cut(hole).Faces[0]
 
 
 FACES = {

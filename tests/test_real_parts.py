@@ -3,7 +3,7 @@ import os
 
 import numpy as np
 import pytest
-from geometry import TESTDATA, FreeCAD, Part, rational_patch_face
+from geometry import TESTDATA, FreeCAD, Part, cartesian_refuses, rational_patch_face
 
 import cmmsampling
 from cmmsampling.cli import main as cli_main
@@ -63,8 +63,11 @@ def _check_points(face, result, edge_offset, spacing):
 @pytest.mark.parametrize("name", ["holed_bspline", "rational_patch", "cylinder", "torus", "lofted"])
 def test_every_strategy_keeps_points_on_the_face_and_off_its_edges(step_faces, name, strategy):
     face = step_faces[name]
-    result = cmmsampling.sample(face, 20, strategy, grid=24, edge_offset=EDGE_OFFSET, min_spacing=SPACING,
-                                occ_check=False, **FAST.get(strategy, {}))
+    run = lambda: cmmsampling.sample(face, 20, strategy, grid=24, edge_offset=EDGE_OFFSET,  # noqa: E731
+                                     min_spacing=SPACING, occ_check=False, **FAST.get(strategy, {}))
+    if cartesian_refuses(strategy, name == "torus", run):
+        return
+    result = run()
     _check_points(face, result, EDGE_OFFSET, SPACING)
 
 

@@ -1,7 +1,7 @@
 """Every strategy: exactly N points, on the face (OCC distance), inside the domain, unit normals."""
 import numpy as np
 import pytest
-from geometry import Part, rational_patch_face
+from geometry import Part, cartesian_refuses, rational_patch_face
 
 import cmmsampling
 from cmmsampling.strategies import allocate, grid_shape, thin_evenly
@@ -19,6 +19,9 @@ FACES = {
 @pytest.mark.parametrize("n", [4, 25, 37])
 def test_blind_strategy_gives_n_points_on_the_face(face_name, strategy, n):
     face = FACES[face_name]()
+    if cartesian_refuses(strategy, face_name == "cylinder" and n > 4,
+                         lambda: cmmsampling.sample(face, n, strategy, occ_check=False)):
+        return
     result = cmmsampling.sample(face, n, strategy, occ_check=False)
     assert result.uv.shape == (n, 2) and result.points.shape == (n, 3)
     u0, u1, v0, v1 = result.model.bounds
