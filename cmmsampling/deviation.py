@@ -110,18 +110,22 @@ def substitute_distances(surface, nodes, start):
     """Exact signed distances d (see the module docstring) from the nodes to a substitute.
 
     surface: FittedSurface; nodes: Feet (the face's nodes, (g_u, g_v, ...)); start: (g_u, g_v, 2)
-    first guesses of the closest points' parameters on the substitute (a second search starts at
-    the nearest of SEARCH_SAMPLES^2 points of the surface, for a substitute that comes back near
-    itself, as on a closed face). Returns (d (g_u, g_v) mm,
+    first guesses of the closest points' parameters on the substitute (where the search ends
+    farther than the nearest of SEARCH_SAMPLES^2 points of the surface, stuck in a local minimum
+    as on a closed face that comes back near itself, it starts again there). Returns (d (g_u, g_v) mm,
     NaN where the node does not count, p (g_u, g_v, 2) the closest points' parameters). The
     substitute is taken with its natural extension (``surface.bounds``); a node it does not reach
     even so is measured to the extension's boundary.
     """
     targets = nodes.points.reshape(-1, 3)
     uv = _closest_parameters(surface, targets, np.asarray(start, dtype=float).reshape(-1, 2))
-    nearest = _closest_parameters(surface, targets, _nearest_samples(surface, targets))
-    closer = ((surface.points(nearest) - targets) ** 2).sum(1) < ((surface.points(uv) - targets) ** 2).sum(1)
-    uv[closer] = nearest[closer]
+    sample_uv, sample_distance = _nearest_samples(surface, targets)
+    stuck = np.flatnonzero(np.linalg.norm(surface.points(uv) - targets, axis=1) > sample_distance)
+    if len(stuck):
+        again = _closest_parameters(surface, targets[stuck], sample_uv[stuck])
+        better = (np.linalg.norm(surface.points(again) - targets[stuck], axis=1)
+                  < np.linalg.norm(surface.points(uv[stuck]) - targets[stuck], axis=1))
+        uv[stuck[better]] = again[better]
     offset = surface.points(uv) - targets
     side = np.where((offset * nodes.normals.reshape(-1, 3)).sum(1) < 0, -1.0, 1.0)
     signed = np.where(nodes.counted.ravel(), side * np.linalg.norm(offset, axis=1), np.nan)
@@ -129,12 +133,13 @@ def substitute_distances(surface, nodes, start):
 
 
 def _nearest_samples(surface, targets):
-    """Parameters (K, 2) of the nearest of a SEARCH_SAMPLES^2 raster of the surface's range to
-    each target (K, 3)."""
+    """The nearest of a SEARCH_SAMPLES^2 raster of the surface's range to each target (K, 3):
+    (parameters (K, 2), distance (K,) mm)."""
     u0, u1, v0, v1 = surface.bounds
     grid = np.stack(np.meshgrid(np.linspace(u0, u1, SEARCH_SAMPLES), np.linspace(v0, v1, SEARCH_SAMPLES),
                                 indexing="ij"), -1).reshape(-1, 2)
-    return grid[cKDTree(surface.points(grid)).query(targets)[1]]
+    distance, index = cKDTree(surface.points(grid)).query(targets)
+    return grid[index], distance
 
 
 def _closest_parameters(model, targets, uv):
