@@ -183,7 +183,7 @@ def test_tiny_comparison_runs_in_the_background_and_opens_its_report(doc, comman
     hold, form = start_held_study(doc, monkeypatch, folder)
     assert wait_until(lambda: form.progress.value() == 3, 2), form.status.text()
     assert form.progress.maximum() == 6 and form.progress.text() == "3 / 6 steps"
-    assert form.status.text() == "N = 25: certified lower bound"
+    assert form.status.text() == "N = 25: uniform_parametric (seed 0)"
     assert not task_button(OK).isEnabled() and not form.ns.isEnabled() and not form.strategies.isEnabled()
     main_window().grab().save(os.path.join(artifacts, "compare_running.png"))
     form.grab().save(os.path.join(artifacts, "compare_running_form.png"))
