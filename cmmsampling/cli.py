@@ -52,14 +52,14 @@ def _sample_arguments(parser):
     parser.add_argument("-n", "--points", type=int, default=49, help="number of probe points (default 49)")
     parser.add_argument("--strategy", default="optimal", choices=list(STRATEGIES),
                         metavar="STRATEGY",
-                        help="where the points go (default optimal, which comes closest to the best "
-                             f"possible; pso is the paper's swarm): {', '.join(STRATEGIES)}")
+                        help="where the points go (default optimal, which goes furthest: to a local "
+                             f"optimum; pso is the paper's swarm): {', '.join(STRATEGIES)}")
     parser.add_argument("--edge-offset", type=float, default=CLI_EDGE_OFFSET, metavar="MM",
                         help="distance every point keeps from the face's edges: the probe ball's "
                              f"radius plus a margin (default {CLI_EDGE_OFFSET} mm; 0 allows edge points)")
     parser.add_argument("--min-spacing", type=float, default=None, metavar="MM",
-                        help="smallest distance between two points (default 0, or a fifth of the "
-                             "even spacing for optimal)")
+                        help="smallest distance between two points, kept by every strategy "
+                             "(default a tenth of the even spacing sqrt(area / N), at least 0.005 mm)")
     parser.add_argument("--iterations", type=int, help="PSO iterations (default 3000)")
     parser.add_argument("--population", type=int, help="PSO particles (default 25)")
     parser.add_argument("--time-limit", type=float, metavar="S",

@@ -222,6 +222,7 @@ class DeviationObjective:
         shape = feet.uv.shape[:2]
         self._halves = np.ascontiguousarray(0.5 * halves.T.reshape((2,) + shape))
         self._directions = np.ascontiguousarray(directions.transpose(1, 2, 0).reshape((2, 3) + shape))
+        self._expansions = [Expansion(self, dtype) for dtype in (np.float64, np.float32)]
         self._counted = feet.counted.ravel().copy()
 
     @property
@@ -241,46 +242,30 @@ class DeviationObjective:
         points = self.model.points_by_coordinate(u, v)
         return self.space.solve(self.space.u_basis.values(u), self.space.v_basis.values(v), points)
 
-    def surface(self, poles, scratch=None):
-        """Substitute points on the grid: poles (..., n_u, n_v, 3) -> (..., 3, g_u, g_v) mm.
-
-        scratch: a Scratch of this batch's shape to compute in (then its ``surface`` is returned).
-        """
+    def surface(self, poles):
+        """Substitute points on the grid: poles (..., n_u, n_v, 3) -> (..., 3, g_u, g_v) mm."""
         by_coord = np.ascontiguousarray(np.moveaxis(np.asarray(poles), -1, -3))
-        if scratch is None:
-            return np.matmul(np.matmul(self.grid_u, by_coord), self.grid_v_t)
-        np.matmul(self.grid_u, by_coord, out=scratch.along_u)
-        return np.matmul(scratch.along_u, self.grid_v_t, out=scratch.surface)
+        return np.matmul(np.matmul(self.grid_u, by_coord), self.grid_v_t)
 
     def expanded_field(self, poles):
         """Signed deviation on the grid's nodes, expanded about the raster.
 
         poles (..., n_u, n_v, 3) -> (..., g_u, g_v) mm: d2 = n . e - e^T K e / 2 with
-        e = S(h) - F_g (see the module docstring); only n . e when ``order`` is 1. A swarm's
-        arrays are large: they are computed in place in buffers kept between calls (allocating
-        them anew each time costs more than the arithmetic).
+        e = S(h) - F_g (see the module docstring); only n . e when ``order`` is 1.
         """
-        return self._expanded_in_scratch(np.asarray(poles)).copy()
+        poles = np.asarray(poles, dtype=float)
+        return self._expansions[0].field(poles, Scratch(poles.shape[:-3], poles.dtype, self.space.poles,
+                                                          self.grid.size), self.order)
 
-    def _expanded_in_scratch(self, poles):
-        """:meth:`expanded_field` computed in the batch's Scratch (overwritten by the next call)."""
-        scratch = self._scratch_for(poles.shape[:-3])
-        error = self.surface(poles, scratch)
-        error -= self._foot_points
-        field = np.einsum("...cij,cij->...ij", error, self._normals, out=scratch.field)
-        if self.order == 2:
-            for half, direction in zip(self._halves, self._directions):
-                along = np.einsum("...cij,cij->...ij", error, direction, out=scratch.along)
-                along *= along
-                along *= half
-                field -= along
-        return field
-
-    def _scratch_for(self, batch):
-        """The Scratch for a batch shape, made on first use (and again when the shape changes)."""
+    def _swarm_field(self, poles):
+        """:meth:`expanded_field` for a swarm, in single precision in work arrays kept between calls
+        (overwritten by the next call). A swarm's arrays are large: allocating them anew costs more
+        than the arithmetic, and single precision halves their traffic; the swarm only compares
+        values (1e-5 mm apart at worst), and every result is judged exactly in double precision."""
+        batch = poles.shape[:-3]
         if self._scratch is None or self._scratch.batch != batch:
-            self._scratch = Scratch(batch, self.space.poles, self.grid.size)
-        return self._scratch
+            self._scratch = Scratch(batch, np.float32, self.space.poles, self.grid.size)
+        return self._expansions[1].field(poles, self._scratch, self.order)
 
     def __getstate__(self):
         state = dict(self.__dict__)
@@ -310,7 +295,7 @@ class DeviationObjective:
     def __call__(self, uv):
         """Maximum expanded deviation of each point set's substitute: uv (P, N, 2) -> (P,) mm."""
         uv = np.asarray(uv, dtype=float)
-        field = self._expanded_in_scratch(self.fit(uv)).reshape(uv.shape[0], -1)
+        field = self._swarm_field(self.fit(uv)).reshape(uv.shape[0], -1)
         self.evaluations += uv.shape[0]
         return np.abs(field, out=field).max(axis=1, where=self._counted, initial=-np.inf)
 
@@ -375,14 +360,41 @@ def curvature_matrices(model, uv, normals):
 
 
 class Scratch:
-    """Work arrays of the swarm objective for one batch shape (see DeviationObjective.expanded_field)."""
+    """Work arrays of the expansion for one batch shape and precision."""
 
-    def __init__(self, batch, poles, grid):
+    def __init__(self, batch, dtype, poles, grid):
         self.batch = tuple(batch)
-        self.along_u = np.empty(self.batch + (3, grid[0], poles[1]))
-        self.surface = np.empty(self.batch + (3,) + tuple(grid))
-        self.field = np.empty(self.batch + tuple(grid))
-        self.along = np.empty(self.batch + tuple(grid))
+        self.along_u = np.empty(self.batch + (3, grid[0], poles[1]), dtype)
+        self.surface = np.empty(self.batch + (3,) + tuple(grid), dtype)
+        self.field = np.empty(self.batch + tuple(grid), dtype)
+        self.along = np.empty(self.batch + tuple(grid), dtype)
+
+
+class Expansion:
+    """The arrays of a DeviationObjective's expansion in one precision, and its evaluation."""
+
+    def __init__(self, objective, dtype):
+        def cast(array):
+            return np.ascontiguousarray(array, dtype=dtype)
+        self.dtype = dtype
+        self.grid_u, self.grid_v_t = cast(objective.grid_u), cast(objective.grid_v_t)
+        self.foot_points, self.normals = cast(objective._foot_points), cast(objective._normals)
+        self.halves, self.directions = cast(objective._halves), cast(objective._directions)
+
+    def field(self, poles, scratch, order):
+        """d2 (or n . e for order 1) of poles (..., n_u, n_v, 3) in ``scratch``: (..., g_u, g_v)."""
+        by_coord = np.ascontiguousarray(np.moveaxis(poles, -1, -3), dtype=self.dtype)
+        np.matmul(self.grid_u, by_coord, out=scratch.along_u)
+        error = np.matmul(scratch.along_u, self.grid_v_t, out=scratch.surface)
+        error -= self.foot_points
+        field = np.einsum("...cij,cij->...ij", error, self.normals, out=scratch.field)
+        if order == 2:
+            for half, direction in zip(self.halves, self.directions):
+                along = np.einsum("...cij,cij->...ij", error, direction, out=scratch.along)
+                along *= along
+                along *= half
+                field -= along
+        return field
 
 
 class Linearisation:

@@ -18,7 +18,8 @@ class SamplingResult:
     deviation: DeviationStats at the nodes of the evaluation grid (cmmsampling.deviation); history: best maximum deviation (mm) per
     iteration for the optimisers, else None; evaluations: fitness evaluations;
     timings: seconds per phase; settings: every parameter of the run; cancelled: stopped early;
-    check: DeviationStats on the check grid (3x denser than the grid optimised on);
+    check: DeviationStats on the check grid (3x denser than the grid optimised on), computed on
+    first use (about half a second);
     problem: the SamplingProblem it was computed for (grids, objective, bounds).
     """
 
@@ -35,10 +36,17 @@ class SamplingResult:
     timings: dict = field(default_factory=dict)
     settings: dict = field(default_factory=dict)
     cancelled: bool = False
-    check: object = None
     problem: object = None
     notes: list = field(default_factory=list)
     _bounds: dict = field(default=None, repr=False)
+    _check: object = field(default=None, repr=False)
+
+    @property
+    def check(self):
+        """DeviationStats at the nodes of the check grid, 3x denser than the grid optimised on."""
+        if self._check is None:
+            self._check = self.problem.deviation(self.poles, check=True)
+        return self._check
 
     @property
     def exact(self):
@@ -98,7 +106,7 @@ class SamplingResult:
             "rms_mm": d.rms,
             "std_mm": d.std,
             "occ_max_mm": d.occ_maximum,
-            "check_max_mm": self.check.maximum if self.check is not None else float("nan"),
+            "check_max_mm": self.check.maximum,
             "time_s": self.timings.get("total_s", float("nan")),
             "evaluations": self.evaluations,
             "cancelled": self.cancelled,

@@ -61,8 +61,10 @@ def run_pso(problem, progress, population, iterations, w1, w2, c1, c2, velocity_
         raise ValueError(
             f"no particle kept its points {problem.min_spacing:g} mm apart; lower min_spacing or "
             "use start_from_uniform=True")
+    if swarm.cancelled:
+        return StrategyOutcome(swarm.best, swarm.history, swarm.evaluations, True)
     best, notes = _best_exact(problem, swarm.best, seeds)
-    return StrategyOutcome(best, swarm.history, swarm.evaluations, swarm.cancelled, notes=notes)
+    return StrategyOutcome(best, swarm.history, swarm.evaluations, False, notes=notes)
 
 
 def _uniform_seeds(problem):
@@ -369,13 +371,12 @@ def _judge(problem, outcome, strategy, settings, strategy_s, occ_check):
     with blas_threads(1):
         poles = problem.objective.fit(uv[None])[0]
         stats = problem.deviation(poles)
-        check = problem.deviation(poles, check=True)
     evaluation_s = time.perf_counter() - start
     result = SamplingResult(
         strategy=strategy, uv=uv, points=problem.model.points(uv), normals=problem.model.normals(uv),
         poles=poles, space=problem.space, deviation=stats, model=problem.model,
         history=outcome.history, evaluations=outcome.evaluations, settings=settings,
-        cancelled=outcome.cancelled, check=check, problem=problem, notes=list(outcome.notes),
+        cancelled=outcome.cancelled, problem=problem, notes=list(outcome.notes),
     )
     occ_s = 0.0
     if occ_check:

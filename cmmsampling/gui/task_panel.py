@@ -196,7 +196,11 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
 
     # --- values
     def _fill_strategies(self):
-        """The strategy list (descriptions as tooltips) and the blind ones a descent starts from."""
+        """The strategy list (descriptions as tooltips) and the starts of a descent: "best" and the
+        blind strategies."""
+        self.form.start.addItem("best")
+        self.form.start.setItemData(0, "the best of " + ", ".join(sampling.BEST_STARTS) + " for this face",
+                                    QtCore.Qt.ToolTipRole)
         for name, strategy in sampling.STRATEGIES.items():
             self.form.strategy.addItem(name)
             self.form.strategy.setItemData(self.form.strategy.count() - 1, strategy.description,

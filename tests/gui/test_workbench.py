@@ -56,7 +56,7 @@ def test_panel_defaults_are_the_papers_and_options_follow_the_strategy(doc):
     assert form.min_spacing.text() == "auto"
     for words in ("useless", "probe ball radius plus a margin", "0 reproduces the paper"):
         assert words in form.edge_offset.toolTip()
-    assert "auto" in form.min_spacing.toolTip() and "optimal" in form.min_spacing.toolTip()
+    assert "auto" in form.min_spacing.toolTip() and "every strategy" in form.min_spacing.toolTip()
     assert form.strategy.currentText() == "pso" and form.start_from_uniform.isChecked()
     assert [form.strategy.itemText(i) for i in range(form.strategy.count())] == list(cmmsampling.STRATEGIES)
     for name in expected:
@@ -68,7 +68,7 @@ def test_panel_defaults_are_the_papers_and_options_follow_the_strategy(doc):
     assert not form.optimalGroup.isEnabled()
     fill(form, "optimal")
     assert form.optimalGroup.isEnabled() and not form.psoGroup.isEnabled() and form.time_limit.isEnabled()
-    assert form.start.currentText() == "uniform_parametric"
+    assert form.start.currentText() == "best"
     assert [form.start.itemText(i) for i in range(form.start.count())] == [
         name for name, s in cmmsampling.STRATEGIES.items() if not s.optimiser]
     fill(form, "pso", auto_poles=True)
@@ -240,9 +240,9 @@ def test_optimal_strategy_through_the_panel(doc):
         max_evaluations=40)
     assert points.Strategy == "optimal" and len(points.Labels) == 16
     assert parameters["max_evaluations"] == 40 and parameters["time_limit"] is None
-    assert parameters["start"] == "uniform_parametric"
+    assert parameters["start"] == "best"
     echo = ("strategy='optimal', seed=0, fit_degree=3, grid=30, edge_offset=1.5, min_spacing=None, "
-            "start='uniform_parametric', time_limit=None, max_evaluations=40)")
+            "start='best', time_limit=None, max_evaluations=40)")
     assert echo in dock_text("Python console")
 
 
