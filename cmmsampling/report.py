@@ -236,7 +236,7 @@ def figure_max_vs_n(study):
         ax.set_xticks(ns)
         ax.grid(True, which="both", alpha=0.3)
     axes[0].set_title("Maximum deviation")
-    axes[1].set_title("How far from the best possible")
+    axes[1].set_title("How far from the best found (local bound)")
     axes[2].set_title("Run time")
     handles = dict(zip(*reversed(axes[0].get_legend_handles_labels())))
     names = [label(s) for s in study.strategies if label(s) in handles]
@@ -277,7 +277,7 @@ def _draw_bounds(ax, study):
     ax.plot(ns, [study.bounds[n].grid for n in ns], color="black", linestyle="--", linewidth=2,
             label="local bound about the best")
     ax.plot(ns, [study.bounds[n].check for n in ns], color="black", linestyle=":", linewidth=2,
-            label="lower bound, check grid")
+            label="local bound, check grid")
 
 
 FIGURES = (
