@@ -18,6 +18,7 @@ from ..cli import CLI_EDGE_OFFSET
 from ..deviation import DEFAULT_GRID
 from ..fitting import DEFAULT_DEGREE, default_pole_count
 from . import icon, resource, settings
+from .qt_compat import flag_value
 from .selection import SelectionError, selected_face
 from .worker import BackgroundSampling
 
@@ -124,7 +125,7 @@ class BackgroundRunPanel:
         fit_narrow_dock(self.form)
 
     def getStandardButtons(self):
-        return int(QtGui.QDialogButtonBox.Ok | QtGui.QDialogButtonBox.Cancel)
+        return flag_value(QtGui.QDialogButtonBox.Ok | QtGui.QDialogButtonBox.Cancel)
 
     @staticmethod
     def report_failure(run):

@@ -48,7 +48,9 @@ def test_colour_map_runs_blue_to_red_with_grey_off_the_face():
 
 
 def test_panel_defaults_are_the_papers_and_options_follow_the_strategy(doc):
+    before = dock_text("Report view")
     form = open_panel(doc)
+    assert "Traceback" not in dock_text("Report view")[len(before):]
     assert form.faceLabel.text() == "Body.Face1"
     expected = {"n": 81, "population": 25, "iterations": 3000, "w1": 0.5, "w2": 0.0, "c1": 2.0,
                 "c2": 2.0, "seed": 0, "fit_degree": 3, "grid": 60, "edge_offset": 1.5}
