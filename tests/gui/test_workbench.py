@@ -14,7 +14,7 @@ from PySide import QtCore, QtGui
 
 import cmmsampling
 from cmmsampling import document
-from cmmsampling.gui import colormap, commands, settings, task_panel, view_providers
+from cmmsampling.gui import colormap, commands, qt_compat, settings, task_panel, view_providers
 from cmmsampling.surface import make_bspline_surface, reference_poles
 
 from .helpers import (
@@ -92,6 +92,16 @@ def clipped_widgets(form):
                if w.isVisible() and w.window() is main_window()
                and w.mapTo(form, QtCore.QPoint(w.width() - 1, 0)).x() > edge]
     return clipped, edge
+
+
+def test_a_closed_panels_form_is_not_handed_out_again(doc):
+    """FreeCAD deletes the form when the panel closes; PySide must drop its wrapper then, or hands
+    it to a later widget at the same address (on FreeCAD 1.0 the next panel's form.strategy was a
+    deleted QComboBox, or a QWidget)."""
+    form = open_panel(doc)
+    task_button(CANCEL).click()
+    assert wait_until(lambda: not FreeCADGui.Control.activeDialog(), 2)
+    assert wait_until(lambda: not qt_compat.shiboken().isValid(form), 5)
 
 
 def test_panel_fits_the_default_width_of_the_combo_view(doc, artifacts):
