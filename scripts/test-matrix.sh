@@ -125,11 +125,16 @@ ensure_debootstrap() {
 
 in_root() {
   # in_root SUITE COMMAND: run a shell command in the checkout inside the suite's root, with a clean
-  # environment and a fresh /tmp; the checkout is bind-mounted at /work/cmmsampling.
+  # environment and a fresh /tmp; the checkout is bind-mounted at /work/cmmsampling (and
+  # ../shared/testdata, where it exists, at /work/shared/testdata).
   local suite="$1" command="$2" dir="$cache/$1"
   unmount_leftovers "$dir"
   mkdir -p "$dir/work/cmmsampling"
   mount --bind "$repo" "$dir/work/cmmsampling" && mounted+=("$dir/work/cmmsampling")
+  if [ -d "$repo/../shared/testdata" ]; then   # the CAD files tests/test_real_parts.py reads
+    mkdir -p "$dir/work/shared/testdata"
+    mount --bind "$repo/../shared/testdata" "$dir/work/shared/testdata" && mounted+=("$dir/work/shared/testdata")
+  fi
   mount -t tmpfs tmpfs "$dir/tmp" && mounted+=("$dir/tmp")
   mount_into "$dir"
   local code=0
