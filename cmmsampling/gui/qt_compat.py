@@ -33,10 +33,11 @@ def forget_when_destroyed(widget):
     """Invalidate PySide's wrapper of ``widget`` and of its children when Qt deletes the widget.
 
     FreeCAD deletes a task panel's form and its button box in C++ when the panel closes, while
-    PySide's wrappers of them live on (a reference from C++ keeps the form's). Until they are
-    invalidated PySide hands such a wrapper, of the old class and with the old children as
-    attributes, to a new widget made at the same address: the next panel's ``form.strategy``
-    was then a deleted QComboBox, or a QWidget (seen on FreeCAD 1.0).
+    PySide's wrappers of them live on (the form's is held by a reference Python's garbage
+    collector cannot see). Until they are invalidated PySide hands such a wrapper, of the old
+    class and with the old children as attributes, to a new widget made at the same address:
+    the next panel's ``form.strategy`` was then a deleted QComboBox, or a QWidget (seen on
+    FreeCAD 1.0).
     """
     widget.destroyed.connect(functools.partial(_invalidate, widget))
 
