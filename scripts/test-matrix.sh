@@ -14,7 +14,9 @@ set -euo pipefail
 repo="$(cd "$(dirname "$0")/.." && pwd)"
 cache="${CMMSAMPLING_ROOTS:-/var/cache/cmmsampling/roots}"
 mirror="${CMMSAMPLING_MIRROR:-http://deb.debian.org/debian}"
-EXTRA_PACKAGES=(git)   # FreeCAD 1.0's Addon Manager clones add-ons with git
+# git: FreeCAD 1.0's Addon Manager clones add-ons with it. qt6-svg-plugins (recommended by Qt 6):
+# FreeCAD 1.1's theme draws check marks and spin-box arrows from SVG images.
+EXTRA_PACKAGES=(git qt6-svg-plugins)
 CHROOT_PATH=/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin
 mounted=()
 
