@@ -114,7 +114,7 @@ ensure_root() {
   fi
   log "$suite: building the root in $dir"
   start=$SECONDS
-  build_root "$suite" "$dir"
+  build_root "$suite" "$dir" || return 1
   log "$suite: root built in $((SECONDS - start)) s"
 }
 
