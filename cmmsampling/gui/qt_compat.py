@@ -32,12 +32,12 @@ def shiboken():
 def forget_when_destroyed(widget):
     """Invalidate PySide's wrapper of ``widget`` and of its children when Qt deletes the widget.
 
-    FreeCAD deletes a task panel's form and its button box in C++ when the panel closes, while
-    PySide's wrappers of them live on (the form's is held by a reference Python's garbage
-    collector cannot see). Until they are invalidated PySide hands such a wrapper, of the old
-    class and with the old children as attributes, to a new widget made at the same address:
-    the next panel's ``form.strategy`` was then a deleted QComboBox, or a QWidget (seen on
-    FreeCAD 1.0).
+    FreeCAD deletes a task panel's form and its button box in C++ when the panel closes. On
+    FreeCAD 1.0 and 1.1 PySide's wrapper of the form stays alive and valid after that (held by a
+    reference Python's garbage collector cannot see; 0.20 invalidates it). Until it is
+    invalidated PySide hands such a wrapper, of the old class and with the old children as
+    attributes, to a new widget made at the same address: on 1.0 the next panel's
+    ``form.strategy`` was then a deleted QComboBox, or a QWidget.
     """
     widget.destroyed.connect(functools.partial(_invalidate, widget))
 
