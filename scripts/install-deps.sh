@@ -1,8 +1,14 @@
 #!/usr/bin/env bash
-# Install what cmmsampling needs on Debian 12, only what is missing: FreeCAD 0.20 (Part/OCC,
-# numpy, scipy), Xvfb for the GUI tests, pytest, hypothesis, matplotlib, threadpoolctl.
+# Install what cmmsampling needs on Debian (12, 13 or sid), only what is missing: FreeCAD (Part/OCC),
+# numpy, scipy, Xvfb for the GUI tests, pytest, hypothesis, matplotlib, threadpoolctl.
+# --list prints the package names instead (scripts/test-matrix.sh installs the same into its roots).
 set -euo pipefail
-PACKAGES=(freecad xvfb xauth python3-pytest python3-matplotlib python3-hypothesis python3-threadpoolctl)
+PACKAGES=(freecad python3-numpy python3-scipy xvfb xauth python3-pytest python3-matplotlib
+          python3-hypothesis python3-threadpoolctl)
+if [ "${1:-}" = "--list" ]; then
+  printf '%s\n' "${PACKAGES[@]}"
+  exit 0
+fi
 missing=()
 for p in "${PACKAGES[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -1,15 +1,17 @@
 #!/usr/bin/env bash
 # Run the GUI tests (tests/gui) inside the real FreeCAD GUI under a virtual X server.
-# The addon is installed into a temporary HOME (a symlink to this checkout), so the user's own
-# FreeCAD configuration is never touched. Extra arguments go to pytest, e.g. -k cancel.
-# Screenshots: artifacts/gui/. Exit code: pytest's.
+# The addon is installed into a temporary HOME (a symlink to this checkout) in the Mod folder
+# FreeCAD names for a new user (~/.local/share/FreeCAD/Mod; FreeCAD 1.1: .../FreeCAD/v1-1/Mod),
+# so the user's own FreeCAD configuration is never touched. Extra arguments go to pytest, e.g.
+# -k cancel. Screenshots: artifacts/gui/. Exit code: pytest's.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 home="$(mktemp -d)"
 trap 'rm -rf "$home"' EXIT
-mkdir -p "$home/.local/share/FreeCAD/Mod"
-ln -s "$root" "$home/.local/share/FreeCAD/Mod/cmmsampling"
 export HOME="$home" XDG_DATA_HOME="$home/.local/share" XDG_CONFIG_HOME="$home/.config"
+mods="$(freecadcmd -c 'import FreeCAD; print(FreeCAD.getUserAppDataDir())' | tail -n 1)Mod"
+mkdir -p "$mods"
+ln -s "$root" "$mods/cmmsampling"
 export QTWEBENGINE_DISABLE_SANDBOX=1
 pytest_args=""
 if [ "$#" -gt 0 ]; then pytest_args="$(printf "%q " "$@")"; fi

@@ -8,6 +8,11 @@ import cmmsampling
 from cmmsampling.surface import make_bspline_surface
 
 QUICK = {"pso": {"iterations": 4, "population": 4}, "optimal": {"max_evaluations": 15}}
+# OCC's distance from a point to a face (Face.distToShape) misses the foot point of a point whose
+# parameter lies within about 1e-7 of the end of the face's [0, 1] parameter range and returns the
+# distance to the edge instead: up to 1e-7 of the face's size, 8e-6 mm on these 80 mm faces, for a
+# point on the face (seen: 1.6e-6 mm for an "optimal" point at u = 2e-8, FreeCAD 0.20 and 1.1).
+OCC_DISTANCE_MM = 1e-5
 
 
 @st.composite
@@ -34,7 +39,7 @@ def nurbs_faces(draw):
 def test_any_face_any_strategy_gives_usable_points(tmp_path_factory, face, strategy, n):
     result = cmmsampling.sample(face, n, strategy, grid=16, occ_check=False, **QUICK.get(strategy, {}))
     assert result.points.shape == (n, 3) and np.all(np.isfinite(result.points))
-    assert max(face.distToShape(Part.Vertex(*p))[0] for p in result.points) < 1e-6
+    assert max(face.distToShape(Part.Vertex(*p))[0] for p in result.points) < OCC_DISTANCE_MM
     assert np.allclose(np.linalg.norm(result.normals, axis=1), 1.0)
     occ = np.array([tuple(result.model.face.normalAt(u, v)) for u, v in result.uv])
     assert np.abs(occ - result.normals).max() < 1e-6

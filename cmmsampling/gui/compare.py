@@ -5,7 +5,8 @@ The task panel composes a ``cmmsampling.compare(face, ...)`` call; the study and
 QTimer, with a progress bar of the study's steps. Cancel stops the study after the step under way
 and keeps what is finished: the partial report is written and opened, and the panel says so.
 Nothing is added to the document: the comparison is a report (HTML and PNG figures), opened in
-FreeCAD's web view. The calls are echoed in the Python console, where ``study`` holds the result.
+FreeCAD's web view or the system's web browser. The calls are echoed in the Python console, where
+``study`` holds the result.
 """
 import __main__
 import os
@@ -86,14 +87,25 @@ def default_folder(doc):
 
 
 def open_report(path):
-    """Show an HTML file in FreeCAD's web view (the Web module), else in the system's browser."""
-    url = QtCore.QUrl.fromLocalFile(os.path.abspath(path))
+    """Show an HTML file in FreeCAD's web view where FreeCAD has one (the Web module's GUI, FreeCAD
+    0.20), else in the system's web browser (FreeCAD 1.0 dropped the Web workbench; its Help opens
+    the system's browser too). Returns whether it could be shown (see :func:`open_in_browser`)."""
     try:
         import WebGui
     except ImportError:
-        QtGui.QDesktopServices.openUrl(url)
-        return
-    WebGui.openBrowser(url.toString())
+        return open_in_browser(path)
+    WebGui.openBrowser(QtCore.QUrl.fromLocalFile(os.path.abspath(path)).toString())
+    return True
+
+
+def open_in_browser(path):
+    """Ask the system to open a file in its web browser; when none can be started (no desktop,
+    no browser), say in the Report view where the file is. Returns whether one was started."""
+    if QtGui.QDesktopServices.openUrl(QtCore.QUrl.fromLocalFile(os.path.abspath(path))):
+        return True
+    FreeCAD.Console.PrintWarning(f"cmmsampling: no web browser could be started; open {path} "
+                                 "in one to see the report.\n")
+    return False
 
 
 class BackgroundComparison(BackgroundTask):
@@ -308,7 +320,7 @@ class CompareTaskPanel(BackgroundRunPanel):
         if run.report is not None:
             FreeCAD.Console.PrintMessage(f"Strategy comparison, {len(study.rows)} runs in "
                                          f"{study.elapsed_s:.0f} s: {run.report}\n")
-            open_report(run.report)
+            shown = open_report(run.report)
         if not study.cancelled:
             FreeCADGui.Control.closeDialog()
             return
@@ -317,8 +329,8 @@ class CompareTaskPanel(BackgroundRunPanel):
                              "finished: no report was written.")
         else:
             self.show_status(f"Cancelled after {run.done} of {run.total} steps. The partial "
-                             f"report ({len(study.rows)} runs) is open; it is report.html in the "
-                             "report folder.")
+                             f"report ({len(study.rows)} runs) is {'open' if shown else 'written'}; "
+                             "it is report.html in the report folder.")
 
     def show_status(self, text, error=False):
         self.form.status.setText(text)

@@ -13,6 +13,7 @@ from PySide import QtCore, QtGui
 
 from ..exporting import ORDERS
 from . import icon, settings
+from .qt_compat import run_modal
 
 GLOBAL = "Global (document)"
 # Document objects that are coordinate systems; types unknown to this FreeCAD are never matched.
@@ -152,7 +153,7 @@ def ask_export_options(points):
     groups = [o.Label for o in points.InList if o.isDerivedFrom("App::DocumentObjectGroup")]
     dialog = ExportOptionsDialog(points.Document, (groups or [points.Label])[0], FreeCADGui.getMainWindow())
     try:
-        if dialog.exec_() != QtGui.QDialog.Accepted:
+        if run_modal(dialog) != QtGui.QDialog.Accepted:
             return None
         settings.save(dialog.stored())
         return dialog.options()

@@ -18,6 +18,7 @@ from ..cli import CLI_EDGE_OFFSET
 from ..deviation import DEFAULT_GRID
 from ..fitting import DEFAULT_DEGREE, default_pole_count
 from . import icon, resource, settings
+from .qt_compat import flag_value, forget_when_destroyed
 from .selection import SelectionError, selected_face
 from .worker import BackgroundSampling
 
@@ -122,9 +123,10 @@ class BackgroundRunPanel:
         self.timer.setInterval(POLL_MS)
         self.timer.timeout.connect(self.poll)
         fit_narrow_dock(self.form)
+        forget_when_destroyed(self.form)
 
     def getStandardButtons(self):
-        return int(QtGui.QDialogButtonBox.Ok | QtGui.QDialogButtonBox.Cancel)
+        return flag_value(QtGui.QDialogButtonBox.Ok | QtGui.QDialogButtonBox.Cancel)
 
     @staticmethod
     def report_failure(run):
@@ -143,6 +145,7 @@ class BackgroundRunPanel:
 
     def modifyStandardButtons(self, box):
         self.buttons = box
+        forget_when_destroyed(box)
         ok = box.button(QtGui.QDialogButtonBox.Ok)
         ok.setText(self.OK_TEXT)
         ok.setToolTip(self.OK_TIP)

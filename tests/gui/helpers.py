@@ -62,9 +62,14 @@ def task_form():
 
 
 def task_button(which):
-    """The open task dialog's standard button: which = QtGui.QDialogButtonBox.Ok or .Cancel."""
+    """The open task dialog's standard button: which = QtGui.QDialogButtonBox.Ok or .Cancel.
+
+    The wrapper of a widget can be a stale one of another class (see :func:`widgets`); calling
+    QDialogButtonBox.button() through it on a widget that is no button box reads that widget as
+    one and can crash FreeCAD. Qt itself (``inherits``: the real object's meta-object) says
+    which widgets are button boxes."""
     for box in widgets():
-        if isinstance(box, QtGui.QDialogButtonBox) and box.isVisible():
+        if isinstance(box, QtGui.QDialogButtonBox) and box.inherits("QDialogButtonBox") and box.isVisible():
             button = box.button(which)
             if button is not None:
                 return button

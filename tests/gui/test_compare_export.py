@@ -2,6 +2,7 @@
 (frame, probe radius, order) in the real FreeCAD GUI."""
 import __main__
 import gc
+import importlib.util
 import os
 import threading
 import weakref
@@ -19,7 +20,7 @@ from cmmsampling.gui import compare as compare_panel
 from cmmsampling.gui import export_options, settings
 from cmmsampling.probe_path import path_length
 
-from .helpers import Hold, dock_text, main_window, process_events, task_button, wait_until
+from .helpers import Hold, dock_text, main_window, process_events, task_button, wait_until, widgets
 
 OK, CANCEL = QtGui.QDialogButtonBox.Ok, QtGui.QDialogButtonBox.Cancel
 # A comparison small enough for a shared two-core machine: 2 N x 2 strategies, 6 steps.
@@ -44,8 +45,35 @@ def command(workbench):
 def opened(monkeypatch):
     """The reports the panel opens (paths), instead of opening them."""
     paths = []
-    monkeypatch.setattr(compare_panel, "open_report", paths.append)
+
+    def record(path):
+        paths.append(path)
+        return True
+
+    monkeypatch.setattr(compare_panel, "open_report", record)
     return paths
+
+
+class UrlRecorder(QtCore.QObject):
+    """A URL handler for QDesktopServices: keeps the local paths it is asked to open."""
+
+    def __init__(self):
+        super().__init__()
+        self.paths = []
+
+    @QtCore.Slot(QtCore.QUrl)
+    def record(self, url):
+        self.paths.append(url.toLocalFile())
+
+
+@pytest.fixture
+def browser():
+    """The files the workbench asks the system to open in its browser (Qt's handler of file URLs
+    takes them instead of the browser)."""
+    recorder = UrlRecorder()
+    QtGui.QDesktopServices.setUrlHandler("file", recorder, "record")
+    yield recorder.paths
+    QtGui.QDesktopServices.unsetUrlHandler("file")
 
 
 def hold_study_at(monkeypatch, step):
@@ -68,7 +96,9 @@ def hold_study_at(monkeypatch, step):
 
 
 def compare_form():
-    return main_window().findChild(QtGui.QWidget, "CompareStrategies")
+    """The Compare strategies panel's form while it is open, else None (looked up as
+    :func:`helpers.task_form` does, not with the main window's findChild)."""
+    return next((w for w in widgets() if w.objectName() == "CompareStrategies"), None)
 
 
 def start_held_study(doc, monkeypatch, folder):
@@ -284,15 +314,41 @@ def browser_views():
     return [w for w in area.subWindowList() if w.widget().metaObject().className() == "WebGui::BrowserView"]
 
 
-def test_the_report_opens_in_freecads_web_view(workbench, tmp_path):
-    page = tmp_path / "report.html"
+def report_page(folder):
+    page = folder / "report.html"
     page.write_text("<html><head><title>Report</title></head><body>Table 1</body></html>")
+    return str(page)
+
+
+def test_the_report_opens_in_freecads_web_view_else_in_the_system_browser(workbench, tmp_path, browser):
+    """FreeCAD 0.20 has a web view (the Web module's GUI); FreeCAD 1.0 and 1.1 have none."""
+    page = report_page(tmp_path)
+    if importlib.util.find_spec("WebGui") is None:
+        assert compare_panel.open_report(page) and browser == [page]
+        return
     before = browser_views()
-    compare_panel.open_report(str(page))
-    assert wait_until(lambda: len(browser_views()) == len(before) + 1, 10)
+    assert compare_panel.open_report(page)
+    assert wait_until(lambda: len(browser_views()) == len(before) + 1, 10) and browser == []
     opened_view = next(w for w in browser_views() if w not in before)
     opened_view.close()
     process_events(0.2)
+
+
+def test_the_system_browser_gets_the_report(workbench, tmp_path, browser):
+    page = report_page(tmp_path)
+    assert compare_panel.open_in_browser(page) and browser == [page]
+
+
+def test_without_a_browser_the_report_view_says_where_the_report_is(workbench, tmp_path, monkeypatch):
+    """No program to open web pages on the PATH (as in a bare system): Qt finds no launcher."""
+    page = report_page(tmp_path)
+    monkeypatch.setenv("PATH", str(tmp_path))
+    for name in ("BROWSER", "DEFAULT_BROWSER"):
+        monkeypatch.delenv(name, raising=False)
+    before = dock_text("Report view")
+    assert not compare_panel.open_in_browser(page)
+    assert wait_until(lambda: f"no web browser could be started; open {page} in one" in
+                      dock_text("Report view")[len(before):], 2)
 
 
 def run_dialog(action, handle, timeout_s=10):

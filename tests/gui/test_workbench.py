@@ -14,7 +14,7 @@ from PySide import QtCore, QtGui
 
 import cmmsampling
 from cmmsampling import document
-from cmmsampling.gui import colormap, commands, settings, task_panel, view_providers
+from cmmsampling.gui import colormap, commands, qt_compat, settings, task_panel, view_providers
 from cmmsampling.surface import make_bspline_surface, reference_poles
 
 from .helpers import (
@@ -48,7 +48,9 @@ def test_colour_map_runs_blue_to_red_with_grey_off_the_face():
 
 
 def test_panel_defaults_are_the_papers_and_options_follow_the_strategy(doc):
+    before = dock_text("Report view")
     form = open_panel(doc)
+    assert "Traceback" not in dock_text("Report view")[len(before):]
     assert form.faceLabel.text() == "Body.Face1"
     expected = {"n": 81, "population": 25, "iterations": 3000, "w1": 0.5, "w2": 0.0, "c1": 2.0,
                 "c2": 2.0, "seed": 0, "fit_degree": 3, "grid": 60, "edge_offset": 1.5}
@@ -90,6 +92,16 @@ def clipped_widgets(form):
                if w.isVisible() and w.window() is main_window()
                and w.mapTo(form, QtCore.QPoint(w.width() - 1, 0)).x() > edge]
     return clipped, edge
+
+
+def test_a_closed_panels_form_is_not_handed_out_again(doc):
+    """FreeCAD deletes the form when the panel closes; PySide must drop its wrapper then, or hands
+    it to a later widget at the same address (on FreeCAD 1.0 the next panel's form.strategy was a
+    deleted QComboBox, or a QWidget)."""
+    form = open_panel(doc)
+    task_button(CANCEL).click()
+    assert wait_until(lambda: not FreeCADGui.Control.activeDialog(), 2)
+    assert wait_until(lambda: not qt_compat.shiboken().isValid(form), 5)
 
 
 def test_panel_fits_the_default_width_of_the_combo_view(doc, artifacts):

@@ -1,0 +1,47 @@
+"""What differs between the Qt bindings of the FreeCAD versions the workbench runs on, and a
+guard against PySide handing out the wrapper of a deleted widget.
+
+FreeCAD 0.20 and 1.0 use PySide2, FreeCAD 1.1 PySide6 (both through FreeCAD's ``PySide``
+module). PySide6 turns Qt's enums and flags into Python enums, which ``int()`` refuses, and
+names ``QDialog.exec_`` ``exec`` (``exec_`` is deprecated there; PySide2 has only ``exec_``).
+"""
+import functools
+import importlib
+
+from PySide import QtCore
+
+
+def flag_value(flags):
+    """The integer of a Qt enum value or flag combination, e.g. ``QDialogButtonBox.Ok |
+    QDialogButtonBox.Cancel``, under PySide2 (``int()``) and PySide6 (``.value``)."""
+    return int(getattr(flags, "value", flags))
+
+
+def run_modal(dialog):
+    """Show ``dialog`` modally and return its result code (``exec`` or, in PySide2, ``exec_``)."""
+    run = getattr(dialog, "exec", None) or dialog.exec_
+    return run()
+
+
+def shiboken():
+    """The shiboken module of the PySide that FreeCAD uses (shiboken2 or shiboken6)."""
+    binding = QtCore.QObject.__module__.split(".")[0]
+    return importlib.import_module("shiboken" + binding[len("PySide"):])
+
+
+def forget_when_destroyed(widget):
+    """Invalidate PySide's wrapper of ``widget`` and of its children when Qt deletes the widget.
+
+    FreeCAD deletes a task panel's form and its button box in C++ when the panel closes. On
+    FreeCAD 1.0 and 1.1 PySide's wrapper of the form stays alive and valid after that (held by a
+    reference Python's garbage collector cannot see; 0.20 invalidates it). Until it is
+    invalidated PySide hands such a wrapper, of the old class and with the old children as
+    attributes, to a new widget made at the same address: on 1.0 the next panel's
+    ``form.strategy`` was then a deleted QComboBox, or a QWidget.
+    """
+    widget.destroyed.connect(functools.partial(_invalidate, widget))
+
+
+def _invalidate(widget, *_):
+    """Invalidate the wrapper of a widget being deleted (shiboken does its children's too)."""
+    shiboken().invalidate(widget)
