@@ -110,7 +110,7 @@ def _feasible_candidates(problem, count):
     return uv[problem.domain.contains(uv)][:count]
 
 
-def _dense_enough(make_candidates, problem, start, keep_first=False):
+def _dense_enough(make_candidates, problem, start, keep_first=False, with_layout=False):
     """Grow a candidate layout until N of its points are feasible and spaced, then thin it.
 
     make_candidates(m) -> (M, 2) uv for a layout of about m points; start: first m to try;
@@ -118,6 +118,7 @@ def _dense_enough(make_candidates, problem, start, keep_first=False):
     Feasible: on the face and at least edge_offset from its edges; spaced: greedily, in the
     layout's order, at least problem.min_spacing mm apart, and never coincident (closer than
     COINCIDENT times the face's size: several (u, v) of a degenerate edge, e.g. a sphere's pole).
+    with_layout: also return the whole layout's feasible, spaced points (M, 2) it was thinned from.
     """
     n = problem.n
     m = start
@@ -127,7 +128,8 @@ def _dense_enough(make_candidates, problem, start, keep_first=False):
         inside = uv[problem.domain.contains(uv)]
         inside = inside[spaced(problem.model.points(inside), spacing)]
         if len(inside) >= n:
-            return inside[:n] if keep_first else thin_evenly(inside, n)
+            chosen = inside[:n] if keep_first else thin_evenly(inside, n)
+            return (chosen, inside) if with_layout else chosen
         m = int(np.ceil(m * max(1.1, n / max(len(inside), 1))))
     raise ValueError(
         f"could not place {n} points on the face at least {problem.min_spacing:g} mm apart and "
@@ -241,24 +243,25 @@ def uniform_cartesian(problem):
         uv = snap_near_misses(problem.domain, uv, cell)
         return np.where((residual <= tolerance)[:, None], uv, np.nan)
 
-    uv = _dense_enough(candidates, problem, problem.n)
-    _check_coverage(problem, model.points(raster_uv), model.points(uv), "xyz"[int(np.argmax(frame[2]))])
+    uv, layout = _dense_enough(candidates, problem, problem.n, with_layout=True)
+    _check_coverage(problem, model.points(raster_uv), model.points(layout), "xyz"[int(np.argmax(frame[2]))],
+                    len(layout))
     return StrategyOutcome(uv)
 
 
-def _check_coverage(problem, face_points, points, axis):
+def _check_coverage(problem, face_points, points, axis, count):
     """ValueError when some of the face lies farther than COVERAGE times the even spacing from
-    every point: the footprint grid missed a steep part, where a fit would extrapolate.
+    every node of the footprint grid: the grid missed a steep part, where a fit would extrapolate.
 
-    face_points: (M, 3) mm spread over the feasible face; points: (N, 3) mm the layout; axis: the
-    machine axis the footprint is seen along.
+    face_points: (M, 3) mm spread over the feasible face; points: (count, 3) mm the grid's nodes on
+    the face (before the surplus is dropped); axis: the machine axis the footprint is seen along.
     """
-    even = float(np.sqrt(problem.domain.feasible_area / problem.n))
+    even = float(np.sqrt(problem.domain.feasible_area / count))
     gap = float(cKDTree(points).query(face_points)[0].max())
     if gap > COVERAGE * even:
         raise ValueError(
             f"uniform_cartesian leaves part of the face without points: a spot {gap:.3g} mm from the "
-            f"nearest one, where {problem.n} points spread evenly are {even:.3g} mm apart (the face is "
+            f"nearest node of its grid, where {count} points spread evenly are {even:.3g} mm apart (the face is "
             f"steep as seen along the machine {axis.upper()} axis, so the footprint grid misses it, and "
             "a fit there would extrapolate); use uniform_parametric, halton or an optimiser for this face")
 
