@@ -103,8 +103,12 @@ class FaceDomain:
         return inside
 
     def contains(self, uv):
-        """True where uv: (..., 2) is a feasible probe position: (...,) bool."""
-        return self._lookup(self._feasible, uv)
+        """True where uv: (..., 2) is a feasible probe position: (...,) bool (on the face by
+        :meth:`on_face`, near the loops tested against the loops themselves)."""
+        feasible = self._lookup(self._feasible, uv)
+        if self._loops is not None:
+            feasible &= self.on_face(uv)
+        return feasible
 
     def project(self, uv):
         """Nearest feasible point for each uv: (..., 2) -> (..., 2); feasible points stay put."""
