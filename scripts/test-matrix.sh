@@ -131,6 +131,7 @@ in_root() {
   # ../shared/testdata, where it exists, at /work/shared/testdata).
   local suite="$1" command="$2" dir="$cache/$1"
   unmount_leftovers "$dir"
+  rmdir "$dir/work/shared/testdata" "$dir/work/shared" 2>/dev/null || true   # an earlier mount point
   mkdir -p "$dir/work/cmmsampling"
   mount --bind "$repo" "$dir/work/cmmsampling" && mounted+=("$dir/work/cmmsampling")
   if [ -d "$repo/../shared/testdata" ]; then   # the CAD files tests/test_real_parts.py reads
