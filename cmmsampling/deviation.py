@@ -74,14 +74,12 @@ class Feet:
     """Closest points on the CAD face of target points, all (g_u, g_v, ...): the deviation's nodes.
 
     uv: (..., 2) the feet's parameters on the face; points: (..., 3) F(uv) mm; normals: (..., 3)
-    unit, out of the material; deviation: (...) signed distance from the target to its foot, mm;
-    counted: (...) bool, the foot lies on the face and is a normal foot.
+    unit, out of the material; counted: (...) bool, the foot lies on the face.
     """
 
     uv: np.ndarray
     points: np.ndarray
     normals: np.ndarray
-    deviation: np.ndarray
     counted: np.ndarray
 
 
@@ -100,10 +98,9 @@ def closest_feet(model, on_face, targets, start):
     uv = _closest_parameters(model, targets, np.asarray(start, dtype=float).reshape(-1, 2))
     points = model.points(uv)
     normals = model.normals(uv)
-    deviation = ((targets - points) * normals).sum(1)
-    counted = on_face(uv) & np.isfinite(deviation) & np.isfinite(normals).all(1)
+    counted = on_face(uv) & np.isfinite(points).all(1) & np.isfinite(normals).all(1)
     return Feet(uv.reshape(shape + (2,)), points.reshape(shape + (3,)), normals.reshape(shape + (3,)),
-                deviation.reshape(shape), counted.reshape(shape))
+                counted.reshape(shape))
 
 
 def substitute_distances(surface, nodes, start):
@@ -188,9 +185,8 @@ class DeviationObjective:
 
     model: the CAD truth (a SurfaceModel or NurbsPatch; only its NurbsPatch is kept, so the
     objective pickles without FreeCAD objects); space: SubstituteSpace; grid: EvaluationGrid;
-    feet: Feet of a reference substitute (see :meth:`expand`), or None to expand later.
-    order: 2 (default) uses the second-order expansion d2, 1 its first-order part n . e. Calling
-    it with uv: (P, N, 2) returns (P,) maximum expanded deviations in mm.
+    feet: Feet of a reference substitute (see :meth:`expand`), or None to expand later. Calling it
+    with uv: (P, N, 2) returns (P,) maximum expanded deviations in mm.
     """
 
     def __init__(self, model, space, grid, feet):
@@ -202,7 +198,6 @@ class DeviationObjective:
         self.grid_u = design_matrices(space.uknots, space.degrees[0], u)[0]
         self.grid_v_t = design_matrices(space.vknots, space.degrees[1], v)[0].T.copy()
         self.evaluations = 0
-        self.order = 2
         self.feet = None
         self._scratch = None
         if feet is not None:
@@ -215,14 +210,13 @@ class DeviationObjective:
         K_g, the latter as its two principal terms lambda_k t_k t_k^T (:func:`principal_terms`).
         """
         self.feet = feet
-        self._foot_points = np.ascontiguousarray(feet.points.transpose(2, 0, 1))
-        self._normals = np.ascontiguousarray(feet.normals.transpose(2, 0, 1))
         halves, directions = principal_terms(curvature_matrices(
             self.model, feet.uv.reshape(-1, 2), feet.normals.reshape(-1, 3)))
         shape = feet.uv.shape[:2]
-        self._halves = np.ascontiguousarray(0.5 * halves.T.reshape((2,) + shape))
-        self._directions = np.ascontiguousarray(directions.transpose(1, 2, 0).reshape((2, 3) + shape))
-        self._expansions = [Expansion(self, dtype) for dtype in (np.float64, np.float32)]
+        arrays = (self.grid_u, self.grid_v_t, feet.points.transpose(2, 0, 1),
+                  feet.normals.transpose(2, 0, 1), 0.5 * halves.T.reshape((2,) + shape),
+                  directions.transpose(1, 2, 0).reshape((2, 3) + shape))
+        self._exact, self._single = (Expansion(arrays, dtype) for dtype in (np.float64, np.float32))
         self._counted = feet.counted.ravel().copy()
 
     @property
@@ -251,11 +245,10 @@ class DeviationObjective:
         """Signed deviation on the grid's nodes, expanded about the raster.
 
         poles (..., n_u, n_v, 3) -> (..., g_u, g_v) mm: d2 = n . e - e^T K e / 2 with
-        e = S(h) - F_g (see the module docstring); only n . e when ``order`` is 1.
+        e = S(h) - F_g (see the module docstring).
         """
         poles = np.asarray(poles, dtype=float)
-        return self._expansions[0].field(poles, Scratch(poles.shape[:-3], poles.dtype, self.space.poles,
-                                                          self.grid.size), self.order)
+        return self._exact.field(poles, Scratch(poles.shape[:-3], poles.dtype, self.space.poles, self.grid.size))
 
     def _swarm_field(self, poles):
         """:meth:`expanded_field` for a swarm, in single precision in work arrays kept between calls
@@ -265,7 +258,7 @@ class DeviationObjective:
         batch = poles.shape[:-3]
         if self._scratch is None or self._scratch.batch != batch:
             self._scratch = Scratch(batch, np.float32, self.space.poles, self.grid.size)
-        return self._expansions[1].field(poles, self._scratch, self.order)
+        return self._single.field(poles, self._scratch)
 
     def __getstate__(self):
         state = dict(self.__dict__)
@@ -279,12 +272,12 @@ class DeviationObjective:
         with respect to S(h), n - K e; distance (g_u, g_v) = |d2| mm; counted (g_u, g_v) bool).
         """
         poles = np.asarray(poles).reshape(self.space.poles + (3,))
-        error = self.surface(poles) - self._foot_points
+        exact = self._exact
+        error = self.surface(poles) - exact.foot_points
         field = self.expanded_field(poles)
-        gradient = self._normals.copy()
-        if self.order == 2:
-            for half, direction in zip(self._halves, self._directions):
-                gradient -= 2.0 * half * (error * direction).sum(0) * direction
+        gradient = exact.normals.copy()
+        for half, direction in zip(exact.halves, exact.directions):
+            gradient -= 2.0 * half * (error * direction).sum(0) * direction
         return field * gradient, np.abs(field), self.feet.counted
 
     def grid_transpose(self, field):
@@ -371,29 +364,30 @@ class Scratch:
 
 
 class Expansion:
-    """The arrays of a DeviationObjective's expansion in one precision, and its evaluation."""
+    """The arrays of a DeviationObjective's expansion in one precision, and its evaluation.
 
-    def __init__(self, objective, dtype):
-        def cast(array):
-            return np.ascontiguousarray(array, dtype=dtype)
+    arrays: the grid's bases along u (g_u, n_u) and v, transposed (n_v, g_v); the nodes F_g
+    (3, g_u, g_v) mm; their normals (3, g_u, g_v); the halved principal curvatures of K_g
+    (2, g_u, g_v) 1/mm and their directions (2, 3, g_u, g_v).
+    """
+
+    def __init__(self, arrays, dtype):
         self.dtype = dtype
-        self.grid_u, self.grid_v_t = cast(objective.grid_u), cast(objective.grid_v_t)
-        self.foot_points, self.normals = cast(objective._foot_points), cast(objective._normals)
-        self.halves, self.directions = cast(objective._halves), cast(objective._directions)
+        (self.grid_u, self.grid_v_t, self.foot_points, self.normals, self.halves,
+         self.directions) = (np.ascontiguousarray(array, dtype=dtype) for array in arrays)
 
-    def field(self, poles, scratch, order):
-        """d2 (or n . e for order 1) of poles (..., n_u, n_v, 3) in ``scratch``: (..., g_u, g_v)."""
+    def field(self, poles, scratch):
+        """d2 of poles (..., n_u, n_v, 3) computed in ``scratch``: (..., g_u, g_v) mm."""
         by_coord = np.ascontiguousarray(np.moveaxis(poles, -1, -3), dtype=self.dtype)
         np.matmul(self.grid_u, by_coord, out=scratch.along_u)
         error = np.matmul(scratch.along_u, self.grid_v_t, out=scratch.surface)
         error -= self.foot_points
         field = np.einsum("...cij,cij->...ij", error, self.normals, out=scratch.field)
-        if order == 2:
-            for half, direction in zip(self.halves, self.directions):
-                along = np.einsum("...cij,cij->...ij", error, direction, out=scratch.along)
-                along *= along
-                along *= half
-                field -= along
+        for half, direction in zip(self.halves, self.directions):
+            along = np.einsum("...cij,cij->...ij", error, direction, out=scratch.along)
+            along *= along
+            along *= half
+            field -= along
         return field
 
 
