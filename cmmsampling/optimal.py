@@ -149,12 +149,10 @@ def descend(objective, start, lower, upper, judge, min_spacing=0.0, time_limit=N
     scale = upper - lower
     start = np.asarray(start, dtype=float)
     began = time.perf_counter()
-    first = surrogate(objective, start, 1.0, min_spacing, 0.0)
-    best = {"uv": start.copy(), "closest": first.closest}
+    best = {"closest": _spacing_penalty(objective.model.points(start), min_spacing, 0.0)[2]}
     _take(best, start, judge(start), objective)
-    start_max = best["max"]
     state = {"count": 0, "history": [], "cancelled": False}
-    penalty = 100.0 * start_max / max(min_spacing, 1e-12) ** 2
+    penalty = 100.0 * best["max"] / max(min_spacing, 1e-12) ** 2
 
     def fun(x, tau, chunk):
         uv = lower + x.reshape(-1, 2) * scale
