@@ -200,6 +200,7 @@ class DeviationObjective:
         self.evaluations = 0
         self.feet = None
         self._scratch = None
+        self._last = (None, None)
         if feet is not None:
             self.expand(feet)
 
@@ -216,8 +217,9 @@ class DeviationObjective:
         arrays = (self.grid_u, self.grid_v_t, feet.points.transpose(2, 0, 1),
                   feet.normals.transpose(2, 0, 1), 0.5 * halves.T.reshape((2,) + shape),
                   directions.transpose(1, 2, 0).reshape((2, 3) + shape))
-        self._exact, self._single = (Expansion(arrays, dtype) for dtype in (np.float64, np.float32))
-        self._counted = feet.counted.ravel().copy()
+        self._exact = Expansion(arrays, np.float64)
+        self._single = Expansion(arrays[:2] + tuple(np.where(feet.counted, array, 0.0) for array in arrays[2:]),
+                                 np.float32)
 
     @property
     def counted(self):
@@ -232,8 +234,11 @@ class DeviationObjective:
         whatever the size of the batch.
         """
         uv = np.asarray(uv, dtype=float)
+        return self._fit_points(uv, self.points(uv))
+
+    def _fit_points(self, uv, points):
+        """:meth:`fit` given the face points at uv, (..., 3, N) mm."""
         u, v = np.ascontiguousarray(uv[..., 0]), np.ascontiguousarray(uv[..., 1])
-        points = self.model.points_by_coordinate(u, v)
         return self.space.solve(self.space.u_basis.values(u), self.space.v_basis.values(v), points)
 
     def surface(self, poles):
@@ -254,7 +259,9 @@ class DeviationObjective:
         """:meth:`expanded_field` for a swarm, in single precision in work arrays kept between calls
         (overwritten by the next call). A swarm's arrays are large: allocating them anew costs more
         than the arithmetic, and single precision halves their traffic; the swarm only compares
-        values (1e-5 mm apart at worst), and every result is judged exactly in double precision."""
+        values (1e-5 mm apart at worst), and every result is judged exactly in double precision.
+        Nodes the objective does not count read 0 (their node, normal and curvatures are zeroed
+        in these arrays), so a plain maximum of the field's magnitude skips them."""
         batch = poles.shape[:-3]
         if self._scratch is None or self._scratch.batch != batch:
             self._scratch = Scratch(batch, np.float32, self.space.poles, self.grid.size)
@@ -263,6 +270,7 @@ class DeviationObjective:
     def __getstate__(self):
         state = dict(self.__dict__)
         state["_scratch"] = None
+        state["_last"] = (None, None)
         return state
 
     def grid_error(self, poles):
@@ -287,16 +295,27 @@ class DeviationObjective:
 
     def __call__(self, uv):
         """Maximum expanded deviation of each point set's substitute: uv (P, N, 2) -> (P,) mm."""
-        uv = np.asarray(uv, dtype=float)
-        field = self._swarm_field(self.fit(uv)).reshape(uv.shape[0], -1)
+        given, uv = uv, np.asarray(uv, dtype=float)
+        points = self.points(uv)
+        field = self._swarm_field(self._fit_points(uv, points)).reshape(uv.shape[0], -1)
+        self._last = (given, points)
         self.evaluations += uv.shape[0]
-        return np.abs(field, out=field).max(axis=1, where=self._counted, initial=-np.inf)
+        return np.abs(field, out=field).max(axis=1)
 
-    def spaced(self, uv, min_spacing):
-        """True for the point sets uv (P, N, 2) whose points keep ``min_spacing`` mm: (P,) bool."""
-        uv = np.asarray(uv, dtype=float)
-        points = self.model.points_by_coordinate(np.ascontiguousarray(uv[..., 0]),
-                                                 np.ascontiguousarray(uv[..., 1]))
+    def points(self, uv):
+        """Face points of point sets, coordinate first: uv (..., N, 2) -> (..., 3, N) mm."""
+        return self.model.points_by_coordinate(np.ascontiguousarray(uv[..., 0]), np.ascontiguousarray(uv[..., 1]))
+
+    def spaced(self, uv, min_spacing, rows=None):
+        """True for the point sets uv[rows] (uv: (P, N, 2)) whose points keep ``min_spacing`` mm:
+        (len(rows),) bool, all of them when rows is None. When uv is the array of this objective's
+        last call, the face points of that call are reused rather than evaluated again."""
+        rows = slice(None) if rows is None else rows
+        last_uv, last_points = self._last
+        if uv is last_uv:
+            points = last_points[rows]
+        else:
+            points = self.points(np.asarray(uv, dtype=float)[rows])
         return closest_squared(points) >= min_spacing ** 2
 
     def reference_poles(self):

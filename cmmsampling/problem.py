@@ -105,9 +105,10 @@ class SamplingProblem:
             return TwoProcessObjective(self.objective)
         return self.objective
 
-    def spaced(self, uv):
-        """True for the point sets uv (P, N, 2) that keep min_spacing: (P,) bool."""
-        return self.objective.spaced(uv, self.min_spacing)
+    def spaced(self, uv, rows=None):
+        """True for the point sets uv[rows] (uv: (P, N, 2)) that keep min_spacing: (len(rows),) bool,
+        all P when rows is None."""
+        return self.objective.spaced(uv, self.min_spacing, rows)
 
     def project(self, uv):
         """Map uv: (..., 2) onto the face's domain."""

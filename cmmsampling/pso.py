@@ -80,7 +80,7 @@ def _screened(values, positions, personal_values, admissible):
         return values
     candidates = np.flatnonzero(values < personal_values)
     if len(candidates):
-        values[candidates[~admissible(positions[candidates])]] = np.inf
+        values[candidates[~admissible(positions, candidates)]] = np.inf
     return values
 
 
@@ -92,8 +92,9 @@ def particle_swarm(objective, lower, upper, n_points, settings, seeds=(), projec
     seeds: layouts (N, 2) that start as particles 0, 1, ...; project: callable (P, N, 2) -> (P, N, 2)
     mapping positions onto the feasible set (default: clip to the box); progress: callable
     (iteration, best_value), called after every iteration, returning True to stop;
-    admissible: callable (M, N, 2) -> (M,) bool, a constraint checked only for the positions
-    that would become a personal best (inadmissible ones never do), so that it costs little.
+    admissible: callable (positions (P, N, 2), rows (M,) int) -> (M,) bool for positions[rows], a
+    constraint checked only for the positions that would become a personal best (inadmissible
+    ones never do), so that it costs little; it is given the array just passed to objective.
     Returns SwarmResult; when stopped early it holds the best found so far.
     """
     lower = np.asarray(lower, dtype=float)
