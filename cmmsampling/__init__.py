@@ -24,6 +24,10 @@ prepare_freecad()
 
 _API = {
     "STRATEGIES": "sampling",
+    "Strategy": "sampling",
+    "Setting": "sampling",
+    "register_strategy": "sampling",
+    "unregister_strategy": "sampling",
     "sample": "sampling",
     "evaluate": "sampling",
     "lower_bound": "sampling",

@@ -5,6 +5,7 @@ import sys
 import time
 
 from . import STRATEGIES, reference_face, sample
+from .sampling import BEST_STRATEGY, PROBE_EDGE_OFFSET_MM, baseline
 
 DESCRIPTION = """Where should a CMM's contact probe touch a free-form face?
 
@@ -19,8 +20,6 @@ examples:
   python -m cmmsampling sample part.igs --face 1 --strategy pso --edge-offset 2 --fcstd out.FCStd
   python -m cmmsampling demo"""
 
-CLI_EDGE_OFFSET = 1.5
-
 
 def build_parser():
     """The argument parser with its sub-commands."""
@@ -30,9 +29,7 @@ def build_parser():
     demo = commands.add_parser(
         "demo", help="sample the built-in reference surface with every strategy and print a table")
     demo.add_argument("-n", "--points", type=int, default=81, help="probe points per strategy (default 81)")
-    demo.add_argument("--iterations", type=int, default=3000,
-                      help="PSO iterations (default 3000, the paper's)")
-    demo.add_argument("--population", type=int, default=25, help="PSO particles (default 25, the paper's)")
+    _strategy_settings(demo)
     demo.add_argument("--seed", type=int, default=0, help="seed of the random parts (default 0)")
     demo.add_argument("--report", metavar="FOLDER", default="out/report",
                       help="then compare every strategy over N = 25..144 and write the HTML report "
@@ -50,20 +47,17 @@ def _sample_arguments(parser):
     parser.add_argument("--face", type=int, required=True,
                         help="face number as 'faces' lists it (FreeCAD's FaceN)")
     parser.add_argument("-n", "--points", type=int, default=49, help="number of probe points (default 49)")
-    parser.add_argument("--strategy", default="optimal", choices=list(STRATEGIES),
+    parser.add_argument("--strategy", default=BEST_STRATEGY, choices=list(STRATEGIES),
                         metavar="STRATEGY",
-                        help="where the points go (default optimal, which goes furthest: to a local "
-                             f"optimum; pso is the paper's swarm): {', '.join(STRATEGIES)}")
-    parser.add_argument("--edge-offset", type=float, default=CLI_EDGE_OFFSET, metavar="MM",
+                        help=f"where the points go (default {BEST_STRATEGY}, which goes furthest): "
+                             + "; ".join(f"{name}: {entry.description}" for name, entry in STRATEGIES.items()))
+    parser.add_argument("--edge-offset", type=float, default=PROBE_EDGE_OFFSET_MM, metavar="MM",
                         help="distance every point keeps from the face's edges: the probe ball's "
-                             f"radius plus a margin (default {CLI_EDGE_OFFSET} mm; 0 allows edge points)")
+                             f"radius plus a margin (default {PROBE_EDGE_OFFSET_MM} mm; 0 allows edge points)")
     parser.add_argument("--min-spacing", type=float, default=None, metavar="MM",
                         help="smallest distance between two points, kept by every strategy "
                              "(default a tenth of the even spacing sqrt(area / N), at least 0.005 mm)")
-    parser.add_argument("--iterations", type=int, help="PSO iterations (default 3000)")
-    parser.add_argument("--population", type=int, help="PSO particles (default 25)")
-    parser.add_argument("--time-limit", type=float, metavar="S",
-                        help="seconds the optimal strategy may take (default: until it converges)")
+    _strategy_settings(parser)
     parser.add_argument("--seed", type=int, default=0, help="seed of the random parts (default 0)")
     parser.add_argument("--out", action="append", default=[], metavar="FILE",
                         help="write the probe points; format from the extension .dmi, .xyz or .csv "
@@ -76,11 +70,35 @@ def _sample_arguments(parser):
     parser.add_argument("--fcstd", metavar="FILE", help="also save a FreeCAD document with the results")
 
 
+def _strategy_settings(parser):
+    """One argument per option that a strategy's record offers (Setting), each named once; unset
+    (None) unless given, so that the strategy's own default applies."""
+    offered = {}
+    for entry in STRATEGIES.values():
+        for setting in entry.settings:
+            offered.setdefault(setting.option, setting)
+    for option, setting in offered.items():
+        parser.add_argument("--" + option.replace("_", "-"), type=setting.kind, default=None,
+                            dest=option, help=setting.help)
+
+
+def strategy_options(name, args):
+    """The options of strategy ``name`` given on the command line, with a progress display for an
+    optimiser (a bar when its number of steps is known)."""
+    entry = STRATEGIES[name]
+    options = {s.option: getattr(args, s.option) for s in entry.settings
+               if getattr(args, s.option, None) is not None}
+    if entry.optimiser:
+        total = options.get(entry.progress_total, entry.options.get(entry.progress_total))
+        options["progress"] = TerminalProgress(entry.label, total, entry.progress_unit)
+    return options
+
+
 class TerminalProgress:
     """A one-line progress display on stderr for an optimiser: a bar when ``total`` is known."""
 
-    def __init__(self, label, total=None, stream=sys.stderr, every_s=0.2):
-        self.label, self.total, self.stream, self.every_s = label, total, stream, every_s
+    def __init__(self, label, total=None, unit="step", stream=sys.stderr, every_s=0.2):
+        self.label, self.total, self.unit, self.stream, self.every_s = label, total, unit, stream, every_s
         self._last = 0.0
 
     def __call__(self, iteration, best):
@@ -92,7 +110,7 @@ class TerminalProgress:
                 done = int(30 * iteration / self.total)
                 where = f"[{'#' * done}{'.' * (30 - done)}] {iteration}/{self.total}"
             else:
-                where = f"evaluation {iteration}"
+                where = f"{self.unit} {iteration}"
             self.stream.write(f"\r{self.label} {where} best max {best:.4f} mm ")
             if last:
                 self.stream.write("\n")
@@ -107,9 +125,9 @@ class TerminalProgress:
 
 def format_table(results):
     """Fixed-width table of results: strategy, max/mean/RMS (mm), ratio to uniform, time (s)."""
-    uniform = next((r.deviation.maximum for r in results if r.strategy == "uniform_parametric"), None)
+    uniform = next((r.deviation.maximum for r in results if r.strategy == baseline()), None)
     lines = [f"{'strategy':<20} {'N':>4} {'max mm':>9} {'mean mm':>9} {'RMS mm':>9} "
-             f"{'OCC max':>9} {'x uniform':>9} {'time s':>8}"]
+             f"{'OCC max':>9} {'x ' + baseline()[:7]:>9} {'time s':>8}"]
     for r in results:
         d = r.deviation
         ratio = d.maximum / uniform if uniform else float("nan")
@@ -125,11 +143,10 @@ def run_demo(args):
           "substitute: bicubic, default poles; grid 60 x 60")
     results = []
     for name in STRATEGIES:
-        options = {}
-        if name == "pso":
-            options = {"iterations": args.iterations, "population": args.population,
-                       "progress": TerminalProgress("PSO", args.iterations)}
+        options = strategy_options(name, args)
         results.append(sample(face, args.points, name, seed=args.seed, **options))
+        if getattr(options.get("progress"), "total", 1) is None:
+            options["progress"].finish()
     print(format_table(results))
     if args.report != "none":
         _study_report(face, args)
@@ -142,9 +159,10 @@ def _study_report(face, args):
     from .study import compare
 
     progress = StudyProgress()
+    options = {name: {key: value for key, value in strategy_options(name, args).items() if key != "progress"}
+               for name in STRATEGIES}
     study = compare(face, seeds=(args.seed, args.seed + 1, args.seed + 2, args.seed + 3, args.seed + 4),
-                    pso_options={"iterations": args.iterations, "population": args.population},
-                    progress=progress)
+                    options={name: values for name, values in options.items() if values}, progress=progress)
     progress.finish()
     print(study.table())
     print(f"report: {write_report(study, args.report)}")
@@ -204,26 +222,12 @@ def run_faces(args):
     return 0
 
 
-def _strategy_options(args):
-    """Strategy options given on the command line, with a progress display."""
-    options = {}
-    if args.strategy == "pso":
-        options = {k: v for k, v in (("iterations", args.iterations), ("population", args.population))
-                   if v is not None}
-        options["progress"] = TerminalProgress("PSO", options.get("iterations", 3000))
-    elif args.strategy == "optimal":
-        if args.time_limit is not None:
-            options["time_limit"] = args.time_limit
-        options["progress"] = TerminalProgress("optimal")
-    return options
-
-
 def run_sample(args):
     """Sample one face of a CAD file and write what was asked for."""
     shape = read_shape(args.file)
     if not 1 <= args.face <= len(shape.Faces):
         raise ValueError(f"--face must be between 1 and {len(shape.Faces)} for {args.file}, got {args.face}")
-    options = _strategy_options(args)
+    options = strategy_options(args.strategy, args)
     progress = options.get("progress")
     result = sample(shape.Faces[args.face - 1], args.points, args.strategy, seed=args.seed,
                     edge_offset=args.edge_offset, min_spacing=args.min_spacing, **options)

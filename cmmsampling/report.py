@@ -23,26 +23,18 @@ from .surface import as_face
 
 DPI = 110
 PANEL_INCHES = 4.2
-HISTOGRAM_STRATEGIES = ("uniform_parametric", "uniform_cartesian", "pso", "optimal")
 HISTOGRAM_BINS = 40
 LOG_SPAN = 3.0
-LABELS = {
-    "uniform_cartesian": "uniform Cartesian",
-    "uniform_parametric": "uniform parametric",
-    "random": "random",
-    "hammersley": "Hammersley",
-    "halton": "Halton",
-    "curvature_mean": "mean curvature",
-    "curvature_gaussian": "Gaussian curvature",
-    "pso": "PSO (paper)",
-    "optimal": "optimal (this project)",
-}
-OPTIMISER_AXES = {"pso": "PSO iteration", "optimal": "surrogate evaluation (optimal strategy)"}
 
 
 def label(strategy):
-    """The display name of a strategy."""
-    return LABELS.get(strategy, strategy)
+    """The display name of a strategy (its record's label; the name itself for one not registered)."""
+    return STRATEGIES[strategy].label if strategy in STRATEGIES else strategy
+
+
+def _marked(study, flag):
+    """The strategies of the study's figures whose record sets ``flag``, in the study's order."""
+    return [s for s in study.strategies if s in study.results and getattr(STRATEGIES.get(s), flag, False)]
 
 
 def colour(strategy):
@@ -170,14 +162,14 @@ def figure_convergence(study):
         ax = fig.add_subplot(1, len(entries), index + 1)
         steps = np.arange(1, len(result.history) + 1)
         ax.plot(steps, result.history, color=colour(strategy), label=label(strategy))
-        for reference in ("uniform_parametric", "uniform_cartesian"):
-            if reference in study.results:
+        for reference in _marked(study, "reference"):
+            if reference != strategy:
                 ax.axhline(study.results[reference].deviation.maximum, color=colour(reference),
                            linestyle=":", label=label(reference))
         if bound is not None:
             ax.axhline(bound.grid, color="black", linestyle="--", label="local bound about the best")
         ax.set_xscale("log")
-        ax.set_xlabel(OPTIMISER_AXES.get(strategy, "iteration"))
+        ax.set_xlabel(STRATEGIES[strategy].progress_unit if strategy in STRATEGIES else "step")
         ax.set_ylabel("best maximum deviation (mm)")
         ax.set_title(f"{panel_title(study, strategy)}, N = {study.figure_n}: "
                      f"final {result.history[-1]:.4f} mm")
@@ -189,7 +181,7 @@ def figure_convergence(study):
 def figure_histograms(study):
     """Paper Fig. 11, 12: distribution of the deviation over the grid nodes (mm), same bins for
     the uniform strategies, PSO and the optimal strategy."""
-    entries = [(s, study.results[s]) for s in HISTOGRAM_STRATEGIES if s in study.results]
+    entries = [(s, study.results[s]) for s in _marked(study, "figures")]
     entries = entries or _ordered_results(study)[:4]
     if not entries:
         return None
@@ -390,11 +382,11 @@ def report_html(study, figures):
 
 
 def _settings_html(study):
-    """A list of what was studied: the face, N, strategies, seeds, fit, grid, PSO, time."""
+    """A list of what was studied: the face, N, strategies, seeds, fit, grid, the strategies'
+    options, time."""
     face = as_face(study.face)
     box = face.BoundBox
     s = study.settings
-    pso = s["pso_options"]
     items = [
         f"Face: area {face.Area:.1f} mm<sup>2</sup>, bounding box {box.XLength:.1f} x {box.YLength:.1f} x "
         f"{box.ZLength:.1f} mm",
@@ -406,14 +398,21 @@ def _settings_html(study):
         f"{_pair(s['fit_poles']) if s['fit_poles'] is not None else 'round(2 sqrt(N) / 3) per direction'}, "
         f"smoothing {s['smoothing']:g}; evaluation grid {_pair(s['grid'])} nodes of (u, v), check grid 3x "
         "denser per direction",
-        f"PSO: population {pso['population']}, {pso['iterations']} iterations, inertia {pso['w1']} to "
-        f"{pso['w2']}, c1 = {pso['c1']}, c2 = {pso['c2']}",
-        "Deviation: distance between substitute and face at the same (u, v), mm. Certified lower bound: "
-        "no set of N points can reach a smaller maximum deviation with a substitute of this degree and "
-        "these poles, on the evaluation grid (or the check grid).",
+        *(_options_html(name, values) for name, values in s["options"].items()),
+        "Deviation: the distance in space from nodes on the face (the feet of a reference fit's grid "
+        "points) to the substitute, signed by side, mm. Local bound: the least maximum deviation that "
+        "reshaping the best substitute at that N along its normals could reach, on the evaluation grid "
+        "(or the check grid); it certifies how near that substitute is to a local optimum of its own "
+        "shape, not what other point sets could reach.",
         f"Wall time of the study: {study.elapsed_s:.1f} s",
     ]
     return "<ul>" + "".join(f"<li>{item}</li>" for item in items) + "</ul>"
+
+
+def _options_html(strategy, options):
+    """'Label: option value, ...' of one strategy's options, escaped for HTML."""
+    listed = ", ".join(f"{key} {value}" for key, value in options.items())
+    return html.escape(f"{label(strategy)}: {listed}")
 
 
 def _pair(value):

@@ -24,15 +24,58 @@ MIN_AREA_RATIO = 1e-12
 
 
 @dataclass(frozen=True)
+class Setting:
+    """An option of a strategy that the command line and the comparison panel offer.
+
+    option: its keyword in sample(); kind: int or float; help: one line, with its unit.
+    """
+
+    option: str
+    kind: type
+    help: str
+
+
+@dataclass(frozen=True)
 class Strategy:
-    """A named strategy: run(problem, progress, **options) -> StrategyOutcome, its options with
-    their defaults, and whether it optimises (uses the objective, reports history)."""
+    """Everything the project knows of one strategy, said once; every other module reads it here.
+
+    name: the identifier sample() takes; run: (problem, progress, **options) -> StrategyOutcome;
+    description: one line (tooltips, --help); label: its name in tables, figures and reports;
+    options: its own options with their defaults; check: options (merged with the defaults) ->
+    the cleaned options, raising ValueError or TypeError, or None when any value goes;
+    optimiser: it searches with the objective and reports progress (iteration, best max mm);
+    progress_unit: what one of those progress steps is; progress_total: the option that says how
+    many there will be (None: unknown in advance); seeded: its points depend on the seed, so a
+    study runs it once per seed; figures: the report draws its deviation histogram; reference:
+    a layout the others are drawn against in the convergence figures; baseline: the layout the
+    studies' and tables' ratios divide by (one strategy has it);
+    settings: the options the command line and the comparison panel offer (Setting).
+    Every strategy keeps the same default minimum spacing (cmmsampling.optimal.default_min_spacing).
+    """
 
     name: str
     run: object
     description: str
+    label: str
     options: dict = field(default_factory=dict)
+    check: object = None
     optimiser: bool = False
+    progress_unit: str = "step"
+    progress_total: str = None
+    seeded: bool = False
+    figures: bool = False
+    reference: bool = False
+    baseline: bool = False
+    settings: tuple = ()
+
+    def checked_options(self, options):
+        """The defaults updated by ``options``, validated: TypeError for an option it does not take."""
+        unknown = sorted(set(options) - set(self.options))
+        if unknown:
+            takes = ", ".join(self.options) or "no options"
+            raise TypeError(f"strategy {self.name!r} does not take {', '.join(unknown)}; it takes {takes}")
+        merged = {**self.options, **options}
+        return self.check(merged) if self.check else merged
 
 
 def _blind(function):
@@ -146,40 +189,9 @@ def _check_optimal_options(options):
     if options["max_evaluations"] is not None:
         clean["max_evaluations"] = check_int("max_evaluations", options["max_evaluations"], 1)
     if isinstance(options["start"], str):
-        starts = ["best"] + [name for name in STRATEGIES if name != "optimal"]
+        starts = ["best"] + [name for name, entry in STRATEGIES.items() if not entry.optimiser]
         check_choice("start", options["start"], starts)
     return clean
-
-
-OPTIMAL_DEFAULTS = {"start": "best", "time_limit": None, "max_evaluations": None}
-BEST_STARTS = ("uniform_parametric", "uniform_cartesian", "halton", "hammersley")
-
-PSO_DEFAULTS = {
-    "population": 25, "iterations": 3000, "w1": 0.5, "w2": 0.0, "c1": 2.0, "c2": 2.0,
-    "velocity_limit": 0.1, "start_from_uniform": True,
-}
-
-STRATEGIES = {
-    s.name: s
-    for s in (
-        Strategy("uniform_cartesian", _blind(blind.uniform_cartesian),
-                 "regular grid over the face's footprint in machine X/Y/Z (paper eq. 3-4)"),
-        Strategy("uniform_parametric", _blind(blind.uniform_parametric),
-                 "regular grid in the face's (u, v) (paper eq. 5-6)"),
-        Strategy("random", _blind(blind.random_uniform), "uniform random (u, v), seeded"),
-        Strategy("hammersley", _blind(blind.hammersley), "Hammersley set in (u, v)"),
-        Strategy("halton", _blind(blind.halton), "Halton sequence in (u, v), bases 2 and 3"),
-        Strategy("curvature_mean", _blind(blind.curvature_adaptive),
-                 "more points on patches of high mean curvature"),
-        Strategy("curvature_gaussian", _blind(blind.curvature_gaussian),
-                 "more points on patches of high Gaussian curvature"),
-        Strategy("pso", run_pso, "the paper's particle swarm optimisation of the maximum deviation",
-                 PSO_DEFAULTS, optimiser=True),
-        Strategy("optimal", run_optimal,
-                 "gradient descent on a smoothed maximum deviation, to a local optimum",
-                 OPTIMAL_DEFAULTS, optimiser=True),
-    )
-}
 
 
 def _check_pso_options(options):
@@ -198,7 +210,71 @@ def _check_pso_options(options):
     return clean
 
 
-OPTION_CHECKS = {"pso": _check_pso_options, "optimal": _check_optimal_options}
+OPTIMAL_DEFAULTS = {"start": "best", "time_limit": None, "max_evaluations": None}
+BEST_STARTS = ("uniform_parametric", "uniform_cartesian", "halton", "hammersley")
+
+PSO_DEFAULTS = {
+    "population": 25, "iterations": 3000, "w1": 0.5, "w2": 0.0, "c1": 2.0, "c2": 2.0,
+    "velocity_limit": 0.1, "start_from_uniform": True,
+}
+PSO_SETTINGS = (Setting("iterations", int, "PSO iterations (default 3000, the paper's)"),
+                Setting("population", int, "PSO particles (default 25, the paper's)"))
+OPTIMAL_SETTINGS = (Setting("time_limit", float, "seconds the optimal strategy may take (default: until it "
+                                                 "converges)"),)
+
+STRATEGIES = {}
+
+
+def register_strategy(strategy):
+    """Add a Strategy record (replacing one of the same name): sample(), compare(), the report, the
+    command line and both panels offer it from then on. Returns the record."""
+    if not isinstance(strategy, Strategy):
+        raise TypeError(f"register takes a cmmsampling Strategy record, got {type(strategy).__name__}")
+    STRATEGIES[strategy.name] = strategy
+    return strategy
+
+
+def unregister_strategy(name):
+    """Remove the strategy named ``name`` (KeyError when there is none)."""
+    del STRATEGIES[name]
+
+
+for _record in (
+    Strategy("uniform_cartesian", _blind(blind.uniform_cartesian),
+             "regular grid over the face's footprint in machine X/Y/Z (paper eq. 3-4)",
+             "uniform Cartesian", figures=True, reference=True),
+    Strategy("uniform_parametric", _blind(blind.uniform_parametric),
+             "regular grid in the face's (u, v) (paper eq. 5-6)", "uniform parametric",
+             figures=True, reference=True, baseline=True),
+    Strategy("random", _blind(blind.random_uniform), "uniform random (u, v), seeded", "random",
+             seeded=True),
+    Strategy("hammersley", _blind(blind.hammersley), "Hammersley set in (u, v)", "Hammersley"),
+    Strategy("halton", _blind(blind.halton), "Halton sequence in (u, v), bases 2 and 3", "Halton"),
+    Strategy("curvature_mean", _blind(blind.curvature_adaptive),
+             "more points on patches of high mean curvature", "mean curvature"),
+    Strategy("curvature_gaussian", _blind(blind.curvature_gaussian),
+             "more points on patches of high Gaussian curvature", "Gaussian curvature"),
+    Strategy("pso", run_pso, "the paper's particle swarm optimisation of the maximum deviation",
+             "PSO (paper)", PSO_DEFAULTS, _check_pso_options, optimiser=True, progress_unit="iteration",
+             progress_total="iterations", figures=True, settings=PSO_SETTINGS),
+    Strategy("optimal", run_optimal,
+             "gradient descent on a smoothed maximum deviation, to a local optimum",
+             "optimal (this project)", OPTIMAL_DEFAULTS, _check_optimal_options, optimiser=True,
+             progress_unit="surrogate evaluation", progress_total="max_evaluations", figures=True,
+             settings=OPTIMAL_SETTINGS),
+):
+    register_strategy(_record)
+DEFAULT_STRATEGY = "pso"
+# What the command line starts with: the strategy that goes furthest.
+BEST_STRATEGY = "optimal"
+# The edge offset the command line and the panel start with, mm: a probe ball's radius plus
+# a margin (sample() itself defaults to 0, the paper's setting).
+PROBE_EDGE_OFFSET_MM = 1.5
+
+
+def baseline():
+    """The name of the layout the studies' and tables' ratios divide by (its record says baseline)."""
+    return next(name for name, entry in STRATEGIES.items() if entry.baseline)
 
 
 def strategy_options(strategy, options):
@@ -206,14 +282,7 @@ def strategy_options(strategy, options):
 
     Raises TypeError for an option the strategy does not take (listing those it does).
     """
-    entry = STRATEGIES[strategy]
-    unknown = sorted(set(options) - set(entry.options))
-    if unknown:
-        takes = ", ".join(entry.options) or "no options"
-        raise TypeError(f"strategy {strategy!r} does not take {', '.join(unknown)}; it takes {takes}")
-    merged = {**entry.options, **options}
-    check = OPTION_CHECKS.get(strategy)
-    return check(merged) if check else merged
+    return STRATEGIES[strategy].checked_options(options)
 
 
 def make_problem(face, n, fit_degree=DEFAULT_DEGREE, fit_poles=None, smoothing=DEFAULT_SMOOTHING,
@@ -284,7 +353,7 @@ def _check_area(face):
         )
 
 
-def sample(face, n=81, strategy="pso", *, fit_degree=DEFAULT_DEGREE, fit_poles=None,
+def sample(face, n=81, strategy=DEFAULT_STRATEGY, *, fit_degree=DEFAULT_DEGREE, fit_poles=None,
            smoothing=DEFAULT_SMOOTHING, grid=DEFAULT_GRID, seed=0, progress=None, occ_check=True,
            workers=None, edge_offset=0.0, min_spacing=None, **options):
     """Place n probe points on a face with a strategy and judge them.

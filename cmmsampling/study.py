@@ -16,15 +16,13 @@ import numpy as np
 from .deviation import DEFAULT_GRID
 from .fitting import DEFAULT_DEGREE, DEFAULT_SMOOTHING
 from .sampling import MIN_POINTS, STRATEGIES, make_problem, sample, strategy_options
+from .sampling import baseline as baseline_strategy
 from .threads import blas_threads
 from .validation import check_choice, check_int
 
 DEFAULT_NS = (25, 36, 49, 64, 81, 100, 121, 144)
 DEFAULT_SEEDS = (0, 1, 2, 3, 4)
-SEEDED = ("random",)
-BASELINE = "uniform_parametric"
 PREFERRED_FIGURE_N = 81
-OPTIMISER_STEPS = {"pso": "iteration", "optimal": "evaluation"}
 
 
 @dataclass(frozen=True)
@@ -207,23 +205,23 @@ class Relay:
 
     def optimiser(self, step):
         """A progress callable (iteration, best_max_mm) for sample(), relaying to the callback."""
-        unit = OPTIMISER_STEPS.get(step.strategy, "step")
+        unit = STRATEGIES[step.strategy].progress_unit
         return lambda count, best: self.report(
             f"{step.describe()}: {unit} {count}, best max {best:.4f} mm")
 
 
-def compare(face, ns=DEFAULT_NS, strategies=None, *, seeds=DEFAULT_SEEDS, seeded=SEEDED,
-            pso_options=None, optimal_options=None, fit_degree=DEFAULT_DEGREE, fit_poles=None,
-            smoothing=DEFAULT_SMOOTHING, grid=DEFAULT_GRID, figure_n=None, progress=None,
-            workers=None):
+def compare(face, ns=DEFAULT_NS, strategies=None, *, seeds=DEFAULT_SEEDS, seeded=None, options=None,
+            fit_degree=DEFAULT_DEGREE, fit_poles=None, smoothing=DEFAULT_SMOOTHING, grid=DEFAULT_GRID,
+            figure_n=None, progress=None, workers=None):
     """Run every strategy over a list of N on one face and collect the trade-off.
 
     face: a Part.Face (e.g. ``cmmsampling.reference_face()``); ns: point counts (each >= 4);
     strategies: names from STRATEGIES (None: all, in their order); seeds: seeds of the
-    seed-dependent strategies named in ``seeded`` (default: "random"; add "pso" for the swarm's
-    spread, at 5x its time); the others run once with seeds[0];
-    pso_options, optimal_options: the strategies' own options (defaults: the paper's PSO, 25 x 3000;
-    the optimal strategy's defaults); fit_degree, fit_poles, smoothing, grid: as in sample();
+    seed-dependent strategies named in ``seeded`` (None: those whose record says ``seeded``, the
+    random one; add "pso" for the swarm's spread, at 5x its time); the others run once with
+    seeds[0]; options: {strategy name: {option: value}}, the strategies' own options (the others
+    keep their defaults, e.g. the paper's PSO, 25 x 3000), e.g. ``{"pso": {"iterations": 500}}``;
+    fit_degree, fit_poles, smoothing, grid: as in sample();
     figure_n: the N whose results are kept for the figures (default 81 if studied, else the middle
     N); progress: callable(done_steps, total_steps, message) called before every step (one run, or
     the bound at an N) and during the optimisers' iterations; returning True cancels: the study
@@ -234,9 +232,10 @@ def compare(face, ns=DEFAULT_NS, strategies=None, *, seeds=DEFAULT_SEEDS, seeded
     ns = _check_ns(ns)
     strategies = _check_strategies(strategies)
     seeds = _check_seeds(seeds)
+    if seeded is None:
+        seeded = [name for name in strategies if STRATEGIES[name].seeded]
     seeded = _check_names("seeded strategy", seeded)
-    options = {"pso": strategy_options("pso", pso_options or {}),
-               "optimal": strategy_options("optimal", optimal_options or {})}
+    options = _check_options(options, strategies)
     figure_n = _check_figure_n(figure_n, ns)
     if progress is not None and not callable(progress):
         raise TypeError(f"progress must be callable(done, total, message) or None, got {progress!r}")
@@ -244,13 +243,27 @@ def compare(face, ns=DEFAULT_NS, strategies=None, *, seeds=DEFAULT_SEEDS, seeded
     make_problem(face, ns[0], **fit, workers=workers)
     study = Study(face, ns, strategies, figure_n=figure_n, settings={
         "ns": list(ns), "strategies": list(strategies), "seeds": list(seeds), "seeded": list(seeded),
-        "pso_options": options["pso"], "optimal_options": options["optimal"], **fit,
-        "figure_n": figure_n, "baseline": BASELINE, "workers": workers})
+        "options": options, **fit, "figure_n": figure_n, "baseline": baseline_strategy(), "workers": workers})
     began = time.perf_counter()
     _execute(study, plan(ns, strategies, seeds, seeded), options, fit, progress, workers)
     study.rows = derive(study.rows, study.bounds)
     study.elapsed_s = time.perf_counter() - began
     return study
+
+
+def _check_options(options, strategies):
+    """{name: validated options, defaults filled in} for the studied strategies that take options;
+    ValueError for a name that is no strategy, TypeError for options one does not take."""
+    if not isinstance(options or {}, dict):
+        raise TypeError(f"options must be a dict {{strategy name: {{option: value}}}}, got {options!r}")
+    given = {}
+    for name, values in (options or {}).items():
+        check_choice("strategy in options", name, list(STRATEGIES))
+        if not isinstance(values, dict):
+            raise TypeError(f"options[{name!r}] must be a dict {{option: value}}, got {values!r}")
+        given[name] = strategy_options(name, values)
+    return {name: given.get(name) or strategy_options(name, {})
+            for name in strategies if STRATEGIES[name].options}
 
 
 def _execute(study, steps, options, fit, callback, workers):
@@ -305,12 +318,13 @@ def record(step, result):
                result.timings["total_s"], result.evaluations)
 
 
-def derive(rows, bounds, baseline=BASELINE):
+def derive(rows, bounds, baseline=None):
     """Rows with ratios to the baseline's mean max/mean/RMS at their N and multiples of the bounds.
 
     Ratios stay NaN where the baseline was not run at that N, multiples where no bound was computed;
-    a zero bound gives an infinite multiple.
+    a zero bound gives an infinite multiple. baseline: a strategy name (None: the records' baseline).
     """
+    baseline = baseline or baseline_strategy()
     reference = {}
     for n in {r.n for r in rows}:
         base = [r for r in rows if r.n == n and r.strategy == baseline]

@@ -11,9 +11,8 @@ from cmmsampling.report import FIGURES, footprint, write_report
 from cmmsampling.study import MEASURES, compare
 from cmmsampling.surface import SurfaceModel
 
-SMALL = {"grid": 20, "pso_options": {"iterations": 20, "population": 10},
-         "optimal_options": {"max_evaluations": 150}, "workers": 1}
-SAMPLE_OPTIONS = {"pso": SMALL["pso_options"], "optimal": SMALL["optimal_options"]}
+SAMPLE_OPTIONS = {"pso": {"iterations": 20, "population": 10}, "optimal": {"max_evaluations": 150}}
+SMALL = {"grid": 20, "options": SAMPLE_OPTIONS, "workers": 1}
 
 
 @pytest.fixture(scope="module")
@@ -117,7 +116,7 @@ def test_progress_reports_every_step_then_completion(study, calls):
     assert all(c[1] == total for c in calls) and steps[-1][2] == "study complete"
     assert steps[13][2] == "N = 16: local bound about the best"
     assert any(re.search(r"pso \(seed 1\): iteration 20, best max \d", c[2]) for c in calls)
-    assert any("optimal (seed 0): evaluation" in c[2] for c in calls)
+    assert any("optimal (seed 0): surrogate evaluation" in c[2] for c in calls)
     done = [c[0] for c in calls]
     assert done == sorted(done)
 
@@ -184,8 +183,10 @@ def test_maps_fall_back_to_parameters_on_a_folded_face(reference, tmp_path):
     ({"strategies": ["uniform", "pso"]}, ValueError),
     ({"seeds": ()}, ValueError),
     ({"seeded": ("lucky",)}, ValueError),
-    ({"pso_options": {"swarm": 3}}, TypeError),
-    ({"optimal_options": {"max_evaluations": 0}}, ValueError),
+    ({"options": {"pso": {"swarm": 3}}}, TypeError),
+    ({"options": {"optimal": {"max_evaluations": 0}}}, ValueError),
+    ({"options": {"swarm": {"iterations": 3}}}, ValueError),
+    ({"options": {"pso": 3}}, TypeError),
     ({"figure_n": 30}, ValueError),
     ({"progress": 5}, TypeError),
     ({"grid": 1}, ValueError),

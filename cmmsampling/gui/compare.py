@@ -17,7 +17,7 @@ from PySide import QtCore, QtGui
 
 from ..deviation import DEFAULT_GRID
 from ..report import write_report
-from ..sampling import PSO_DEFAULTS, STRATEGIES
+from ..sampling import STRATEGIES
 from ..study import DEFAULT_NS, DEFAULT_SEEDS, compare
 from . import settings
 from .commands import FaceCommand
@@ -26,18 +26,30 @@ from .worker import BackgroundTask
 
 # The panel's values are stored under these names with this prefix, apart from Sample face's.
 SETTINGS_PREFIX = "Compare_"
-SPIN_BOXES = ("seeds", "iterations", "population", "grid")
+# The strategies' settings (Setting.option) this panel has a spin box for, and its own.
+SETTING_BOXES = ("iterations", "population")
+SPIN_BOXES = ("seeds",) + SETTING_BOXES + ("grid",)
+
+
+def setting_defaults():
+    """{option: default} of the strategies' settings that have a spin box here, from the records."""
+    defaults = {}
+    for entry in STRATEGIES.values():
+        for setting in entry.settings:
+            if setting.option in SETTING_BOXES:
+                defaults.setdefault(setting.option, entry.options[setting.option])
+    return defaults
 
 
 def panel_defaults():
     """The panel's values by name with their defaults: the study's N list and seed count, every
-    strategy, the paper's swarm (population 25, 3000 iterations) and the 60 x 60 grid."""
+    strategy, their settings' defaults (the paper's swarm: population 25, 3000 iterations) and the
+    60 x 60 grid."""
     return {
         "ns": ", ".join(str(n) for n in DEFAULT_NS),
         "strategies": ", ".join(STRATEGIES),
         "seeds": len(DEFAULT_SEEDS),
-        "iterations": PSO_DEFAULTS["iterations"],
-        "population": PSO_DEFAULTS["population"],
+        **setting_defaults(),
         "grid": DEFAULT_GRID,
     }
 
@@ -67,14 +79,15 @@ def parse_ns(text):
 
 def compare_arguments(values):
     """The keyword arguments of ``cmmsampling.compare(face, ...)`` for the panel's values: seeds
-    0 .. k-1 for the random strategy, the swarm's population and iterations."""
-    return {
-        "ns": parse_ns(values["ns"]),
-        "strategies": tuple(name for name in values["strategies"].split(", ") if name),
-        "seeds": tuple(range(values["seeds"])),
-        "pso_options": {"iterations": values["iterations"], "population": values["population"]},
-        "grid": values["grid"],
-    }
+    0 .. k-1 for the seeded strategies, and each chosen strategy's settings shown here."""
+    strategies = tuple(name for name in values["strategies"].split(", ") if name)
+    options = {}
+    for name in strategies:
+        offered = [s.option for s in STRATEGIES[name].settings if s.option in SETTING_BOXES]
+        if offered:
+            options[name] = {option: values[option] for option in offered}
+    return {"ns": parse_ns(values["ns"]), "strategies": strategies, "seeds": tuple(range(values["seeds"])),
+            "options": options, "grid": values["grid"]}
 
 
 def default_folder(doc):
@@ -222,16 +235,17 @@ class CompareTaskPanel(BackgroundRunPanel):
             getattr(self.form, name).setValue(values[name])
 
     def update_enabled(self):
-        """Enable the seeds with the random strategy and the swarm's settings with pso; nothing
-        (but Cancel) while a study runs."""
+        """Enable the seeds when a chosen strategy is seeded and each strategy setting when a chosen
+        strategy offers it; nothing (but Cancel) while a study runs."""
         idle = self.run is None
-        chosen = self.checked()
+        chosen = [STRATEGIES[name] for name in self.checked() if name in STRATEGIES]
         for widget in (self.form.ns, self.form.strategies, self.form.grid, self.form.folder,
                        self.form.browse):
             widget.setEnabled(idle)
-        self.form.seeds.setEnabled(idle and "random" in chosen)
-        for widget in (self.form.iterations, self.form.population):
-            widget.setEnabled(idle and "pso" in chosen)
+        self.form.seeds.setEnabled(idle and any(entry.seeded for entry in chosen))
+        offered = {setting.option for entry in chosen for setting in entry.settings}
+        for option in SETTING_BOXES:
+            getattr(self.form, option).setEnabled(idle and option in offered)
         if self.buttons is not None:
             self.buttons.button(QtGui.QDialogButtonBox.Ok).setEnabled(idle)
 

@@ -14,7 +14,6 @@ import Part
 from PySide import QtCore, QtGui
 
 from .. import sampling
-from ..cli import CLI_EDGE_OFFSET
 from ..deviation import DEFAULT_GRID
 from ..fitting import DEFAULT_DEGREE, default_pole_count
 from . import icon, resource, settings
@@ -51,9 +50,9 @@ def option_defaults():
 
 def panel_defaults():
     """Every value of the panel with its default: strategy, N, seed, probe constraints (the
-    command line's edge offset, mm; automatic spacing), options, fit, grid."""
+    probe's edge offset PROBE_EDGE_OFFSET_MM; automatic spacing), options, fit, grid."""
     return {
-        "strategy": "pso", "n": 81, "seed": 0, "edge_offset": CLI_EDGE_OFFSET,
+        "strategy": sampling.DEFAULT_STRATEGY, "n": 81, "seed": 0, "edge_offset": sampling.PROBE_EDGE_OFFSET_MM,
         "min_spacing": AUTO_SPACING, **option_defaults(),
         "fit_degree": DEFAULT_DEGREE, "auto_poles": True,
         "fit_poles_u": default_pole_count(81), "fit_poles_v": default_pole_count(81),
@@ -89,10 +88,11 @@ def fit_narrow_dock(form):
 
 
 def progress_total(arguments):
-    """(what a progress step is, how many there will be or 0 when unknown) for a run."""
-    if "iterations" in arguments:
-        return "Iteration", arguments["iterations"]
-    return "Evaluation", arguments.get("max_evaluations") or 0
+    """(what a progress step is, how many there will be or 0 when unknown) for a run, from its
+    strategy's record."""
+    entry = sampling.STRATEGIES[arguments["strategy"]]
+    total = arguments.get(entry.progress_total, entry.options.get(entry.progress_total)) or 0
+    return entry.progress_unit.capitalize(), total
 
 
 class FacePicker:

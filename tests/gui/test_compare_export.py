@@ -20,14 +20,18 @@ from cmmsampling.gui import compare as compare_panel
 from cmmsampling.gui import export_options, settings
 from cmmsampling.probe_path import path_length
 
-from .helpers import Hold, dock_text, main_window, process_events, task_button, wait_until, widgets
+from toy_strategy import TOY
+
+from .helpers import (
+    Hold, dock_text, main_window, open_panel, process_events, task_button, task_form, wait_until, widgets,
+)
 
 OK, CANCEL = QtGui.QDialogButtonBox.Ok, QtGui.QDialogButtonBox.Cancel
 # A comparison small enough for a shared two-core machine: 2 N x 2 strategies, 6 steps.
 TINY = {"ns": "16, 25", "strategies": "uniform_parametric, pso", "seeds": 1, "iterations": 20,
         "population": 6, "grid": 20}
 TINY_CALL = ("cmmsampling.compare(face, ns=(16, 25), strategies=('uniform_parametric', 'pso'), "
-             "seeds=(0,), pso_options={'iterations': 20, 'population': 6}, grid=20)")
+             "seeds=(0,), options={'pso': {'iterations': 20, 'population': 6}}, grid=20)")
 
 
 @pytest.fixture
@@ -204,6 +208,29 @@ def test_panel_defaults_are_the_papers_study_and_options_follow_the_strategies(d
     assert wait_until(lambda: not FreeCADGui.Control.activeDialog(), 2)
     doc.saveAs(str(tmp_path / "bracket.FCStd"))
     assert compare_panel.default_folder(doc) == str(tmp_path / "bracket_comparison")
+
+
+@pytest.fixture
+def toy():
+    """The toy strategy (tests/toy_strategy.py, one module and one record) registered for one test."""
+    cmmsampling.register_strategy(TOY)
+    yield TOY
+    cmmsampling.unregister_strategy(TOY.name)
+
+
+def test_a_registered_strategy_is_in_both_panels_lists(doc, command, toy):
+    form = open_panel(doc)
+    assert [form.strategy.itemText(i) for i in range(form.strategy.count())][-1] == "mirrored_halton"
+    form.strategy.setCurrentIndex(form.strategy.count() - 1)
+    assert form.strategyInfo.text() == TOY.description and not form.psoGroup.isEnabled()
+    task_button(CANCEL).click()
+    assert wait_until(lambda: task_form() is None, 5)
+    form = open_compare(doc)
+    assert checked(form)[-1] == "mirrored_halton" and items(form)[-1].toolTip() == TOY.description
+    fill(form, strategies="uniform_parametric, mirrored_halton")
+    assert form.seeds.isEnabled() and not form.iterations.isEnabled()
+    task_button(CANCEL).click()
+    assert wait_until(lambda: not FreeCADGui.Control.activeDialog(), 2)
 
 
 def test_tiny_comparison_runs_in_the_background_and_opens_its_report(doc, command, opened, tmp_path,
