@@ -15,6 +15,28 @@ QUICK = {"pso": {"iterations": 4, "population": 4}, "optimal": {"max_evaluations
 OCC_DISTANCE_MM = 1e-5
 
 
+def on_crease(surface, uv):
+    """(N,) True for parameters uv (N, 2) on a knot line where the B-spline surface is only C0:
+    its normal jumps there, and which side's normal is returned is a convention (OCC 7.6 and 7.8
+    differ; seen on FreeCAD 1.0 for a degree-1 face and a uniform Cartesian point on a pole line)."""
+    crease = np.zeros(len(uv), dtype=bool)
+    for axis, (knots, multiplicities, degree) in enumerate((
+            (surface.getUKnots(), surface.getUMultiplicities(), surface.UDegree),
+            (surface.getVKnots(), surface.getVMultiplicities(), surface.VDegree))):
+        inner = [k for k, m in zip(knots[1:-1], multiplicities[1:-1]) if m >= degree]
+        if inner:
+            near = np.abs(uv[:, axis][:, None] - np.array(inner)) <= 1e-9 * (knots[-1] - knots[0])
+            crease |= near.any(axis=1)
+    return crease
+
+
+def test_a_degree_one_face_has_creases_on_its_inner_knots():
+    surface = make_bspline_surface(np.stack(np.meshgrid(np.linspace(0, 80, 3), np.linspace(0, 60, 3),
+                                                        indexing="ij") + [np.zeros((3, 3))], -1), (1, 2))
+    uv = np.array([[0.5, 0.3], [0.25, 0.5], [0.5, 0.5]])
+    assert on_crease(surface, uv).tolist() == [True, False, True]
+
+
 @st.composite
 def nurbs_faces(draw):
     """A random NURBS face: degrees 1-5, 4-12 poles, weights 0.5-2, sometimes a hole cut through."""
@@ -49,7 +71,8 @@ def test_any_face_any_strategy_gives_usable_points(tmp_path_factory, face, strat
     assert off_face < OCC_DISTANCE_MM
     assert np.allclose(np.linalg.norm(result.normals, axis=1), 1.0)
     occ = np.array([tuple(result.model.face.normalAt(u, v)) for u, v in result.uv])
-    assert np.abs(occ - result.normals).max() < 1e-6
+    smooth = ~on_crease(face.Surface, result.uv)
+    assert np.abs(occ - result.normals)[smooth].max(initial=0.0) < 1e-6
     assert result.exact or result.deviation.maximum >= result.bounds()["grid"].lower * (1 - 1e-9)
     path = str(tmp_path_factory.mktemp("export") / "points.csv")
     cmmsampling.export(result, path)
