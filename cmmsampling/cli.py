@@ -82,16 +82,27 @@ def _strategy_settings(parser):
                             dest=option, help=setting.help)
 
 
+def given_settings(name, args):
+    """{option: value} of the settings of strategy ``name`` given on the command line."""
+    return {s.option: getattr(args, s.option) for s in STRATEGIES[name].settings
+            if getattr(args, s.option, None) is not None}
+
+
 def strategy_options(name, args):
     """The options of strategy ``name`` given on the command line, with a progress display for an
     optimiser (a bar when its number of steps is known)."""
     entry = STRATEGIES[name]
-    options = {s.option: getattr(args, s.option) for s in entry.settings
-               if getattr(args, s.option, None) is not None}
+    options = given_settings(name, args)
     if entry.optimiser:
-        total = options.get(entry.progress_total, entry.options.get(entry.progress_total))
-        options["progress"] = TerminalProgress(entry.label, total, entry.progress_unit)
+        options["progress"] = TerminalProgress(entry.label, entry.progress_steps(options), entry.progress_unit)
     return options
+
+
+def finish_progress(options):
+    """End the progress line of a run whose display had no known total (a bar ends itself)."""
+    progress = options.get("progress")
+    if progress is not None and progress.total is None:
+        progress.finish()
 
 
 class TerminalProgress:
@@ -125,9 +136,11 @@ class TerminalProgress:
 
 def format_table(results):
     """Fixed-width table of results: strategy, max/mean/RMS (mm), ratio to uniform, time (s)."""
-    uniform = next((r.deviation.maximum for r in results if r.strategy == baseline()), None)
+    reference = baseline()
+    uniform = next((r.deviation.maximum for r in results if r.strategy == reference), None)
+    # the ratio column is headed by the baseline label's first word: "x uniform"
     lines = [f"{'strategy':<20} {'N':>4} {'max mm':>9} {'mean mm':>9} {'RMS mm':>9} "
-             f"{'OCC max':>9} {'x ' + baseline()[:7]:>9} {'time s':>8}"]
+             f"{'OCC max':>9} {'x ' + STRATEGIES[reference].label.split()[0]:>9} {'time s':>8}"]
     for r in results:
         d = r.deviation
         ratio = d.maximum / uniform if uniform else float("nan")
@@ -145,8 +158,7 @@ def run_demo(args):
     for name in STRATEGIES:
         options = strategy_options(name, args)
         results.append(sample(face, args.points, name, seed=args.seed, **options))
-        if getattr(options.get("progress"), "total", 1) is None:
-            options["progress"].finish()
+        finish_progress(options)
     print(format_table(results))
     if args.report != "none":
         _study_report(face, args)
@@ -159,8 +171,7 @@ def _study_report(face, args):
     from .study import compare
 
     progress = StudyProgress()
-    options = {name: {key: value for key, value in strategy_options(name, args).items() if key != "progress"}
-               for name in STRATEGIES}
+    options = {name: given_settings(name, args) for name in STRATEGIES}
     study = compare(face, seeds=(args.seed, args.seed + 1, args.seed + 2, args.seed + 3, args.seed + 4),
                     options={name: values for name, values in options.items() if values}, progress=progress)
     progress.finish()
@@ -228,11 +239,9 @@ def run_sample(args):
     if not 1 <= args.face <= len(shape.Faces):
         raise ValueError(f"--face must be between 1 and {len(shape.Faces)} for {args.file}, got {args.face}")
     options = strategy_options(args.strategy, args)
-    progress = options.get("progress")
     result = sample(shape.Faces[args.face - 1], args.points, args.strategy, seed=args.seed,
                     edge_offset=args.edge_offset, min_spacing=args.min_spacing, **options)
-    if progress is not None and progress.total is None:
-        progress.finish()
+    finish_progress(options)
     print(f"{os.path.basename(args.file)} Face{args.face}: {args.strategy}, N = {result.n}, "
           f"edge offset {args.edge_offset:g} mm, spacing {result.settings['min_spacing']:.3g} mm")
     print(format_table([result]))

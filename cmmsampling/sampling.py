@@ -77,6 +77,14 @@ class Strategy:
         merged = {**self.options, **options}
         return self.check(merged) if self.check else merged
 
+    def progress_steps(self, options):
+        """How many progress steps a run with ``options`` (given ones; the rest default) will
+        report, or None when that is not known in advance."""
+        if self.progress_total is None:
+            return None
+        return options.get(self.progress_total, self.options.get(self.progress_total))
+
+
 
 def _blind(function):
     """Adapter: a blind strategy ignores progress and takes no options."""

@@ -91,8 +91,7 @@ def progress_total(arguments):
     """(what a progress step is, how many there will be or 0 when unknown) for a run, from its
     strategy's record."""
     entry = sampling.STRATEGIES[arguments["strategy"]]
-    total = arguments.get(entry.progress_total, entry.options.get(entry.progress_total)) or 0
-    return entry.progress_unit.capitalize(), total
+    return entry.progress_unit.capitalize(), entry.progress_steps(arguments) or 0
 
 
 class FacePicker:
