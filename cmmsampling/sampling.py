@@ -85,7 +85,6 @@ class Strategy:
         return options.get(self.progress_total, self.options.get(self.progress_total))
 
 
-
 def _blind(function):
     """Adapter: a blind strategy ignores progress and takes no options."""
     return lambda problem, progress: function(problem)
@@ -119,13 +118,22 @@ def run_pso(problem, progress, population, iterations, w1, w2, c1, c2, velocity_
 
 
 def _uniform_seeds(problem):
-    """{name: uv (N, 2)} of the uniform layouts that fit the face (uniform Cartesian may refuse)."""
-    seeds = {"uniform parametric": blind.uniform_parametric(problem).uv}
-    try:
-        seeds["uniform Cartesian"] = blind.uniform_cartesian(problem).uv
-    except ValueError:
-        pass
-    return seeds
+    """{label: uv (N, 2)} of the uniform layouts that fit the face (uniform Cartesian may refuse)."""
+    layouts = _layouts(problem, required=("uniform_parametric",), optional=("uniform_cartesian",))
+    return {STRATEGIES[name].label: uv for name, uv in layouts.items()}
+
+
+def _layouts(problem, required=(), optional=()):
+    """{name: uv (N, 2)} of the named strategies' layouts with their default options, in the order
+    given; a refusal (ValueError) of a required one is raised, an optional one is left out."""
+    layouts = {}
+    for name in (*required, *optional):
+        try:
+            layouts[name] = STRATEGIES[name].run(problem, None, **STRATEGIES[name].options).uv
+        except ValueError:
+            if name in required:
+                raise
+    return layouts
 
 
 def _best_exact(problem, found, seeds):
@@ -175,14 +183,7 @@ def run_optimal(problem, progress, start, time_limit, max_evaluations):
 def _start_layout(problem, start):
     """(uv (N, 2), name) of the start named ``start``; for "best", the BEST_STARTS layout of
     smallest exact maximum deviation (layouts a strategy refuses for this face are skipped)."""
-    names = BEST_STARTS if start == "best" else (start,)
-    layouts = {}
-    for name in names:
-        try:
-            layouts[name] = STRATEGIES[name].run(problem, None, **STRATEGIES[name].options).uv
-        except ValueError:
-            if len(names) == 1:
-                raise
+    layouts = _layouts(problem, optional=BEST_STARTS) if start == "best" else _layouts(problem, required=(start,))
     if len(layouts) == 1:
         return next(iter(layouts.values())), next(iter(layouts))
     name = min(layouts, key=lambda key: problem.exact_maximum(layouts[key]))
