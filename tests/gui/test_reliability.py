@@ -11,7 +11,7 @@ from cmmsampling import document
 
 from .helpers import (
     Hold, answer_dialog, dock_text, drawn, fill, groups, interrupt_run, open_panel, process_events,
-    running_workers, short_result, task_button, wait_until,
+    running_workers, short_result, task_button, wait_until, widgets,
 )
 
 OK, CANCEL = QtGui.QDialogButtonBox.Ok, QtGui.QDialogButtonBox.Cancel
@@ -108,6 +108,21 @@ def test_the_source_deleted_during_a_run_is_reported_and_nothing_added(doc, monk
     task_button(CANCEL).click()
 
 
+def focus_tree():
+    """Give the keyboard focus to the document tree, as a user does who selects there before
+    Ctrl+C. Std_Copy first offers "Copy" to the active view when the focus lies inside it: with the
+    focus left in a report spreadsheet's table by an earlier test, it copied cells and no
+    dependency dialog opened (reproduced on FreeCAD 0.20)."""
+    [tree] = [w for w in widgets() if w.inherits("Gui::TreeWidget") and w.isVisible()]
+    tree.setFocus()
+    process_events(0.1)
+
+
+def focus_widget_class():
+    widget = QtGui.QApplication.focusWidget()
+    return widget.metaObject().className() if widget is not None else None
+
+
 @pytest.fixture
 def clipboard():
     """Empty the clipboard after the test: while this FreeCAD owns it, a FreeCAD started by a
@@ -123,8 +138,9 @@ def test_copy_and_paste_of_a_group_gives_a_consistent_copy(doc, clipboard):
     FreeCADGui.Selection.addSelection(group)
     assert [o.Name for o in FreeCADGui.Selection.getSelection()] == [group.Name]
     assert FreeCADGui.Command.get("Std_Copy").isActive()
+    focus_tree()
     asked = answer_dialog(lambda: FreeCADGui.runCommand("Std_Copy"), "OK")
-    assert "dependencies" in asked
+    assert "dependencies" in asked, f"no dependency dialog; focus in {focus_widget_class()}"
     FreeCADGui.Selection.clearSelection()
     names, undo = [o.Name for o in doc.Objects], doc.UndoCount
     FreeCADGui.runCommand("Std_Paste")
