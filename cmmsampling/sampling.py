@@ -14,7 +14,7 @@ from .optimal import default_min_spacing, descend
 from .pso import SwarmSettings, particle_swarm
 from .result import SamplingResult
 from .strategies import StrategyOutcome
-from .surface import SurfaceModel, as_face, substitute_surface
+from .surface import ON_FACE_MM, SurfaceModel, as_face, substitute_surface
 from .threads import blas_threads
 from .validation import check_choice, check_int, check_pair, check_real, check_uv
 
@@ -391,10 +391,21 @@ def sample(face, n=81, strategy=DEFAULT_STRATEGY, *, fit_degree=DEFAULT_DEGREE, 
     start = time.perf_counter()
     with blas_threads(1):
         outcome = STRATEGIES[strategy].run(problem, progress, **options)
+    _move_onto_face(problem.model, outcome)
     strategy_s = time.perf_counter() - start
     settings = {"strategy": strategy, "n": problem.n, **_common_settings(problem),
                 **_json_friendly({**options, **outcome.details})}
     return _judge(problem, outcome, strategy, settings, strategy_s, occ_check)
+
+
+def _move_onto_face(model, outcome):
+    """Move the outcome's points that lie off the face (OCC) onto it, with a note saying so."""
+    outcome.uv, off = model.onto_face(outcome.uv)
+    moved = off > ON_FACE_MM
+    if moved.any():
+        outcome.notes.append(
+            f"{moved.sum()} point(s) lay up to {off.max():.2g} mm off the face at its boundary "
+            "and were moved onto it")
 
 
 def _json_friendly(options):

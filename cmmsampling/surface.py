@@ -15,6 +15,13 @@ from .nurbs import NurbsPatch
 Part = import_part()
 import FreeCAD  # noqa: E402  (importable once import_part() has set the path)
 
+# How far a probe point may lie from its face, mm, by OCC's distance (BRepExtrema): points
+# farther off (beyond a trimmed boundary, or past an edge whose parameter range is wider than
+# the face) are moved onto the face by SurfaceModel.onto_face.
+ON_FACE_MM = 1e-5
+INWARD_STEP = 1e-7
+INWARD_DOUBLINGS = 40
+
 
 class SurfaceModel(NurbsPatch):
     """A face's NURBS definition (see NurbsPatch) together with the face it came from.
@@ -53,6 +60,46 @@ class SurfaceModel(NurbsPatch):
         if surface.isVPeriodic():
             surface.setVNotPeriodic()
         return cls(evaluated, face, surface)
+
+    def distance_to_face(self, uv):
+        """OCC's distance (mm) from the model's points at uv (N, 2) to the face, and the nearest
+        points on it: ((N,) mm, (N, 3) mm). One OCC query per point: a final check, not for
+        optimiser loops."""
+        found = [self.face.distToShape(Part.Vertex(*point)) for point in self.points(uv)]
+        return (np.array([d[0] for d in found]),
+                np.array([tuple(d[1][0][0]) for d in found]).reshape(-1, 3))
+
+    def onto_face(self, uv):
+        """uv (N, 2) with every point farther than ON_FACE_MM from the face moved onto it.
+
+        An off point goes to the parameters of its nearest point on the face (OCC), and from there
+        inward (away from where it was) by steps doubling from INWARD_STEP of the parameter range
+        until OCC finds it on the face (an edge's 3D curve and its curve on the surface differ
+        by up to the edge's tolerance). Returns (uv (N, 2), off (N,) mm: each point's distance
+        from the face before the move).
+        """
+        uv = np.array(uv, dtype=float)
+        off, feet = self.distance_to_face(uv)
+        for i in np.flatnonzero(off > ON_FACE_MM):
+            uv[i] = self._inward(uv[i], feet[i])
+        return uv, off
+
+    def _inward(self, outside, foot):
+        """Parameters (2,) of a point on the face near ``foot`` (3,) mm, the nearest face point
+        of the parameters ``outside`` (2,)."""
+        low, high = np.array(self.bounds[0::2]), np.array(self.bounds[1::2])
+        start = np.clip(self.face.Surface.parameter(FreeCAD.Vector(*foot)), low, high)
+        direction = start - outside
+        if np.linalg.norm(direction / (high - low)) < INWARD_STEP:   # off by the edge's tolerance only
+            direction = 0.5 * (low + high) - start
+        direction = direction / np.linalg.norm(direction / (high - low))
+        steps = np.concatenate([[0.0], INWARD_STEP * 2.0 ** np.arange(INWARD_DOUBLINGS)])
+        for step in steps:
+            candidate = np.clip(start + step * direction, low, high)
+            if self.distance_to_face(candidate[None])[0][0] <= ON_FACE_MM:
+                return candidate
+        raise ValueError("a point off the face could not be moved onto it; the face's boundary "
+                         "may be broken: check it with Part's Check geometry")
 
 
 def as_face(shape):

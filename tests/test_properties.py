@@ -1,6 +1,5 @@
 """Property-based tests over random NURBS faces (hypothesis): every strategy's points are usable."""
 import numpy as np
-import pytest
 from geometry import FreeCAD, Part
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
@@ -62,9 +61,6 @@ def test_any_face_any_strategy_gives_usable_points(tmp_path_factory, face, strat
         return
     assert result.points.shape == (n, 3) and np.all(np.isfinite(result.points))
     off_face = max(face.distToShape(Part.Vertex(*p))[0] for p in result.points)
-    if off_face >= OCC_DISTANCE_MM and FreeCAD.Version()[:2] >= ["1", "1"]:
-        pytest.xfail(f"open: on FreeCAD 1.1 a point of this face lies {off_face:.3g} mm off it (0.20 "
-                     "and 1.0 pass); see the issue on points off the face")
     assert off_face < OCC_DISTANCE_MM
     assert np.allclose(np.linalg.norm(result.normals, axis=1), 1.0)
     occ = np.array([tuple(result.model.face.normalAt(u, v)) for u, v in result.uv])

@@ -1,9 +1,9 @@
 """SurfaceModel against OpenCASCADE: points, normals, derivatives and curvature."""
 import numpy as np
 import pytest
-from geometry import sample_faces, uv_samples
+from geometry import FreeCAD, Part, holed_face, sample_faces, uv_samples
 
-from cmmsampling.surface import SurfaceModel, reference_poles
+from cmmsampling.surface import ON_FACE_MM, SurfaceModel, reference_poles
 
 FACES = sample_faces()
 
@@ -118,3 +118,20 @@ def test_non_face_input_is_refused():
         SurfaceModel.from_face(Part.makeBox(1, 1, 1))
     with pytest.raises(TypeError, match="Part.Face"):
         SurfaceModel.from_face("Face1")
+
+
+def test_points_off_a_trimmed_face_are_moved_onto_it_and_the_others_stay():
+    face = holed_face()
+    model = SurfaceModel.from_face(face)
+    hole_centre = np.array(face.Surface.parameter(FreeCAD.Vector(40, 55, 0)))
+    inside = uv_samples(model, 6)
+    inside = inside[[face.isPartOfDomain(u, v) and face.distToShape(Part.Vertex(face.valueAt(u, v)))[0] < 1e-9
+                     for u, v in inside]]
+    uv = np.vstack([inside, hole_centre + [0.01, 0.0], hole_centre])
+    moved, off = model.onto_face(uv)
+    assert off[:len(inside)].max() < 1e-9 and off[len(inside):].min() > 7.0
+    assert np.array_equal(moved[:len(inside)], inside)
+    after = [face.distToShape(Part.Vertex(*p))[0] for p in model.points(moved)]
+    assert max(after) <= ON_FACE_MM
+    # a moved point lands at the hole's edge, 8 mm (the radius) in 3D from the hole's centre
+    assert np.allclose(np.linalg.norm(model.points(moved[-2:])[:, :2] - [40, 55], axis=1), 8.0, atol=0.05)
