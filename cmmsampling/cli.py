@@ -3,6 +3,7 @@ import argparse
 import os
 import sys
 import time
+import traceback
 
 from . import STRATEGIES, reference_face, sample
 from .sampling import BEST_STRATEGY, PROBE_EDGE_OFFSET_MM, baseline
@@ -25,6 +26,8 @@ def build_parser():
     """The argument parser with its sub-commands."""
     parser = argparse.ArgumentParser(prog="python -m cmmsampling", description=DESCRIPTION,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--debug", action="store_true",
+                        help="print the traceback of an error (for a bug report)")
     commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     demo = commands.add_parser(
         "demo", help="sample the built-in reference surface with every strategy and print a table")
@@ -199,14 +202,39 @@ def read_shape(path):
     import Part
 
     extension = os.path.splitext(path)[1].lower()
-    if extension not in (".step", ".stp", ".iges", ".igs", ".brep", ".brp"):
+    if extension not in CAD_TYPES:
         raise ValueError(f"{path}: unknown file type {extension!r}; use a STEP, IGES or BREP file")
+    if os.path.isdir(path):
+        raise ValueError(f"{path}: is a folder, not a CAD file; give the file's path")
     if not os.path.isfile(path):
         raise ValueError(f"{path}: no such file")
-    shape = Part.read(path)
+    if not os.access(path, os.R_OK):
+        raise ValueError(f"{path}: no permission to read it")
+    kind = CAD_TYPES[extension]
+    try:
+        shape = Part.read(path)
+    except Exception as exc:   # OCC's reader raises a bare RuntimeError for any broken file
+        raise ValueError(f"{path}: cannot be read as {kind} ({_freecad_reason(exc)}); check that the "
+                         f"file is complete (not empty or cut short) and was exported as {kind}") from exc
     if not shape.Faces:
         raise ValueError(f"{path}: the file holds no faces")
     return shape
+
+
+CAD_TYPES = {".step": "STEP", ".stp": "STEP", ".iges": "IGES", ".igs": "IGES", ".brep": "BREP",
+             ".brp": "BREP"}
+
+
+def _freecad_reason(exc):
+    """The words of a FreeCAD exception: its message without the 'FreeCAD exception thrown' frame,
+    or the 'sErrMsg' of the dict some FreeCAD versions raise."""
+    detail = exc.args[0] if exc.args else exc
+    if isinstance(detail, dict):
+        detail = detail.get("sErrMsg") or detail.get("swhat") or detail
+    text = str(detail)
+    if text.startswith("FreeCAD exception thrown (") and text.endswith(")"):
+        text = text[len("FreeCAD exception thrown ("):-1]
+    return text
 
 
 def describe_faces(shape):
@@ -235,6 +263,7 @@ def run_faces(args):
 
 def run_sample(args):
     """Sample one face of a CAD file and write what was asked for."""
+    _check_outputs(args)
     shape = read_shape(args.file)
     if not 1 <= args.face <= len(shape.Faces):
         raise ValueError(f"--face must be between 1 and {len(shape.Faces)} for {args.file}, got {args.face}")
@@ -247,6 +276,25 @@ def run_sample(args):
     print(format_table([result]))
     _write_outputs(result, args)
     return 0
+
+
+def _check_outputs(args):
+    """ValueError or OSError before any computation when an output cannot be written: an
+    unknown point-file extension, an --fcstd name without .FCStd, a folder that takes no file."""
+    from .exporting import check_writable
+    from .pointfiles import resolve_format
+
+    for path in args.out:
+        try:
+            resolve_format(path)
+        except ValueError:
+            raise ValueError(f"--out {path}: unknown point-file type; end the name in .dmi (DMIS), "
+                             ".xyz (PC-DMIS XYZIJK) or .csv") from None
+        check_writable(path)
+    if args.fcstd:
+        if not args.fcstd.lower().endswith(".fcstd"):
+            raise ValueError(f"--fcstd {args.fcstd}: a FreeCAD document's name ends in .FCStd")
+        check_writable(args.fcstd)
 
 
 def _write_outputs(result, args):
@@ -273,17 +321,36 @@ def _save_document(result, args):
         part.Shape = read_shape(args.file)
         document.recompute()
         add_to_document(result, document, source=(part, f"Face{args.face}"))
-        document.saveAs(os.path.abspath(args.fcstd))
+        try:
+            document.saveAs(os.path.abspath(args.fcstd))
+        except Exception as exc:   # FreeCAD raises its own exception types here
+            raise OSError(f"could not save {args.fcstd}: {_freecad_reason(exc)}") from exc
         print(f"saved {args.fcstd}")
     finally:
         FreeCAD.closeDocument(document.Name)
 
 
 def main(argv=None):
-    """Entry point; returns the process exit code (2 for bad input)."""
+    """Entry point; returns the process exit code: 2 for bad input (a file, path or value, with one
+    line saying what to do), 1 for anything unexpected; a traceback only with --debug."""
     args = build_parser().parse_args(argv)
     try:
         return {"demo": run_demo, "faces": run_faces, "sample": run_sample}[args.command](args)
     except (ValueError, TypeError, OSError) as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
+        return _fail(args, f"error: {exc}", 2)
+    except MemoryError:
+        return _fail(args, "error: this run needs more memory than the machine has free; lower -n "
+                           "(or --population for PSO)", 2)
+    except KeyboardInterrupt:
+        return _fail(args, "interrupted", 130)
+    except Exception as exc:
+        return _fail(args, f"error: unexpected {type(exc).__name__}: {exc}; run again with --debug "
+                           "for the details and report them", 1)
+
+
+def _fail(args, message, code):
+    """Print the message (and, with --debug, the traceback) on stderr; return the exit code."""
+    if args.debug:
+        traceback.print_exc()
+    print(message, file=sys.stderr)
+    return code

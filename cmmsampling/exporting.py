@@ -450,21 +450,74 @@ def csv_text(point_set, facts, options):
 WRITERS = {"dmis": dmis_text, "xyz": xyz_text, "csv": csv_text}
 
 
+# The temporary files of write_atomically: .<file name>.<process id>.<random>.tmp
+TEMPORARY = re.compile(r"^\..+\.(?P<pid>\d+)\.[A-Za-z0-9_]{8}\.tmp$")
+
+
+def check_writable(path):
+    """ExportError naming the path and the reason unless a file can be written at path: the
+    folder exists and takes new files (a temporary file is created there and removed), and path
+    is no folder. Returns the absolute path. For checking output paths before a long run."""
+    target = os.path.abspath(os.fspath(path))
+    if os.path.isdir(target):
+        raise ExportError(f"could not write {target}: it is a folder; give a file name")
+    descriptor, temporary = _temporary_file(target)
+    os.close(descriptor)
+    os.unlink(temporary)
+    return target
+
+
+def _temporary_file(target):
+    """(descriptor, path) of a new temporary file beside target, named after it and this process;
+    ExportError naming the reason when the folder takes no new file."""
+    try:
+        descriptor, temporary = tempfile.mkstemp(
+            prefix=f".{os.path.basename(target)}.{os.getpid()}.", suffix=".tmp",
+            dir=os.path.dirname(target))
+    except OSError as exc:
+        raise ExportError(f"could not write {target}: {_reason(exc, target)}") from exc
+    return descriptor, temporary
+
+
+def remove_stale_temporaries(folder):
+    """Remove the temporary files that writes killed midway (kill -9, power loss) left in folder:
+    those of write_atomically whose process is gone. Returns the paths removed."""
+    removed = []
+    for name in os.listdir(folder):
+        match = TEMPORARY.match(name)
+        if match and not _process_alive(int(match["pid"])):
+            try:
+                os.unlink(os.path.join(folder, name))
+                removed.append(os.path.join(folder, name))
+            except OSError:
+                pass
+    return removed
+
+
+def _process_alive(pid):
+    """True when a process with this id runs on this machine (or may: no permission to ask)."""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
 def write_atomically(path, text, encoding):
     """Write text to path through a temporary file in the same folder (fsync, then os.replace).
 
-    On any failure the temporary file is removed and an existing file at path is untouched.
-    Returns the absolute path; ExportError naming the path and the reason when it cannot be written.
+    On any failure the temporary file is removed and an existing file at path is untouched;
+    temporary files of earlier writes that were killed midway are removed first
+    (:func:`remove_stale_temporaries`). Returns the absolute path; ExportError naming the path
+    and the reason when it cannot be written.
     """
     target = os.path.abspath(os.fspath(path))
     folder = os.path.dirname(target)
     data = text.encode(encoding)
-    try:
-        descriptor, temporary = tempfile.mkstemp(
-            prefix=f".{os.path.basename(target)}.", suffix=".tmp", dir=folder
-        )
-    except OSError as exc:
-        raise ExportError(f"could not write {target}: {_reason(exc, target)}") from exc
+    descriptor, temporary = _temporary_file(target)
+    remove_stale_temporaries(folder)
     try:
         with os.fdopen(descriptor, "wb") as stream:
             stream.write(data)
@@ -488,13 +541,13 @@ def _reason(exc, target):
         while blocker and not os.path.exists(blocker):
             blocker = os.path.dirname(blocker)
         return f"{blocker} is a file, not a folder"
-    if isinstance(exc, FileNotFoundError):
+    if isinstance(exc, FileNotFoundError) and not os.path.isdir(folder):
         return f"the folder {folder} does not exist"
     if isinstance(exc, IsADirectoryError):
         return f"{target} is a folder"
     if isinstance(exc, PermissionError):
         return f"no permission to write in {folder} ({exc.strerror})"
-    return exc.strerror or str(exc)
+    return f"the folder {folder} takes no new files ({exc.strerror or exc}); choose another folder"
 
 
 def _file_mode(target):

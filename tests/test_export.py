@@ -3,6 +3,8 @@ atomic writes, label rules, the DMIS grammar, and measured points against the CA
 import dataclasses
 import itertools
 import os
+import subprocess
+import sys
 import time
 
 import dmis_syntax
@@ -12,7 +14,7 @@ from geometry import FreeCAD, Part
 
 import cmmsampling
 from cmmsampling.exporting import (
-    ExportError, export, measured_deviation, placement_from_metadata, reordered, sanitise_labels,
+    TEMPORARY, ExportError, export, measured_deviation, placement_from_metadata, reordered, sanitise_labels,
 )
 from cmmsampling.pointfiles import read_points
 from cmmsampling.pointset import PointSet
@@ -455,3 +457,18 @@ def test_measured_deviation_on_a_reversed_solid_face():
     source = PointSet(["out", "in"], points, np.tile([0.0, 0.0, -1.0], (2, 1)))
     measured = measured_deviation(bottom, source)
     assert np.allclose(measured.distances, [0.2, -0.3], atol=1e-9)
+
+
+def test_temporary_files_of_a_killed_export_are_removed_by_the_next_export(tmp_path, reference):
+    target = tmp_path / "points.csv"
+    killed = subprocess.run(
+        [sys.executable, "-c", "import os, sys; sys.path[:0] = sys.argv[2:]; "
+         "from cmmsampling.exporting import _temporary_file; _temporary_file(sys.argv[1]); os._exit(9)",
+         str(target), *sys.path], capture_output=True, text=True)
+    assert killed.returncode == 9, killed.stderr
+    [left] = [name for name in os.listdir(tmp_path) if name.endswith(".tmp")]
+    assert TEMPORARY.match(left)
+    ours = tmp_path / f".other.csv.{os.getpid()}.abcdefgh.tmp"
+    ours.write_text("a write of this live process")
+    cmmsampling.export(cmmsampling.sample(reference, 9, "uniform_parametric", occ_check=False), str(target))
+    assert sorted(os.listdir(tmp_path)) == sorted([ours.name, "points.csv"])
