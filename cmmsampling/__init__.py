@@ -31,6 +31,7 @@ _API = {
     "sample": "sampling",
     "evaluate": "sampling",
     "lower_bound": "sampling",
+    "memory_needed": "sampling",
     "SamplingResult": "result",
     "SurfaceModel": "surface",
     "reference_face": "surface",

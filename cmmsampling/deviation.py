@@ -34,6 +34,9 @@ from scipy.spatial import cKDTree
 from .bspline import design_matrices
 
 DEFAULT_GRID = 60
+# closest_squared compares all pairs of each point set up to this many pairs in all (32 MB of
+# distances), and searches neighbours beyond.
+PAIRWISE_LIMIT = 4_000_000
 FOOT_ITERATIONS = 60
 FOOT_STEP_TOLERANCE = 1e-10
 SEARCH_SAMPLES = 48
@@ -327,7 +330,13 @@ class DeviationObjective:
 
 
 def closest_squared(points):
-    """Smallest squared distance between two points of each set: (P, 3, N) mm -> (P,) mm^2."""
+    """Smallest squared distance between two points of each set: (P, 3, N) mm -> (P,) mm^2.
+
+    Up to PAIRWISE_LIMIT pairs in all, from the sets' distance matrices; beyond, from one
+    neighbour search over every set at once (memory linear in P N), the sets moved apart along x
+    so that no point of one is near a point of another."""
+    if points.shape[0] * points.shape[2] ** 2 > PAIRWISE_LIMIT:
+        return _closest_squared_by_tree(points)
     lengths = np.einsum("pcn,pcn->pn", points, points)
     squared = np.matmul(np.swapaxes(points, 1, 2), points)
     squared *= -2.0
@@ -336,6 +345,18 @@ def closest_squared(points):
     count = points.shape[-1]
     squared[:, np.arange(count), np.arange(count)] = np.inf
     return squared.min(axis=(1, 2))
+
+
+def _closest_squared_by_tree(points):
+    """closest_squared by a k-d tree over all sets at once: (P, 3, N) mm -> (P,) mm^2."""
+    sets, _, count = points.shape
+    flat = np.swapaxes(points, 1, 2).copy()
+    lower, upper = flat.min(axis=(0, 1)), flat.max(axis=(0, 1))
+    stride = 3.0 * float(np.max(upper - lower)) + 1.0
+    flat[:, :, 0] += stride * np.arange(sets)[:, None]
+    flat = flat.reshape(-1, 3)
+    distance = cKDTree(flat).query(flat, k=2)[0][:, 1].reshape(sets, count)
+    return distance.min(axis=1) ** 2
 
 
 def principal_terms(matrices):

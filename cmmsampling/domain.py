@@ -2,16 +2,21 @@
 
 A face is a region of its surface's parameter rectangle ``bounds``. For an untrimmed face with no
 edge offset the region is the rectangle itself, tested exactly. Otherwise the rectangle is cut into
-a RASTER x RASTER grid of cells, classified once:
+a grid of about CELLS cells, classified once; the cells are about square in 3D (a thin strip gets
+many cells across its length and few across its width), so that their size, and with it the
+margin below, is as small as CELLS allows:
 
 * on the face: the cell centre lies inside the face's trimming loops (each edge's curve on the
   surface, from OCC, discretised; even-odd rule, so holes need no orientation). A point within
   NEAR_CELLS // 2 cells of a cell that a loop passes through is tested against the discretised
   loops themselves;
 * feasible: on the face and at least ``edge_offset`` mm (3D) from every edge of the face. The 3D
-  distance is taken from a fine discretisation of the face's wires and made conservative by the
-  discretisation step and half the cell's 3D diagonal, so every point of a feasible cell keeps
-  the offset.
+  distance is taken from a fine discretisation of the face's wires and made conservative by half
+  the largest gap between its samples and half the cell's 3D diagonal, so every point of a
+  feasible cell keeps the offset. A point's clearance is thus underrated by at most half that gap
+  and a whole cell diagonal: that margin (``FaceDomain.margin``, mm) is what a refusal may be
+  wrong by. A face is refused only when none of its points lies farther than edge_offset +
+  margin from its edges.
 
 Points outside the feasible cells are moved to the nearest feasible cell centre.
 """
@@ -19,7 +24,9 @@ import numpy as np
 from scipy.ndimage import distance_transform_edt, maximum_filter
 from scipy.spatial import cKDTree
 
-RASTER = 256
+CELLS = 256 * 256
+MIN_CELLS_PER_SIDE = 16
+SHAPE_SAMPLES = 17
 LOOP_SAMPLES_PER_EDGE = 200
 AREA_TOLERANCE = 1e-7
 NEAR_CELLS = 5
@@ -29,20 +36,26 @@ class FaceDomain:
     """The feasible part of a face's parameter rectangle (see the module docstring).
 
     bounds: (u0, u1, v0, v1) of the face; trimmed: the face is not the whole rectangle;
-    edge_offset: mm kept from every edge; lower, upper: (2,) corners of the box holding every
-    feasible point; feasible_area: mm^2 of the feasible cells (the face's area when exact).
+    edge_offset: mm kept from every edge; on_face, feasible: (R_u, R_v) bool rasters; lower,
+    upper: (2,) corners of the box holding every feasible point; feasible_area: mm^2 of the
+    feasible cells (the face's area when exact); reach: mm, the largest edge offset that some
+    cell keeps by the conservative measure; margin: mm, how much farther from the edges a point
+    of the face may lie than that measure says (0 when exact).
     """
 
     def __init__(self, bounds, trimmed=False, edge_offset=0.0, on_face=None, feasible=None, area=None,
-                 loops=None):
+                 loops=None, reach=np.inf, margin=0.0):
         self.bounds = tuple(float(b) for b in bounds)
         self.trimmed = trimmed
         self.edge_offset = float(edge_offset)
+        self.reach = float(reach)
+        self.margin = float(margin)
+        self.shape = np.array(feasible.shape if feasible is not None else (1, 1))
         self._on_face = on_face
         self._loops = loops if trimmed else None
         self._near_loops = None
         if self._loops is not None:
-            touched = np.zeros((RASTER, RASTER), dtype=bool)
+            touched = np.zeros(tuple(self.shape), dtype=bool)
             cells = self._cells(np.concatenate(self._loops))
             touched[cells[:, 0], cells[:, 1]] = True
             self._near_loops = maximum_filter(touched, size=NEAR_CELLS)
@@ -70,9 +83,9 @@ class FaceDomain:
     def _cells(self, uv):
         """Raster cell indices (..., 2) of uv (..., 2), clipped to the raster."""
         u0, u1, v0, v1 = self.bounds
-        scale = np.array([RASTER / (u1 - u0), RASTER / (v1 - v0)])
+        scale = self.shape / np.array([u1 - u0, v1 - v0])
         cells = np.floor((np.asarray(uv, dtype=float) - [u0, v0]) * scale)
-        return np.clip(np.nan_to_num(cells, nan=-1), 0, RASTER - 1).astype(int)
+        return np.clip(np.nan_to_num(cells, nan=-1), 0, self.shape - 1).astype(int)
 
     def _in_rectangle(self, uv):
         uv = np.asarray(uv, dtype=float)
@@ -124,7 +137,7 @@ class FaceDomain:
         ok = self._feasible[cells[..., 0], cells[..., 1]]
         target = np.stack([self._nearest[0][cells[..., 0], cells[..., 1]],
                            self._nearest[1][cells[..., 0], cells[..., 1]]], axis=-1)
-        centres = low + (target + 0.5) * (high - low) / RASTER
+        centres = low + (target + 0.5) * (high - low) / self.shape
         return np.where(ok[..., None], clipped, centres)
 
     def from_unit(self, unit):
@@ -138,16 +151,38 @@ def face_domain(model, edge_offset=0.0):
     trimmed = _is_trimmed(face)
     if not trimmed and edge_offset <= 0:
         return FaceDomain(model.bounds, area=float(face.Area))
-    centres = _cell_centres(model.bounds)
-    step = max(face.BoundBox.DiagonalLength / 1000.0, 1e-6)
+    shape = raster_shape(model)
+    centres = _cell_centres(model.bounds, shape)
+    points = model.points(centres.reshape(-1, 2)).reshape(*shape, 3)
+    half_diagonals = 0.5 * _cell_diagonals(points)
+    step = max(min(face.BoundBox.DiagonalLength / 1000.0, float(half_diagonals.max())), 1e-6)
     loops = _loops(face, step)
-    on_face = _inside_loops(loops, centres) if trimmed else np.ones((RASTER, RASTER), bool)
-    points = model.points(centres.reshape(-1, 2)).reshape(RASTER, RASTER, 3)
-    clearance = _edge_clearance(model.points(np.concatenate(loops)), points, step)
+    on_face = _inside_loops(loops, centres) if trimmed else np.ones(shape, bool)
+    samples = [model.points(loop) for loop in loops]
+    distance = _edge_distance(np.concatenate(samples), points)
+    gap = max(float(np.linalg.norm(np.diff(loop, axis=0), axis=1).max(initial=0.0)) for loop in samples)
+    clearance = distance - 0.5 * gap - half_diagonals
     feasible = on_face & (clearance >= edge_offset)
     cell_areas = _cell_areas(points)
+    reach = float(clearance[on_face].max(initial=0.0))
+    margin = 0.5 * gap + 2.0 * float(half_diagonals[on_face].max(initial=0.0))
     return FaceDomain(model.bounds, trimmed, edge_offset, on_face, feasible,
-                      float(cell_areas[feasible].sum()), loops)
+                      float(cell_areas[feasible].sum()), loops, reach, margin)
+
+
+def raster_shape(model):
+    """(R_u, R_v) cells of the raster, about CELLS in all, in proportion to the face's 3D extent
+    along u and along v (the longest iso-parametric line of SHAPE_SAMPLES in each direction),
+    so that the cells are about square in 3D; at least MIN_CELLS_PER_SIDE along each."""
+    u0, u1, v0, v1 = model.bounds
+    grid = np.stack(np.meshgrid(np.linspace(u0, u1, SHAPE_SAMPLES), np.linspace(v0, v1, SHAPE_SAMPLES),
+                                indexing="ij"), -1)
+    points = model.points(grid.reshape(-1, 2)).reshape(SHAPE_SAMPLES, SHAPE_SAMPLES, 3)
+    along_u = np.linalg.norm(np.diff(points, axis=0), axis=-1).sum(axis=0).max()
+    along_v = np.linalg.norm(np.diff(points, axis=1), axis=-1).sum(axis=1).max()
+    ratio = max(along_u, 1e-12) / max(along_v, 1e-12)
+    cells_u = int(np.clip(round(np.sqrt(CELLS * ratio)), MIN_CELLS_PER_SIDE, CELLS // MIN_CELLS_PER_SIDE))
+    return cells_u, max(CELLS // cells_u, MIN_CELLS_PER_SIDE)
 
 
 def _is_trimmed(face):
@@ -156,11 +191,11 @@ def _is_trimmed(face):
     return abs(full.Area - face.Area) > AREA_TOLERANCE * full.Area or len(face.Wires) > 1
 
 
-def _cell_centres(bounds):
-    """(RASTER, RASTER, 2) centres of the raster cells over the rectangle."""
+def _cell_centres(bounds, shape):
+    """(R_u, R_v, 2) centres of the raster cells of ``shape`` (R_u, R_v) over the rectangle."""
     u0, u1, v0, v1 = bounds
-    u = u0 + (np.arange(RASTER) + 0.5) * (u1 - u0) / RASTER
-    v = v0 + (np.arange(RASTER) + 0.5) * (v1 - v0) / RASTER
+    u = u0 + (np.arange(shape[0]) + 0.5) * (u1 - u0) / shape[0]
+    v = v0 + (np.arange(shape[1]) + 0.5) * (v1 - v0) / shape[1]
     return np.stack(np.meshgrid(u, v, indexing="ij"), axis=-1)
 
 
@@ -185,7 +220,7 @@ def _loops(face, step):
 
 
 def _inside_loops(loops, centres):
-    """Even-odd classification of the raster cell centres against the trimming loops: (R, R) bool."""
+    """Even-odd classification of the raster cell centres against the trimming loops: (R_u, R_v) bool."""
     u = centres[:, 0, 0]
     v = centres[0, :, 1]
     crossings = [[] for _ in v]
@@ -222,25 +257,23 @@ def inside_loops(loops, uv, block=4096):
     return inside
 
 
-def _edge_clearance(samples, points, step):
-    """Conservative 3D distance (mm) from each raster cell to the face's edges: (R, R).
-
-    samples: (K, 3) points along the edges at most ``step`` mm apart; points: (R, R, 3) cell
-    centres. The distance to the nearest sample, less the step and half the cell's 3D diagonal.
-    """
-    distance = cKDTree(samples).query(points.reshape(-1, 3))[0].reshape(points.shape[:2])
-    return distance - step - 0.5 * _cell_diagonals(points)
+def _edge_distance(samples, points):
+    """3D distance (mm) from each cell centre, points (R_u, R_v, 3), to the nearest of the edge
+    samples (K, 3): (R_u, R_v). Every point of an edge is within about half the largest gap
+    between consecutive samples of a sample; less that and half the cell's diagonal, it is a
+    distance every point of the cell keeps from the edges."""
+    return cKDTree(samples).query(points.reshape(-1, 3))[0].reshape(points.shape[:2])
 
 
 def _cell_diagonals(points):
-    """Approximate 3D diagonal of each raster cell from its neighbours' centres: (R, R) mm."""
+    """Approximate 3D diagonal of each raster cell from its neighbours' centres: (R_u, R_v) mm."""
     du = np.linalg.norm(np.gradient(points, axis=0), axis=-1)
     dv = np.linalg.norm(np.gradient(points, axis=1), axis=-1)
     return np.hypot(du, dv)
 
 
 def _cell_areas(points):
-    """Approximate 3D area of each raster cell: (R, R) mm^2."""
+    """Approximate 3D area of each raster cell: (R_u, R_v) mm^2."""
     su = np.gradient(points, axis=0)
     sv = np.gradient(points, axis=1)
     return np.linalg.norm(np.cross(su, sv), axis=-1)

@@ -21,6 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy.optimize import minimize
+from scipy.spatial import cKDTree
 from scipy.special import logsumexp, softmax
 
 from .bspline import kron_rows
@@ -97,20 +98,28 @@ def surrogate(objective, uv, tau, min_spacing=0.0, penalty=0.0):
 def _spacing_penalty(points, min_spacing, weight):
     """Penalty on pairs closer than min_spacing: (value, d value / d points (N, 3), closest mm).
 
-    Coincident points have no direction to be pushed apart; they add no gradient (and, being
-    closer than min_spacing, are never accepted as a result)."""
-    gaps = points[:, None, :] - points[None, :, :]
-    distance = np.sqrt((gaps ** 2).sum(-1))
-    np.fill_diagonal(distance, np.inf)
-    closest = float(distance.min()) if len(points) > 1 else np.inf
+    value = weight * sum over pairs i < j of max(min_spacing - |p_i - p_j|, 0)^2. The close pairs
+    come from a neighbour search (memory linear in N). Coincident points have no direction to be
+    pushed apart; they add no gradient (and, being closer than min_spacing, are never accepted as
+    a result)."""
+    if len(points) < 2:
+        return 0.0, np.zeros_like(points), np.inf
+    tree = cKDTree(points)
+    closest = float(tree.query(points, k=2)[0][:, 1].min())
     if weight <= 0 or min_spacing <= 0:
         return 0.0, np.zeros_like(points), closest
+    pairs = tree.query_pairs(min_spacing, output_type="ndarray")
+    gaps = points[pairs[:, 0]] - points[pairs[:, 1]]
+    distance = np.sqrt((gaps ** 2).sum(-1))
     short = np.maximum(min_spacing - distance, 0.0)
-    value = 0.5 * weight * float((short ** 2).sum())
-    pulling = (short > 0) & (distance > 0)
-    factor = np.zeros_like(distance)
-    factor[pulling] = -2.0 * weight * short[pulling] / distance[pulling]
-    return value, (factor[:, :, None] * gaps).sum(1), closest
+    value = weight * float((short ** 2).sum())
+    factor = np.where(distance > 0, -2.0 * weight * short / np.where(distance > 0, distance, 1.0), 0.0)
+    push = factor[:, None] * gaps
+    gradient = np.zeros_like(points)
+    for axis in range(3):
+        gradient[:, axis] = (np.bincount(pairs[:, 0], push[:, axis], len(points))
+                             - np.bincount(pairs[:, 1], push[:, axis], len(points)))
+    return value, gradient, closest
 
 
 @dataclass

@@ -18,7 +18,7 @@ class SamplingProblem:
     substitute; smoothing: its second-difference weight; grid: (g_u, g_v) evaluation raster;
     seed: for the random parts of the strategies; workers: processes an optimiser's swarm is
     spread over (1 or 2); edge_offset: mm every point keeps from the face's edges; min_spacing:
-    mm between any two points.
+    mm between any two points; spacing_by_default: min_spacing is the default, not the caller's.
     """
 
     def __init__(self, model, n, fit_degree, fit_poles, smoothing, grid, seed, workers=1,
@@ -28,12 +28,20 @@ class SamplingProblem:
         self.seed = seed
         self.workers = workers
         self.min_spacing = min_spacing
+        self.spacing_by_default = False
         self.domain = face_domain(model, edge_offset)
         self.space = SubstituteSpace(fit_degree, fit_poles, model.bounds, smoothing)
         self.grid = EvaluationGrid(model, grid)
         self._objective = None
         self._check = None
         self._bounds = None
+
+    def spacing_advice(self):
+        """How to let more points in, in words that say whether the caller chose the spacing."""
+        if self.spacing_by_default:
+            return (f"the default spacing of {self.min_spacing:.3g} mm applies; lower n or pass a "
+                    "smaller min_spacing (0 allows any)")
+        return "lower n or min_spacing"
 
     @property
     def objective(self):

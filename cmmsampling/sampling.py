@@ -5,6 +5,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from . import memory
 from . import strategies as blind
 from .crosscheck import occ_cross_check
 from .deviation import DEFAULT_GRID
@@ -49,7 +50,9 @@ class Strategy:
     study runs it once per seed; figures: the report draws its deviation histogram; reference:
     a layout the others are drawn against in the convergence figures; baseline: the layout the
     studies' and tables' ratios divide by (one strategy has it);
-    settings: the options the command line and the comparison panel offer (Setting).
+    settings: the options the command line and the comparison panel offer (Setting);
+    memory: (n, poles (n_u, n_v), grid nodes, options, workers) -> bytes it needs beyond every
+    run's base (cmmsampling.memory), None for nothing that grows with N.
     Every strategy keeps the same default minimum spacing (cmmsampling.optimal.default_min_spacing).
     """
 
@@ -67,6 +70,7 @@ class Strategy:
     reference: bool = False
     baseline: bool = False
     settings: tuple = ()
+    memory: object = None
 
     def checked_options(self, options):
         """The defaults updated by ``options``, validated: TypeError for an option it does not take."""
@@ -109,7 +113,7 @@ def run_pso(problem, progress, population, iterations, w1, w2, c1, c2, velocity_
     )
     if not np.isfinite(swarm.best_value):
         raise ValueError(
-            f"no particle kept its points {problem.min_spacing:g} mm apart; lower min_spacing or "
+            f"no particle kept its points {problem.min_spacing:g} mm apart ({problem.spacing_advice()}) or "
             "use start_from_uniform=True")
     if swarm.cancelled:
         return StrategyOutcome(swarm.best, swarm.history, swarm.evaluations, True)
@@ -190,6 +194,20 @@ def _start_layout(problem, start):
     return layouts[name], name
 
 
+def _pso_memory(n, poles, nodes, options, workers):
+    """PSO fits its whole swarm at once: about 1.25 (P/W, K, K) float64 arrays in each of its W
+    processes, and each process beyond the first holds a copy of the problem (bytes)."""
+    count = poles[0] * poles[1]
+    share = -(-options["population"] // workers)
+    return workers * 10 * share * count ** 2 + (workers - 1) * (memory.FIXED_BYTES + 16 * count ** 2)
+
+
+def _optimal_memory(n, poles, nodes, options, workers):
+    """The descent's linearisation: (N, K) rows with their two derivatives and (G, K) grid rows."""
+    count = poles[0] * poles[1]
+    return 8 * count * (3 * n + nodes)
+
+
 def _check_optimal_options(options):
     """Validate the options of the 'optimal' strategy (merged with defaults)."""
     clean = dict(options)
@@ -265,12 +283,12 @@ for _record in (
              "more points on patches of high Gaussian curvature", "Gaussian curvature"),
     Strategy("pso", run_pso, "the paper's particle swarm optimisation of the maximum deviation",
              "PSO (paper)", PSO_DEFAULTS, _check_pso_options, optimiser=True, progress_unit="iteration",
-             progress_total="iterations", figures=True, settings=PSO_SETTINGS),
+             progress_total="iterations", figures=True, settings=PSO_SETTINGS, memory=_pso_memory),
     Strategy("optimal", run_optimal,
              "gradient descent on a smoothed maximum deviation, to a local optimum",
              "optimal (this project)", OPTIMAL_DEFAULTS, _check_optimal_options, optimiser=True,
              progress_unit="surrogate evaluation", progress_total="max_evaluations", figures=True,
-             settings=OPTIMAL_SETTINGS),
+             settings=OPTIMAL_SETTINGS, memory=_optimal_memory),
 ):
     register_strategy(_record)
 DEFAULT_STRATEGY = "pso"
@@ -295,15 +313,19 @@ def strategy_options(strategy, options):
 
 
 def make_problem(face, n, fit_degree=DEFAULT_DEGREE, fit_poles=None, smoothing=DEFAULT_SMOOTHING,
-                 grid=DEFAULT_GRID, seed=0, workers=None, edge_offset=0.0, min_spacing=0.0):
+                 grid=DEFAULT_GRID, seed=0, workers=None, edge_offset=0.0, min_spacing=0.0,
+                 strategy=None, options=None):
     """Validate the common inputs and build a SamplingProblem (see :func:`sample`).
 
     min_spacing None: the default (cmmsampling.optimal.default_min_spacing), lowered where the
-    face's feasible part cannot hold N points that far apart.
+    face's feasible part cannot hold N points that far apart. strategy, options (checked): the
+    run it is for, whose memory is checked (:func:`memory_needed`) before anything is built;
+    None checks every run's base.
     """
     n = check_int("n", n, MIN_POINTS)
     degree = check_pair("fit_degree", fit_degree, 1)
-    poles = resolve_fit_poles(None if fit_poles is None else check_pair("fit_poles", fit_poles, 2), n, degree)
+    given_poles = None if fit_poles is None else check_pair("fit_poles", fit_poles, 2)
+    poles = resolve_fit_poles(given_poles, n, degree)
     for axis, (d, p) in enumerate(zip(degree, poles)):
         if p < d + 1:
             raise ValueError(
@@ -313,6 +335,7 @@ def make_problem(face, n, fit_degree=DEFAULT_DEGREE, fit_poles=None, smoothing=D
     grid = check_pair("grid", grid, 2)
     seed = check_int("seed", seed, 0)
     workers = _check_workers(workers)
+    _check_memory(n, degree, given_poles, grid, workers, strategy, options or {})
     edge_offset = check_real("edge_offset", edge_offset, 0.0)
     if min_spacing is not None:
         min_spacing = check_real("min_spacing", min_spacing, 0.0)
@@ -322,8 +345,55 @@ def make_problem(face, n, fit_degree=DEFAULT_DEGREE, fit_poles=None, smoothing=D
                               min_spacing or 0.0)
     if min_spacing is None:
         problem.min_spacing = default_min_spacing(model.face.Area, n, problem.domain.feasible_area)
+        problem.spacing_by_default = True
     _check_room(problem)
     return problem
+
+
+def memory_needed(n, strategy=DEFAULT_STRATEGY, *, fit_degree=DEFAULT_DEGREE, fit_poles=None,
+                  grid=DEFAULT_GRID, workers=None, **options):
+    """Estimated peak memory (bytes) of :func:`sample` with these arguments, before any run.
+
+    The arguments as in :func:`sample` (strategy None: what every run needs). sample() refuses
+    a run whose estimate exceeds 80 % of the memory the machine has free (cmmsampling.memory).
+    """
+    n = check_int("n", n, MIN_POINTS)
+    degree = check_pair("fit_degree", fit_degree, 1)
+    given_poles = None if fit_poles is None else check_pair("fit_poles", fit_poles, 2)
+    checked = strategy_options(strategy, options) if strategy is not None else {}
+    return _memory_bytes(n, degree, given_poles, check_pair("grid", grid, 2), _check_workers(workers),
+                         strategy, checked)
+
+
+def _memory_bytes(n, degree, given_poles, grid, workers, strategy, options):
+    """Estimated bytes of a run (see :func:`memory_needed`); arguments already checked."""
+    poles = resolve_fit_poles(given_poles, n, degree)
+    needed = memory.base_bytes(poles)
+    entry = STRATEGIES.get(strategy)
+    if entry is not None and entry.memory is not None:
+        needed += entry.memory(n, poles, grid[0] * grid[1], options, workers)
+    return needed
+
+
+def _check_memory(n, degree, given_poles, grid, workers, strategy, options):
+    """ValueError, before anything is built, when the run would not fit in the free memory."""
+    grid = check_pair("grid", grid, 2)
+    needed = _memory_bytes(n, degree, given_poles, grid, workers, strategy, options)
+    poles = resolve_fit_poles(given_poles, n, degree)
+    what = f"{strategy or 'the fit'}, a substitute of {poles[0]} x {poles[1]} poles"
+
+    def largest_n(free):
+        low, high = MIN_POINTS, n
+        if _memory_bytes(low, degree, given_poles, grid, workers, strategy, options) > free:
+            return None
+        while low < high:
+            middle = (low + high + 1) // 2
+            if _memory_bytes(middle, degree, given_poles, grid, workers, strategy, options) <= free:
+                low = middle
+            else:
+                high = middle - 1
+        return low
+    memory.check_fits(needed, n, largest_n, what)
 
 
 def _check_room(problem):
@@ -331,15 +401,24 @@ def _check_room(problem):
     domain = problem.domain
     if domain.empty:
         raise ValueError(
-            f"the face is too small for edge_offset {domain.edge_offset:g} mm: no point of it is that "
-            "far from its edges; lower edge_offset")
+            f"the face is too narrow for edge_offset {domain.edge_offset:g} mm: none of its points "
+            f"is farther than {domain.reach + domain.margin:.2g} mm from its edges; edge_offset "
+            f"{_round_down(domain.reach):g} mm fits (measured to within {domain.margin:.2g} mm)")
     if problem.min_spacing > 0:
         room = int(domain.feasible_area / (np.sqrt(3) / 2 * problem.min_spacing ** 2)) + 1
         if problem.n > room:
             raise ValueError(
                 f"{problem.n} points {problem.min_spacing:g} mm apart do not fit on the "
                 f"{domain.feasible_area:.4g} mm^2 of the face that keeps edge_offset "
-                f"{domain.edge_offset:g} mm (at most about {room}); lower n or min_spacing")
+                f"{domain.edge_offset:g} mm (at most about {room}); {problem.spacing_advice()}")
+
+
+def _round_down(value):
+    """value (mm, >= 0) rounded down to two significant digits, 0 for none left."""
+    if value <= 0:
+        return 0.0
+    scale = 10.0 ** (np.floor(np.log10(value)) - 1)
+    return float(np.floor(value / scale) * scale)
 
 
 def _check_workers(workers):
@@ -387,7 +466,7 @@ def sample(face, n=81, strategy=DEFAULT_STRATEGY, *, fit_degree=DEFAULT_DEGREE, 
     options = strategy_options(strategy, options)
     n = check_int("n", n, MIN_POINTS)
     problem = make_problem(face, n, fit_degree, fit_poles, smoothing, grid, seed, workers, edge_offset,
-                           min_spacing)
+                           min_spacing, strategy, options)
     start = time.perf_counter()
     with blas_threads(1):
         outcome = STRATEGIES[strategy].run(problem, progress, **options)

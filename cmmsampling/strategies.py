@@ -17,6 +17,9 @@ NEWTON_STEPS = 30
 NEWTON_TOLERANCE = 1e-9
 COINCIDENT = 1e-9
 COVERAGE = 1.6
+# The largest layout a strategy grows before it gives up placing N points (a thin feasible strip
+# can keep almost none of a layout's points).
+MAX_LAYOUT = 250_000
 
 
 @dataclass
@@ -70,11 +73,15 @@ def spaced(points, min_spacing):
     """Indices of a greedy subset of points (M, 3) mm, in their order, at least min_spacing apart."""
     if min_spacing <= 0 or len(points) < 2:
         return np.arange(len(points))
-    kept = [0]
-    for i in range(1, len(points)):
-        if np.min(np.linalg.norm(points[kept] - points[i], axis=1)) >= min_spacing:
-            kept.append(i)
-    return np.array(kept)
+    pairs = cKDTree(points).query_pairs(min_spacing, output_type="ndarray")
+    pairs = pairs[np.linalg.norm(points[pairs[:, 0]] - points[pairs[:, 1]], axis=1) < min_spacing]
+    later, earlier = pairs.max(axis=1), pairs.min(axis=1)
+    by_later = np.argsort(later, kind="stable")
+    crowding, starts = np.unique(later[by_later], return_index=True)
+    kept = np.ones(len(points), dtype=bool)
+    for i, neighbours in zip(crowding, np.split(earlier[by_later], starts[1:])):
+        kept[i] = not kept[neighbours].any()
+    return np.flatnonzero(kept)
 
 
 def respace(problem, uv):
@@ -88,18 +95,19 @@ def respace(problem, uv):
     kept = spaced(points, problem.min_spacing)
     if len(kept) == len(uv):
         return uv, 0
+    spacing = problem.min_spacing
     candidates = _feasible_candidates(problem, 64 * len(uv))
     places = problem.model.points(candidates)
     uv = uv.copy()
-    taken = points[kept]
+    free = cKDTree(points[kept]).query(places, distance_upper_bound=spacing)[0] >= spacing
+    nearby = cKDTree(places)
     for i in np.setdiff1d(np.arange(len(uv)), kept):
-        free = np.linalg.norm(places[:, None, :] - taken[None, :, :], axis=-1).min(1) >= problem.min_spacing
         if not free.any():
-            raise ValueError(f"no room to keep {len(uv)} points {problem.min_spacing:g} mm apart; "
-                             "lower n or min_spacing")
+            raise ValueError(f"no room to keep {len(uv)} points {spacing:g} mm apart; "
+                             f"{problem.spacing_advice()}")
         choice = np.flatnonzero(free)[np.argmin(np.linalg.norm(places[free] - points[i], axis=1))]
         uv[i] = candidates[choice]
-        taken = np.vstack([taken, places[choice]])
+        free[nearby.query_ball_point(places[choice], spacing)] = False
     return uv, len(uv) - len(kept)
 
 
@@ -115,6 +123,7 @@ def _dense_enough(make_candidates, problem, start, keep_first=False, with_layout
 
     make_candidates(m) -> (M, 2) uv for a layout of about m points; start: first m to try;
     keep_first: keep the first N (for a sequence) instead of N spread evenly over the layout.
+    Gives up (ValueError) past MAX_LAYOUT candidates.
     Feasible: on the face and at least edge_offset from its edges; spaced: greedily, in the
     layout's order, at least problem.min_spacing mm apart, and never coincident (closer than
     COINCIDENT times the face's size: several (u, v) of a degenerate edge, e.g. a sphere's pole).
@@ -123,7 +132,7 @@ def _dense_enough(make_candidates, problem, start, keep_first=False, with_layout
     n = problem.n
     m = start
     spacing = max(problem.min_spacing, COINCIDENT * problem.model.face.BoundBox.DiagonalLength)
-    for _ in range(60):
+    while m <= MAX_LAYOUT:
         uv = make_candidates(m)
         inside = uv[problem.domain.contains(uv)]
         inside = inside[spaced(problem.model.points(inside), spacing)]
@@ -133,7 +142,8 @@ def _dense_enough(make_candidates, problem, start, keep_first=False, with_layout
         m = int(np.ceil(m * max(1.1, n / max(len(inside), 1))))
     raise ValueError(
         f"could not place {n} points on the face at least {problem.min_spacing:g} mm apart and "
-        f"{problem.domain.edge_offset:g} mm from its edges; lower n, min_spacing or edge_offset"
+        f"{problem.domain.edge_offset:g} mm from its edges; lower edge_offset, or "
+        f"{problem.spacing_advice()}"
     )
 
 

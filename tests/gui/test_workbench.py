@@ -289,8 +289,8 @@ BAD_SETTINGS = {
         "ValueError: fit_poles along u (3) must be at least fit_degree + 1 (4)"),
     "face too small for the edge offset": (
         dict(n=16, edge_offset=60.0),
-        "ValueError: the face is too small for edge_offset 60 mm: no point of it is that far from "
-        "its edges; lower edge_offset"),
+        "ValueError: the face is too narrow for edge_offset 60 mm: none of its points is farther "
+        "than 52 mm from its edges; edge_offset 50 mm fits"),
     "too many points for the spacing": (
         dict(n=200, min_spacing=10.0),
         "ValueError: 200 points 10 mm apart do not fit on the"),

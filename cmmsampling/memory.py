@@ -1,0 +1,68 @@
+"""How much memory a sampling run takes, estimated before it starts, and the refusal of a run
+that would not fit in the memory this machine has free.
+
+The estimate follows the arrays that grow with the problem (measured with tracemalloc and peak
+RSS on the reference face, N = 100 to 4000; the project's memory benchmark prints estimate
+against measurement):
+
+* every run: the substitute's normal equations and regulariser, about 6 (K, K) float64 arrays
+  (K = n_u n_v poles, about 4N/9 by default), and a fixed part (the domain raster, the grid);
+* each strategy adds its own (``Strategy.memory``): PSO fits its whole swarm at once, about
+  1.25 (P/W, K, K) float64 arrays in each of its W processes, plus a process; the optimal
+  strategy's linearisation, (N, K) and (G, K) arrays.
+
+Pairs of points are found by neighbour searches, so nothing of size N^2 is left.
+"""
+import os
+
+from .validation import check_int
+
+FIXED_BYTES = 80 * 2**20
+FIT_ARRAYS = 6
+FLOAT = 8
+# Refuse a run whose estimate exceeds this share of the memory the machine has free.
+SAFE_SHARE = 0.8
+
+
+def base_bytes(poles):
+    """Memory (bytes) every run needs for a substitute with ``poles`` (n_u, n_v)."""
+    count = poles[0] * poles[1]
+    return FIXED_BYTES + FIT_ARRAYS * FLOAT * count ** 2
+
+
+def available_bytes():
+    """Memory this machine has free for a new allocation (Linux MemAvailable), bytes, or None
+    where the system does not say."""
+    try:
+        with open("/proc/meminfo") as meminfo:
+            for line in meminfo:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except OSError:
+        return None
+    return None
+
+
+def gib(size):
+    """Bytes as a short TiB, GiB or MiB figure for messages."""
+    if size >= 2**40:
+        return f"{size / 2**40:.1f} TiB"
+    return f"{size / 2**30:.1f} GiB" if size >= 2**30 else f"{size / 2**20:.0f} MiB"
+
+
+def check_fits(needed, n, largest_n, what):
+    """ValueError when ``needed`` bytes exceed SAFE_SHARE of the free memory.
+
+    n: the points asked for; largest_n: callable (free bytes) -> the largest N that fits, for the
+    message; what: the run in words (strategy and its sizes). Environment variable
+    CMMSAMPLING_MEMORY_BYTES, when set, stands for the free memory (tests, batch limits).
+    """
+    limit = os.environ.get("CMMSAMPLING_MEMORY_BYTES")
+    free = check_int("CMMSAMPLING_MEMORY_BYTES", int(limit), 1) if limit else available_bytes()
+    if free is None or needed <= SAFE_SHARE * free:
+        return
+    fits = largest_n(SAFE_SHARE * free)
+    advice = f"at most about n = {fits} fits" if fits else "no run fits"
+    raise ValueError(
+        f"n = {n} needs about {gib(needed)} of memory ({what}), more than the {gib(free)} this "
+        f"machine has free; {advice}")
