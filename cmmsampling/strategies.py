@@ -310,6 +310,8 @@ def _patch_scores(model, domain, patches, curvature, raster_per_patch=8):
     curvature: "mean" uses |H| (1/mm), "gaussian" uses sqrt|K| (1/mm), so both weigh alike.
     The area share (20% of the face's average) keeps flat patches from getting no points; a face
     without that curvature (a plane, or a cylinder for "gaussian") is weighted by area alone.
+    Only feasible samples count, unless none is (a feasible strip narrower than the samples'
+    spacing): then every sample does.
     """
     rows, cols = patches
     size_u, size_v = rows * raster_per_patch, cols * raster_per_patch
@@ -321,7 +323,8 @@ def _patch_scores(model, domain, patches, curvature, raster_per_patch=8):
     mean, gauss = model.curvatures(flat)
     bend = np.abs(mean) if curvature == "mean" else np.sqrt(np.abs(gauss))
     bend = np.nan_to_num(bend)
-    area = np.where(domain.contains(flat), np.nan_to_num(area), 0.0)
+    inside = domain.contains(flat)
+    area = np.where(inside, np.nan_to_num(area), 0.0) if inside.any() else np.nan_to_num(area)
     average_bend = (bend * area).sum() / max(area.sum(), 1e-300)
     weight = bend * area + area * (0.2 * average_bend if average_bend > 0 else 1.0)
     return weight.reshape(rows, raster_per_patch, cols, raster_per_patch).sum(axis=(1, 3))
