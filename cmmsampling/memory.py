@@ -43,6 +43,18 @@ def available_bytes():
     return None
 
 
+def free_bytes():
+    """The free memory runs are checked against, bytes (None: unknown): the environment variable
+    CMMSAMPLING_MEMORY_BYTES where set (tests, a batch job's limit), else :func:`available_bytes`."""
+    limit = os.environ.get("CMMSAMPLING_MEMORY_BYTES")
+    return check_int("CMMSAMPLING_MEMORY_BYTES", int(limit), 1) if limit else available_bytes()
+
+
+def fits(needed, free):
+    """True when ``needed`` bytes are within SAFE_SHARE of ``free`` (or free is unknown)."""
+    return free is None or needed <= SAFE_SHARE * free
+
+
 def gib(size):
     """Bytes as a short TiB, GiB or MiB figure for messages."""
     if size >= 2**40:
@@ -54,12 +66,10 @@ def check_fits(needed, n, largest_n, what):
     """ValueError when ``needed`` bytes exceed SAFE_SHARE of the free memory.
 
     n: the points asked for; largest_n: callable (free bytes) -> the largest N that fits, for the
-    message; what: the run in words (strategy and its sizes). Environment variable
-    CMMSAMPLING_MEMORY_BYTES, when set, stands for the free memory (tests, batch limits).
+    message; what: the run in words (strategy and its sizes). The free memory: :func:`free_bytes`.
     """
-    limit = os.environ.get("CMMSAMPLING_MEMORY_BYTES")
-    free = check_int("CMMSAMPLING_MEMORY_BYTES", int(limit), 1) if limit else available_bytes()
-    if free is None or needed <= SAFE_SHARE * free:
+    free = free_bytes()
+    if fits(needed, free):
         return
     fits = largest_n(SAFE_SHARE * free)
     advice = f"at most about n = {fits} fits" if fits else "no run fits"

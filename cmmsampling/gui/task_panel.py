@@ -13,7 +13,7 @@ import FreeCADGui
 import Part
 from PySide import QtCore, QtGui
 
-from .. import sampling
+from .. import memory, sampling
 from ..deviation import DEFAULT_GRID
 from ..fitting import DEFAULT_DEGREE, default_pole_count
 from . import icon, resource, settings
@@ -183,6 +183,8 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
         self.form.auto_poles.toggled.connect(self.update_enabled)
         self.form.pickFace.toggled.connect(self.pick_face)
         self.form.min_spacing.valueChanged.connect(self.snap_spacing)
+        self.memory_fits = True
+        self._add_memory_line()
         self.show_source()
         self.update_enabled()
 
@@ -258,6 +260,55 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
         arguments.update({name: option_argument(name, values) for name in strategy.options if name in values})
         return arguments
 
+    def modifyStandardButtons(self, box):
+        super().modifyStandardButtons(box)
+        self.update_enabled()
+
+    def _add_memory_line(self):
+        """A line under N with the run's estimated memory, kept up to date with the values."""
+        self.memoryInfo = QtGui.QLabel(self.form)
+        self.memoryInfo.setObjectName("memoryInfo")
+        self.memoryInfo.setWordWrap(True)
+        self.memoryInfo.setToolTip("Estimated peak memory of the run (cmmsampling.memory_needed) against "
+                                   "the memory this machine has free; a run that would not fit is refused")
+        layout = self.form.samplingGroup.layout()
+        layout.insertRow(layout.getWidgetPosition(self.form.n)[0] + 1, self.memoryInfo)
+        for name in ("n", "population", "fit_degree", "fit_poles_u", "fit_poles_v", "grid"):
+            self.widget(name).valueChanged.connect(self.update_memory)
+        self.form.strategy.currentIndexChanged.connect(self.update_memory)
+        self.form.auto_poles.toggled.connect(self.update_memory)
+        self.update_memory()
+
+    def memory_arguments(self):
+        """The arguments of :func:`cmmsampling.memory_needed` for the panel's values."""
+        arguments = self.sample_arguments()
+        strategy = sampling.STRATEGIES[arguments["strategy"]]
+        kept = ("n", "strategy", "fit_degree", "fit_poles", "grid", *strategy.options)
+        return {name: value for name, value in arguments.items() if name in kept}
+
+    def update_memory(self, *_):
+        """Show the run's estimated memory; one that would not fit is said in red and Sample is
+        disabled until N (or the population, the poles, the grid) is lowered. Values the run
+        would refuse anyway (e.g. w2 > w1) leave the line empty: Sample says what is wrong."""
+        try:
+            needed = sampling.memory_needed(**self.memory_arguments())
+        except (ValueError, TypeError):
+            self.memory_fits = True
+            self.memoryInfo.setText("")
+            self.update_enabled()
+            return
+        free = memory.free_bytes()
+        self.memory_fits = memory.fits(needed, free)
+        of_free = f" of {memory.gib(free)} free" if free is not None else ""
+        if self.memory_fits:
+            self.memoryInfo.setText(f"Memory: about {memory.gib(needed)}{of_free}")
+            self.memoryInfo.setStyleSheet("")
+        else:
+            self.memoryInfo.setText(f"Memory: about {memory.gib(needed)}, more than this machine can "
+                                    f"spare ({memory.gib(free)} free): lower N")
+            self.memoryInfo.setStyleSheet(ERROR_STYLE)
+        self.update_enabled()
+
     def snap_spacing(self, value):
         """Show a negative minimum spacing, which means automatic, as "auto"."""
         if AUTO_SPACING < value < 0:
@@ -285,7 +336,7 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
         self.form.strategy.setEnabled(not running)
         self.form.pickFace.setEnabled(not running)
         if self.buttons is not None:
-            self.buttons.button(QtGui.QDialogButtonBox.Ok).setEnabled(not running)
+            self.buttons.button(QtGui.QDialogButtonBox.Ok).setEnabled(not running and self.memory_fits)
 
     # --- face
     def show_source(self):

@@ -19,7 +19,7 @@ from cmmsampling.surface import make_bspline_surface, reference_poles
 
 from .helpers import (
     dock_text, drawn, fill, groups, main_window, modal_message, open_panel, process_events, running_workers,
-    short_result, task_button, texts, wait_until,
+    short_result, task_button, texts, wait_until, widgets,
 )
 
 OK, CANCEL = QtGui.QDialogButtonBox.Ok, QtGui.QDialogButtonBox.Cancel
@@ -113,6 +113,25 @@ def test_panel_fits_the_default_width_of_the_combo_view(doc, artifacts):
     assert not clipped, f"cut off at {edge} px by the task view: {clipped}"
     assert form.strategy.width() >= form.strategy.fontMetrics().horizontalAdvance("curvature_g")
     main_window().grab().save(os.path.join(artifacts, "task_panel_narrow.png"))
+    task_button(CANCEL).click()
+
+
+def test_the_panel_shows_the_runs_memory_and_refuses_what_does_not_fit(doc, monkeypatch, artifacts):
+    monkeypatch.setenv("CMMSAMPLING_MEMORY_BYTES", str(2 * 2**30))
+    form = open_panel(doc)
+    [line] = [w for w in widgets() if w.objectName() == "memoryInfo" and w.isVisible()]
+    fill(form, "pso", n=81)
+    process_events(0.1)
+    assert line.text().startswith("Memory: about") and line.text().endswith("of 2.0 GiB free")
+    assert task_button(OK).isEnabled()
+    fill(form, "pso", n=20000)
+    process_events(0.2)
+    assert "more than this machine can spare (2.0 GiB free): lower N" in line.text()
+    assert not task_button(OK).isEnabled()
+    main_window().grab().save(os.path.join(artifacts, "task_panel_memory.png"))
+    fill(form, "halton", n=81)
+    process_events(0.1)
+    assert task_button(OK).isEnabled() and "more than" not in line.text()
     task_button(CANCEL).click()
 
 
