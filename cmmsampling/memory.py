@@ -71,8 +71,8 @@ def check_fits(needed, n, largest_n, what):
     free = free_bytes()
     if fits(needed, free):
         return
-    fits = largest_n(SAFE_SHARE * free)
-    advice = f"at most about n = {fits} fits" if fits else "no run fits"
+    largest = largest_n(SAFE_SHARE * free)
+    advice = f"at most about n = {largest} fits" if largest else "no run fits"
     raise ValueError(
         f"n = {n} needs about {gib(needed)} of memory ({what}), more than the {gib(free)} this "
         f"machine has free; {advice}")

@@ -15,7 +15,7 @@ from .optimal import default_min_spacing, descend
 from .pso import SwarmSettings, particle_swarm
 from .result import SamplingResult
 from .strategies import StrategyOutcome
-from .surface import ON_FACE_MM, SurfaceModel, as_face, substitute_surface
+from .surface import SurfaceModel, as_face, substitute_surface
 from .threads import blas_threads
 from .validation import check_choice, check_int, check_pair, check_real, check_uv
 
@@ -479,11 +479,10 @@ def sample(face, n=81, strategy=DEFAULT_STRATEGY, *, fit_degree=DEFAULT_DEGREE, 
 
 def _move_onto_face(model, outcome):
     """Move the outcome's points that lie off the face (OCC) onto it, with a note saying so."""
-    outcome.uv, off = model.onto_face(outcome.uv)
-    moved = off > ON_FACE_MM
+    outcome.uv, moved, off = model.onto_face(outcome.uv)
     if moved.any():
         outcome.notes.append(
-            f"{moved.sum()} point(s) lay up to {off.max():.2g} mm off the face at its boundary "
+            f"{moved.sum()} point(s) lay up to {off[moved].max():.2g} mm off the face at its boundary "
             "and were moved onto it")
 
 

@@ -69,20 +69,31 @@ class SurfaceModel(NurbsPatch):
         return (np.array([d[0] for d in found]),
                 np.array([tuple(d[1][0][0]) for d in found]).reshape(-1, 3))
 
+    def on_face(self, uv):
+        """(N,) True where the points at uv (N, 2) lie on the face by OCC: within ON_FACE_MM of it
+        and inside its boundary by OCC's face classifier (``isPartOfDomain``). Both are asked: on
+        a planar face with tolerant edges OCC's distance was seen to be 0 for a point outside its
+        boundary."""
+        uv = np.asarray(uv, dtype=float)
+        return (self.distance_to_face(uv)[0] <= ON_FACE_MM) & np.array(
+            [self.face.isPartOfDomain(u, v) for u, v in uv], dtype=bool)
+
     def onto_face(self, uv):
-        """uv (N, 2) with every point farther than ON_FACE_MM from the face moved onto it.
+        """uv (N, 2) with every point that is not on the face (:meth:`on_face`) moved onto it.
 
         An off point goes to the parameters of its nearest point on the face (OCC), and from there
         inward (away from where it was) by steps doubling from INWARD_STEP of the parameter range
         until OCC finds it on the face (an edge's 3D curve and its curve on the surface differ
-        by up to the edge's tolerance). Returns (uv (N, 2), off (N,) mm: each point's distance
-        from the face before the move).
+        by up to the edge's tolerance). Returns (uv (N, 2), moved (N,) bool, off (N,) mm: each
+        point's OCC distance from the face before the move).
         """
         uv = np.array(uv, dtype=float)
         off, feet = self.distance_to_face(uv)
-        for i in np.flatnonzero(off > ON_FACE_MM):
+        inside = np.array([self.face.isPartOfDomain(u, v) for u, v in uv], dtype=bool)
+        moved = (off > ON_FACE_MM) | ~inside
+        for i in np.flatnonzero(moved):
             uv[i] = self._inward(uv[i], feet[i])
-        return uv, off
+        return uv, moved, off
 
     def _inward(self, outside, foot):
         """Parameters (2,) of a point on the face near ``foot`` (3,) mm, the nearest face point
@@ -96,7 +107,7 @@ class SurfaceModel(NurbsPatch):
         steps = np.concatenate([[0.0], INWARD_STEP * 2.0 ** np.arange(INWARD_DOUBLINGS)])
         for step in steps:
             candidate = np.clip(start + step * direction, low, high)
-            if self.distance_to_face(candidate[None])[0][0] <= ON_FACE_MM:
+            if self.on_face(candidate[None])[0]:
                 return candidate
         raise ValueError("a point off the face could not be moved onto it; the face's boundary "
                          "may be broken: check it with Part's Check geometry")

@@ -1,8 +1,9 @@
 """A sweep over the faces of real CAD files: every strategy at edge offsets 0 and 1 mm, each
 outcome checked with OCC, not with the project's own numerics.
 
-An outcome is "points" (every point within ON_FACE_MM of the face, at least the offset from its
-edges and the spacing from the others, all by OCC's distances), "refused" (a ValueError whose
+An outcome is "points" (every point within ON_FACE_MM of the face and inside its boundary by
+OCC's face classifier, at least the offset from its edges and the spacing from the others, all by
+OCC's distances), "refused" (a ValueError whose
 message is one of the known refusals; "too narrow" is checked to be true: no point of a raster
 over the face lies farther from the edges than the refusal says) or a failure, described.
 Used by tests/test_sweep.py and, for the README's table, ``/usr/bin/python3 tests/sweep.py``.
@@ -72,14 +73,14 @@ def _refusal(face, message):
 
 def _farthest_from_edges(face):
     """The largest OCC distance from the edges of the face's points on a RASTER x RASTER grid of
-    its parameter range (those that lie on the face), mm."""
+    its parameter range (those on the face: within ON_FACE_MM and inside by OCC's classifier), mm."""
     u0, u1, v0, v1 = face.ParameterRange
     edges = Part.Compound(face.Edges)
     farthest = 0.0
     for u in np.linspace(u0, u1, RASTER):
         for v in np.linspace(v0, v1, RASTER):
             vertex = Part.Vertex(face.valueAt(u, v))
-            if face.distToShape(vertex)[0] <= ON_FACE_MM:
+            if face.isPartOfDomain(u, v) and face.distToShape(vertex)[0] <= ON_FACE_MM:
                 farthest = max(farthest, edges.distToShape(vertex)[0])
     return farthest
 
@@ -90,6 +91,9 @@ def _check_points(face, result, offset):
     off = max(face.distToShape(v)[0] for v in vertices)
     if off > ON_FACE_MM:
         return "failure", f"a point {off:.3g} mm off the face"
+    outside = sum(not result.model.face.isPartOfDomain(u, v) for u, v in result.uv)
+    if outside:
+        return "failure", f"{outside} point(s) outside the face's boundary by OCC's classifier"
     if offset > 0:
         edges = Part.Compound(face.Edges)
         clearance = min(edges.distToShape(v)[0] for v in vertices)

@@ -128,8 +128,9 @@ def test_points_off_a_trimmed_face_are_moved_onto_it_and_the_others_stay():
     inside = inside[[face.isPartOfDomain(u, v) and face.distToShape(Part.Vertex(face.valueAt(u, v)))[0] < 1e-9
                      for u, v in inside]]
     uv = np.vstack([inside, hole_centre + [0.01, 0.0], hole_centre])
-    moved, off = model.onto_face(uv)
+    moved, which, off = model.onto_face(uv)
     assert off[:len(inside)].max() < 1e-9 and off[len(inside):].min() > 7.0
+    assert not which[:len(inside)].any() and which[len(inside):].all()
     assert np.array_equal(moved[:len(inside)], inside)
     after = [face.distToShape(Part.Vertex(*p))[0] for p in model.points(moved)]
     assert max(after) <= ON_FACE_MM
