@@ -6,7 +6,7 @@ OCC's face classifier, at least the offset from its edges and the spacing from t
 OCC's distances), "refused" (a ValueError whose
 message is one of the known refusals; "too narrow" is checked to be true: no point of a raster
 over the face lies farther from the edges than the refusal says) or a failure, described.
-Used by tests/test_sweep.py and, for the README's table, ``/usr/bin/python3 tests/sweep.py``.
+Used by tests/test_sweep.py and, for the README's table, ``/usr/bin/python3 tests/sweep.py [FILE ...]``.
 """
 import collections
 import os
@@ -119,10 +119,13 @@ def table(counts):
     return "\n".join(lines)
 
 
-def main():
-    """Sweep every face of every shared file; print failures as they come and the table."""
+def main(names=()):
+    """Sweep every face of the shared files named (default: all); print failures as they come
+    and the table."""
     counts = collections.OrderedDict()
     for name, shape in shapes().items():
+        if names and name not in names:
+            continue
         counter = counts.setdefault(name, collections.Counter())
         for number, face in enumerate(shape.Faces, start=1):
             for strategy in cmmsampling.STRATEGIES:
@@ -136,4 +139,4 @@ def main():
 
 
 if __name__ == "__main__":
-    main()
+    main(sys.argv[1:])
