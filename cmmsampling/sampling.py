@@ -470,20 +470,30 @@ def sample(face, n=81, strategy=DEFAULT_STRATEGY, *, fit_degree=DEFAULT_DEGREE, 
     start = time.perf_counter()
     with blas_threads(1):
         outcome = STRATEGIES[strategy].run(problem, progress, **options)
-    _move_onto_face(problem.model, outcome)
+    _move_onto_face(problem, outcome)
     strategy_s = time.perf_counter() - start
     settings = {"strategy": strategy, "n": problem.n, **_common_settings(problem),
                 **_json_friendly({**options, **outcome.details})}
     return _judge(problem, outcome, strategy, settings, strategy_s, occ_check)
 
 
-def _move_onto_face(model, outcome):
-    """Move the outcome's points that lie off the face (OCC) onto it, with a note saying so."""
-    outcome.uv, moved, off = model.onto_face(outcome.uv)
-    if moved.any():
-        outcome.notes.append(
-            f"{moved.sum()} point(s) lay up to {off[moved].max():.2g} mm off the face at its boundary "
-            "and were moved onto it")
+def _move_onto_face(problem, outcome):
+    """Move the outcome's points that lie off the face (OCC) onto it, with a note saying so.
+
+    Points moved onto the same stretch of boundary (two grid points past a trimmed corner) can
+    land closer than min_spacing: those are moved to free places (blind.respace), and checked
+    on the face again."""
+    outcome.uv, moved, off = problem.model.onto_face(outcome.uv)
+    if not moved.any():
+        return
+    outcome.notes.append(
+        f"{moved.sum()} point(s) lay up to {off[moved].max():.2g} mm off the face at its boundary "
+        "and were moved onto it")
+    outcome.uv, crowded = blind.respace(problem, outcome.uv)
+    if crowded:
+        outcome.uv = problem.model.onto_face(outcome.uv)[0]
+        outcome.notes.append(f"{crowded} point(s) then lay closer than min_spacing to others and "
+                             "were moved to free places")
 
 
 def _json_friendly(options):

@@ -12,7 +12,7 @@ SUBSET = {
     "surf114.igs": (1, 3),
     "sunglasses_lens.igs": (5,),
     "hammer.iges": (4,),
-    "Ventilator.stp": (19, 123, 236),
+    "Ventilator.stp": (19, 123, 236, 240),
 }
 SHAPES = sweep.shapes() if os.path.isdir(sweep.TESTDATA) else {}
 
