@@ -376,8 +376,8 @@ def _memory_bytes(n, degree, given_poles, grid, workers, strategy, options):
 
 
 def _check_memory(n, degree, given_poles, grid, workers, strategy, options):
-    """ValueError, before anything is built, when the run would not fit in the free memory."""
-    grid = check_pair("grid", grid, 2)
+    """ValueError, before anything is built, when the run would not fit in the free memory.
+    The arguments already checked (grid: the (g_u, g_v) pair)."""
     needed = _memory_bytes(n, degree, given_poles, grid, workers, strategy, options)
     poles = resolve_fit_poles(given_poles, n, degree)
     what = f"{strategy or 'the fit'}, a substitute of {poles[0]} x {poles[1]} poles"

@@ -74,9 +74,15 @@ class SurfaceModel(NurbsPatch):
         and inside its boundary by OCC's face classifier (``isPartOfDomain``). Both are asked: on
         a planar face with tolerant edges OCC's distance was seen to be 0 for a point outside its
         boundary."""
+        off, _, inside = self._occ_placement(uv)
+        return (off <= ON_FACE_MM) & inside
+
+    def _occ_placement(self, uv):
+        """OCC's view of the points at uv (N, 2): (distance (N,) mm, nearest face points (N, 3)
+        mm, inside the boundary by the face classifier (N,) bool)."""
         uv = np.asarray(uv, dtype=float)
-        return (self.distance_to_face(uv)[0] <= ON_FACE_MM) & np.array(
-            [self.face.isPartOfDomain(u, v) for u, v in uv], dtype=bool)
+        off, feet = self.distance_to_face(uv)
+        return off, feet, np.array([self.face.isPartOfDomain(u, v) for u, v in uv], dtype=bool)
 
     def onto_face(self, uv):
         """uv (N, 2) with every point that is not on the face (:meth:`on_face`) moved onto it.
@@ -88,8 +94,7 @@ class SurfaceModel(NurbsPatch):
         point's OCC distance from the face before the move).
         """
         uv = np.array(uv, dtype=float)
-        off, feet = self.distance_to_face(uv)
-        inside = np.array([self.face.isPartOfDomain(u, v) for u, v in uv], dtype=bool)
+        off, feet, inside = self._occ_placement(uv)
         moved = (off > ON_FACE_MM) | ~inside
         for i in np.flatnonzero(moved):
             uv[i] = self._inward(uv[i], feet[i])
