@@ -32,6 +32,7 @@ _API = {
     "evaluate": "sampling",
     "lower_bound": "sampling",
     "memory_needed": "sampling",
+    "probe_edge_offset": "sampling",
     "SamplingResult": "result",
     "SurfaceModel": "surface",
     "reference_face": "surface",

@@ -6,7 +6,7 @@ import time
 import traceback
 
 from . import STRATEGIES, reference_face, sample
-from .sampling import BEST_STRATEGY, PROBE_EDGE_OFFSET_MM, baseline
+from .sampling import BEST_STRATEGY, PROBE_EDGE_OFFSET_MM, baseline, probe_edge_offset
 
 DESCRIPTION = """Where should a CMM's contact probe touch a free-form face?
 
@@ -54,9 +54,10 @@ def _sample_arguments(parser):
                         metavar="STRATEGY",
                         help=f"where the points go (default {BEST_STRATEGY}, which goes furthest): "
                              + "; ".join(f"{name}: {entry.description}" for name, entry in STRATEGIES.items()))
-    parser.add_argument("--edge-offset", type=float, default=PROBE_EDGE_OFFSET_MM, metavar="MM",
-                        help="distance every point keeps from the face's edges: the probe ball's "
-                             f"radius plus a margin (default {PROBE_EDGE_OFFSET_MM} mm; 0 allows edge points)")
+    parser.add_argument("--edge-offset", type=float, default=None, metavar="MM",
+                        help="distance every point keeps from the face's edges (default: the probe "
+                             f"ball's radius plus a margin, {PROBE_EDGE_OFFSET_MM} mm, or on a narrower "
+                             "face half its largest clearance; 0 allows edge points)")
     parser.add_argument("--min-spacing", type=float, default=None, metavar="MM",
                         help="smallest distance between two points, kept by every strategy "
                              "(default a tenth of the even spacing sqrt(area / N), at least 0.005 mm)")
@@ -268,11 +269,16 @@ def run_sample(args):
     if not 1 <= args.face <= len(shape.Faces):
         raise ValueError(f"--face must be between 1 and {len(shape.Faces)} for {args.file}, got {args.face}")
     options = strategy_options(args.strategy, args)
-    result = sample(shape.Faces[args.face - 1], args.points, args.strategy, seed=args.seed,
-                    edge_offset=args.edge_offset, min_spacing=args.min_spacing, **options)
+    face = shape.Faces[args.face - 1]
+    edge_offset = probe_edge_offset(face) if args.edge_offset is None else args.edge_offset
+    result = sample(face, args.points, args.strategy, seed=args.seed,
+                    edge_offset=edge_offset, min_spacing=args.min_spacing, **options)
     finish_progress(options)
     print(f"{os.path.basename(args.file)} Face{args.face}: {args.strategy}, N = {result.n}, "
-          f"edge offset {args.edge_offset:g} mm, spacing {result.settings['min_spacing']:.3g} mm")
+          f"edge offset {edge_offset:g} mm{' (default for this face)' if args.edge_offset is None else ''}, "
+          f"spacing {result.settings['min_spacing']:.3g} mm")
+    for note in result.notes:
+        print(f"Note: {note}")
     print(format_table([result]))
     _write_outputs(result, args)
     return 0

@@ -10,10 +10,11 @@ from . import strategies as blind
 from .crosscheck import occ_cross_check
 from .deviation import DEFAULT_GRID
 from .fitting import DEFAULT_DEGREE, DEFAULT_SMOOTHING
+from .domain import face_domain
 from .problem import SamplingProblem, resolve_fit_poles
 from .optimal import default_min_spacing, descend
 from .pso import SwarmSettings, particle_swarm
-from .result import SamplingResult
+from .result import EXACT_FIT, SamplingResult
 from .strategies import StrategyOutcome
 from .surface import SurfaceModel, as_face, substitute_surface
 from .threads import blas_threads
@@ -418,7 +419,7 @@ def _round_down(value):
     if value <= 0:
         return 0.0
     scale = 10.0 ** (np.floor(np.log10(value)) - 1)
-    return float(np.floor(value / scale) * scale)
+    return float(f"{np.floor(value / scale) * scale:.2g}")
 
 
 def _check_workers(workers):
@@ -469,12 +470,42 @@ def sample(face, n=81, strategy=DEFAULT_STRATEGY, *, fit_degree=DEFAULT_DEGREE, 
                            min_spacing, strategy, options)
     start = time.perf_counter()
     with blas_threads(1):
-        outcome = STRATEGIES[strategy].run(problem, progress, **options)
+        outcome = _exact_outcome(problem, strategy) or STRATEGIES[strategy].run(problem, progress, **options)
     _move_onto_face(problem, outcome)
     strategy_s = time.perf_counter() - start
     settings = {"strategy": strategy, "n": problem.n, **_common_settings(problem),
                 **_json_friendly({**options, **outcome.details})}
     return _judge(problem, outcome, strategy, settings, strategy_s, occ_check)
+
+
+def _exact_outcome(problem, strategy):
+    """For an optimiser on a face the substitute reproduces exactly (a plane, a face of the fit's
+    own space): the uniform parametric layout with a note, since no point set can do better;
+    otherwise (or for a blind strategy) None, and the strategy runs."""
+    if not STRATEGIES[strategy].optimiser:
+        return None
+    name = baseline()
+    uv = STRATEGIES[name].run(problem, None, **STRATEGIES[name].options).uv
+    maximum = problem.exact_maximum(uv)
+    if maximum > EXACT_FIT * problem.model.face.BoundBox.DiagonalLength:
+        return None
+    return StrategyOutcome(uv, notes=[f"{strategy} was not run: the {STRATEGIES[name].label} layout "
+                                      "already fits this face exactly"])
+
+
+def probe_edge_offset(face, cap=None):
+    """The edge offset (mm) the panel and the command line start with on this face.
+
+    cap (mm, default PROBE_EDGE_OFFSET_MM: a probe ball's radius plus a margin) where the face
+    is wide enough; on a narrower face (a strip, a blade) half the largest clearance any of its
+    points has from the edges, rounded down to two digits, which leaves a band for the points.
+    face: a Part.Face.
+    """
+    cap = PROBE_EDGE_OFFSET_MM if cap is None else check_real("cap", cap, 0.0)
+    if cap == 0:
+        return 0.0
+    reach = face_domain(SurfaceModel.from_face(face), cap).reach
+    return cap if reach >= 2 * cap else _round_down(0.5 * reach)
 
 
 def _move_onto_face(problem, outcome):

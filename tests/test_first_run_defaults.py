@@ -1,0 +1,52 @@
+"""Defaults that work on the first face a user picks: an edge offset that adapts to the face
+(capped at a probe's), and optimisers that do not run where no point set can do better."""
+import numpy as np
+from geometry import Part, strip_face
+
+import cmmsampling
+from cmmsampling.cli import main as cli_main
+from cmmsampling.sampling import PROBE_EDGE_OFFSET_MM
+
+
+def edge_distances(face, points):
+    """OCC's distance (mm) of each point to the face's edges."""
+    edges = Part.Compound(face.Edges)
+    return np.array([edges.distToShape(Part.Vertex(*p))[0] for p in points])
+
+
+def test_a_wide_face_gets_the_probes_edge_offset():
+    assert cmmsampling.probe_edge_offset(cmmsampling.reference_face()) == PROBE_EDGE_OFFSET_MM
+    assert cmmsampling.probe_edge_offset(cmmsampling.reference_face(), cap=3.0) == 3.0
+    assert cmmsampling.probe_edge_offset(cmmsampling.reference_face(), cap=0) == 0.0
+
+
+def test_a_2_mm_strip_gets_an_offset_that_fits_and_samples_with_it():
+    face = strip_face().Faces[0]
+    offset = cmmsampling.probe_edge_offset(face)
+    assert 0.2 < offset < 0.6, offset
+    result = cmmsampling.sample(face, 25, "halton", edge_offset=offset)
+    assert edge_distances(face, result.points).min() >= offset - 1e-6
+
+
+def test_the_command_line_adapts_the_edge_offset_to_a_strip(tmp_path, capsys):
+    path = str(tmp_path / "strip.step")
+    strip_face().exportStep(path)
+    out = str(tmp_path / "strip.csv")
+    assert cli_main(["sample", path, "--face", "1", "-n", "16", "--strategy", "halton", "--out", out]) == 0
+    printed = capsys.readouterr().out
+    offset = cmmsampling.probe_edge_offset(Part.read(path).Faces[0])
+    assert f"edge offset {offset:g} mm (default for this face)" in printed
+
+
+def test_an_optimiser_on_a_plane_returns_at_once_and_says_why():
+    plane = Part.makePlane(50, 30).Faces[0]
+    result = cmmsampling.sample(plane, 25, "pso", iterations=3000)
+    assert result.exact and result.evaluations == 0
+    assert any("pso was not run" in note for note in result.notes), result.notes
+    uniform = cmmsampling.sample(plane, 25, "uniform_parametric")
+    np.testing.assert_allclose(result.uv, uniform.uv)
+
+
+def test_an_optimiser_on_a_curved_face_still_runs():
+    result = cmmsampling.sample(cmmsampling.reference_face(), 16, "pso", iterations=3, population=4)
+    assert result.evaluations > 0 and not any("was not run" in note for note in result.notes)
