@@ -28,6 +28,18 @@ import FreeCAD  # noqa: E402  (importable once import_part() has set the path)
 
 POINT_TOLERANCE_MM = 1e-7
 FIT_SETTINGS = ("fit_degree", "fit_poles", "smoothing", "grid")
+REPORT_COLUMNS = "ABCDEFGHIJ"
+REPORT_WIDTHS = {"A": 190, "B": 110, "C": 110, **{c: 95 for c in "DEFGHIJ"}}
+PARAMETER_NAMES = {
+    "fit_degree": "Fit degree (u x v)", "fit_poles": "Fit poles (u x v)", "smoothing": "Fit smoothing",
+    "grid": "Evaluation grid (u x v)", "seed": "Seed", "workers": "Processes",
+    "edge_offset": "Edge offset (mm)", "min_spacing": "Minimum spacing (mm)",
+    "population": "PSO population", "iterations": "PSO iterations", "w1": "PSO inertia w1",
+    "w2": "PSO inertia w2", "c1": "PSO c1", "c2": "PSO c2", "velocity_limit": "PSO velocity limit",
+    "start_from_uniform": "PSO starts from uniform", "start": "Descent start",
+    "time_limit": "Time limit (s)", "max_evaluations": "Most evaluations", "closest": "Closest points (mm)",
+}
+NOTES_DOC = "What the run did that the user should know, in sentences (e.g. points moved onto the face)"
 SUMMARY_FIGURES = (
     ("MaxDeviation", "maximum",
      "Largest distance in space from the face to the substitute, over the grid's nodes on the face"),
@@ -39,12 +51,14 @@ SUMMARY_FIGURES = (
 )
 
 
-def add_to_document(result, doc, source=None, hide_source=True):
+def add_to_document(result, doc, source=None, hide_source=False, hide_others=True):
     """Add a SamplingResult to ``doc`` in one transaction (one Undo removes it all).
 
     result: a :class:`cmmsampling.SamplingResult`; doc: a FreeCAD document;
     source: ``(obj, "Face3")``, the document face the result was sampled on, or None;
-    hide_source: hide the source object, on which the substitute surface lies (Undo shows it again).
+    hide_source: hide the whole source object (by default it stays visible: the substitute is
+    drawn over its face); hide_others: hide the probe points and substitutes of earlier results,
+    so that one result is shown at a time (Undo shows them again).
     Creates a group "Sampling <label> <face> (<strategy>)" holding the probe points, the substitute
     surface and the deviation report (in that order) and returns the group.
     When any step fails, nothing is added (see :func:`transaction`) and the exception is raised.
@@ -52,6 +66,8 @@ def add_to_document(result, doc, source=None, hide_source=True):
     source = _check_source(source, doc)
     with transaction(doc, "Add sampling result"):
         group = doc.addObject("App::DocumentObjectGroup", "Sampling")
+        if hide_others:
+            hide_results(doc)
         group.Label = _group_label(result, source)
         surface = make_substitute_surface(doc)
         report = doc.addObject("Spreadsheet::Sheet", "DeviationReport")
@@ -63,6 +79,17 @@ def add_to_document(result, doc, source=None, hide_source=True):
             source[0].Visibility = False
         recompute(doc, [points, surface, report])
     return group
+
+
+def hide_results(doc):
+    """Hide the probe points and substitute surfaces of every result in ``doc``.
+
+    Within a transaction, call it after the transaction has added an object: FreeCAD records
+    changes of Visibility for Undo only in a transaction that has begun with another change."""
+    for obj in probe_points_in(doc.Objects):
+        for shown in (obj, getattr(obj, "Substitute", None)):
+            if shown is not None and shown.Visibility:
+                shown.Visibility = False
 
 
 @contextlib.contextmanager
@@ -149,6 +176,10 @@ def write_result(points, result, settings, run_time_s):
     points.Parameters = json.dumps(settings, default=_json_value)
     points.RunTime = float(run_time_s)
     points.Cancelled = bool(result.cancelled)
+    if not hasattr(points, "Notes"):  # made before notes were kept
+        points.addProperty("App::PropertyStringList", "Notes", "Sampling", NOTES_DOC)
+        points.setEditorMode("Notes", 1)
+    points.Notes = list(result.notes)
     for prop, attribute, _ in SUMMARY_FIGURES:
         setattr(points, prop, float(getattr(result.deviation, attribute)))
     if points.Substitute is not None:
@@ -197,16 +228,20 @@ def write_substitute(surface, result):
 
 
 def write_report(sheet, points):
-    """Fill the spreadsheet with the probe points' summary and per-point table.
+    """Fill the spreadsheet with the probe points' summary, run parameters, notes and per-point
+    table, in readable columns.
 
-    The summary figures get aliases (strategy, n, max_mm, mean_mm, rms_mm, std_mm, occ_max_mm,
-    time_s) for expressions such as ``=DeviationReport.max_mm``.
+    The summary figures are numbers in column B with aliases (strategy, n, max_mm, mean_mm,
+    rms_mm, std_mm, occ_max_mm, time_s) for expressions such as ``=DeviationReport.max_mm``;
+    column C repeats them readably, with their unit (the spreadsheet shows numbers with two
+    decimals, which hides micrometres). The per-point table is text at the CMM's resolution.
     """
     clear_cells(sheet)
     summary = summary_rows(points)
-    rows = [row[:2] for row in summary] + parameter_rows(points) + [()] + table_rows(points)
+    rows = ([row[:2] + _readable(row) for row in summary] + parameter_rows(points)
+            + note_rows(points) + [()] + table_rows(points))
     for row, values in enumerate(rows, start=1):
-        for column, value in zip("ABCDEFGHIJ", values):
+        for column, value in zip(REPORT_COLUMNS, values):
             sheet.set(f"{column}{row}", _cell_text(value))
     for row, entry in enumerate(summary, start=1):
         if len(entry) == 3:
@@ -214,6 +249,9 @@ def write_report(sheet, points):
     header = len(rows) - len(points.Labels)
     sheet.setStyle("A1", "bold")
     sheet.setStyle(f"A{header}:J{header}", "bold")
+    sheet.setAlignment(f"B{header}:J{len(rows)}", "right")
+    for column, width in REPORT_WIDTHS.items():
+        sheet.setColumnWidth(column, width)
 
 
 def clear_cells(sheet):
@@ -244,20 +282,37 @@ def summary_rows(points):
 
 
 def parameter_rows(points):
-    """The run's parameters other than strategy and N: rows (name, value)."""
+    """The run's parameters other than strategy and N: rows (name with its unit, value)."""
     settings = json.loads(points.Parameters)
-    return [(key, _parameter_text(value)) for key, value in settings.items()
-            if key not in ("strategy", "n")]
+    return [(PARAMETER_NAMES.get(key, key.replace("_", " ").capitalize()), _parameter_text(value))
+            for key, value in settings.items() if key not in ("strategy", "n")]
+
+
+def note_rows(points):
+    """The run's notes: rows ("Note", sentence)."""
+    return [("Note", note) for note in getattr(points, "Notes", [])]
 
 
 def table_rows(points):
-    """The per-point table: a header and rows (label, x, y, z, i, j, k, u, v, deviation)."""
+    """The per-point table: a header and rows (label, x, y, z, i, j, k, u, v, deviation), the
+    values as text: coordinates to 0.1 um, approach vectors to 6 decimals, parameters and
+    deviations to 6 significant digits."""
     header = ("Label", "X (mm)", "Y (mm)", "Z (mm)", "I", "J", "K", "U", "V", "Deviation (mm)")
     return [header] + [
-        (label, p.x, p.y, p.z, n.x, n.y, n.z, u, v, d)
+        (label, *(f"{c:.4f}" for c in p), *(f"{c:.6f}" for c in n), f"{u:.6g}", f"{v:.6g}", f"{d:.6g}")
         for label, p, n, u, v, d in zip(points.Labels, points.Points, points.Normals,
                                         points.U, points.V, points.Deviation)
     ]
+
+
+def _readable(row):
+    """(text,) for a summary row (name, number[, alias]) whose name ends in its unit, 'Max
+    deviation (mm)': the number to four significant digits with the unit, so that micrometres
+    show; () for other rows."""
+    if len(row) < 2 or isinstance(row[1], (str, bool)) or not row[0].endswith(")"):
+        return ()
+    unit = row[0][row[0].rindex("(") + 1:-1]
+    return (f"{row[1]:.4g} {unit}",)
 
 
 class TypedProxy:
@@ -313,6 +368,7 @@ class ProbePoints(TypedProxy):
             ("App::PropertyString", "Parameters", "Every parameter of the run (JSON)"),
             ("App::PropertyFloat", "RunTime", "Duration of the sampling run (s)"),
             ("App::PropertyBool", "Cancelled", "The run was stopped early (best points so far)"),
+            ("App::PropertyStringList", "Notes", NOTES_DOC),
         ]
         status = [
             ("App::PropertyString", "SourceName", "The sampled face when the points were made"),
@@ -503,10 +559,10 @@ def _parameter_text(value):
 
 
 def _cell_text(value):
-    """Spreadsheet cell content: numbers in full precision, text as entered (never a formula)."""
+    """Spreadsheet cell content: numbers in full precision, text always as text (never a
+    formula or a number, e.g. the table's '12.3456')."""
     if isinstance(value, bool):
-        return "yes" if value else "no"
+        return "'yes" if value else "'no"
     if isinstance(value, (int, float, np.floating, np.integer)):
         return format(float(value), ".10g")
-    text = str(value)
-    return "'" + text if text.startswith(("=", "'")) else text
+    return "'" + str(value)

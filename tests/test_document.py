@@ -52,7 +52,7 @@ def test_add_to_document_makes_a_group_of_three_in_one_transaction(doc, result):
     assert (points.TypeId, surface.TypeId, report.TypeId) == (
         "Part::FeaturePython", "Part::FeaturePython", "Spreadsheet::Sheet")
     assert doc.UndoCount == before + 1 and not doc.HasPendingTransaction
-    assert not doc.Body.Visibility
+    assert doc.Body.Visibility
     doc.undo()
     assert [o.Name for o in doc.Objects] == ["Body"] and doc.Body.Visibility
     doc.redo()
@@ -110,10 +110,15 @@ def test_report_has_summary_and_point_table(group, result):
     assert report.get("occ_max_mm") == pytest.approx(result.deviation.occ_maximum, rel=1e-9)
     header = next((row for row in range(1, 60) if cell(report, f"A{row}") == "Label"), None)
     assert header is not None and cell(report, f"J{header}") == "Deviation (mm)"
-    first = [report.get(f"{c}{header + 1}") for c in "ABCDEFGHI"]
+    first = [report.get(f"{c}{header + 1}") for c in "ABCDEFGHIJ"]
     assert first[0] == "P1"
-    assert np.allclose(first[1:4], result.points[0], atol=1e-8)
-    assert np.allclose(first[7:9], result.uv[0], atol=1e-8)
+    assert np.allclose([float(x) for x in first[1:4]], result.points[0], atol=5e-5)
+    assert np.allclose([float(x) for x in first[7:9]], result.uv[0], rtol=1e-5)
+    deviation = cmmsampling.PointSet.from_result(result).deviation[0]
+    assert float(first[9]) == pytest.approx(deviation, rel=1e-5, abs=1e-12)
+    rows = {cell(report, f"A{row}"): row for row in range(1, header)}
+    assert cell(report, f"C{rows['Max deviation (mm)']}") == f"{result.deviation.maximum:.4g} mm"
+    assert cell(report, f"B{rows['Edge offset (mm)']}") == 0 and "fit_degree" not in rows
     assert cell(report, f"A{header + 25}") == "P25" and cell(report, f"A{header + 26}") == ""
 
 
@@ -187,9 +192,20 @@ def test_vanished_face_name_orphans_the_points(doc):
     assert points.Orphaned and "Box has no Face3" in points.Status
 
 
-def test_source_stays_visible_when_asked(doc, result):
-    document.add_to_document(result, doc, source=(doc.Body, "Face1"), hide_source=False)
+def test_source_is_hidden_when_asked(doc, result):
+    document.add_to_document(result, doc, source=(doc.Body, "Face1"), hide_source=True)
+    assert not doc.Body.Visibility
+    doc.undo()
     assert doc.Body.Visibility
+
+
+def test_one_result_is_shown_at_a_time_and_undo_shows_the_earlier_again(doc, result):
+    first = document.add_to_document(result, doc, source=(doc.Body, "Face1")).Group
+    second = document.add_to_document(result, doc, source=(doc.Body, "Face1")).Group
+    assert [o.Visibility for o in first[:2]] == [False, False]
+    assert [o.Visibility for o in second[:2]] == [True, True] and doc.Body.Visibility
+    doc.undo()
+    assert [o.Visibility for o in first[:2]] == [True, True]
 
 
 def test_result_without_source(doc, result):

@@ -5,6 +5,7 @@ from geometry import Part, strip_face
 
 import cmmsampling
 from cmmsampling.cli import main as cli_main
+from cmmsampling import sampling
 from cmmsampling.sampling import PROBE_EDGE_OFFSET_MM
 
 
@@ -50,3 +51,24 @@ def test_an_optimiser_on_a_plane_returns_at_once_and_says_why():
 def test_an_optimiser_on_a_curved_face_still_runs():
     result = cmmsampling.sample(cmmsampling.reference_face(), 16, "pso", iterations=3, population=4)
     assert result.evaluations > 0 and not any("was not run" in note for note in result.notes)
+
+
+def test_a_handed_over_run_is_returned_once_for_exactly_its_call():
+    face = cmmsampling.reference_face()
+    arguments = {"n": 16, "strategy": "halton", "edge_offset": 1.5, "grid": 20}
+    made = cmmsampling.sample(face, **arguments)
+    sampling.hand_over(face, arguments, made)
+    assert cmmsampling.sample(face, 16, "halton", edge_offset=1.5, grid=20) is made
+    again = cmmsampling.sample(face, **arguments)
+    assert again is not made
+    np.testing.assert_array_equal(again.uv, made.uv)
+
+
+def test_a_handed_over_run_is_not_taken_by_another_call_or_face():
+    face = cmmsampling.reference_face()
+    made = cmmsampling.sample(face, 16, "halton")
+    sampling.hand_over(face, {"n": 16, "strategy": "halton"}, made)
+    assert cmmsampling.sample(face, 16, "hammersley") is not made
+    assert cmmsampling.sample(face, 16, "halton") is not made
+    sampling.hand_over(face, {"n": 16, "strategy": "halton"}, made)
+    assert cmmsampling.sample(cmmsampling.reference_face(), 16, "halton") is not made

@@ -151,7 +151,7 @@ def test_undo_removes_everything_and_redo_brings_it_back_intact(result):
         doc.undo()
         assert names(doc) == ["Body"] and body.Visibility
         doc.redo()
-        assert names(doc) == made and snapshot(group) == kept and not body.Visibility
+        assert names(doc) == made and snapshot(group) == kept and body.Visibility
         points = group.Group[0]
         assert points.Substitute == group.Group[1] and points.Report == group.Group[2]
         doc.recompute()

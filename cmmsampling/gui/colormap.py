@@ -16,8 +16,13 @@ STOPS = np.array([
 OFF_FACE = (0.6, 0.6, 0.6)
 LEGEND_BANDS = 40
 LEGEND_TICKS = 5
-LEGEND_X = (0.86, 0.90)
-LEGEND_Y = (-0.55, 0.55)
+# The legend sits at the left, clear of the navigation cube (top right) and the axis cross
+# (bottom right); x and y in the view's [-1, 1] square.
+LEGEND_X = (-0.97, -0.93)
+LEGEND_Y = (-0.7, 0.4)
+# Deviations below this (mm) are shown in one colour: finer than any CMM measures, so a
+# spread of colours there would be rounding noise.
+SMALLEST_SHOWN_MM = 1e-4
 TEXT_COLOUR = (0.0, 0.0, 0.0)
 FONT_SIZE = 14
 
@@ -37,6 +42,11 @@ def colours(values, maximum):
     return rgb
 
 
+def shown_maximum(maximum):
+    """The deviation (mm) shown red: the largest one, at least SMALLEST_SHOWN_MM."""
+    return max(float(maximum), SMALLEST_SHOWN_MM)
+
+
 def tick_labels(maximum, count=LEGEND_TICKS):
     """count labels from 0 to maximum mm, e.g. ['0.000 mm', ..., '1.053 mm']."""
     digits = max(0, 3 - int(np.floor(np.log10(maximum)))) if maximum > 0 else 3
@@ -44,7 +54,7 @@ def tick_labels(maximum, count=LEGEND_TICKS):
 
 
 def legend(maximum, title="Deviation"):
-    """A coin overlay (SoAnnotation) with the colour bar from 0 to ``maximum`` mm at the right.
+    """A coin overlay (SoAnnotation) with the colour bar from 0 to ``maximum`` mm at the left.
 
     It has its own orthographic camera (the view's [-1, 1] square), is not pickable and does not
     count in the scene's bounding box (so "fit all" ignores it).
@@ -107,24 +117,22 @@ def text_node(rgb, size):
 
 
 def _labels(maximum, title):
-    """Tick labels left of the bar and the title above it, as screen-aligned text."""
+    """Tick labels right of the bar and the title above it, as screen-aligned text."""
     node = text_node(TEXT_COLOUR, FONT_SIZE)
     heights = np.linspace(*LEGEND_Y, LEGEND_TICKS)
     for text, y in zip(tick_labels(maximum), heights):
-        node.addChild(text_at(text, (LEGEND_X[0] - 0.01, float(y) - 0.015, 0.0), right=True))
-    node.addChild(text_at(title, (LEGEND_X[1], LEGEND_Y[1] + 0.05, 0.0), right=True))
+        node.addChild(text_at(text, (LEGEND_X[1] + 0.01, float(y) - 0.015, 0.0)))
+    node.addChild(text_at(title, (LEGEND_X[0], LEGEND_Y[1] + 0.05, 0.0)))
     return node
 
 
-def text_at(text, position, right=False):
+def text_at(text, position):
     """A separator with screen-aligned text (SoText2) at position (x, y, z)."""
     node = coin.SoSeparator()
     move = coin.SoTranslation()
     move.translation = position
     label = coin.SoText2()
     label.string = text
-    if right:
-        label.justification = coin.SoText2.RIGHT
     node.addChild(move)
     node.addChild(label)
     return node

@@ -6,8 +6,6 @@ a QTimer; Cancel stops it and leaves the document untouched. The result is writt
 thread through the console API (``cmmsampling.add_to_document``), echoed in the Python
 console.
 """
-import __main__
-
 import FreeCAD
 import FreeCADGui
 import Part
@@ -24,13 +22,16 @@ from .worker import BackgroundSampling
 POLL_MS = 100
 CANCEL_WAIT_S = 1.0
 ERROR_STYLE = "color: #b00000;"
+EXPERT_GROUPS = ("psoGroup", "optimalGroup", "fitGroup", "gridGroup")
 COMMON = ("n", "seed", "edge_offset", "min_spacing", "fit_degree", "auto_poles", "fit_poles_u",
           "fit_poles_v", "grid")
 OPTION_GROUPS = ("psoGroup", "optimalGroup")
 # Panel stand-ins for options whose default None means automatic or unlimited.
 STAND_INS = {"time_limit": 0.0, "max_evaluations": 0}
-# The minimum spacing shown as "auto" (the spin box's minimum): sample(min_spacing=None).
-AUTO_SPACING = -0.5
+# The value shown as "auto" (the spin box's minimum) of the minimum spacing (sample's
+# min_spacing=None) and of the edge offset (cmmsampling.probe_edge_offset of the face).
+AUTO = -0.5
+AUTOMATIC = ("edge_offset", "min_spacing")
 # Narrowest input fields (px): the panel fits the default width of the combo view.
 FIELD_WIDTH = 70
 CHOICE_CHARACTERS = 10
@@ -49,11 +50,11 @@ def option_defaults():
 
 
 def panel_defaults():
-    """Every value of the panel with its default: strategy, N, seed, probe constraints (the
-    probe's edge offset PROBE_EDGE_OFFSET_MM; automatic spacing), options, fit, grid."""
+    """Every value of the panel with its default: strategy, N, seed, probe constraints (both
+    automatic: the face's probe edge offset and the default spacing), options, fit, grid."""
     return {
-        "strategy": sampling.DEFAULT_STRATEGY, "n": 81, "seed": 0, "edge_offset": sampling.PROBE_EDGE_OFFSET_MM,
-        "min_spacing": AUTO_SPACING, **option_defaults(),
+        "strategy": sampling.DEFAULT_STRATEGY, "n": 81, "seed": 0, "edge_offset": AUTO,
+        "min_spacing": AUTO, **option_defaults(),
         "fit_degree": DEFAULT_DEGREE, "auto_poles": True,
         "fit_poles_u": default_pole_count(81), "fit_poles_v": default_pole_count(81),
         "grid": DEFAULT_GRID,
@@ -71,6 +72,12 @@ def option_argument(name, values):
 def spacing_argument(value):
     """sample()'s min_spacing (mm) for the panel's value: None ("auto") below zero."""
     return None if value < 0 else value
+
+
+def edge_offset_argument(value, automatic):
+    """sample()'s edge_offset (mm) for the panel's value: ``automatic`` (the face's probe edge
+    offset, mm) below zero ("auto")."""
+    return automatic if value < 0 else value
 
 
 def fit_narrow_dock(form):
@@ -177,12 +184,15 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
         self.source_text = source_text(source)
         self.step = ""
         self.picker = None
+        self.run_face = None
+        self.automatic_offset = None
         self._fill_strategies()
+        self._set_up_automatic_values()
+        self._collapse_expert_settings()
         self.set_values(settings.load(panel_defaults()))
         self.form.strategy.currentIndexChanged.connect(self.update_enabled)
         self.form.auto_poles.toggled.connect(self.update_enabled)
         self.form.pickFace.toggled.connect(self.pick_face)
-        self.form.min_spacing.valueChanged.connect(self.snap_spacing)
         self.memory_fits = True
         self._add_memory_line()
         self.show_source()
@@ -200,50 +210,89 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
 
     # --- values
     def _fill_strategies(self):
-        """The strategy list (descriptions as tooltips) and the starts of a descent: "best" and the
-        blind strategies."""
-        self.form.start.addItem("best")
-        self.form.start.setItemData(0, "the best of " + ", ".join(sampling.BEST_STARTS) + " for this face",
-                                    QtCore.Qt.ToolTipRole)
+        """The strategy list and the starts of a descent ("best" and the blind strategies): each
+        entry shows the strategy's label and holds its name, with its description as tooltip."""
+        best = ", ".join(sampling.STRATEGIES[name].label for name in sampling.BEST_STARTS)
+        add_choice(self.form.start, "best", "best start", f"the best of {best} for this face")
         for name, strategy in sampling.STRATEGIES.items():
-            self.form.strategy.addItem(name)
-            self.form.strategy.setItemData(self.form.strategy.count() - 1, strategy.description,
-                                           QtCore.Qt.ToolTipRole)
+            add_choice(self.form.strategy, name, strategy.label, strategy.description)
             if not strategy.optimiser:
-                self.form.start.addItem(name)
-                self.form.start.setItemData(self.form.start.count() - 1, strategy.description,
-                                            QtCore.Qt.ToolTipRole)
+                add_choice(self.form.start, name, strategy.label, strategy.description)
+
+    def _set_up_automatic_values(self):
+        """Edge offset and minimum spacing below zero show "auto"; a line under the edge offset
+        says what "auto" is on the chosen face."""
+        for name in AUTOMATIC:
+            widget = self.widget(name)
+            widget.setMinimum(AUTO)
+            widget.setSpecialValueText("auto")
+            widget.valueChanged.connect(lambda value, widget=widget: snap_to_auto(widget, value))
+        self.edgeOffsetInfo = QtGui.QLabel(self.form)
+        self.edgeOffsetInfo.setObjectName("edgeOffsetInfo")
+        self.edgeOffsetInfo.setWordWrap(True)
+        layout = self.form.constraintsGroup.layout()
+        layout.insertRow(layout.getWidgetPosition(self.form.edge_offset)[0] + 1, self.edgeOffsetInfo)
+        self.form.edge_offset.valueChanged.connect(self.show_edge_offset)
+
+    def _collapse_expert_settings(self):
+        """Put the strategies' options, the fit and the grid in an "Expert settings" section
+        below the common ones, closed until its button is pressed."""
+        layout = self.form.layout()
+        self.expertSettings = QtGui.QWidget(self.form)
+        self.expertSettings.setObjectName("expertSettings")
+        inner = QtGui.QVBoxLayout(self.expertSettings)
+        inner.setContentsMargins(0, 0, 0, 0)
+        for name in EXPERT_GROUPS:
+            group = self.widget(name)
+            layout.removeWidget(group)
+            inner.addWidget(group)
+        self.showExpert = QtGui.QToolButton(self.form)
+        self.showExpert.setObjectName("showExpert")
+        self.showExpert.setText("Expert settings")
+        self.showExpert.setCheckable(True)
+        self.showExpert.setToolButtonStyle(QtCore.Qt.ToolButtonTextBesideIcon)
+        self.showExpert.setArrowType(QtCore.Qt.RightArrow)
+        self.showExpert.setToolTip("The strategies' own options, the substitute's fit and the "
+                                   "evaluation grid; their defaults suit most faces")
+        self.showExpert.toggled.connect(self.show_expert)
+        layout.addWidget(self.showExpert)
+        layout.addWidget(self.expertSettings)
+        layout.addStretch(1)
+        self.show_expert(False)
+
+    def show_expert(self, shown):
+        """Open or close the expert settings."""
+        self.expertSettings.setVisible(shown)
+        self.showExpert.setArrowType(QtCore.Qt.DownArrow if shown else QtCore.Qt.RightArrow)
 
     def widget(self, name):
         """The form's widget for a value name, or None."""
         return getattr(self.form, name, None)
 
     def values(self):
-        """Every value of the panel by name (see :func:`panel_defaults`)."""
-        out = {"strategy": self.form.strategy.currentText()}
+        """Every value of the panel by name (see :func:`panel_defaults`); choices by the name
+        an entry holds, not the label it shows."""
+        out = {}
         for name in panel_defaults():
             widget = self.widget(name)
             if isinstance(widget, QtGui.QCheckBox):
                 out[name] = widget.isChecked()
             elif isinstance(widget, (QtGui.QSpinBox, QtGui.QDoubleSpinBox)):
                 out[name] = widget.value()
-            elif isinstance(widget, QtGui.QComboBox) and name != "strategy":
-                out[name] = widget.currentText()
+            elif isinstance(widget, QtGui.QComboBox):
+                out[name] = widget.currentData()
         return out
 
     def set_values(self, values):
-        """Show values by name; unknown names and strategies are ignored."""
-        index = self.form.strategy.findText(str(values.get("strategy", "")))
-        if index >= 0:
-            self.form.strategy.setCurrentIndex(index)
+        """Show values by name; unknown names and choices are ignored."""
         for name, value in values.items():
             widget = self.widget(name)
             if isinstance(widget, QtGui.QCheckBox):
                 widget.setChecked(bool(value))
             elif isinstance(widget, (QtGui.QSpinBox, QtGui.QDoubleSpinBox)):
                 widget.setValue(value)
-            elif isinstance(widget, QtGui.QComboBox) and name != "strategy":
-                index = widget.findText(str(value))
+            elif isinstance(widget, QtGui.QComboBox):
+                index = widget.findData(str(value))
                 if index >= 0:
                     widget.setCurrentIndex(index)
 
@@ -255,7 +304,7 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
                      "fit_degree": values["fit_degree"], "grid": values["grid"]}
         if not values["auto_poles"]:
             arguments["fit_poles"] = (values["fit_poles_u"], values["fit_poles_v"])
-        arguments["edge_offset"] = values["edge_offset"]
+        arguments["edge_offset"] = edge_offset_argument(values["edge_offset"], self.face_edge_offset())
         arguments["min_spacing"] = spacing_argument(values["min_spacing"])
         arguments.update({name: option_argument(name, values) for name in strategy.options if name in values})
         return arguments
@@ -309,15 +358,33 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
             self.memoryInfo.setStyleSheet(ERROR_STYLE)
         self.update_enabled()
 
-    def snap_spacing(self, value):
-        """Show a negative minimum spacing, which means automatic, as "auto"."""
-        if AUTO_SPACING < value < 0:
-            self.form.min_spacing.setValue(AUTO_SPACING)
+    def face_edge_offset(self):
+        """The chosen face's probe edge offset (mm, cmmsampling.probe_edge_offset), measured once
+        per face; 0 when the face is gone or cannot be measured (the run then says why)."""
+        if self.automatic_offset is None:
+            face = self.source_face()
+            try:
+                self.automatic_offset = sampling.probe_edge_offset(face) if face is not None else 0.0
+            except (ValueError, RuntimeError, Part.OCCError):
+                self.automatic_offset = 0.0
+        return self.automatic_offset
+
+    def show_edge_offset(self, *_):
+        """Say under the edge offset what "auto" is on the chosen face."""
+        if self.form.edge_offset.value() >= 0:
+            self.edgeOffsetInfo.setText("")
+            return
+        offset = self.face_edge_offset()
+        if offset >= sampling.PROBE_EDGE_OFFSET_MM:
+            why = "a probe ball's radius plus a margin"
+        else:
+            why = "the face is too narrow for more: half its widest clearance"
+        self.edgeOffsetInfo.setText(f"auto: {offset:g} mm on this face ({why})")
 
     def update_enabled(self):
         """Enable the options the chosen strategy takes (and their groups) and the pole counts
         unless automatic; nothing while a run is on."""
-        strategy = sampling.STRATEGIES[self.form.strategy.currentText()]
+        strategy = sampling.STRATEGIES[self.form.strategy.currentData()]
         self.form.strategyInfo.setText(strategy.description)
         running = self.run is not None
         taken = [self.widget(name) for name in strategy.options if self.widget(name) is not None]
@@ -342,6 +409,7 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
     def show_source(self):
         self.form.faceLabel.setText(self.source_text)
         self.form.faceLabel.setStyleSheet("")
+        self.show_edge_offset()
 
     def source_gone(self):
         """Say that the chosen face is gone and what to do."""
@@ -369,6 +437,7 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
         try:
             self.source = selected_face(FreeCADGui.Selection.getSelectionEx())
             self.source_text = source_text(self.source)
+            self.automatic_offset = None
         except SelectionError as exc:
             self.form.faceLabel.setText(str(exc))
             self.form.faceLabel.setStyleSheet(ERROR_STYLE)
@@ -378,18 +447,19 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
 
     # --- the run
     def start(self):
-        """Save the values and start ``cmmsampling.sample`` in the background."""
-        settings.save(self.values())
+        """Start ``cmmsampling.sample`` in the background (the values are saved for the next use
+        once it has succeeded)."""
         face = self.source_face()
         if face is None:
             self.source_gone()
             return
         arguments = self.sample_arguments()
+        self.run_face = face
         self.run = BackgroundSampling(face.copy(), arguments)
         self.step, total = progress_total(arguments)
         self.form.progress.setRange(0, total)
         self.form.progress.setValue(0)
-        self.show_status(f"Running {arguments['strategy']} with N = {arguments['n']}...")
+        self.show_status(f"Running {sampling.STRATEGIES[arguments['strategy']].label} with N = {arguments['n']}...")
         self.update_enabled()
         self.run.start()
         self.timer.start()
@@ -426,15 +496,53 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
             self.source_gone()
             return
         try:
-            add_result(self.source, run.arguments, run.result)
+            group = add_result(self.source, self.run_face, run.arguments, run.result)
         except Exception as exc:  # shown in the panel; the console has the traceback
             self.show_status(f"The result could not be added: {exc}", error=True)
             return
+        settings.save(self.values())
+        report_run(self.source_text, run.result)
         FreeCADGui.Control.closeDialog()
+        fit_view_to(group)
 
     def show_status(self, text, error=False):
         self.form.status.setText(text)
         self.form.status.setStyleSheet(ERROR_STYLE if error else "")
+
+
+def add_choice(choice, name, label, tip):
+    """Add an entry showing ``label`` that holds ``name``, with the tooltip ``tip``."""
+    choice.addItem(label, name)
+    choice.setItemData(choice.count() - 1, tip, QtCore.Qt.ToolTipRole)
+
+
+def snap_to_auto(widget, value):
+    """Show a negative value, which means automatic, as "auto" (the widget's minimum)."""
+    if AUTO < value < 0:
+        widget.setValue(AUTO)
+
+
+def report_run(source, result):
+    """One line in the Report view for a finished run, and its notes below it."""
+    label = sampling.STRATEGIES[result.strategy].label if result.strategy in sampling.STRATEGIES else result.strategy
+    FreeCAD.Console.PrintMessage(
+        f"cmmsampling: {source}, {label}, N = {result.n}: maximum deviation "
+        f"{result.deviation.maximum:.4g} mm, mean {result.deviation.mean:.4g} mm, "
+        f"{result.timings.get('total_s', 0.0):.1f} s\n")
+    for note in result.notes:
+        FreeCAD.Console.PrintMessage(f"cmmsampling: note: {note}\n")
+
+
+def fit_view_to(group):
+    """Fit the active 3D view to a result's probe points (not the whole part, nor the
+    substitute's shape, which spans the face's whole parameter range)."""
+    view = FreeCADGui.ActiveDocument.ActiveView if FreeCADGui.ActiveDocument else None
+    if view is None or not hasattr(view, "fitAll"):
+        return
+    FreeCADGui.Selection.clearSelection()
+    FreeCADGui.Selection.addSelection(group.Group[0])
+    FreeCADGui.SendMsgToActiveView("ViewSelection")
+    FreeCADGui.Selection.clearSelection()
 
 
 def source_text(source):
@@ -442,19 +550,25 @@ def source_text(source):
     return f"{source[0].Label}.{source[1]}"
 
 
-def add_result(source, arguments, result):
-    """Write a finished run into the source's document through the console API.
+def add_result(source, face, arguments, result):
+    """Write a finished run into the source's document through the console API; returns the
+    result's group.
 
-    The sample() call that ran in the worker thread is echoed as a comment (it is not run again);
-    its result is bound to ``result`` in the console, then ``add_to_document`` runs.
+    The echo replays as a macro: ``face = ...``, ``result = cmmsampling.sample(face, ...)`` with
+    the run's arguments, then ``add_to_document``. Here the sample() line does not run again: the
+    run made in the worker thread is handed over to it (cmmsampling.sampling.hand_over).
+    face: the face the run was made on, as the panel took it from the source.
     """
     obj, name = source
     doc = f"App.getDocument({obj.Document.Name!r})"
     source_expr = f"{doc}.getObject({obj.Name!r})"
     call = ", ".join(["face"] + [f"{key}={value!r}" for key, value in arguments.items()])
+    before = set(o.Name for o in obj.Document.Objects)
     FreeCADGui.doCommand("import cmmsampling")
     FreeCADGui.doCommand(f"face = {source_expr}.getSubObject({name!r})")
-    FreeCADGui.doCommand(f"# result = cmmsampling.sample({call})  # ran in the task panel")
-    __main__.__dict__["result"] = result
+    sampling.hand_over(face, arguments, result)
+    FreeCADGui.doCommand(f"result = cmmsampling.sample({call})")
     FreeCADGui.doCommand(
         f"group = cmmsampling.add_to_document(result, {doc}, source=({source_expr}, {name!r}))")
+    return next(o for o in obj.Document.Objects
+                if o.Name not in before and o.TypeId == "App::DocumentObjectGroup")

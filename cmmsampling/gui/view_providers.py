@@ -5,6 +5,9 @@ document objects hold.
 """
 import numpy as np
 from pivy import coin
+from scipy.interpolate import RegularGridInterpolator
+from scipy.ndimage import distance_transform_edt
+from scipy.spatial import cKDTree
 from PySide import QtCore
 
 from .. import document
@@ -15,6 +18,10 @@ APPROACH_COLOUR = (0.75, 0.05, 0.05)
 POINT_COLOUR = (0.75, 0.05, 0.05)
 APPROACH_FRACTION = 0.05
 DEFAULT_APPROACH_MM = 5.0
+# Tessellation tolerance of the coloured face, as a fraction of its diagonal.
+TESSELLATION_FRACTION = 2e-3
+# Labels closer than this fraction of the face's diagonal to a shown one are left out.
+LABEL_SPACING_FRACTION = 0.04
 POINT_VIEW_PROPERTIES = ("ShowLabels", "ShowApproach", "ApproachLength", "LabelSize")
 
 
@@ -35,8 +42,11 @@ class Stateless:
 
 
 class ViewProviderProbePoints(Stateless):
-    """Draws the probe points as vertices (the Part view), each with its label P1..PN and its
-    approach vector (a line along the outward normal, ``ApproachLength`` mm long)."""
+    """Draws the probe points as vertices (the Part view), each with its approach vector (a line
+    along the outward normal, ``ApproachLength`` mm long) and labels P1..PN. Labels are drawn
+    over the surface (never hidden behind it) and thinned so that they do not collide: a label
+    closer than ``LabelSpacing`` mm to a shown one is left out (0 shows all); hovering a point
+    names it in the status bar."""
 
     def __init__(self, vobj):
         vobj.addProperty("App::PropertyBool", "ShowLabels", "Probe points", "Show the labels P1..PN")
@@ -45,10 +55,13 @@ class ViewProviderProbePoints(Stateless):
         vobj.addProperty("App::PropertyLength", "ApproachLength", "Probe points",
                          "Length of the drawn approach vectors (mm)")
         vobj.addProperty("App::PropertyInteger", "LabelSize", "Probe points", "Label font size (pixels)")
+        vobj.addProperty("App::PropertyLength", "LabelSpacing", "Probe points",
+                         "Labels closer than this (mm) to a shown label are left out; 0 shows all")
         vobj.ShowLabels = True
         vobj.ShowApproach = True
         vobj.ApproachLength = approach_length(vobj.Object)
         vobj.LabelSize = 13
+        vobj.LabelSpacing = LABEL_SPACING_FRACTION / APPROACH_FRACTION * vobj.ApproachLength.Value
         vobj.PointSize = 6
         vobj.PointColor = POINT_COLOUR
         vobj.Proxy = self
@@ -70,7 +83,7 @@ class ViewProviderProbePoints(Stateless):
     def onChanged(self, vobj, prop):
         if prop == "Visibility" and hasattr(self, "switch"):
             self.switch.whichChild = 0 if vobj.Visibility else -1
-        elif prop in POINT_VIEW_PROPERTIES:
+        elif prop in POINT_VIEW_PROPERTIES + ("LabelSpacing",):
             self.redraw(vobj)
 
     def redraw(self, vobj):
@@ -90,15 +103,21 @@ class ViewProviderProbePoints(Stateless):
         if vobj.ShowApproach:
             self.annotation.addChild(approach_lines(points, tips))
         if vobj.ShowLabels:
-            self.annotation.addChild(point_labels(obj.Labels, tips, vobj.LabelSize))
+            shown = spread_out(tips, label_spacing(vobj))
+            self.shown_labels = shown
+            labels = [obj.Labels[i] for i in shown]
+            self.annotation.addChild(point_labels(labels, tips[shown], vobj.LabelSize))
 
     def getIcon(self):
         return icon("ProbePoints.svg")
 
 
 class ViewProviderSubstituteSurface(Stateless):
-    """Draws the substitute surface coloured by its deviation from the CAD face ("Deviation"
-    display mode, the default) with a colour legend in mm; the Part display modes stay available.
+    """Draws the deviation of the substitute surface from the CAD face as colours on the CAD
+    face itself ("Deviation" display mode, the default: its own tessellation, smooth along
+    trimmed edges, drawn over the part), with a colour legend in mm titled with the face's name.
+    Where the source face is gone, the substitute's evaluation grid is drawn instead. The Part
+    display modes stay available (they show the substitute over the face's whole parameter range).
 
     The legends of all substitutes sit in the same corner of the 3D view, so one is shown at a
     time: a new substitute's legend, or one switched on with ShowLegend, hides the others'.
@@ -145,15 +164,64 @@ class ViewProviderSubstituteSurface(Stateless):
         if not obj.Shape.Faces or not obj.DeviationField:
             return
         u, v, field = obj.Proxy.deviation_grid(obj)
-        surface = obj.Shape.Faces[0].Surface
-        nodes = np.array([tuple(surface.value(a, b)) for a in u for b in v], dtype=float)
-        maximum = float(np.nanmax(field))
-        self.coloured.addChild(coloured_mesh(nodes, field, maximum))
+        maximum = colormap.shown_maximum(float(np.nanmax(field)))
+        self.coloured.addChild(in_front())
+        face = source_of(obj)
+        if face is not None:
+            self.coloured.addChild(face_mesh(face, u, v, field, maximum))
+        else:
+            surface = obj.Shape.Faces[0].Surface
+            nodes = np.array([tuple(surface.value(a, b)) for a in u for b in v], dtype=float)
+            self.coloured.addChild(coloured_mesh(nodes, field, maximum))
         if getattr(vobj, "ShowLegend", True):
-            self.coloured.addChild(colormap.legend(maximum, f"Deviation, {obj.Label}"))
+            self.coloured.addChild(colormap.legend(maximum, legend_title(obj)))
 
     def getIcon(self):
         return icon("SubstituteSurface.svg")
+
+
+def in_front():
+    """A polygon offset that draws the substitute over the CAD face it lies on (the two
+    coincide to within the deviation), so the part can stay visible beside it."""
+    offset = coin.SoPolygonOffset()
+    offset.factor = -2.0
+    offset.units = -2.0
+    return offset
+
+
+def source_of(surface):
+    """The source face (Part.Face) of the probe points that use this substitute, or None."""
+    for points in surface.InList:
+        if document.is_probe_points(points):
+            return document.source_face(points)[0]
+    return None
+
+
+def face_mesh(face, u, v, field, maximum):
+    """The face's tessellation coloured per vertex by the deviation at its (u, v).
+
+    face: Part.Face; u (g_u,), v (g_v,): the grid's parameters; field: (g_u, g_v) mm, NaN off the
+    face (those nodes take the value of the nearest node on it); maximum: the deviation shown
+    red (mm). Between nodes the deviation is interpolated linearly.
+    """
+    points, triangles = face.tessellate(TESSELLATION_FRACTION * face.BoundBox.DiagonalLength)
+    if not triangles or np.isnan(field).all():
+        return coin.SoSeparator()
+    nearest = distance_transform_edt(np.isnan(field), return_distances=False, return_indices=True)
+    filled = field[tuple(nearest)]
+    uv = np.array([face.Surface.parameter(p) for p in points], dtype=float)
+    values = RegularGridInterpolator((u, v), filled, bounds_error=False, fill_value=None)(uv)
+    index = np.hstack([np.array(triangles), -np.ones((len(triangles), 1), dtype=int)]).ravel().tolist()
+    return indexed_mesh(np.array([tuple(p) for p in points]), index, colormap.colours(values, maximum))
+
+
+def legend_title(surface):
+    """The legend's title: 'Deviation, <object>.<face>' of the probe points that use this
+    substitute, or the substitute's label when none says its source."""
+    for points in surface.InList:
+        if document.is_probe_points(points) and points.SourceName:
+            return f"Deviation, {points.SourceName.replace(':', '.')}"
+    return f"Deviation, {surface.Label}"
 
 
 def hide_other_legends(obj):
@@ -220,11 +288,35 @@ def approach_lines(points, tips):
     return node
 
 
+def label_spacing(vobj):
+    """The view's LabelSpacing (mm); 0 (all labels) for a view saved before it existed."""
+    spacing = getattr(vobj, "LabelSpacing", None)
+    return 0.0 if spacing is None else float(spacing.Value)
+
+
+def spread_out(positions, spacing):
+    """Indices (ascending) of positions (N, 3) mm no two of which are closer than ``spacing`` mm,
+    taken in order: each is kept unless an earlier kept one lies within ``spacing``."""
+    if spacing <= 0 or len(positions) < 2:
+        return np.arange(len(positions))
+    pairs = cKDTree(positions).query_pairs(spacing, output_type="ndarray")
+    neighbours = [[] for _ in positions]
+    for a, b in pairs:
+        neighbours[max(a, b)].append(min(a, b))
+    kept = np.zeros(len(positions), bool)
+    for index, earlier in enumerate(neighbours):
+        kept[index] = not kept[earlier].any()
+    return np.flatnonzero(kept)
+
+
 def point_labels(labels, positions, size):
-    """Screen-aligned labels at (N, 3) positions (mm), font ``size`` pixels."""
-    node = colormap.text_node(LABEL_COLOUR, size)
+    """Screen-aligned labels at (N, 3) positions (mm), font ``size`` pixels, drawn over the
+    scene (an annotation: never hidden behind the surface)."""
+    node = coin.SoAnnotation()
+    text = colormap.text_node(LABEL_COLOUR, size)
     for label, position in zip(labels, positions):
-        node.addChild(colormap.text_at(label, tuple(map(float, position))))
+        text.addChild(colormap.text_at(label, tuple(map(float, position))))
+    node.addChild(text)
     return node
 
 
@@ -240,10 +332,15 @@ def coloured_mesh(nodes, field, maximum):
     flat = field.ravel()
     quads = quads[~np.isnan(flat[quads]).any(axis=1)]
     index = np.hstack([quads, -np.ones((len(quads), 1), dtype=int)]).ravel().tolist()
-    rgb = colormap.colours(flat, maximum)
+    return indexed_mesh(nodes, index, colormap.colours(flat, maximum))
+
+
+def indexed_mesh(nodes, index, rgb):
+    """A mesh of polygons coloured per vertex: nodes (K, 3) mm; index: node indices of each
+    polygon, each ended by -1; rgb (K, 3) in [0, 1]. Lit on both sides."""
     node = coin.SoSeparator()
     hints = coin.SoShapeHints()
-    hints.vertexOrdering = coin.SoShapeHints.COUNTERCLOCKWISE
+    hints.vertexOrdering = coin.SoShapeHints.UNKNOWN_ORDERING
     hints.creaseAngle = 0.8
     material = coin.SoMaterial()
     material.diffuseColor.setValues(0, len(rgb), [tuple(map(float, c)) for c in rgb])

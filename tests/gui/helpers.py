@@ -56,6 +56,12 @@ def _alive(widget):
     return True
 
 
+def child(form, name):
+    """The form's widget named ``name`` that the panel added in code (uic gives attributes only
+    to the widgets of the .ui file)."""
+    return form.findChild(QtGui.QWidget, name)
+
+
 def task_form():
     """The Sample face task panel's form while it is open, else None."""
     return next((w for w in widgets() if w.objectName() == "SampleFace"), None)
@@ -159,7 +165,7 @@ def open_panel(doc, face="Face1"):
 
 def fill(form, strategy="pso", **values):
     """Set the strategy and spin/check boxes of the form by name."""
-    form.strategy.setCurrentIndex(form.strategy.findText(strategy))
+    form.strategy.setCurrentIndex(form.strategy.findData(strategy))
     for name, value in values.items():
         widget = getattr(form, name)
         if isinstance(widget, QtGui.QCheckBox):

@@ -220,7 +220,7 @@ def toy():
 
 def test_a_registered_strategy_is_in_both_panels_lists(doc, command, toy):
     form = open_panel(doc)
-    assert [form.strategy.itemText(i) for i in range(form.strategy.count())][-1] == "mirrored_halton"
+    assert [form.strategy.itemData(i) for i in range(form.strategy.count())][-1] == "mirrored_halton"
     form.strategy.setCurrentIndex(form.strategy.count() - 1)
     assert form.strategyInfo.text() == TOY.description and not form.psoGroup.isEnabled()
     task_button(CANCEL).click()

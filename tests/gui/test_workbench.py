@@ -18,7 +18,7 @@ from cmmsampling.gui import colormap, commands, qt_compat, settings, task_panel,
 from cmmsampling.surface import make_bspline_surface, reference_poles
 
 from .helpers import (
-    dock_text, drawn, fill, groups, main_window, modal_message, open_panel, process_events, running_workers,
+    child, dock_text, drawn, fill, groups, main_window, modal_message, open_panel, process_events, running_workers,
     short_result, task_button, texts, wait_until, widgets,
 )
 
@@ -53,14 +53,20 @@ def test_panel_defaults_are_the_papers_and_options_follow_the_strategy(doc):
     assert "Traceback" not in dock_text("Report view")[len(before):]
     assert form.faceLabel.text() == "Body.Face1"
     expected = {"n": 81, "population": 25, "iterations": 3000, "w1": 0.5, "w2": 0.0, "c1": 2.0,
-                "c2": 2.0, "seed": 0, "fit_degree": 3, "grid": 60, "edge_offset": 1.5}
+                "c2": 2.0, "seed": 0, "fit_degree": 3, "grid": 60}
     assert {name: getattr(form, name).value() for name in expected} == expected
-    assert form.min_spacing.text() == "auto"
+    assert form.min_spacing.text() == "auto" and form.edge_offset.text() == "auto"
+    assert child(form, "edgeOffsetInfo").text().startswith("auto: 1.5 mm on this face")
     for words in ("useless", "probe ball radius plus a margin", "0 reproduces the paper"):
         assert words in form.edge_offset.toolTip()
     assert "auto" in form.min_spacing.toolTip() and "every strategy" in form.min_spacing.toolTip()
-    assert form.strategy.currentText() == "pso" and form.start_from_uniform.isChecked()
-    assert [form.strategy.itemText(i) for i in range(form.strategy.count())] == list(cmmsampling.STRATEGIES)
+    assert form.strategy.currentData() == "pso" and form.start_from_uniform.isChecked()
+    assert [form.strategy.itemData(i) for i in range(form.strategy.count())] == list(cmmsampling.STRATEGIES)
+    assert [form.strategy.itemText(i) for i in range(form.strategy.count())] == [
+        s.label for s in cmmsampling.STRATEGIES.values()]
+    assert not child(form, "expertSettings").isVisible() and not form.psoGroup.isVisible()
+    child(form, "showExpert").click()
+    assert child(form, "expertSettings").isVisible() and form.psoGroup.isVisible()
     for name in expected:
         assert getattr(form, name).toolTip(), name
     fill(form, "uniform_parametric")
@@ -70,8 +76,8 @@ def test_panel_defaults_are_the_papers_and_options_follow_the_strategy(doc):
     assert not form.optimalGroup.isEnabled()
     fill(form, "optimal")
     assert form.optimalGroup.isEnabled() and not form.psoGroup.isEnabled() and form.time_limit.isEnabled()
-    assert form.start.currentText() == "best"
-    assert [form.start.itemText(i) for i in range(form.start.count())] == ["best"] + [
+    assert form.start.currentData() == "best"
+    assert [form.start.itemData(i) for i in range(form.start.count())] == ["best"] + [
         name for name, s in cmmsampling.STRATEGIES.items() if not s.optimiser]
     fill(form, "pso", auto_poles=True)
     assert not form.fit_poles_u.isEnabled()
@@ -218,13 +224,13 @@ def test_short_pso_through_the_panel_then_one_undo(doc, artifacts):
     assert report.get("max_mm") == pytest.approx(points.MaxDeviation.Value, rel=1e-9)
     assert isinstance(points.ViewObject.Proxy, view_providers.ViewProviderProbePoints)
     assert surface.ViewObject.DisplayMode == "Deviation"
-    assert drawn(points) == 3 and drawn(surface) == 2
+    assert drawn(points) == 3 and drawn(surface) == 3
     assert texts(points.ViewObject.Proxy.annotation) == [f"P{i}" for i in range(1, 26)]
     assert texts(surface.ViewObject.Proxy.coloured) == colormap.tick_labels(surface.MaxDeviation.Value) + [
-        "Deviation, Substitute surface"]
-    assert not doc.Body.ViewObject.Visibility
+        "Deviation, Body.Face1"]
+    assert doc.Body.ViewObject.Visibility
     console = dock_text("Python console")
-    assert "# result = cmmsampling.sample(face, n=25, strategy='pso', seed=2" in console
+    assert ">>> result = cmmsampling.sample(face, n=25, strategy='pso', seed=2" in console
     assert "cmmsampling.add_to_document(result, App.getDocument('GuiTest')" in console
     assert settings.load({"n": 0, "iterations": 0})["iterations"] == 400
 
@@ -241,8 +247,8 @@ def test_short_pso_through_the_panel_then_one_undo(doc, artifacts):
     assert [o.Name for o in doc.Objects] == ["Body"] and doc.Body.ViewObject.Visibility
     FreeCADGui.runCommand("Std_Redo")
     process_events(0.1)
-    assert [o.Name for o in doc.Objects] == made and not doc.Body.ViewObject.Visibility
-    assert group.Group == [points, surface, report] and drawn(points) == 3 and drawn(surface) == 2
+    assert [o.Name for o in doc.Objects] == made and doc.Body.ViewObject.Visibility
+    assert group.Group == [points, surface, report] and drawn(points) == 3 and drawn(surface) == 3
     assert report.getContents("B4") == "25" and len(points.Proxy.point_set(points)) == 25
     FreeCADGui.runCommand("Std_Undo")
     process_events(0.1)
@@ -297,7 +303,7 @@ def test_probe_constraints_keep_points_off_the_edges_and_apart(doc):
     assert form.min_spacing.text() == "auto"
     form.min_spacing.setValue(-0.2)
     assert form.min_spacing.text() == "auto"
-    assert form.min_spacing.value() == task_panel.AUTO_SPACING
+    assert form.min_spacing.value() == task_panel.AUTO
     assert task_panel.spacing_argument(form.min_spacing.value()) is None
     task_button(CANCEL).click()
 
@@ -403,14 +409,14 @@ def test_one_deviation_legend_at_a_time(doc, artifacts):
     view.saveImage(os.path.join(artifacts, "view_two_results.png"), 1200, 900, "White")
 
     def shown():
-        return [bool(s.ViewObject.ShowLegend) and "Deviation, " + s.Label in texts(s.ViewObject.Proxy.coloured)
+        return [bool(s.ViewObject.ShowLegend) and "Deviation, Body.Face1" in texts(s.ViewObject.Proxy.coloured)
                 for s in (first, second)]
 
     assert shown() == [False, True]
     first.ViewObject.ShowLegend = True
     assert shown() == [True, False]
     first.ViewObject.ShowLegend = False
-    assert shown() == [False, False] and drawn(first) == 1
+    assert shown() == [False, False] and drawn(first) == 2
 
 
 def test_export_command_writes_the_selected_points(doc, tmp_path, monkeypatch):
@@ -512,7 +518,7 @@ def test_save_and_reopen_here_and_in_a_fresh_session(doc, tmp_path, artifacts):
         assert isinstance(points.ViewObject.Proxy, view_providers.ViewProviderProbePoints)
         assert isinstance(surface.ViewObject.Proxy, view_providers.ViewProviderSubstituteSurface)
         assert surface.ViewObject.DisplayMode == "Deviation"
-        assert drawn(points) == 3 and drawn(surface) == 2
+        assert drawn(points) == 3 and drawn(surface) == 3
         assert points.Proxy.point_set(points).labels[-1] == "P25"
         assert report.get("n") == 25
     finally:
@@ -549,7 +555,7 @@ def test_a_document_made_headless_gets_its_view_providers_in_the_gui(workbench, 
         assert isinstance(points.ViewObject.Proxy, view_providers.ViewProviderProbePoints)
         assert isinstance(surface.ViewObject.Proxy, view_providers.ViewProviderSubstituteSurface)
         assert surface.ViewObject.DisplayMode == "Deviation" and points.ViewObject.ShowLabels
-        assert drawn(points) == 3 and drawn(surface) == 2
+        assert drawn(points) == 3 and drawn(surface) == 3
         view = FreeCADGui.ActiveDocument.ActiveView
         view.viewIsometric()
         view.fitAll()

@@ -1,0 +1,182 @@
+"""The first run on a part, as a new user makes it: the defaults sample a 2 mm strip, points keep
+the spacing, the part stays visible and the view fits the result, a planar face finishes at once
+with its note shown, and the console echo replays in a fresh document to the same points."""
+import json
+import os
+
+import FreeCAD
+import FreeCADGui
+import numpy as np
+import Part
+import pytest
+from geometry import TESTDATA, strip_face
+
+import cmmsampling
+
+from PySide import QtGui
+
+from .helpers import child, dock_text, fill, groups, process_events, task_button, task_form, wait_until
+from .helpers import open_panel as open_body_panel
+
+OK = QtGui.QDialogButtonBox.Ok
+VENTILATOR = os.path.join(TESTDATA, "Ventilator.stp")
+BLADE_FACE = "Face61"
+
+
+def part_document(name, shape):
+    """A new active document holding ``shape`` as Part::Feature 'Body', seen isometric and fitted."""
+    doc = FreeCAD.newDocument(name)
+    body = doc.addObject("Part::Feature", "Body")
+    body.Shape = shape
+    doc.recompute()
+    FreeCADGui.ActiveDocument.ActiveView.viewIsometric()
+    FreeCADGui.SendMsgToActiveView("ViewFit")
+    return doc
+
+
+@pytest.fixture
+def part(workbench, request):
+    """A document with a part: a 2 mm strip beside a 400 mm plate (built here) or the
+    Ventilator (when the shared test files are there); (document, the strip's face name)."""
+    if request.param == "built":
+        strip = strip_face()
+        plate = Part.makePlane(400, 300, FreeCAD.Vector(-150, 10, -20))
+        doc = part_document("FirstRun", Part.Compound([plate, strip]))
+        face = "Face2"
+    else:
+        if not os.path.isfile(VENTILATOR):
+            pytest.skip("the shared test files are not here")
+        doc = part_document("FirstRun", Part.read(VENTILATOR))
+        face = BLADE_FACE
+    yield doc, face
+    if FreeCADGui.Control.activeDialog():
+        FreeCADGui.Control.closeDialog()
+    FreeCADGui.Selection.clearSelection()
+    FreeCAD.closeDocument(doc.Name)
+    process_events(0.1)
+
+
+def run_panel(doc, face, strategy, **values):
+    """Open Sample face on the Body's face, set the strategy and values, press Sample and wait
+    until the panel closes; returns the new result's group."""
+    form = open_body_panel(doc, face)
+    fill(form, strategy, **values)
+    task_button(OK).click()
+    assert wait_until(lambda: not FreeCADGui.Control.activeDialog(), 120), form.status.text()
+    return groups(doc)[-1]
+
+
+def screen_box(view, shape):
+    """(width, height) of the view in px and the screen rectangle (x0, y0, x1, y1) of the
+    corners of ``shape``'s bounding box."""
+    box = shape.BoundBox
+    corners = [FreeCAD.Vector(x, y, z) for x in (box.XMin, box.XMax) for y in (box.YMin, box.YMax)
+               for z in (box.ZMin, box.ZMax)]
+    screen = np.array([tuple(view.getPointOnScreen(c)) for c in corners], dtype=float)
+    return view.getSize(), (*screen.min(axis=0), *screen.max(axis=0))
+
+
+@pytest.mark.parametrize("part", ["built", "Ventilator"], indirect=True)
+def test_the_defaults_sample_a_2_mm_strip_and_the_part_stays_in_view(part, artifacts):
+    doc, face_name = part
+    form = open_body_panel(doc, face_name)
+    assert form.edge_offset.text() == "auto"
+    assert "too narrow" in child(form, "edgeOffsetInfo").text(), child(form, "edgeOffsetInfo").text()
+    child(form, "showExpert").click()
+    fill(form, "pso", iterations=40)
+    task_button(OK).click()
+    assert wait_until(lambda: not FreeCADGui.Control.activeDialog(), 180), form.status.text()
+    group = groups(doc)[-1]
+    points, surface = group.Group[:2]
+    parameters = json.loads(points.Parameters)
+    face = doc.Body.getSubObject(face_name)
+    offset = cmmsampling.probe_edge_offset(face)
+    assert 0 < offset < 1.5 and parameters["edge_offset"] == offset
+    xyz = np.array([tuple(p) for p in points.Points])
+    edges = Part.Compound(face.Edges)
+    assert min(edges.distToShape(Part.Vertex(*p))[0] for p in xyz) >= offset - 1e-6
+    gaps = np.linalg.norm(xyz[:, None] - xyz[None], axis=-1) + np.diag(np.full(len(xyz), np.inf))
+    assert gaps.min() >= parameters["min_spacing"] - 1e-9 > 0
+    assert doc.Body.ViewObject.Visibility and points.ViewObject.Visibility
+    process_events(0.3)
+    view = FreeCADGui.ActiveDocument.ActiveView
+    (width, height), (x0, y0, x1, y1) = screen_box(view, points.Shape)
+    assert 0 <= x0 and x1 <= width and 0 <= y0 and y1 <= height
+    assert max((x1 - x0) / width, (y1 - y0) / height) > 0.25, (width, height, x0, y0, x1, y1)
+    view.saveImage(os.path.join(artifacts, f"first_run_strip_{len(doc.Body.Shape.Faces)}_faces.png"),
+                   width, height, "White")
+
+
+@pytest.mark.parametrize("part", ["built"], indirect=True)
+def test_labels_do_not_collide_and_one_result_is_shown(part, artifacts):
+    doc, face_name = part
+    first = run_panel(doc, face_name, "halton", n=81)
+    second = run_panel(doc, face_name, "hammersley", n=81)
+    assert not first.Group[0].ViewObject.Visibility and not first.Group[1].ViewObject.Visibility
+    points = second.Group[0]
+    proxy = points.ViewObject.Proxy
+    spacing = points.ViewObject.LabelSpacing.Value
+    tips = np.array([tuple(p) for p in points.Points]) + points.ViewObject.ApproachLength.Value * np.array(
+        [tuple(n) for n in points.Normals])
+    shown = proxy.shown_labels
+    assert 0 < len(shown) < 81
+    kept = tips[shown]
+    gaps = np.linalg.norm(kept[:, None] - kept[None], axis=-1) + np.diag(np.full(len(kept), np.inf))
+    assert gaps.min() >= spacing
+    points.ViewObject.LabelSpacing = 0
+    assert len(points.ViewObject.Proxy.shown_labels) == 81
+    points.ViewObject.LabelSpacing = spacing
+    process_events(0.2)
+    FreeCADGui.ActiveDocument.ActiveView.saveImage(os.path.join(artifacts, "first_run_labels.png"),
+                                                   1200, 900, "White")
+
+
+def test_a_planar_face_finishes_at_once_with_its_note_shown(workbench, artifacts):
+    doc = part_document("Planar", Part.makeBox(40, 30, 10))
+    try:
+        before = dock_text("Report view")
+        group = run_panel(doc, "Face5", "pso")
+        points, surface = group.Group[:2]
+        assert points.Notes[0].startswith("pso was not run"), points.Notes
+        line = "cmmsampling: Body.Face5, PSO (paper), N = 81: maximum deviation"
+        assert wait_until(lambda: line in dock_text("Report view")[len(before):], 2)
+        report = dock_text("Report view")[len(before):]
+        assert "note: pso was not run: the uniform parametric layout already fits this face exactly" in report
+        texts = []
+        _collect_texts(surface.ViewObject.Proxy.coloured, texts)
+        assert texts[-2] == "0.0001000 mm", texts
+        FreeCADGui.ActiveDocument.ActiveView.saveImage(os.path.join(artifacts, "first_run_planar.png"),
+                                                       1000, 750, "White")
+    finally:
+        FreeCAD.closeDocument(doc.Name)
+
+
+def _collect_texts(node, out):
+    """The strings of every SoText2 below node, depth first."""
+    if node.getTypeId().getName() == "Text2":
+        out.append(node.string.getValues()[0])
+    for index in range(node.getNumChildren() if hasattr(node, "getNumChildren") else 0):
+        _collect_texts(node.getChild(index), out)
+
+
+def test_the_echo_replays_in_a_fresh_document_to_the_same_points(workbench):
+    doc = part_document("Echo", cmmsampling.reference_face())
+    group = run_panel(doc, "Face1", "pso", n=25, population=8, iterations=20, seed=4)
+    made = np.array([tuple(p) for p in group.Group[0].Points])
+    console = dock_text("Python console")
+    echo = [line.removeprefix(">>> ") for line in console[console.rindex("import cmmsampling"):].splitlines()[:4]]
+    assert echo[2].startswith("result = cmmsampling.sample(face, n=25, strategy='pso'"), echo
+    name = doc.Name
+    assert echo[3].startswith(f"group = cmmsampling.add_to_document(result, App.getDocument('{name}')")
+    FreeCAD.closeDocument(name)
+    fresh = part_document(name, cmmsampling.reference_face())
+    try:
+        assert fresh.Name == name and not groups(fresh)
+        namespace = {"App": FreeCAD}
+        exec("\n".join(echo), namespace)
+        replayed = np.array([tuple(p) for p in namespace["group"].Group[0].Points])
+        np.testing.assert_allclose(replayed, made, atol=1e-9)
+        assert namespace["result"].evaluations > 0
+    finally:
+        FreeCAD.closeDocument(fresh.Name)
+    assert task_form() is None
