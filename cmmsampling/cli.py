@@ -69,8 +69,8 @@ def _sample_arguments(parser):
     parser.add_argument("--probe-radius", type=float, default=0.0, metavar="MM",
                         help="write ball centres (point + radius * normal) instead of contact points "
                              "(default 0: contact points)")
-    parser.add_argument("--order", default="as_optimised", choices=["as_optimised", "short_path"],
-                        help="point order in the files: as optimised (default) or a short probe path")
+    parser.add_argument("--order", default="short_path", choices=["as_optimised", "short_path"],
+                        help="point order in the files: a short probe path (default) or as optimised")
     parser.add_argument("--fcstd", metavar="FILE", help="also save a FreeCAD document with the results")
 
 

@@ -64,6 +64,9 @@ class WriteOptions:
     comments: bool
 
 
+FORMAT_NAMES = {"dmis": "DMIS", "xyz": "XYZIJK text", "csv": "CSV"}
+
+
 @dataclass(frozen=True)
 class ExportReport:
     """What :func:`export` wrote.
@@ -89,10 +92,16 @@ class ExportReport:
         return self.length_before - self.length_after
 
     def __str__(self):
-        return (
-            f"{self.count} points to {self.path} ({self.format}, {self.frame} frame, probe radius "
-            f"{self.probe_radius:g} mm); path {self.length_before:.1f} -> {self.length_after:.1f} mm"
-        )
+        what = "contact points" if self.probe_radius == 0 else f"ball centres, probe radius {self.probe_radius:g} mm"
+        line = (f"Wrote {self.count} points to {self.path} ({FORMAT_NAMES.get(self.format, self.format)}, "
+                f"{self.frame} frame, {what}). ")
+        if self.order == "short_path":
+            line += f"Probe path {self.length_after:.1f} mm in the short-path order"
+            if self.saving > 0:
+                line += (f" ({self.length_before:.1f} mm in the optimised order: "
+                         f"{100 * self.saving / self.length_before:.0f} % shorter)")
+            return line + "."
+        return line + f"Probe path {self.length_before:.1f} mm in the optimised order."
 
 
 def export(source, path, format=None, *, frame=None, probe_radius=0.0, order="as_optimised", name=None,

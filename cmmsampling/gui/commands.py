@@ -3,6 +3,7 @@ tooltip say why. What they change in the document goes through the console API, 
 Python console (``Gui.doCommand``)."""
 import __main__
 import os
+import re
 
 import FreeCAD
 import FreeCADGui
@@ -183,13 +184,28 @@ def export_filters():
     return filters
 
 
+def default_export_name(points):
+    """A file name (without extension) for probe points: their source and strategy with
+    characters other than letters, digits, '-' and '_' replaced, e.g. 'Body_Face1_pso'."""
+    words = [points.SourceName or points.Label, points.Strategy]
+    return re.sub(r"[^A-Za-z0-9_-]+", "_", "_".join(w for w in words if w)).strip("_") or "probe_points"
+
+
+def default_export_folder(doc):
+    """Where an export starts: beside the saved document, else the folder FreeCAD's own file
+    dialogs used last, else the home folder."""
+    if doc.FileName:
+        return os.path.dirname(doc.FileName)
+    last = FreeCAD.ParamGet("User parameter:BaseApp/Preferences/General").GetString("FileOpenSavePath", "")
+    return last if last and os.path.isdir(last) else os.path.expanduser("~")
+
+
 def choose_export_path(points):
-    """Ask for the file to write; '' when the user cancels. Without a known extension, the one of
+    """Ask for the file to write, starting with :func:`default_export_name` in
+    :func:`default_export_folder`; '' when the user cancels. Without a known extension, the one of
     the chosen format is added."""
     filters = export_filters()
-    folder = os.path.dirname(points.Document.FileName) or os.path.expanduser("~")
-    groups = [o.Label for o in points.InList if o.isDerivedFrom("App::DocumentObjectGroup")]
-    start = os.path.join(folder, (groups or [points.Label])[0] + filters[0][1][0])
+    start = os.path.join(default_export_folder(points.Document), default_export_name(points) + filters[0][1][0])
     path, chosen = QtGui.QFileDialog.getSaveFileName(
         FreeCADGui.getMainWindow(), "Export probe points", start, ";;".join(text for text, _ in filters))
     if not path:

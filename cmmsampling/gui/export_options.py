@@ -20,7 +20,7 @@ GLOBAL = "Global (document)"
 FRAME_TYPES = ("PartDesign::CoordinateSystem", "Part::LocalCoordinateSystem", "App::Placement")
 ORDER_TEXTS = {"as_optimised": "As optimised",
                "short_path": "Short probe path (nearest neighbour + 2-opt)"}
-DEFAULTS = {"ExportFrame": "", "ExportProbeRadius": 0.0, "ExportOrder": "as_optimised"}
+DEFAULTS = {"ExportFrame": "", "ExportProbeRadius": 0.0, "ExportOrder": "short_path"}
 MAX_RADIUS_MM = 100.0
 RADIUS_DECIMALS = 3
 STATUS_MS = 20000
@@ -50,7 +50,7 @@ def frame_tip(obj):
 def export_keywords(options):
     """The options of :func:`ask_export_options` as keyword text for the echoed export call, e.g.
     ", frame=App.getDocument('D').getObject('LCS'), probe_radius=1.5, order='short_path'";
-    the defaults (global frame, contact points, as optimised) are left out."""
+    the defaults of cmmsampling.export (global frame, contact points, as optimised) are left out."""
     words = []
     if options["frame"] is not None:
         words.append(f"frame={options['frame']}")
@@ -61,18 +61,10 @@ def export_keywords(options):
     return "".join(f", {word}" for word in words)
 
 
-def report_line(report):
-    """One line on what an export wrote (an ExportReport); with a short probe path, what it saved."""
-    line = str(report)
-    if report.order == "short_path" and report.length_before > 0:
-        line += (f": the short path saves {report.saving:.1f} mm "
-                 f"({100 * report.saving / report.length_before:.0f} %)")
-    return line
-
-
 def show_export_report(report):
-    """Tell the user what an export wrote: in the Report view and the status bar."""
-    line = report_line(report)
+    """Tell the user what an export wrote (an ExportReport, in words: the file, the frame, the
+    probe path and what the short path saved): in the Report view and the status bar."""
+    line = str(report)
     FreeCAD.Console.PrintMessage(line + "\n")
     FreeCADGui.getMainWindow().statusBar().showMessage(line, STATUS_MS)
 

@@ -457,8 +457,8 @@ def test_export_options_write_ball_centres_in_a_local_frame_along_a_short_path(d
     report = __main__.report
     export_options.show_export_report(report)
     line = main_window().statusBar().currentMessage()
-    assert line.startswith(f"25 points to {target} (csv, local frame, probe radius 1.5 mm)")
-    assert f"the short path saves {report.saving:.1f} mm" in line and report.saving > 0
+    assert line.startswith(f"Wrote 25 points to {target} (CSV, local frame, ball centres, probe radius 1.5 mm).")
+    assert f"({report.length_before:.1f} mm in the optimised order: " in line and report.saving > 0
 
     written = cmmsampling.read_points(target)
     source = points.Proxy.point_set(points)

@@ -14,7 +14,7 @@ from PySide import QtCore, QtGui
 
 import cmmsampling
 from cmmsampling import document
-from cmmsampling.gui import colormap, commands, qt_compat, settings, task_panel, view_providers
+from cmmsampling.gui import colormap, commands, export_options, qt_compat, settings, task_panel, view_providers
 from cmmsampling.surface import make_bspline_surface, reference_poles
 
 from .helpers import (
@@ -439,7 +439,7 @@ def test_export_command_writes_the_selected_points(doc, tmp_path, monkeypatch):
     assert [text for text, _ in commands.export_filters()][0].endswith("(*.dmi *.dmis)")
 
 
-def test_export_dialog_adds_the_extension_of_the_chosen_format(doc, monkeypatch):
+def test_export_dialog_adds_the_extension_of_the_chosen_format(doc, monkeypatch, tmp_path):
     points = document.add_to_document(short_result(doc), doc, source=(doc.Body, "Face1")).Group[0]
     xyz = next(text for text, extensions in commands.export_filters() if ".xyz" in extensions)
     asked = []
@@ -450,7 +450,27 @@ def test_export_dialog_adds_the_extension_of_the_chosen_format(doc, monkeypatch)
 
     monkeypatch.setattr(QtGui.QFileDialog, "getSaveFileName", dialog)
     assert commands.choose_export_path(points) == "/tmp/probe points.xyz"
-    assert asked[0][0].endswith("Sampling Body Face1 (pso).dmi") and xyz in asked[0][1]
+    folder = FreeCAD.ParamGet("User parameter:BaseApp/Preferences/General").GetString("FileOpenSavePath", "")
+    expected = folder if folder and os.path.isdir(folder) else os.path.expanduser("~")
+    assert asked[0][0] == os.path.join(expected, "Body_Face1_pso.dmi") and xyz in asked[0][1]
+    doc.saveAs(os.path.join(str(tmp_path), "bracket.FCStd"))
+    commands.choose_export_path(points)
+    assert asked[1][0] == os.path.join(str(tmp_path), "Body_Face1_pso.dmi")
+
+
+def test_the_export_report_says_in_words_what_was_written(doc, tmp_path):
+    points = document.add_to_document(short_result(doc), doc, source=(doc.Body, "Face1")).Group[0]
+    before = dock_text("Report view")
+    path = str(tmp_path / "face.dmi")
+    options = export_options.ExportOptionsDialog(doc, "test").options()
+    assert options["order"] == "short_path"
+    report = cmmsampling.export(points, path, order=options["order"])
+    export_options.show_export_report(report)
+    assert wait_until(lambda: "Wrote 25 points to " in dock_text("Report view")[len(before):], 2)
+    line = dock_text("Report view")[len(before):]
+    assert f"Wrote 25 points to {path} (DMIS, global frame, contact points). Probe path " in line
+    assert f"{report.length_after:.1f} mm in the short-path order ({report.length_before:.1f} mm in the " \
+           "optimised order: " in line and "% shorter)" in line
 
 
 FRESH_SESSION = """
