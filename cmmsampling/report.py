@@ -23,6 +23,8 @@ from .surface import as_face
 
 DPI = 110
 PANEL_INCHES = 4.2
+# The 3D panels are larger: a surface needs more room than a map.
+PANEL_3D_INCHES = 5.6
 HISTOGRAM_BINS = 40
 LOG_SPAN = 3.0
 
@@ -106,14 +108,14 @@ def figure_substitutes(study):
     if not entries:
         return None
     rows, columns = _grid_of_panels(len(entries))
-    fig = Figure(figsize=(PANEL_INCHES * columns, PANEL_INCHES * rows), layout="constrained")
+    fig = Figure(figsize=(PANEL_3D_INCHES * columns, PANEL_3D_INCHES * rows), layout="constrained")
     for index, (strategy, result) in enumerate(entries):
         ax = fig.add_subplot(rows, columns, index + 1, projection="3d", computed_zorder=False)
         surface = substitute_points(result)
         ax.plot_surface(surface[..., 0], surface[..., 1], surface[..., 2], color="lightsteelblue",
                         alpha=0.75, rcount=30, ccount=30, linewidth=0, shade=True, zorder=1)
         ax.scatter(*result.points.T, color="crimson", s=10, depthshade=False, zorder=2)
-        ax.set_box_aspect(None, zoom=0.85)
+        ax.set_box_aspect(None, zoom=1.0)
         ax.set_title(f"{panel_title(study, strategy)}\nmax deviation {result.deviation.maximum:.3f} mm",
                      fontsize=10)
         for setter, name in ((ax.set_xlabel, "x"), (ax.set_ylabel, "y"), (ax.set_zlabel, "z")):
@@ -169,6 +171,7 @@ def figure_convergence(study):
         if bound is not None:
             ax.axhline(bound.grid, color="black", linestyle="--", label="local bound about the best")
         ax.set_xscale("log")
+        _scale_y(ax)
         ax.set_xlabel(STRATEGIES[strategy].progress_unit if strategy in STRATEGIES else "step")
         ax.set_ylabel("best maximum deviation (mm)")
         ax.set_title(f"{panel_title(study, strategy)}, N = {study.figure_n}: "

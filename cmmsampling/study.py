@@ -212,7 +212,7 @@ class Relay:
 
 def compare(face, ns=DEFAULT_NS, strategies=None, *, seeds=DEFAULT_SEEDS, seeded=None, options=None,
             fit_degree=DEFAULT_DEGREE, fit_poles=None, smoothing=DEFAULT_SMOOTHING, grid=DEFAULT_GRID,
-            figure_n=None, progress=None, workers=None):
+            edge_offset=0.0, min_spacing=None, figure_n=None, progress=None, workers=None):
     """Run every strategy over a list of N on one face and collect the trade-off.
 
     face: a Part.Face (e.g. ``cmmsampling.reference_face()``); ns: point counts (each >= 4);
@@ -221,7 +221,8 @@ def compare(face, ns=DEFAULT_NS, strategies=None, *, seeds=DEFAULT_SEEDS, seeded
     random one; add "pso" for the swarm's spread, at 5x its time); the others run once with
     seeds[0]; options: {strategy name: {option: value}}, the strategies' own options (the others
     keep their defaults, e.g. the paper's PSO, 25 x 3000), e.g. ``{"pso": {"iterations": 500}}``;
-    fit_degree, fit_poles, smoothing, grid: as in sample();
+    fit_degree, fit_poles, smoothing, grid, edge_offset (mm), min_spacing (mm): as in sample(),
+    the same for every run (so a study's figures match Sample face's with the same values);
     figure_n: the N whose results are kept for the figures (default 81 if studied, else the middle
     N); progress: callable(done_steps, total_steps, message) called before every step (one run, or
     the bound at an N) and during the optimisers' iterations; returning True cancels: the study
@@ -239,7 +240,8 @@ def compare(face, ns=DEFAULT_NS, strategies=None, *, seeds=DEFAULT_SEEDS, seeded
     figure_n = _check_figure_n(figure_n, ns)
     if progress is not None and not callable(progress):
         raise TypeError(f"progress must be callable(done, total, message) or None, got {progress!r}")
-    fit = {"fit_degree": fit_degree, "fit_poles": fit_poles, "smoothing": smoothing, "grid": grid}
+    fit = {"fit_degree": fit_degree, "fit_poles": fit_poles, "smoothing": smoothing, "grid": grid,
+           "edge_offset": edge_offset, "min_spacing": min_spacing}
     make_problem(face, ns[0], **fit, workers=workers)
     study = Study(face, ns, strategies, figure_n=figure_n, settings={
         "ns": list(ns), "strategies": list(strategies), "seeds": list(seeds), "seeded": list(seeded),

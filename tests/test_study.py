@@ -197,3 +197,16 @@ def test_bad_input_fails_before_any_run(reference, bad, error):
     with pytest.raises(error):
         compare(reference, **{"ns": (16,), "progress": lambda *call: calls.append(call), **bad})
     assert calls == []
+
+
+def test_the_probe_constraints_hold_in_every_run_as_in_sample(reference):
+    constrained = compare(reference, ns=(16,), strategies=("halton", "pso"),
+                          options={"pso": {"iterations": 5, "population": 4}}, grid=20,
+                          edge_offset=6.0, min_spacing=9.0)
+    for strategy, result in constrained.results.items():
+        assert (result.settings["edge_offset"], result.settings["min_spacing"]) == (6.0, 9.0)
+        alone = cmmsampling.sample(reference, 16, strategy, grid=20, edge_offset=6.0, min_spacing=9.0,
+                                   occ_check=False, **({"iterations": 5, "population": 4} if strategy == "pso" else {}))
+        np.testing.assert_allclose(result.uv, alone.uv)
+        gaps = np.linalg.norm(result.points[:, None] - result.points[None], axis=-1) + np.diag(np.full(16, np.inf))
+        assert gaps.min() >= 9.0 - 1e-9

@@ -21,7 +21,9 @@ from ..sampling import STRATEGIES
 from ..study import DEFAULT_NS, DEFAULT_SEEDS, compare
 from . import settings
 from .commands import FaceCommand
-from .task_panel import ERROR_STYLE, BackgroundRunPanel, source_text
+from ..sampling import probe_edge_offset
+from .task_panel import (AUTO, ERROR_STYLE, BackgroundRunPanel, edge_offset_argument, snap_to_auto,
+                         source_text, spacing_argument)
 from .worker import BackgroundTask
 
 # The panel's values are stored under these names with this prefix, apart from Sample face's.
@@ -29,6 +31,14 @@ SETTINGS_PREFIX = "Compare_"
 # The strategies' settings (Setting.option) this panel has a spin box for, and its own.
 SETTING_BOXES = ("iterations", "population")
 SPIN_BOXES = ("seeds",) + SETTING_BOXES + ("grid",)
+# Probe constraints, as in Sample face: spin boxes made here, "auto" below zero.
+CONSTRAINTS = {
+    "edge_offset": ("Edge offset", "Distance (mm) every point keeps from the face's edges, in every "
+                    "run. auto: as Sample face's (the probe ball radius plus a margin, or half the "
+                    "widest clearance of a narrower face)."),
+    "min_spacing": ("Minimum spacing", "Smallest distance (mm) between two points, in every run. "
+                    "auto: a tenth of the even spacing sqrt(area / N), at least 0.005 mm."),
+}
 
 
 def setting_defaults():
@@ -51,6 +61,8 @@ def panel_defaults():
         "seeds": len(DEFAULT_SEEDS),
         **setting_defaults(),
         "grid": DEFAULT_GRID,
+        "edge_offset": AUTO,
+        "min_spacing": AUTO,
     }
 
 
@@ -77,9 +89,10 @@ def parse_ns(text):
                          f"25, 49, 81 (not {text.strip()!r}).") from None
 
 
-def compare_arguments(values):
+def compare_arguments(values, automatic_offset):
     """The keyword arguments of ``cmmsampling.compare(face, ...)`` for the panel's values: seeds
-    0 .. k-1 for the seeded strategies, and each chosen strategy's settings shown here."""
+    0 .. k-1 for the seeded strategies, each chosen strategy's settings shown here, and the probe
+    constraints (automatic_offset: the face's probe edge offset, mm, for "auto")."""
     strategies = tuple(name for name in values["strategies"].split(", ") if name)
     options = {}
     for name in strategies:
@@ -87,7 +100,9 @@ def compare_arguments(values):
         if offered:
             options[name] = {option: values[option] for option in offered}
     return {"ns": parse_ns(values["ns"]), "strategies": strategies, "seeds": tuple(range(values["seeds"])),
-            "options": options, "grid": values["grid"]}
+            "options": options, "grid": values["grid"],
+            "edge_offset": edge_offset_argument(values["edge_offset"], automatic_offset),
+            "min_spacing": spacing_argument(values["min_spacing"])}
 
 
 def default_folder(doc):
@@ -99,15 +114,22 @@ def default_folder(doc):
     return os.path.join(os.path.expanduser("~"), f"{doc.Name}_comparison")
 
 
-def open_report(path):
-    """Show an HTML file in FreeCAD's web view where FreeCAD has one (the Web module's GUI, FreeCAD
-    0.20), else in the system's web browser (FreeCAD 1.0 dropped the Web workbench; its Help opens
-    the system's browser too). Returns whether it could be shown (see :func:`open_in_browser`)."""
+def open_report(path, title):
+    """Show an HTML file in FreeCAD's web view, in a tab named ``title``, where FreeCAD has one
+    (the Web module's GUI, FreeCAD 0.20), else in the system's web browser (FreeCAD 1.0 dropped
+    the Web workbench; its Help opens the system's browser too). Returns whether it could be
+    shown (see :func:`open_in_browser`). While the web tab is the active one, FreeCAD's Undo and
+    Redo do not reach the document (they act on the active view): the Report view says so."""
     try:
         import WebGui
     except ImportError:
         return open_in_browser(path)
-    WebGui.openBrowser(QtCore.QUrl.fromLocalFile(os.path.abspath(path)).toString())
+    with open(path, encoding="utf-8") as page:
+        html = page.read()
+    base = QtCore.QUrl.fromLocalFile(os.path.dirname(os.path.abspath(path)) + os.sep).toString()
+    WebGui.openBrowserHTML(html, base, title)
+    FreeCAD.Console.PrintMessage("cmmsampling: Undo and Redo act on the document again once its "
+                                 "3D view is the active tab (not while the report's tab is).\n")
     return True
 
 
@@ -167,9 +189,11 @@ class CompareTaskPanel(BackgroundRunPanel):
     def __init__(self, source):
         self._set_up("compare.ui", "Compare.svg", source)
         self.face = face_expression(source)
+        self.source_name = source_text(source)
         self._fill_strategies()
+        self._add_constraints()
         self.set_values(load_values())
-        self.form.faceLabel.setText(source_text(source))
+        self.form.faceLabel.setText(self.source_name)
         self.form.folder.setText(default_folder(source[0].Document))
         self.form.progress.setTextVisible(False)
         self.form.browse.clicked.connect(self.browse)
@@ -204,6 +228,25 @@ class CompareTaskPanel(BackgroundRunPanel):
             item.setToolTip(strategy.description)
         QtCore.QTimer.singleShot(0, self.fit_strategy_list)
 
+    def _add_constraints(self):
+        """Spin boxes for the probe constraints (CONSTRAINTS) below the grid, "auto" below zero."""
+        layout = self.form.studyGroup.layout()
+        self.constraint_boxes = {}
+        for name, (text, tip) in CONSTRAINTS.items():
+            box = QtGui.QDoubleSpinBox(self.form)
+            box.setObjectName(name)
+            box.setRange(AUTO, 1000.0)
+            box.setDecimals(3)
+            box.setSingleStep(0.5)
+            box.setSuffix(" mm")
+            box.setSpecialValueText("auto")
+            box.setToolTip(tip)
+            box.valueChanged.connect(lambda value, box=box: snap_to_auto(box, value))
+            label = QtGui.QLabel(text, self.form)
+            label.setToolTip(tip)
+            layout.addRow(label, box)
+            self.constraint_boxes[name] = box
+
     def fit_strategy_list(self):
         """Make the strategy list as tall as its rows, so that it never scrolls."""
         strategies = self.form.strategies
@@ -222,6 +265,7 @@ class CompareTaskPanel(BackgroundRunPanel):
         """The panel's values by name (see :func:`panel_defaults`)."""
         out = {"ns": self.form.ns.text(), "strategies": ", ".join(self.checked())}
         out.update({name: getattr(self.form, name).value() for name in SPIN_BOXES})
+        out.update({name: box.value() for name, box in self.constraint_boxes.items()})
         return out
 
     def set_values(self, values):
@@ -233,6 +277,8 @@ class CompareTaskPanel(BackgroundRunPanel):
             item.setCheckState(QtCore.Qt.Checked if item.text() in chosen else QtCore.Qt.Unchecked)
         for name in SPIN_BOXES:
             getattr(self.form, name).setValue(values[name])
+        for name, box in self.constraint_boxes.items():
+            box.setValue(values[name])
 
     def update_enabled(self):
         """Enable the seeds when a chosen strategy is seeded and each strategy setting when a chosen
@@ -240,7 +286,7 @@ class CompareTaskPanel(BackgroundRunPanel):
         idle = self.run is None
         chosen = [STRATEGIES[name] for name in self.checked() if name in STRATEGIES]
         for widget in (self.form.ns, self.form.strategies, self.form.grid, self.form.folder,
-                       self.form.browse):
+                       self.form.browse, *self.constraint_boxes.values()):
             widget.setEnabled(idle)
         self.form.seeds.setEnabled(idle and any(entry.seeded for entry in chosen))
         offered = {setting.option for entry in chosen for setting in entry.settings}
@@ -265,18 +311,19 @@ class CompareTaskPanel(BackgroundRunPanel):
     def start(self):
         """Check the values, save them and start the study in the background."""
         values = self.values()
+        face = self.source_face()
+        if face is None:
+            self.show_status(f"{source_text(self.source)} is not in the document any more.", error=True)
+            return
         try:
-            arguments = compare_arguments(values)
+            automatic = probe_edge_offset(face) if values["edge_offset"] < 0 else None
+            arguments = compare_arguments(values, automatic)
         except ValueError as exc:
             self.show_status(str(exc), error=True)
             return
         folder = self.folder()
         if not folder:
             self.show_status("Type or browse the folder the report is written to.", error=True)
-            return
-        face = self.source_face()
-        if face is None:
-            self.show_status(f"{source_text(self.source)} is not in the document any more.", error=True)
             return
         try:
             os.makedirs(folder, exist_ok=True)
@@ -334,7 +381,7 @@ class CompareTaskPanel(BackgroundRunPanel):
         if run.report is not None:
             FreeCAD.Console.PrintMessage(f"Strategy comparison, {len(study.rows)} runs in "
                                          f"{study.elapsed_s:.0f} s: {run.report}\n")
-            shown = open_report(run.report)
+            shown = open_report(run.report, f"Compare strategies: {self.source_name}")
         if not study.cancelled:
             FreeCADGui.Control.closeDialog()
             return

@@ -23,15 +23,16 @@ from cmmsampling.probe_path import path_length
 from toy_strategy import TOY
 
 from .helpers import (
-    Hold, dock_text, main_window, open_panel, process_events, task_button, task_form, wait_until, widgets,
+    Hold, child, dock_text, main_window, open_panel, process_events, task_button, task_form, wait_until, widgets,
 )
 
 OK, CANCEL = QtGui.QDialogButtonBox.Ok, QtGui.QDialogButtonBox.Cancel
 # A comparison small enough for a shared two-core machine: 2 N x 2 strategies, 6 steps.
 TINY = {"ns": "16, 25", "strategies": "uniform_parametric, pso", "seeds": 1, "iterations": 20,
-        "population": 6, "grid": 20}
+        "population": 6, "grid": 20, "edge_offset": -0.5, "min_spacing": 2.0}
 TINY_CALL = ("cmmsampling.compare(face, ns=(16, 25), strategies=('uniform_parametric', 'pso'), "
-             "seeds=(0,), options={'pso': {'iterations': 20, 'population': 6}}, grid=20)")
+             "seeds=(0,), options={'pso': {'iterations': 20, 'population': 6}}, grid=20, edge_offset=1.5, "
+             "min_spacing=2.0)")
 
 
 @pytest.fixture
@@ -50,7 +51,7 @@ def opened(monkeypatch):
     """The reports the panel opens (paths), instead of opening them."""
     paths = []
 
-    def record(path):
+    def record(path, title):
         paths.append(path)
         return True
 
@@ -143,7 +144,7 @@ def fill(form, folder=None, **values):
         for item in items(form):
             item.setCheckState(QtCore.Qt.Checked if item.text() in chosen else QtCore.Qt.Unchecked)
     for name, value in values.items():
-        getattr(form, name).setValue(value)
+        (getattr(form, name, None) or child(form, name)).setValue(value)
     if folder is not None:
         form.folder.setText(folder)
 
@@ -198,6 +199,7 @@ def test_panel_defaults_are_the_papers_study_and_options_follow_the_strategies(d
     assert checked(form) == list(cmmsampling.STRATEGIES)
     assert [form.seeds.value(), form.iterations.value(), form.population.value(), form.grid.value()] == [
         5, 3000, 25, 60]
+    assert child(form, "edge_offset").text() == "auto" and child(form, "min_spacing").text() == "auto"
     assert form.folder.text() == os.path.join(os.path.expanduser("~"), f"{doc.Name}_comparison")
     assert all(item.toolTip() for item in items(form))
     assert form.seeds.isEnabled() and form.iterations.isEnabled()
@@ -351,12 +353,13 @@ def test_the_report_opens_in_freecads_web_view_else_in_the_system_browser(workbe
     """FreeCAD 0.20 has a web view (the Web module's GUI); FreeCAD 1.0 and 1.1 have none."""
     page = report_page(tmp_path)
     if importlib.util.find_spec("WebGui") is None:
-        assert compare_panel.open_report(page) and browser == [page]
+        assert compare_panel.open_report(page, "Compare strategies: Body.Face1") and browser == [page]
         return
     before = browser_views()
-    assert compare_panel.open_report(page)
+    assert compare_panel.open_report(page, "Compare strategies: Body.Face1")
     assert wait_until(lambda: len(browser_views()) == len(before) + 1, 10) and browser == []
     opened_view = next(w for w in browser_views() if w not in before)
+    assert opened_view.windowTitle().startswith("Compare strategies: Body.Face1"), opened_view.windowTitle()
     opened_view.close()
     process_events(0.2)
 
