@@ -33,6 +33,7 @@ _API = {
     "lower_bound": "sampling",
     "memory_needed": "sampling",
     "probe_edge_offset": "sampling",
+    "time_needed": "sampling",
     "SamplingResult": "result",
     "SurfaceModel": "surface",
     "reference_face": "surface",

@@ -24,6 +24,8 @@ from .validation import check_choice, check_int, check_pair, check_real, check_u
 MIN_POINTS = 4
 SIGNIFICANT_MM = 1e-9
 MIN_AREA_RATIO = 1e-12
+# Swarms timed by time_needed (the first one warms the caches and is not counted).
+TIMED_SWARMS = 4
 
 
 @dataclass(frozen=True)
@@ -365,6 +367,51 @@ def memory_needed(n, strategy=DEFAULT_STRATEGY, *, fit_degree=DEFAULT_DEGREE, fi
     checked = strategy_options(strategy, options) if strategy is not None else {}
     return _memory_bytes(n, degree, given_poles, check_pair("grid", grid, 2), _check_workers(workers),
                          strategy, checked)
+
+
+def time_needed(face, n=81, strategy=DEFAULT_STRATEGY, *, fit_degree=DEFAULT_DEGREE, fit_poles=None,
+                grid=DEFAULT_GRID, edge_offset=0.0, min_spacing=None, workers=None, **options):
+    """Estimated seconds of :func:`sample` with these arguments on this face, before the run.
+
+    The problem is built (as sample() builds it: that time counts) and the objective the
+    strategy iterates is timed on a few random swarms; its cost times the strategy's progress
+    steps (PSO: iterations over its workers) is added. None when the number of steps is not
+    known in advance (the optimal strategy without max_evaluations or time_limit: until it
+    converges). Raises what sample() would raise for these arguments.
+    """
+    check_choice("strategy", strategy, list(STRATEGIES))
+    entry = STRATEGIES[strategy]
+    options = strategy_options(strategy, options)
+    start = time.perf_counter()
+    problem = make_problem(face, n, fit_degree, fit_poles, grid=grid, workers=workers,
+                           edge_offset=edge_offset, min_spacing=min_spacing, strategy=strategy,
+                           options=options)
+    built_s = time.perf_counter() - start
+    if not entry.optimiser:
+        return built_s
+    if options.get("time_limit") is not None:
+        return built_s + options["time_limit"]
+    steps = entry.progress_steps(options)
+    if steps is None:
+        return None
+    population = options.get("population", 1)
+    swarm = problem.project(np.random.default_rng(0).uniform(
+        problem.domain.lower, problem.domain.upper, (TIMED_SWARMS, population, n, 2)))
+    with blas_threads(1):
+        _one_step(problem, swarm[0])
+        start = time.perf_counter()
+        for positions in swarm[1:]:
+            _one_step(problem, positions)
+    per_step = (time.perf_counter() - start) / (TIMED_SWARMS - 1) / problem.workers
+    return built_s + steps * per_step
+
+
+def _one_step(problem, positions):
+    """What an optimiser's step costs: the objective of point sets positions (P, N, 2) and,
+    with a spacing, their spacing check."""
+    problem.objective(positions)
+    if problem.min_spacing > 0:
+        problem.spaced(positions)
 
 
 def _memory_bytes(n, degree, given_poles, grid, workers, strategy, options):

@@ -1,6 +1,7 @@
 """Defaults that work on the first face a user picks: an edge offset that adapts to the face
 (capped at a probe's), and optimisers that do not run where no point set can do better."""
 import numpy as np
+import pytest
 from geometry import Part, strip_face
 
 import cmmsampling
@@ -72,3 +73,14 @@ def test_a_handed_over_run_is_not_taken_by_another_call_or_face():
     assert cmmsampling.sample(face, 16, "halton") is not made
     sampling.hand_over(face, {"n": 16, "strategy": "halton"}, made)
     assert cmmsampling.sample(cmmsampling.reference_face(), 16, "halton") is not made
+
+
+def test_the_time_estimate_follows_the_strategys_steps():
+    face = cmmsampling.reference_face()
+    short = cmmsampling.time_needed(face, 25, "pso", iterations=10, workers=1)
+    long = cmmsampling.time_needed(face, 25, "pso", iterations=10000, workers=1)
+    assert 0 < short < long
+    assert cmmsampling.time_needed(face, 25, "optimal") is None
+    assert cmmsampling.time_needed(face, 25, "optimal", time_limit=30.0) >= 30.0
+    with pytest.raises(ValueError, match="inertia must decrease"):
+        cmmsampling.time_needed(face, 25, "pso", w1=0.1, w2=0.5)

@@ -20,6 +20,8 @@ from .selection import SelectionError, selected_face
 from .worker import BackgroundSampling
 
 POLL_MS = 100
+# The time estimate is made this long after the last change of a value (it builds the problem).
+TIME_DELAY_MS = 400
 CANCEL_WAIT_S = 1.0
 ERROR_STYLE = "color: #b00000;"
 EXPERT_GROUPS = ("psoGroup", "optimalGroup", "fitGroup", "gridGroup")
@@ -202,6 +204,7 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
     def reject(self):
         """Cancel: stop a running swarm (within CANCEL_WAIT_S), change nothing, close."""
         self.timer.stop()
+        self.time_timer.stop()
         if self.run is not None:
             self.run.cancel(CANCEL_WAIT_S)
             self.run = None
@@ -322,11 +325,26 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
                                    "the memory this machine has free; a run that would not fit is refused")
         layout = self.form.samplingGroup.layout()
         layout.insertRow(layout.getWidgetPosition(self.form.n)[0] + 1, self.memoryInfo)
+        self.timeInfo = QtGui.QLabel(self.form)
+        self.timeInfo.setObjectName("timeInfo")
+        self.timeInfo.setWordWrap(True)
+        self.timeInfo.setToolTip("Estimated duration of the run (cmmsampling.time_needed): the "
+                                 "strategy's objective timed on this face, times its iterations")
+        layout.insertRow(layout.getWidgetPosition(self.form.n)[0] + 2, self.timeInfo)
+        self.time_timer = QtCore.QTimer()
+        self.time_timer.setSingleShot(True)
+        self.time_timer.setInterval(TIME_DELAY_MS)
+        self.time_timer.timeout.connect(self.update_time)
         for name in ("n", "population", "fit_degree", "fit_poles_u", "fit_poles_v", "grid"):
             self.widget(name).valueChanged.connect(self.update_memory)
+        for name in ("n", "population", "iterations", "fit_degree", "fit_poles_u", "fit_poles_v", "grid",
+                     "edge_offset", "min_spacing", "time_limit", "max_evaluations"):
+            self.widget(name).valueChanged.connect(self.time_timer.start)
         self.form.strategy.currentIndexChanged.connect(self.update_memory)
+        self.form.strategy.currentIndexChanged.connect(self.time_timer.start)
         self.form.auto_poles.toggled.connect(self.update_memory)
         self.update_memory()
+        self.time_timer.start()
 
     def memory_arguments(self):
         """The arguments of :func:`cmmsampling.memory_needed` for the panel's values."""
@@ -357,6 +375,23 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
                                     f"spare ({memory.gib(free)} free): lower N")
             self.memoryInfo.setStyleSheet(ERROR_STYLE)
         self.update_enabled()
+
+    def update_time(self):
+        """Show the run's estimated duration (cmmsampling.time_needed on the chosen face);
+        nothing while a run is on or for values the run would refuse (Sample says why)."""
+        face = self.source_face()
+        if self.run is not None or face is None:
+            return
+        arguments = self.sample_arguments()
+        try:
+            seconds = sampling.time_needed(face, **{k: v for k, v in arguments.items() if k != "seed"})
+        except (ValueError, TypeError):
+            self.timeInfo.setText("")
+            return
+        if seconds is None:
+            self.timeInfo.setText("Time: until the descent converges (set a time limit to bound it)")
+        else:
+            self.timeInfo.setText(f"Time: {'' if seconds < 1 else 'about '}{duration_text(seconds)}")
 
     def face_edge_offset(self):
         """The chosen face's probe edge offset (mm, cmmsampling.probe_edge_offset), measured once
@@ -438,6 +473,7 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
             self.source = selected_face(FreeCADGui.Selection.getSelectionEx())
             self.source_text = source_text(self.source)
             self.automatic_offset = None
+            self.time_timer.start()
         except SelectionError as exc:
             self.form.faceLabel.setText(str(exc))
             self.form.faceLabel.setStyleSheet(ERROR_STYLE)
@@ -502,12 +538,24 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
             return
         settings.save(self.values())
         report_run(self.source_text, run.result)
+        self.time_timer.stop()
         FreeCADGui.Control.closeDialog()
         fit_view_to(group)
 
     def show_status(self, text, error=False):
         self.form.status.setText(text)
         self.form.status.setStyleSheet(ERROR_STYLE if error else "")
+
+
+def duration_text(seconds):
+    """'under a second', '12 s', '3 min' or '1.5 h' for a duration in seconds."""
+    if seconds < 1:
+        return "under a second"
+    if seconds < 120:
+        return f"{seconds:.0f} s"
+    if seconds < 7200:
+        return f"{seconds / 60:.0f} min"
+    return f"{seconds / 3600:.1f} h"
 
 
 def add_choice(choice, name, label, tip):

@@ -122,6 +122,19 @@ def test_panel_fits_the_default_width_of_the_combo_view(doc, artifacts):
     task_button(CANCEL).click()
 
 
+def test_the_panel_estimates_the_runs_time_before_it_starts(doc):
+    form = open_panel(doc)
+    line = child(form, "timeInfo")
+    assert wait_until(lambda: line.text().startswith("Time: about "), 5), line.text()
+    fill(form, "optimal", time_limit=0.0, max_evaluations=0)
+    assert wait_until(lambda: "until the descent converges" in line.text(), 5), line.text()
+    fill(form, "optimal", time_limit=30.0)
+    assert wait_until(lambda: line.text() == "Time: about 30 s", 5), line.text()
+    fill(form, "halton")
+    assert wait_until(lambda: line.text() == "Time: under a second", 5), line.text()
+    task_button(CANCEL).click()
+
+
 def test_the_panel_shows_the_runs_memory_and_refuses_what_does_not_fit(doc, monkeypatch, artifacts):
     monkeypatch.setenv("CMMSAMPLING_MEMORY_BYTES", str(2 * 2**30))
     form = open_panel(doc)
