@@ -22,9 +22,10 @@ class CMMSamplingWorkbench(FreeCADGui.Workbench):
         self.__class__.Icon = os.path.join(os.path.dirname(package), "icons", "Workbench.svg")
 
     def Initialize(self):
-        from cmmsampling.gui import commands, compare
+        from cmmsampling.gui import commands, compare, resource
 
         names = commands.register() + [compare.register()]
+        FreeCADGui.addPreferencePage(resource("preferences.ui"), "CMM sampling")
         self.appendToolbar("CMM Sampling", names)
         self.appendMenu("CMM Sampling", names)
 

@@ -1,5 +1,6 @@
 """The workbench in the real FreeCAD GUI: commands, task panel runs, undo, cancel, save/reopen."""
 import json
+from xml.etree import ElementTree
 import os
 import subprocess
 import time
@@ -604,3 +605,36 @@ def run_headless(script, *arguments):
         ["/usr/bin/python3", "-c", script, os.environ["CMMSAMPLING_ROOT"], *arguments],
         env={key: value for key, value in os.environ.items() if not key.startswith("PYTHON")},
         capture_output=True, text=True, timeout=120, check=False)
+
+
+def test_the_preferences_page_sets_what_the_panel_starts_with(doc, artifacts):
+    page = ElementTree.parse(os.path.join(os.path.dirname(cmmsampling.__file__), "..", "resources",
+                                          "preferences.ui"))
+    shown = {w.get("name"): float(w.find("property[@name='value']")[0].text)
+             for w in page.iter("widget") if w.get("class", "").startswith("Gui::Pref")}
+    defaults = {**task_panel.panel_defaults(), "ExportProbeRadius": export_options.DEFAULTS["ExportProbeRadius"]}
+    assert shown == {name: defaults[name] for name in shown}
+    seen = []
+
+    def set_points():
+        dialog = QtGui.QApplication.activeModalWidget()
+        box = dialog.findChild(QtGui.QSpinBox, "n") if dialog is not None else None
+        if box is None or not box.isVisible():
+            return
+        timer.stop()
+        box.setValue(49)
+        seen.append(dialog.grab())
+        dialog.accept()
+
+    timer = QtCore.QTimer()
+    timer.setInterval(100)
+    timer.timeout.connect(set_points)
+    timer.start()
+    FreeCADGui.showPreferences("CMM sampling", 0)
+    timer.stop()
+    assert seen, "the CMM sampling preferences page did not open"
+    seen[0].save(os.path.join(artifacts, "preferences.png"))
+    assert settings.load({"n": 0})["n"] == 49
+    form = open_panel(doc)
+    assert form.n.value() == 49
+    task_button(CANCEL).click()
