@@ -526,6 +526,7 @@ def sample(face, n=81, strategy=DEFAULT_STRATEGY, *, fit_degree=DEFAULT_DEGREE, 
     with blas_threads(1):
         outcome = _exact_outcome(problem, strategy) or STRATEGIES[strategy].run(problem, progress, **options)
     _move_onto_face(problem, outcome)
+    outcome.notes += _fit_notes(problem)
     strategy_s = time.perf_counter() - start
     settings = {"strategy": strategy, "n": problem.n, **_common_settings(problem),
                 **_json_friendly({**options, **outcome.details})}
@@ -617,6 +618,18 @@ def _move_onto_face(problem, outcome):
         outcome.uv = problem.model.onto_face(outcome.uv)[0]
         outcome.notes.append(f"{crowded} point(s) then lay closer than min_spacing to others and "
                              "were moved to free places")
+
+
+def _fit_notes(problem):
+    """Sentences on a substitute with more poles than points: between the points its shape then
+    comes from the smoothing, not from the measurement."""
+    poles = problem.space.poles
+    if poles[0] * poles[1] <= problem.n:
+        return []
+    usual = resolve_fit_poles(None, problem.n, problem.space.degrees)
+    return [f"the substitute has {poles[0]} x {poles[1]} poles for {problem.n} points: between the "
+            f"points its shape comes from the smoothing, not from the measurement (the default for "
+            f"{problem.n} points is {usual[0]} x {usual[1]})"]
 
 
 def _json_friendly(options):

@@ -84,3 +84,11 @@ def test_the_time_estimate_follows_the_strategys_steps():
     assert cmmsampling.time_needed(face, 25, "optimal", time_limit=30.0) >= 30.0
     with pytest.raises(ValueError, match="inertia must decrease"):
         cmmsampling.time_needed(face, 25, "pso", w1=0.1, w2=0.5)
+
+
+def test_more_poles_than_points_is_said():
+    face = cmmsampling.reference_face()
+    result = cmmsampling.sample(face, 25, "halton", fit_poles=40, grid=20)
+    assert any("40 x 40 poles for 25 points" in note and "default for 25 points is 4 x 4" in note
+               for note in result.notes), result.notes
+    assert not any("poles for" in note for note in cmmsampling.sample(face, 25, "halton").notes)
