@@ -15,7 +15,7 @@ import numpy as np
 
 from .deviation import DEFAULT_GRID
 from .fitting import DEFAULT_DEGREE, DEFAULT_SMOOTHING
-from .sampling import MIN_POINTS, STRATEGIES, make_problem, sample, strategy_options
+from .sampling import MIN_POINTS, STRATEGIES, make_problem, sample, strategy_options, time_needed
 from .sampling import baseline as baseline_strategy
 from .threads import blas_threads
 from .validation import check_choice, check_int
@@ -251,6 +251,37 @@ def compare(face, ns=DEFAULT_NS, strategies=None, *, seeds=DEFAULT_SEEDS, seeded
     study.rows = derive(study.rows, study.bounds)
     study.elapsed_s = time.perf_counter() - began
     return study
+
+
+def study_time(face, ns=DEFAULT_NS, strategies=None, *, seeds=DEFAULT_SEEDS, options=None, **common):
+    """Estimated duration of :func:`compare` with these arguments, the bounds left out:
+    (seconds of the runs whose length is known, names of the strategies whose runs go on until
+    they converge: the optimal strategy without a limit).
+
+    Each optimiser is timed by :func:`cmmsampling.time_needed` at every N; a blind strategy's
+    run is mostly building its problem, timed once per N and counted for each of them.
+    common: fit_degree, fit_poles, grid, edge_offset, min_spacing, workers (as in compare()).
+    """
+    ns = _check_ns(ns)
+    strategies = _check_strategies(strategies)
+    options = _check_options(options, strategies)
+    total, open_ended = 0.0, []
+    for n in ns:
+        blind = None
+        for step in plan((n,), strategies, _check_seeds(seeds), [s for s in strategies if STRATEGIES[s].seeded]):
+            if step.strategy is None:
+                continue
+            if not STRATEGIES[step.strategy].optimiser:
+                if blind is None:
+                    blind = time_needed(face, n, step.strategy, **common)
+                total += blind
+                continue
+            seconds = time_needed(face, n, step.strategy, **common, **options.get(step.strategy, {}))
+            if seconds is None:
+                open_ended += [step.strategy] if step.strategy not in open_ended else []
+            else:
+                total += seconds
+    return total, open_ended
 
 
 def _check_options(options, strategies):

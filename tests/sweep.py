@@ -128,6 +128,7 @@ def main(names=()):
             continue
         counter = counts.setdefault(name, collections.Counter())
         for number, face in enumerate(shape.Faces, start=1):
+            print(f"{name} Face{number}", file=sys.stderr, flush=True)
             for strategy in cmmsampling.STRATEGIES:
                 for offset in OFFSETS:
                     kind, detail = outcome(face, strategy, offset)

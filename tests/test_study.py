@@ -8,7 +8,7 @@ from geometry import Part
 
 import cmmsampling
 from cmmsampling.report import FIGURES, footprint, write_report
-from cmmsampling.study import MEASURES, compare
+from cmmsampling.study import MEASURES, compare, study_time
 from cmmsampling.surface import SurfaceModel
 
 SAMPLE_OPTIONS = {"pso": {"iterations": 20, "population": 10}, "optimal": {"max_evaluations": 150}}
@@ -210,3 +210,12 @@ def test_the_probe_constraints_hold_in_every_run_as_in_sample(reference):
         np.testing.assert_allclose(result.uv, alone.uv)
         gaps = np.linalg.norm(result.points[:, None] - result.points[None], axis=-1) + np.diag(np.full(16, np.inf))
         assert gaps.min() >= 9.0 - 1e-9
+
+
+def test_the_study_time_counts_every_run_and_names_the_open_ended(reference):
+    seconds, open_ended = study_time(reference, ns=(16, 25), strategies=("halton", "pso", "optimal"),
+                                     options={"pso": {"iterations": 50}}, grid=20)
+    assert seconds > 0 and open_ended == ["optimal"]
+    longer, _ = study_time(reference, ns=(16, 25), strategies=("halton", "pso"),
+                           options={"pso": {"iterations": 5000}}, grid=20)
+    assert longer > seconds

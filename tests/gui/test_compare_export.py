@@ -509,3 +509,15 @@ def test_export_options_persist_and_cancel_returns_none(doc):
     assert options == {"frame": None, "probe_radius": 0.0, "order": "short_path"}
     assert settings.load(export_options.DEFAULTS) == {
         "ExportFrame": "", "ExportProbeRadius": 0.0, "ExportOrder": "short_path"}
+
+
+def test_the_panel_estimates_the_studys_time(doc, command):
+    form = open_compare(doc)
+    line = child(form, "timeInfo")
+    assert wait_until(lambda: "runs; at least about" in line.text(), 30), line.text()
+    assert line.text().startswith("104 runs;") and "optimal (this project) runs, which go on" in line.text()
+    fill(form, **TINY)
+    assert wait_until(lambda: line.text().startswith("4 runs; at least about "), 30), line.text()
+    assert line.text().endswith("plus the local bounds")
+    task_button(CANCEL).click()
+    assert wait_until(lambda: not FreeCADGui.Control.activeDialog(), 2)
