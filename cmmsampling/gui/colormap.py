@@ -23,6 +23,8 @@ LEGEND_Y = (-0.7, 0.4)
 # Deviations below this (mm) are shown in one colour: finer than any CMM measures, so a
 # spread of colours there would be rounding noise.
 SMALLEST_SHOWN_MM = 1e-4
+# Legends whose largest deviation is below this (mm) are labelled in micrometres.
+MICROMETRES_BELOW_MM = 0.01
 TEXT_COLOUR = (0.0, 0.0, 0.0)
 FONT_SIZE = 14
 
@@ -48,9 +50,12 @@ def shown_maximum(maximum):
 
 
 def tick_labels(maximum, count=LEGEND_TICKS):
-    """count labels from 0 to maximum mm, e.g. ['0.000 mm', ..., '1.053 mm']."""
-    digits = max(0, 3 - int(np.floor(np.log10(maximum)))) if maximum > 0 else 3
-    return [f"{value:.{digits}f} mm" for value in np.linspace(0, maximum, count)]
+    """count labels from 0 to maximum mm with four significant digits at the top, e.g.
+    ['0.0000 mm', ..., '1.053 mm']; below MICROMETRES_BELOW_MM in micrometres ('0.100 um')."""
+    scale, unit = (1000.0, "um") if 0 < maximum < MICROMETRES_BELOW_MM else (1.0, "mm")
+    top = maximum * scale
+    digits = max(0, 3 - int(np.floor(np.log10(top)))) if top > 0 else 3
+    return [f"{value:.{digits}f} {unit}" for value in np.linspace(0, top, count)]
 
 
 def legend(maximum, title="Deviation"):

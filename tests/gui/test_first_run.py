@@ -135,16 +135,16 @@ def test_a_planar_face_finishes_at_once_with_its_note_shown(workbench, artifacts
     doc = part_document("Planar", Part.makeBox(40, 30, 10))
     try:
         before = dock_text("Report view")
-        group = run_panel(doc, "Face5", "pso")
+        group = run_panel(doc, "Face6", "pso")
         points, surface = group.Group[:2]
         assert points.Notes[0].startswith("pso was not run"), points.Notes
-        line = "cmmsampling: Body.Face5, PSO (paper), N = 81: maximum deviation"
+        line = "cmmsampling: Body.Face6, PSO (paper), N = 81: maximum deviation"
         assert wait_until(lambda: line in dock_text("Report view")[len(before):], 2)
         report = dock_text("Report view")[len(before):]
         assert "note: pso was not run: the uniform parametric layout already fits this face exactly" in report
         texts = []
         _collect_texts(surface.ViewObject.Proxy.coloured, texts)
-        assert texts[-2] == "0.0001000 mm", texts
+        assert texts[-2] == "0.1000 um", texts
         FreeCADGui.ActiveDocument.ActiveView.saveImage(os.path.join(artifacts, "first_run_planar.png"),
                                                        1000, 750, "White")
     finally:

@@ -46,6 +46,7 @@ def test_colour_map_runs_blue_to_red_with_grey_off_the_face():
     assert np.allclose(rgb[3], colormap.OFF_FACE)
     assert colormap.tick_labels(1.0533) == ["0.000 mm", "0.263 mm", "0.527 mm", "0.790 mm", "1.053 mm"]
     assert colormap.tick_labels(0.01234)[-1] == "0.01234 mm"
+    assert colormap.tick_labels(1e-4) == ["0.0000 um", "0.0250 um", "0.0500 um", "0.0750 um", "0.1000 um"]
 
 
 def test_panel_defaults_are_the_papers_and_options_follow_the_strategy(doc):
