@@ -54,6 +54,10 @@ def grid_shape(n, aspect=1.0):
     return best[1]
 
 
+# Points thinned at a time by spaced(): about SPACING_BLOCK^2 / 2 pairs at most in memory.
+SPACING_BLOCK = 2048
+
+
 def thin_evenly(uv, n):
     """Keep n of the M >= n points, spread evenly along their order: (M, 2) -> (n, 2)."""
     if len(uv) == n:
@@ -69,9 +73,29 @@ def _unit_grid(rows, cols):
     return np.stack(np.meshgrid(u, v, indexing="ij"), axis=-1).reshape(-1, 2)
 
 
-def spaced(points, min_spacing):
-    """Indices of a greedy subset of points (M, 3) mm, in their order, at least min_spacing apart."""
+def spaced(points, min_spacing, block=SPACING_BLOCK):
+    """Indices of a greedy subset of points (M, 3) mm, in their order, at least min_spacing apart.
+
+    Point i is kept unless an earlier kept point lies within min_spacing. The points go in
+    blocks of ``block``: those near a point kept in an earlier block go at once (a tree query),
+    then the rest of the block is thinned among itself, so that memory stays bounded (about
+    block^2 pairs) even where most points crowd, e.g. a footprint grid seen along a cylinder.
+    """
     if min_spacing <= 0 or len(points) < 2:
+        return np.arange(len(points))
+    kept = np.zeros(len(points), dtype=bool)
+    for first in range(0, len(points), block):
+        rows = np.arange(first, min(first + block, len(points)))
+        if kept.any():
+            distance = cKDTree(points[kept]).query(points[rows], distance_upper_bound=min_spacing)[0]
+            rows = rows[distance >= min_spacing]
+        kept[rows[_spaced_among(points[rows], min_spacing)]] = True
+    return np.flatnonzero(kept)
+
+
+def _spaced_among(points, min_spacing):
+    """Indices of the greedy subset of points (B, 3) mm, in their order, at least min_spacing apart."""
+    if len(points) < 2:
         return np.arange(len(points))
     pairs = cKDTree(points).query_pairs(min_spacing, output_type="ndarray")
     pairs = pairs[np.linalg.norm(points[pairs[:, 0]] - points[pairs[:, 1]], axis=1) < min_spacing]
