@@ -18,6 +18,7 @@ from matplotlib.figure import Figure
 from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 
 from .sampling import STRATEGIES
+from .sampling import strategy_label as label
 from .strategies import projection_frame
 from .surface import as_face
 
@@ -27,11 +28,6 @@ PANEL_INCHES = 4.2
 PANEL_3D_INCHES = 5.6
 HISTOGRAM_BINS = 40
 LOG_SPAN = 3.0
-
-
-def label(strategy):
-    """The display name of a strategy (its record's label; the name itself for one not registered)."""
-    return STRATEGIES[strategy].label if strategy in STRATEGIES else strategy
 
 
 def _marked(study, flag):

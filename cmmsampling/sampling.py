@@ -17,7 +17,7 @@ from .optimal import default_min_spacing, descend
 from .pso import SwarmSettings, particle_swarm
 from .result import EXACT_FIT, SamplingResult
 from .strategies import StrategyOutcome
-from .surface import SurfaceModel, as_face, substitute_surface
+from .surface import SurfaceModel, substitute_surface
 from .threads import blas_threads
 from .validation import check_choice, check_int, check_pair, check_real, check_uv
 
@@ -301,6 +301,12 @@ BEST_STRATEGY = "optimal"
 # The edge offset the command line and the panel start with, mm: a probe ball's radius plus
 # a margin (sample() itself defaults to 0, the paper's setting).
 PROBE_EDGE_OFFSET_MM = 1.5
+
+
+def strategy_label(name):
+    """The display name of a strategy (its record's label; the name itself for one not registered,
+    e.g. a result of ``evaluate(strategy="given")``)."""
+    return STRATEGIES[name].label if name in STRATEGIES else name
 
 
 def baseline():

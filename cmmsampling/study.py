@@ -8,6 +8,7 @@ optimisation grid and on the 3x denser check grid, and collects the deviations (
 Pure computation; :mod:`cmmsampling.report` draws it.
 """
 import time
+from collections import Counter
 from dataclasses import dataclass, field, fields, replace
 from typing import NamedTuple
 
@@ -253,35 +254,44 @@ def compare(face, ns=DEFAULT_NS, strategies=None, *, seeds=DEFAULT_SEEDS, seeded
     return study
 
 
-def study_time(face, ns=DEFAULT_NS, strategies=None, *, seeds=DEFAULT_SEEDS, options=None, **common):
-    """Estimated duration of :func:`compare` with these arguments, the bounds left out:
-    (seconds of the runs whose length is known, names of the strategies whose runs go on until
-    they converge: the optimal strategy without a limit).
+class StudyTime(NamedTuple):
+    """What :func:`study_time` estimates: runs, the study's runs (the bounds left out); seconds,
+    those whose length is known; open_ended, the strategies whose runs go on until they converge."""
 
-    Each optimiser is timed by :func:`cmmsampling.time_needed` at every N; a blind strategy's
-    run is mostly building its problem, timed once per N and counted for each of them.
-    common: fit_degree, fit_poles, grid, edge_offset, min_spacing, workers (as in compare()).
+    runs: int
+    seconds: float
+    open_ended: list
+
+
+def study_time(face, ns=DEFAULT_NS, strategies=None, *, seeds=DEFAULT_SEEDS, options=None, **common):
+    """Estimated duration of :func:`compare` with these arguments, the bounds left out: a
+    StudyTime.
+
+    Each optimiser is timed by :func:`cmmsampling.time_needed` once per N and counted for each of
+    its seeds; a blind strategy's run is mostly building its problem, timed once per N and
+    counted for each blind run. The optimal strategy without a limit has no known length: it is
+    named in ``open_ended``. common: fit_degree, fit_poles, grid, edge_offset, min_spacing,
+    workers (as in compare()).
     """
     ns = _check_ns(ns)
     strategies = _check_strategies(strategies)
     options = _check_options(options, strategies)
-    total, open_ended = 0.0, []
-    for n in ns:
-        blind = None
-        for step in plan((n,), strategies, _check_seeds(seeds), [s for s in strategies if STRATEGIES[s].seeded]):
-            if step.strategy is None:
-                continue
-            if not STRATEGIES[step.strategy].optimiser:
-                if blind is None:
-                    blind = time_needed(face, n, step.strategy, **common)
-                total += blind
-                continue
-            seconds = time_needed(face, n, step.strategy, **common, **options.get(step.strategy, {}))
-            if seconds is None:
-                open_ended += [step.strategy] if step.strategy not in open_ended else []
-            else:
-                total += seconds
-    return total, open_ended
+    seeded = [name for name in strategies if STRATEGIES[name].seeded]
+    runs = Counter((step.n, step.strategy) for step in plan(ns, strategies, _check_seeds(seeds), seeded)
+                   if step.strategy is not None)
+    seconds, open_ended, blind = 0.0, [], {}
+    for (n, name), count in runs.items():
+        if not STRATEGIES[name].optimiser:
+            if n not in blind:
+                blind[n] = time_needed(face, n, name, **common)
+            seconds += count * blind[n]
+            continue
+        each = time_needed(face, n, name, **common, **options.get(name, {}))
+        if each is None:
+            open_ended += [] if name in open_ended else [name]
+        else:
+            seconds += count * each
+    return StudyTime(sum(runs.values()), seconds, open_ended)
 
 
 def _check_options(options, strategies):

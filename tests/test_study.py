@@ -213,9 +213,10 @@ def test_the_probe_constraints_hold_in_every_run_as_in_sample(reference):
 
 
 def test_the_study_time_counts_every_run_and_names_the_open_ended(reference):
-    seconds, open_ended = study_time(reference, ns=(16, 25), strategies=("halton", "pso", "optimal"),
-                                     options={"pso": {"iterations": 50}}, grid=20)
-    assert seconds > 0 and open_ended == ["optimal"]
-    longer, _ = study_time(reference, ns=(16, 25), strategies=("halton", "pso"),
-                           options={"pso": {"iterations": 5000}}, grid=20)
+    runs, seconds, open_ended = study_time(reference, ns=(16, 25), strategies=("halton", "pso", "optimal"),
+                                           options={"pso": {"iterations": 50}}, grid=20)
+    assert seconds > 0 and open_ended == ["optimal"] and runs == 6
+    _, longer, _ = study_time(reference, ns=(16, 25), strategies=("halton", "pso"),
+                              options={"pso": {"iterations": 5000}}, grid=20)
     assert longer > seconds
+    assert study_time(reference, ns=(16,), strategies=("random", "halton"), seeds=(0, 1, 2), grid=20).runs == 4

@@ -18,12 +18,11 @@ from PySide import QtCore, QtGui
 from ..deviation import DEFAULT_GRID
 from ..report import write_report
 from ..sampling import STRATEGIES
-from ..study import DEFAULT_NS, DEFAULT_SEEDS, compare, plan, study_time
+from ..study import DEFAULT_NS, DEFAULT_SEEDS, compare, study_time
 from . import settings
 from .commands import FaceCommand
-from ..sampling import probe_edge_offset
-from .task_panel import (AUTO, ERROR_STYLE, POLL_MS, TIME_DELAY_MS, BackgroundRunPanel, duration_text,
-                         edge_offset_argument, snap_to_auto, source_text, spacing_argument)
+from .task_panel import (AUTO, ERROR_STYLE, BackgroundRunPanel, duration_text, edge_offset_argument,
+                         snap_to_auto, source_text, spacing_argument)
 from .worker import BackgroundTask
 
 # The panel's values are stored under these names with this prefix, apart from Sample face's.
@@ -180,31 +179,12 @@ class BackgroundComparison(BackgroundTask):
             self.report = write_report(self.study, self.folder)
 
 
-class BackgroundEstimate(BackgroundTask):
-    """Runs :func:`cmmsampling.study.study_time` for a study's arguments in a daemon thread;
-    the GUI thread polls ``running``, then ``estimate`` (seconds, open-ended strategies) or
-    ``error``."""
-
-    def __init__(self, face, arguments):
-        super().__init__("cmmsampling-estimate")
-        self.face = face
-        self.arguments = dict(arguments)
-        self.estimate = None
-
-    def _work(self):
-        self.estimate = study_time(self.face, **self.arguments)
-
-
-def estimate_text(arguments, estimate):
+def study_time_text(estimate):
     """'45 runs; at least about 2 min, plus the local bounds' (and the descents that run until
-    they converge) for a study's arguments and its (seconds, open-ended strategies)."""
-    seconds, open_ended = estimate
-    runs = sum(1 for step in plan(arguments["ns"], arguments["strategies"], arguments["seeds"],
-                                  [s for s in arguments["strategies"] if STRATEGIES[s].seeded])
-               if step.strategy is not None)
+    they converge) for a StudyTime."""
     extra = "the local bounds" + "".join(f" and the {STRATEGIES[name].label} runs, which go on until they "
-                                         "converge" for name in open_ended)
-    return f"{runs} runs; at least about {duration_text(seconds)}, plus {extra}"
+                                         "converge" for name in estimate.open_ended)
+    return f"{estimate.runs} runs; at least about {duration_text(estimate.seconds)}, plus {extra}"
 
 
 class CompareTaskPanel(BackgroundRunPanel):
@@ -225,7 +205,7 @@ class CompareTaskPanel(BackgroundRunPanel):
         self.form.progress.setTextVisible(False)
         self.form.browse.clicked.connect(self.browse)
         self.form.strategies.itemChanged.connect(self.update_enabled)
-        self._add_time_line()
+        self._add_study_time_line()
         self.update_enabled()
 
     # --- FreeCAD task dialog interface
@@ -242,8 +222,7 @@ class CompareTaskPanel(BackgroundRunPanel):
                              "runs are kept and reported.")
             return False
         self.timer.stop()
-        self.estimate_timer.stop()
-        self.estimate_poll.stop()
+        self.stop_estimates()
         return True
 
     # --- values
@@ -277,59 +256,34 @@ class CompareTaskPanel(BackgroundRunPanel):
             layout.addRow(label, box)
             self.constraint_boxes[name] = box
 
-    def _add_time_line(self):
-        """A line above the progress bar with the study's estimated time, made in a thread
-        (:class:`BackgroundEstimate`) TIME_DELAY_MS after the last change of a value."""
-        self.timeInfo = QtGui.QLabel(self.form)
-        self.timeInfo.setObjectName("timeInfo")
-        self.timeInfo.setWordWrap(True)
-        self.timeInfo.setToolTip("The runs timed on this face with cmmsampling.time_needed; the "
-                                 "local bound at each N comes on top")
-        self.form.runGroup.layout().insertWidget(0, self.timeInfo)
-        self.estimate = None
-        self.estimate_timer = QtCore.QTimer()
-        self.estimate_timer.setSingleShot(True)
-        self.estimate_timer.setInterval(TIME_DELAY_MS)
-        self.estimate_timer.timeout.connect(self.start_estimate)
-        self.estimate_poll = QtCore.QTimer()
-        self.estimate_poll.setInterval(POLL_MS)
-        self.estimate_poll.timeout.connect(self.show_estimate)
+    def _add_study_time_line(self):
+        """A line above the progress bar with the study's estimated time, remade when a value
+        changes."""
+        self._add_time_line(self.form.runGroup.layout(), 0, "The runs timed on this face with "
+                            "cmmsampling.time_needed; the local bound at each N comes on top")
         self.form.ns.textChanged.connect(self.estimate_timer.start)
         self.form.strategies.itemChanged.connect(self.estimate_timer.start)
         for box in [getattr(self.form, name) for name in SPIN_BOXES] + list(self.constraint_boxes.values()):
             box.valueChanged.connect(self.estimate_timer.start)
         self.estimate_timer.start()
 
-    def start_estimate(self):
-        """Estimate the study's time in the background (again once the one under way ends)."""
-        if self.estimate is not None and self.estimate.running:
-            self.estimate_timer.start()
-            return
-        face = self.source_face()
-        try:
-            automatic = probe_edge_offset(face) if face is not None and self.values()["edge_offset"] < 0 else None
-            arguments = compare_arguments(self.values(), automatic)
-        except (ValueError, RuntimeError):
-            self.timeInfo.setText("")
-            return
-        if face is None or not arguments["strategies"]:
-            self.timeInfo.setText("")
-            return
-        self.timeInfo.setText("Estimating the time...")
-        self.estimate = BackgroundEstimate(face.copy(), arguments)
-        self.estimate.start()
-        self.estimate_poll.start()
+    def study_arguments(self, values):
+        """The compare() arguments for the panel's values (:func:`compare_arguments`, "auto"
+        edge offset measured once on the face); ValueError for an N list that is no list."""
+        automatic = self.face_edge_offset() if values["edge_offset"] < 0 else None
+        return compare_arguments(values, automatic)
 
-    def show_estimate(self):
-        """Show the finished estimate; nothing for values the study would refuse."""
-        if self.estimate is None or self.estimate.running:
-            return
-        self.estimate_poll.stop()
-        estimate, self.estimate = self.estimate, None
-        if estimate.error is not None:
-            self.timeInfo.setText("")
-            return
-        self.timeInfo.setText(estimate_text(estimate.arguments, estimate.estimate))
+    def estimate_call(self):
+        """cmmsampling.study.study_time on a copy of the face with the study's arguments."""
+        face = self.source_face()
+        arguments = self.study_arguments(self.values())
+        if face is None or not arguments["strategies"]:
+            return None
+        return study_time, {"face": face.copy(), **arguments}
+
+    def estimate_text(self, value):
+        """The time line for a StudyTime (:func:`study_time_text`)."""
+        return study_time_text(value)
 
     def fit_strategy_list(self):
         """Make the strategy list as tall as its rows, so that it never scrolls."""
@@ -400,8 +354,7 @@ class CompareTaskPanel(BackgroundRunPanel):
             self.show_status(f"{source_text(self.source)} is not in the document any more.", error=True)
             return
         try:
-            automatic = probe_edge_offset(face) if values["edge_offset"] < 0 else None
-            arguments = compare_arguments(values, automatic)
+            arguments = self.study_arguments(values)
         except ValueError as exc:
             self.show_status(str(exc), error=True)
             return
@@ -467,8 +420,7 @@ class CompareTaskPanel(BackgroundRunPanel):
                                          f"{study.elapsed_s:.0f} s: {run.report}\n")
             shown = open_report(run.report, f"Compare strategies: {self.source_name}")
         if not study.cancelled:
-            self.estimate_timer.stop()
-            self.estimate_poll.stop()
+            self.stop_estimates()
             FreeCADGui.Control.closeDialog()
             return
         if run.report is None:

@@ -17,7 +17,7 @@ from ..fitting import DEFAULT_DEGREE, default_pole_count
 from . import icon, resource, settings
 from .qt_compat import flag_value, forget_when_destroyed
 from .selection import SelectionError, selected_face
-from .worker import BackgroundSampling
+from .worker import BackgroundCall, BackgroundSampling
 
 POLL_MS = 100
 # The time estimate is made this long after the last change of a value (it builds the problem).
@@ -125,6 +125,7 @@ class BackgroundRunPanel:
         self.form = FreeCADGui.PySideUic.loadUi(resource(ui_file))
         self.form.setWindowIcon(QtGui.QIcon(icon(icon_file)))
         self.source = source
+        self.automatic_offset = None
         self.run = None
         self.buttons = None
         self.timer = QtCore.QTimer()
@@ -132,6 +133,81 @@ class BackgroundRunPanel:
         self.timer.timeout.connect(self.poll)
         fit_narrow_dock(self.form)
         forget_when_destroyed(self.form)
+
+    def _add_time_line(self, layout, row, tip):
+        """The run's time estimate: a label (``timeInfo``) inserted at ``row`` of ``layout`` (a
+        form or box layout), remade in a background thread (:class:`BackgroundCall`)
+        TIME_DELAY_MS after the last change of a value: connect the values' change signals to
+        ``self.estimate_timer.start``. The subclass gives :meth:`estimate_call` and
+        :meth:`estimate_text`."""
+        self.timeInfo = QtGui.QLabel(self.form)
+        self.timeInfo.setObjectName("timeInfo")
+        self.timeInfo.setWordWrap(True)
+        self.timeInfo.setToolTip(tip)
+        if isinstance(layout, QtGui.QFormLayout):
+            layout.insertRow(row, self.timeInfo)
+        else:
+            layout.insertWidget(row, self.timeInfo)
+        self.estimate = None
+        self.estimate_timer = QtCore.QTimer()
+        self.estimate_timer.setSingleShot(True)
+        self.estimate_timer.setInterval(TIME_DELAY_MS)
+        self.estimate_timer.timeout.connect(self.start_estimate)
+        self.estimate_poll = QtCore.QTimer()
+        self.estimate_poll.setInterval(POLL_MS)
+        self.estimate_poll.timeout.connect(self.show_estimate)
+
+    def estimate_call(self):
+        """(function, keyword arguments) whose value is the estimate, or None for none now."""
+        raise NotImplementedError
+
+    def estimate_text(self, value):
+        """The time line for the estimate's value."""
+        raise NotImplementedError
+
+    def start_estimate(self):
+        """Estimate the run's time in the background (again once the one under way ends);
+        nothing while a run is on or for values the run would refuse (OK says why)."""
+        if self.estimate is not None and self.estimate.running:
+            self.estimate_timer.start()
+            return
+        if self.run is not None:
+            return
+        try:
+            call = self.estimate_call()
+        except (ValueError, TypeError):
+            call = None
+        if call is None:
+            self.timeInfo.setText("")
+            return
+        function, arguments = call
+        self.estimate = BackgroundCall("cmmsampling-estimate", function, **arguments)
+        self.estimate.start()
+        self.estimate_poll.start()
+
+    def show_estimate(self):
+        """Show the finished estimate; nothing for values the run would refuse."""
+        if self.estimate is None or self.estimate.running:
+            return
+        self.estimate_poll.stop()
+        estimate, self.estimate = self.estimate, None
+        self.timeInfo.setText("" if estimate.error is not None else self.estimate_text(estimate.value))
+
+    def stop_estimates(self):
+        """Stop the estimate's timers (the panel closes)."""
+        self.estimate_timer.stop()
+        self.estimate_poll.stop()
+
+    def face_edge_offset(self):
+        """The chosen face's probe edge offset (mm, cmmsampling.probe_edge_offset), measured once
+        per face; 0 when the face is gone or cannot be measured (the run then says why)."""
+        if self.automatic_offset is None:
+            face = self.source_face()
+            try:
+                self.automatic_offset = sampling.probe_edge_offset(face) if face is not None else 0.0
+            except (ValueError, RuntimeError, Part.OCCError):
+                self.automatic_offset = 0.0
+        return self.automatic_offset
 
     def getStandardButtons(self):
         return flag_value(QtGui.QDialogButtonBox.Ok | QtGui.QDialogButtonBox.Cancel)
@@ -187,7 +263,6 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
         self.step = ""
         self.picker = None
         self.run_face = None
-        self.automatic_offset = None
         self._fill_strategies()
         self._set_up_automatic_values()
         self._collapse_expert_settings()
@@ -197,6 +272,7 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
         self.form.pickFace.toggled.connect(self.pick_face)
         self.memory_fits = True
         self._add_memory_line()
+        self._add_sample_time_line()
         self.show_source()
         self.update_enabled()
 
@@ -204,7 +280,7 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
     def reject(self):
         """Cancel: stop a running swarm (within CANCEL_WAIT_S), change nothing, close."""
         self.timer.stop()
-        self.time_timer.stop()
+        self.stop_estimates()
         if self.run is not None:
             self.run.cancel(CANCEL_WAIT_S)
             self.run = None
@@ -325,26 +401,24 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
                                    "the memory this machine has free; a run that would not fit is refused")
         layout = self.form.samplingGroup.layout()
         layout.insertRow(layout.getWidgetPosition(self.form.n)[0] + 1, self.memoryInfo)
-        self.timeInfo = QtGui.QLabel(self.form)
-        self.timeInfo.setObjectName("timeInfo")
-        self.timeInfo.setWordWrap(True)
-        self.timeInfo.setToolTip("Estimated duration of the run (cmmsampling.time_needed): the "
-                                 "strategy's objective timed on this face, times its iterations")
-        layout.insertRow(layout.getWidgetPosition(self.form.n)[0] + 2, self.timeInfo)
-        self.time_timer = QtCore.QTimer()
-        self.time_timer.setSingleShot(True)
-        self.time_timer.setInterval(TIME_DELAY_MS)
-        self.time_timer.timeout.connect(self.update_time)
         for name in ("n", "population", "fit_degree", "fit_poles_u", "fit_poles_v", "grid"):
             self.widget(name).valueChanged.connect(self.update_memory)
-        for name in ("n", "population", "iterations", "fit_degree", "fit_poles_u", "fit_poles_v", "grid",
-                     "edge_offset", "min_spacing", "time_limit", "max_evaluations"):
-            self.widget(name).valueChanged.connect(self.time_timer.start)
         self.form.strategy.currentIndexChanged.connect(self.update_memory)
-        self.form.strategy.currentIndexChanged.connect(self.time_timer.start)
         self.form.auto_poles.toggled.connect(self.update_memory)
         self.update_memory()
-        self.time_timer.start()
+
+    def _add_sample_time_line(self):
+        """The run's time estimate under the memory line, remade when a value it depends on changes."""
+        layout = self.form.samplingGroup.layout()
+        self._add_time_line(layout, layout.getWidgetPosition(self.memoryInfo)[0] + 1,
+                            "Estimated duration of the run (cmmsampling.time_needed): the strategy's "
+                            "objective timed on this face, times its iterations")
+        for name in ("n", "population", "iterations", "fit_degree", "fit_poles_u", "fit_poles_v", "grid",
+                     "edge_offset", "min_spacing", "time_limit", "max_evaluations"):
+            self.widget(name).valueChanged.connect(self.estimate_timer.start)
+        self.form.strategy.currentIndexChanged.connect(self.estimate_timer.start)
+        self.form.auto_poles.toggled.connect(self.estimate_timer.start)
+        self.estimate_timer.start()
 
     def memory_arguments(self):
         """The arguments of :func:`cmmsampling.memory_needed` for the panel's values."""
@@ -376,33 +450,19 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
             self.memoryInfo.setStyleSheet(ERROR_STYLE)
         self.update_enabled()
 
-    def update_time(self):
-        """Show the run's estimated duration (cmmsampling.time_needed on the chosen face);
-        nothing while a run is on or for values the run would refuse (Sample says why)."""
+    def estimate_call(self):
+        """cmmsampling.time_needed on a copy of the chosen face with the run's arguments."""
         face = self.source_face()
-        if self.run is not None or face is None:
-            return
-        arguments = self.sample_arguments()
-        try:
-            seconds = sampling.time_needed(face, **{k: v for k, v in arguments.items() if k != "seed"})
-        except (ValueError, TypeError):
-            self.timeInfo.setText("")
-            return
-        if seconds is None:
-            self.timeInfo.setText("Time: until the descent converges (set a time limit to bound it)")
-        else:
-            self.timeInfo.setText(f"Time: {'' if seconds < 1 else 'about '}{duration_text(seconds)}")
+        if face is None:
+            return None
+        arguments = {k: v for k, v in self.sample_arguments().items() if k != "seed"}
+        return sampling.time_needed, {"face": face.copy(), **arguments}
 
-    def face_edge_offset(self):
-        """The chosen face's probe edge offset (mm, cmmsampling.probe_edge_offset), measured once
-        per face; 0 when the face is gone or cannot be measured (the run then says why)."""
-        if self.automatic_offset is None:
-            face = self.source_face()
-            try:
-                self.automatic_offset = sampling.probe_edge_offset(face) if face is not None else 0.0
-            except (ValueError, RuntimeError, Part.OCCError):
-                self.automatic_offset = 0.0
-        return self.automatic_offset
+    def estimate_text(self, seconds):
+        """'Time: about 12 s', 'Time: under a second', or that the descent has no known end."""
+        if seconds is None:
+            return "Time: until the descent converges (set a time limit to bound it)"
+        return f"Time: {'' if seconds < 1 else 'about '}{duration_text(seconds)}"
 
     def show_edge_offset(self, *_):
         """Say under the edge offset what "auto" is on the chosen face."""
@@ -473,7 +533,7 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
             self.source = selected_face(FreeCADGui.Selection.getSelectionEx())
             self.source_text = source_text(self.source)
             self.automatic_offset = None
-            self.time_timer.start()
+            self.estimate_timer.start()
         except SelectionError as exc:
             self.form.faceLabel.setText(str(exc))
             self.form.faceLabel.setStyleSheet(ERROR_STYLE)
@@ -538,7 +598,7 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
             return
         settings.save(self.values())
         report_run(self.source_text, run.result)
-        self.time_timer.stop()
+        self.stop_estimates()
         FreeCADGui.Control.closeDialog()
         fit_view_to(group)
 
@@ -572,9 +632,8 @@ def snap_to_auto(widget, value):
 
 def report_run(source, result):
     """One line in the Report view for a finished run, and its notes below it."""
-    label = sampling.STRATEGIES[result.strategy].label if result.strategy in sampling.STRATEGIES else result.strategy
     FreeCAD.Console.PrintMessage(
-        f"cmmsampling: {source}, {label}, N = {result.n}: maximum deviation "
+        f"cmmsampling: {source}, {sampling.strategy_label(result.strategy)}, N = {result.n}: maximum deviation "
         f"{result.deviation.maximum:.4g} mm, mean {result.deviation.mean:.4g} mm, "
         f"{result.timings.get('total_s', 0.0):.1f} s\n")
     for note in result.notes:

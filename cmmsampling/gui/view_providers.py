@@ -7,10 +7,10 @@ import numpy as np
 from pivy import coin
 from scipy.interpolate import RegularGridInterpolator
 from scipy.ndimage import distance_transform_edt
-from scipy.spatial import cKDTree
 from PySide import QtCore
 
 from .. import document
+from ..strategies import spaced
 from . import colormap, icon
 
 LABEL_COLOUR = (0.0, 0.0, 0.0)
@@ -103,7 +103,7 @@ class ViewProviderProbePoints(Stateless):
         if vobj.ShowApproach:
             self.annotation.addChild(approach_lines(points, tips))
         if vobj.ShowLabels:
-            shown = spread_out(tips, label_spacing(vobj))
+            shown = spaced(tips, label_spacing(vobj))
             self.shown_labels = shown
             labels = [obj.Labels[i] for i in shown]
             self.annotation.addChild(point_labels(labels, tips[shown], vobj.LabelSize))
@@ -189,12 +189,15 @@ def in_front():
     return offset
 
 
+def probe_points_of(surface):
+    """The probe-points object that uses this substitute, or None."""
+    return next((points for points in surface.InList if document.is_probe_points(points)), None)
+
+
 def source_of(surface):
     """The source face (Part.Face) of the probe points that use this substitute, or None."""
-    for points in surface.InList:
-        if document.is_probe_points(points):
-            return document.source_face(points)[0]
-    return None
+    points = probe_points_of(surface)
+    return None if points is None else document.source_face(points)[0]
 
 
 def face_mesh(face, u, v, field, maximum):
@@ -217,10 +220,10 @@ def face_mesh(face, u, v, field, maximum):
 
 def legend_title(surface):
     """The legend's title: 'Deviation, <object>.<face>' of the probe points that use this
-    substitute, or the substitute's label when none says its source."""
-    for points in surface.InList:
-        if document.is_probe_points(points) and points.SourceName:
-            return f"Deviation, {points.SourceName.replace(':', '.')}"
+    substitute, or the substitute's label when they do not say their source."""
+    points = probe_points_of(surface)
+    if points is not None and points.SourceName:
+        return f"Deviation, {points.SourceName.replace(':', '.')}"
     return f"Deviation, {surface.Label}"
 
 
@@ -292,21 +295,6 @@ def label_spacing(vobj):
     """The view's LabelSpacing (mm); 0 (all labels) for a view saved before it existed."""
     spacing = getattr(vobj, "LabelSpacing", None)
     return 0.0 if spacing is None else float(spacing.Value)
-
-
-def spread_out(positions, spacing):
-    """Indices (ascending) of positions (N, 3) mm no two of which are closer than ``spacing`` mm,
-    taken in order: each is kept unless an earlier kept one lies within ``spacing``."""
-    if spacing <= 0 or len(positions) < 2:
-        return np.arange(len(positions))
-    pairs = cKDTree(positions).query_pairs(spacing, output_type="ndarray")
-    neighbours = [[] for _ in positions]
-    for a, b in pairs:
-        neighbours[max(a, b)].append(min(a, b))
-    kept = np.zeros(len(positions), bool)
-    for index, earlier in enumerate(neighbours):
-        kept[index] = not kept[earlier].any()
-    return np.flatnonzero(kept)
 
 
 def point_labels(labels, positions, size):

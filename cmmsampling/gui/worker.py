@@ -1,5 +1,6 @@
 """Background jobs for the GUI thread: cmmsampling.sample() in a daemon thread, with progress and
-cancel, and the :class:`BackgroundTask` base that other long jobs (the comparison) share."""
+cancel, any one call (:class:`BackgroundCall`, the time estimates), and the
+:class:`BackgroundTask` base that other long jobs (the comparison) share."""
 import threading
 import traceback
 
@@ -41,6 +42,20 @@ class BackgroundTask:
         except Exception as exc:  # reported to the user by the GUI thread
             self.error = exc
             self.details = traceback.format_exc()
+
+
+class BackgroundCall(BackgroundTask):
+    """Runs ``function(*args, **kwargs)`` once in a daemon thread named ``name`` (an estimate
+    that would hold up the GUI); the GUI thread polls ``running``, then ``value`` or ``error``."""
+
+    def __init__(self, name, function, *args, **kwargs):
+        super().__init__(name)
+        self.call = (function, args, kwargs)
+        self.value = None
+
+    def _work(self):
+        function, args, kwargs = self.call
+        self.value = function(*args, **kwargs)
 
 
 class BackgroundSampling(BackgroundTask):
