@@ -24,9 +24,9 @@ import numpy as np
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 import cmmsampling  # noqa: E402
-from cmmsampling.deviation import curvature_matrices  # noqa: E402
-from cmmsampling.sampling import make_problem  # noqa: E402
-from cmmsampling.threads import blas_threads, threadpool_limits  # noqa: E402
+from cmmsampling.fitting.deviation import curvature_matrices  # noqa: E402
+from cmmsampling.strategies.sampling import make_problem  # noqa: E402
+from cmmsampling.strategies.threads import blas_threads, threadpool_limits  # noqa: E402
 
 
 def timed(function, repeat=1):
@@ -205,7 +205,7 @@ def peak_memory():
     """Peak resident set of this process and of its finished or running children, MiB."""
     own = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     children = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
-    from cmmsampling import parallel
+    from cmmsampling.strategies import parallel
 
     if parallel._worker is not None:
         with open(f"/proc/{parallel._worker.process.pid}/status") as status:

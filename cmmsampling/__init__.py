@@ -12,39 +12,39 @@ Scripting API (FreeCAD Python console, ``freecadcmd`` or ``/usr/bin/python3``)::
 
 Importing the package makes FreeCAD importable from Debian's Python and imports FreeCAD (not
 Part: about 0.06 s); the names below are imported on first use, so that the numeric modules
-(bspline, nurbs, fitting, deviation, pso) load without FreeCAD, e.g. in a worker process.
+(geometry, fitting, strategies) load without FreeCAD, e.g. in a worker process.
 
 The method follows Zahmati & Amirabadi, Modares Mechanical Engineering 16(8), 55-64, 2016.
 """
 import importlib
 
-from .freecad_env import prepare_freecad
+from .geometry.freecad_env import prepare_freecad
 
 prepare_freecad()
 
 _API = {
-    "STRATEGIES": "sampling",
-    "Strategy": "sampling",
-    "Setting": "sampling",
-    "register_strategy": "sampling",
-    "unregister_strategy": "sampling",
-    "sample": "sampling",
-    "evaluate": "sampling",
-    "lower_bound": "sampling",
-    "memory_needed": "sampling",
-    "probe_edge_offset": "sampling",
-    "time_needed": "sampling",
-    "SamplingResult": "result",
-    "SurfaceModel": "surface",
-    "reference_face": "surface",
-    "default_pole_count": "fitting",
-    "export": "exporting",
-    "ExportError": "exporting",
-    "measured_deviation": "exporting",
-    "sanitise_labels": "exporting",
-    "read_points": "pointfiles",
-    "PointSet": "pointset",
-    "short_path": "probe_path",
+    "STRATEGIES": "strategies.sampling",
+    "Strategy": "strategies.sampling",
+    "Setting": "strategies.sampling",
+    "register_strategy": "strategies.sampling",
+    "unregister_strategy": "strategies.sampling",
+    "sample": "strategies.sampling",
+    "evaluate": "strategies.sampling",
+    "lower_bound": "strategies.sampling",
+    "memory_needed": "strategies.sampling",
+    "probe_edge_offset": "strategies.sampling",
+    "time_needed": "strategies.sampling",
+    "SamplingResult": "strategies.result",
+    "SurfaceModel": "geometry.surface",
+    "reference_face": "geometry.surface",
+    "default_pole_count": "fitting.substitute",
+    "export": "formats.exporting",
+    "ExportError": "formats.files",
+    "measured_deviation": "measurement",
+    "sanitise_labels": "formats.dmis",
+    "read_points": "formats.pointfiles",
+    "PointSet": "formats.pointset",
+    "short_path": "planning.probe_path",
     "add_to_document": "document",
     "reevaluate": "document",
     "compare": "study",

@@ -5,8 +5,9 @@ import sys
 import time
 import traceback
 
-from . import STRATEGIES, reference_face, sample
-from .sampling import BEST_STRATEGY, PROBE_EDGE_OFFSET_MM, baseline, probe_edge_offset
+from .geometry.surface import reference_face
+from .strategies.sampling import (BEST_STRATEGY, PROBE_EDGE_OFFSET_MM, STRATEGIES, baseline, probe_edge_offset,
+                                  sample)
 
 DESCRIPTION = """Where should a CMM's contact probe touch a free-form face?
 
@@ -240,8 +241,8 @@ def _freecad_reason(exc):
 
 def describe_faces(shape):
     """One line per face: number, surface type, area (mm^2), size (mm), degrees and poles of its NURBS."""
-    from .domain import face_domain
-    from .surface import SurfaceModel
+    from .geometry.domain import face_domain
+    from .geometry.surface import SurfaceModel
 
     lines = [f"{'face':>5} {'surface':<22} {'area mm^2':>11} {'size mm':>24} {'degree':>7} {'poles':>7} trimmed"]
     for number, face in enumerate(shape.Faces, start=1):
@@ -287,8 +288,8 @@ def run_sample(args):
 def _check_outputs(args):
     """ValueError or OSError before any computation when an output cannot be written: an
     unknown point-file extension, an --fcstd name without .FCStd, a folder that takes no file."""
-    from .exporting import check_writable
-    from .pointfiles import resolve_format
+    from .formats.files import check_writable
+    from .formats.pointfiles import resolve_format
 
     for path in args.out:
         try:
@@ -305,8 +306,8 @@ def _check_outputs(args):
 
 def _write_outputs(result, args):
     """Point files and the optional FreeCAD document."""
-    from .exporting import export
-    from .pointset import PointSet
+    from .formats.exporting import export
+    from .formats.pointset import PointSet
 
     points = PointSet.from_result(result, f"{os.path.basename(args.file)}:Face{args.face}")
     for path in args.out:

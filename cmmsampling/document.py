@@ -18,10 +18,11 @@ from xml.etree import ElementTree
 
 import numpy as np
 
-from .freecad_env import import_part
-from .pointset import PointSet
-from .sampling import evaluate
-from .surface import SurfaceModel
+from .formats.pointset import PointSet
+from .geometry.freecad_env import import_part
+from .geometry.surface import SurfaceModel
+from .object_types import PROBE_POINTS, SUBSTITUTE_SURFACE, is_probe_points, source_face
+from .strategies.sampling import evaluate
 
 Part = import_part()
 import FreeCAD  # noqa: E402  (importable once import_part() has set the path)
@@ -144,20 +145,6 @@ def reevaluate(points, occ_check=True):
         write_result(points, result, settings, points.RunTime)
         recompute(points.Document, [o for o in (points, points.Substitute, points.Report) if o is not None])
     return result
-
-
-def source_face(points):
-    """The probe points' source face as it is now: (Part.Face, None), or (None, why not)."""
-    if points.Source is None:
-        if points.SourceName:
-            return None, f"its source face {points.SourceName} was deleted"
-        return None, "it was made without a source face"
-    obj, names = points.Source
-    name = names[0] if names else ""
-    face = obj.getSubObject(name) if name else None
-    if not isinstance(face, Part.Face):
-        return None, f"{obj.Label} has no {name or 'face'} any more"
-    return face, None
 
 
 def write_result(points, result, settings, run_time_s):
@@ -344,7 +331,7 @@ class ProbePoints(TypedProxy):
     Substitute and Report (the other two result objects); Orphaned, Outdated, Status.
     """
 
-    Type = "CMMSampling::ProbePoints"
+    Type = PROBE_POINTS
 
     def __init__(self, obj):
         obj.Proxy = self
@@ -408,7 +395,7 @@ class ProbePoints(TypedProxy):
         _view_provider_when_missing(obj)
 
     def point_set(self, obj):
-        """The probe points as a :class:`cmmsampling.pointset.PointSet`."""
+        """The probe points as a :class:`cmmsampling.formats.pointset.PointSet`."""
         settings = json.loads(obj.Parameters or "{}")
         metadata = {
             "source": obj.SourceName, **settings,
@@ -434,7 +421,7 @@ class SubstituteSurface(TypedProxy):
     MaxDeviation (mm).
     """
 
-    Type = "CMMSampling::SubstituteSurface"
+    Type = SUBSTITUTE_SURFACE
 
     def __init__(self, obj):
         obj.Proxy = self
@@ -468,7 +455,7 @@ def export(objects, filename):
 
     Raises ValueError unless exactly one probe-points object is found.
     """
-    from .exporting import export as write_points
+    from .formats.exporting import export as write_points
 
     found = probe_points_in(objects)
     if len(found) != 1:
@@ -485,11 +472,6 @@ def probe_points_in(objects):
             if is_probe_points(candidate) and candidate not in found:
                 found.append(candidate)
     return found
-
-
-def is_probe_points(obj):
-    """True for a probe-points object made by this module."""
-    return isinstance(getattr(obj, "Proxy", None), ProbePoints)
 
 
 def _view_provider_when_missing(obj):

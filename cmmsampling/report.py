@@ -17,10 +17,9 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 
-from .sampling import STRATEGIES
-from .sampling import strategy_label as label
-from .strategies import projection_frame
-from .surface import as_face
+from .geometry.surface import SurfaceModel
+from .strategies.sampling import STRATEGIES
+from .strategies.sampling import strategy_label as label
 
 DPI = 110
 PANEL_INCHES = 4.2
@@ -61,43 +60,6 @@ def _ordered_results(study):
     return [(s, study.results[s]) for s in study.strategies if s in study.results]
 
 
-def substitute_points(result):
-    """The substitute surface on the evaluation raster: (g_u, g_v, 3) mm."""
-    return result.space.evaluate(result.poles, result.deviation.grid_uv)
-
-
-def footprint(model, uv):
-    """The face seen along the machine axis closest to its mean normal.
-
-    uv: (g_u, g_v, 2) grid of parameters. Returns (xy (g_u, g_v, 2) mm, (name_1, name_2), frame
-    (3, 3)) where the view is one-to-one on the grid (every cell keeps its orientation), else None
-    (a face that folds over itself in every machine view, e.g. a whole cylinder).
-    """
-    frame = projection_frame(model)
-    xy = model.points(uv.reshape(-1, 2)).reshape(uv.shape[:2] + (3,)) @ frame[:2].T
-    along_u = xy[1:, :-1] - xy[:-1, :-1]
-    along_v = xy[:-1, 1:] - xy[:-1, :-1]
-    turn = along_u[..., 0] * along_v[..., 1] - along_u[..., 1] * along_v[..., 0]
-    if not (np.all(turn > 0) or np.all(turn < 0)):
-        return None
-    names = tuple("xyz"[int(np.argmax(np.abs(axis)))] for axis in frame[:2])
-    return xy, names, frame
-
-
-def _map_coordinates(result):
-    """Plot coordinates of the deviation grid and of the probe points, with axis labels.
-
-    Returns (grid (g_u, g_v, 2), points (N, 2), (x label, y label)): the machine footprint in mm
-    where it is one-to-one, else the face's (u, v) parameters.
-    """
-    uv = result.deviation.grid_uv
-    view = footprint(result.model, uv)
-    if view is None:
-        return uv, result.uv, ("u (face parameter)", "v (face parameter)")
-    xy, names, frame = view
-    return xy, result.points @ frame[:2].T, tuple(f"{name} (mm)" for name in names)
-
-
 def figure_substitutes(study):
     """Paper Fig. 4, 5, 8: the substitute surface of every strategy with its probe points (3D, mm)."""
     entries = _ordered_results(study)
@@ -107,7 +69,7 @@ def figure_substitutes(study):
     fig = Figure(figsize=(PANEL_3D_INCHES * columns, PANEL_3D_INCHES * rows), layout="constrained")
     for index, (strategy, result) in enumerate(entries):
         ax = fig.add_subplot(rows, columns, index + 1, projection="3d", computed_zorder=False)
-        surface = substitute_points(result)
+        surface = result.substitute_grid()
         ax.plot_surface(surface[..., 0], surface[..., 1], surface[..., 2], color="lightsteelblue",
                         alpha=0.75, rcount=30, ccount=30, linewidth=0, shade=True, zorder=1)
         ax.scatter(*result.points.T, color="crimson", s=10, depthshade=False, zorder=2)
@@ -130,7 +92,7 @@ def figure_deviation_maps(study):
     fig = Figure(figsize=(PANEL_INCHES * columns, 0.9 * PANEL_INCHES * rows), layout="constrained")
     for index, (strategy, result) in enumerate(entries):
         ax = fig.add_subplot(rows, columns, index + 1)
-        grid, points, names = _map_coordinates(result)
+        grid, points, names = result.map_coordinates()
         field = result.deviation.field
         filled = ax.contourf(grid[..., 0], grid[..., 1], field, levels=20, cmap="viridis")
         fig.colorbar(filled, ax=ax, label="deviation (mm)")
@@ -383,12 +345,11 @@ def report_html(study, figures):
 def _settings_html(study):
     """A list of what was studied: the face, N, strategies, seeds, fit, grid, the strategies'
     options, time."""
-    face = as_face(study.face)
-    box = face.BoundBox
+    model = SurfaceModel.from_face(study.face)
     s = study.settings
     items = [
-        f"Face: area {face.Area:.1f} mm<sup>2</sup>, bounding box {box.XLength:.1f} x {box.YLength:.1f} x "
-        f"{box.ZLength:.1f} mm",
+        f"Face: area {model.area:.1f} mm<sup>2</sup>, bounding box "
+        f"{' x '.join(f'{length:.1f}' for length in model.extent)} mm",
         f"Numbers of probe points N: {', '.join(map(str, study.ns))}; figures at N = {study.figure_n}",
         f"Strategies: {', '.join(label(x) for x in study.strategies)}",
         f"Seeds {', '.join(map(str, s['seeds']))} for {', '.join(label(x) for x in s['seeded']) or 'none'}; "

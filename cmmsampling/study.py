@@ -2,7 +2,7 @@
 
 :func:`compare` runs :func:`cmmsampling.sample` for each N and strategy (seed-dependent strategies
 once per seed), computes once per N the local bound about the best substitute found at that N (the
-least maximum deviation that reshaping it along its normals could reach, cmmsampling.bound) on the
+least maximum deviation that reshaping it along its normals could reach, cmmsampling.fitting.bound) on the
 optimisation grid and on the 3x denser check grid, and collects the deviations (mm), the run times
 (s), the ratios to uniform parametric sampling and the multiples of the bound in a :class:`Study`.
 Pure computation; :mod:`cmmsampling.report` draws it.
@@ -14,12 +14,13 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .deviation import DEFAULT_GRID
-from .fitting import DEFAULT_DEGREE, DEFAULT_SMOOTHING
-from .sampling import MIN_POINTS, STRATEGIES, make_problem, sample, strategy_options, time_needed
-from .sampling import baseline as baseline_strategy
-from .threads import blas_threads
-from .validation import check_choice, check_int
+from .fitting.deviation import DEFAULT_GRID
+from .fitting.substitute import DEFAULT_DEGREE, DEFAULT_SMOOTHING
+from .strategies import handover
+from .strategies.sampling import MIN_POINTS, STRATEGIES, make_problem, sample, strategy_options, time_needed
+from .strategies.sampling import baseline as baseline_strategy
+from .strategies.threads import blas_threads
+from .strategies.validation import check_choice, check_int
 
 DEFAULT_NS = (25, 36, 49, 64, 81, 100, 121, 144)
 DEFAULT_SEEDS = (0, 1, 2, 3, 4)
@@ -231,6 +232,12 @@ def compare(face, ns=DEFAULT_NS, strategies=None, *, seeds=DEFAULT_SEEDS, seeded
     workers: processes for the optimisers (as in sample()).
     Returns a Study.
     """
+    handed = handover.take(compare, face, {
+        "ns": ns, "strategies": strategies, "seeds": seeds, "seeded": seeded, "options": options,
+        "fit_degree": fit_degree, "fit_poles": fit_poles, "smoothing": smoothing, "grid": grid,
+        "edge_offset": edge_offset, "min_spacing": min_spacing, "figure_n": figure_n, "workers": workers})
+    if handed is not None:
+        return handed
     ns = _check_ns(ns)
     strategies = _check_strategies(strategies)
     seeds = _check_seeds(seeds)
@@ -252,6 +259,15 @@ def compare(face, ns=DEFAULT_NS, strategies=None, *, seeds=DEFAULT_SEEDS, seeded
     study.rows = derive(study.rows, study.bounds)
     study.elapsed_s = time.perf_counter() - began
     return study
+
+
+def hand_over(face, arguments, study):
+    """Let the next ``compare(face, **arguments)`` in this process return ``study`` at once (the
+    Compare panel's study, echoed in the console: see :mod:`cmmsampling.strategies.handover`).
+
+    arguments: the keyword arguments of compare() other than face and progress.
+    """
+    handover.give(compare, face, arguments, study)
 
 
 class StudyTime(NamedTuple):
@@ -348,7 +364,7 @@ def local_bound(result):
     """The local bounds about a result's substitute on the grid and on the check grid: Bound (mm).
 
     The least maximum deviation that moving its poles along its normals could reach
-    (:meth:`cmmsampling.result.SamplingResult.bounds`)."""
+    (:meth:`cmmsampling.strategies.result.SamplingResult.bounds`)."""
     with blas_threads(1):
         bounds = result.bounds()
     return Bound(bounds["grid"].lower, bounds["check"].lower)

@@ -4,11 +4,11 @@ import os
 import numpy as np
 import pytest
 
-from cmmsampling.freecad_env import import_part
+from cmmsampling.geometry.freecad_env import import_part
 
 Part = import_part()
 import FreeCAD  # noqa: E402,F401  (importable once import_part() has set the path)
-from cmmsampling.surface import make_bspline_surface  # noqa: E402
+from cmmsampling.geometry.surface import make_bspline_surface  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 TESTDATA = os.path.join(os.path.dirname(ROOT), "shared", "testdata")

@@ -18,8 +18,8 @@ import numpy as np
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 import cmmsampling  # noqa: E402
-from cmmsampling.surface import ON_FACE_MM  # noqa: E402
-from cmmsampling.freecad_env import import_part  # noqa: E402
+from cmmsampling.geometry.surface import ON_FACE_MM  # noqa: E402
+from cmmsampling.geometry.freecad_env import import_part  # noqa: E402
 
 Part = import_part()
 

@@ -123,7 +123,7 @@ def test_bad_faces_get_a_clear_message():
         cmmsampling.sample(Part.makeLine((0, 0, 0), (1, 0, 0)), 25, "uniform_parametric")
     with pytest.raises(TypeError, match="expected a Part.Face, got NoneType"):
         cmmsampling.sample(None, 25, "uniform_parametric")
-    from cmmsampling.surface import make_bspline_surface
+    from cmmsampling.geometry.surface import make_bspline_surface
 
     x, y = np.meshgrid(np.linspace(0, 10, 4), np.linspace(0, 10, 4), indexing="ij")
     flat_line = np.stack([x + y, np.zeros_like(x), np.zeros_like(x)], -1)

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 from scipy.interpolate import BSpline
 
-from cmmsampling.bspline import KnotBasis, clamped_uniform_knots
+from cmmsampling.geometry.bspline import KnotBasis, clamped_uniform_knots
 
 KNOT_VECTORS = {
     "cubic uniform": (clamped_uniform_knots(3, 6), 3),

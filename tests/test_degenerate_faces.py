@@ -5,7 +5,7 @@ import pytest
 from geometry import Part, cartesian_refuses
 
 import cmmsampling
-from cmmsampling.surface import SurfaceModel, make_bspline_surface, reference_poles
+from cmmsampling.geometry.surface import SurfaceModel, make_bspline_surface, reference_poles
 
 QUICK = {"pso": {"iterations": 10, "population": 6}, "optimal": {"max_evaluations": 40}}
 

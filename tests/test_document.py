@@ -7,8 +7,9 @@ from geometry import FreeCAD, Part, closed, reference_document
 
 import cmmsampling
 from cmmsampling import document
-from cmmsampling.pointset import PointSet
-from cmmsampling.surface import make_bspline_surface, reference_poles
+from cmmsampling.object_types import is_probe_points
+from cmmsampling.formats.pointset import PointSet
+from cmmsampling.geometry.surface import make_bspline_surface, reference_poles
 
 RUN = {"n": 25, "strategy": "pso", "population": 8, "iterations": 20, "seed": 1}
 
@@ -61,7 +62,7 @@ def test_add_to_document_makes_a_group_of_three_in_one_transaction(doc, result):
 
 def test_probe_points_hold_the_result(group, result, doc):
     points = group.Group[0]
-    assert document.is_probe_points(points)
+    assert is_probe_points(points)
     assert list(points.Labels) == [f"P{i}" for i in range(1, 26)]
     assert np.allclose(vectors(points.Points), result.points, atol=1e-12)
     assert np.allclose(vectors(points.Normals), result.normals, atol=1e-12)

@@ -13,12 +13,14 @@ import pytest
 from geometry import FreeCAD, Part
 
 import cmmsampling
-from cmmsampling.exporting import (
-    TEMPORARY, ExportError, export, measured_deviation, placement_from_metadata, reordered, sanitise_labels,
-)
-from cmmsampling.pointfiles import read_points
-from cmmsampling.pointset import PointSet
-from cmmsampling.probe_path import path_length, short_path
+from cmmsampling.formats.dmis import sanitise_labels
+from cmmsampling.formats.exporting import export, reordered
+from cmmsampling.formats.files import TEMPORARY, ExportError
+from cmmsampling.formats.frames import placement_from_metadata
+from cmmsampling.measurement import measured_deviation
+from cmmsampling.formats.pointfiles import read_points
+from cmmsampling.formats.pointset import PointSet
+from cmmsampling.planning.probe_path import path_length, short_path
 
 EXTENSIONS = {"dmis": "dmi", "xyz": "xyz", "csv": "csv"}
 PLACEMENT = FreeCAD.Placement(FreeCAD.Vector(12.5, -40.0, 7.25),
@@ -463,7 +465,7 @@ def test_temporary_files_of_a_killed_export_are_removed_by_the_next_export(tmp_p
     target = tmp_path / "points.csv"
     killed = subprocess.run(
         [sys.executable, "-c", "import os, sys; sys.path[:0] = sys.argv[2:]; "
-         "from cmmsampling.exporting import _temporary_file; _temporary_file(sys.argv[1]); os._exit(9)",
+         "from cmmsampling.formats.files import _temporary_file; _temporary_file(sys.argv[1]); os._exit(9)",
          str(target), *sys.path], capture_output=True, text=True)
     assert killed.returncode == 9, killed.stderr
     [left] = [name for name in os.listdir(tmp_path) if name.endswith(".tmp")]

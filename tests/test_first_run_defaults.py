@@ -6,8 +6,8 @@ from geometry import Part, strip_face
 
 import cmmsampling
 from cmmsampling.cli import main as cli_main
-from cmmsampling import sampling
-from cmmsampling.sampling import PROBE_EDGE_OFFSET_MM
+from cmmsampling.strategies import sampling
+from cmmsampling.strategies.sampling import PROBE_EDGE_OFFSET_MM
 
 
 def edge_distances(face, points):

@@ -3,10 +3,11 @@ import numpy as np
 import pytest
 from geometry import Part
 
-from cmmsampling.deviation import EvaluationGrid, deviation_objective, substitute_distances
-from cmmsampling.fitting import FittedSurface
-from cmmsampling.fitting import DEFAULT_SMOOTHING, SubstituteSpace, default_pole_count
-from cmmsampling.surface import SurfaceModel, make_bspline_surface, substitute_surface
+from cmmsampling.fitting.deviation import EvaluationGrid, deviation_objective, substitute_distances
+from cmmsampling.fitting.substitute import FittedSurface
+from cmmsampling.fitting.substitute import DEFAULT_SMOOTHING, SubstituteSpace, default_pole_count
+from cmmsampling.fitting.occ_surface import substitute_surface
+from cmmsampling.geometry.surface import SurfaceModel, make_bspline_surface
 
 
 def _bicubic_face(poles=(6, 6), seed=1):

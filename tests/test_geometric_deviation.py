@@ -12,8 +12,8 @@ import pytest
 from geometry import TESTDATA, Part, holed_face, rational_saddle, strip_face
 
 import cmmsampling
-from cmmsampling.optimal import default_min_spacing
-from cmmsampling.sampling import make_problem
+from cmmsampling.strategies.optimal import default_min_spacing
+from cmmsampling.strategies.sampling import make_problem
 
 
 FACES = {

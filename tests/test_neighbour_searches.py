@@ -2,10 +2,10 @@
 import numpy as np
 import pytest
 
-from cmmsampling import deviation
-from cmmsampling.deviation import closest_squared
-from cmmsampling.optimal import _spacing_penalty
-from cmmsampling.strategies import spaced
+from cmmsampling.fitting import deviation
+from cmmsampling.fitting.deviation import closest_squared
+from cmmsampling.strategies.optimal import _spacing_penalty
+from cmmsampling.strategies.blind import spaced
 
 
 def all_pairs_distances(points):

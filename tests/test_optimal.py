@@ -3,11 +3,11 @@ import numpy as np
 import pytest
 
 import cmmsampling
-from cmmsampling import strategies
-from cmmsampling.bound import minimax_bound
-from cmmsampling.optimal import surrogate
-from cmmsampling.sampling import make_problem
-from cmmsampling.surface import make_bspline_surface
+from cmmsampling.strategies import blind as strategies
+from cmmsampling.fitting.bound import minimax_bound
+from cmmsampling.strategies.optimal import surrogate
+from cmmsampling.strategies.sampling import make_problem
+from cmmsampling.geometry.surface import make_bspline_surface
 
 
 @pytest.fixture(scope="module")
@@ -21,7 +21,7 @@ def test_bound_agrees_with_a_linear_programme(small):
     lower <= the LP optimum <= upper, and the bound within its tolerance of it."""
     from scipy.optimize import linprog
 
-    from cmmsampling.bound import _GridResiduals
+    from cmmsampling.fitting.bound import _GridResiduals
 
     poles = small.objective.fit(strategies.uniform_parametric(small).uv[None])[0]
     bound = minimax_bound(small.objective, poles)

@@ -5,14 +5,14 @@ import numpy as np
 import pytest
 
 import cmmsampling
-from cmmsampling import parallel
-from cmmsampling.parallel import TwoProcessObjective
-from cmmsampling.threads import blas_threads
+from cmmsampling.strategies import parallel
+from cmmsampling.strategies.parallel import TwoProcessObjective
+from cmmsampling.strategies.threads import blas_threads
 
 
 @pytest.fixture(scope="module")
 def problem():
-    from cmmsampling.sampling import make_problem
+    from cmmsampling.strategies.sampling import make_problem
 
     return make_problem(cmmsampling.reference_face(), 25, grid=30, workers=2)
 
@@ -65,7 +65,7 @@ def test_waiting_polls_then_gives_way_to_a_blocking_receive():
     """wait_for returns once data is there, and after its polling time when none comes."""
     from multiprocessing import Pipe
 
-    from cmmsampling.worker import wait_for
+    from cmmsampling.strategies.worker import wait_for
 
     here, there = Pipe()
     wait_for(here, seconds=0.01)

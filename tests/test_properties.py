@@ -5,7 +5,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import cmmsampling
-from cmmsampling.surface import make_bspline_surface
+from cmmsampling.geometry.surface import make_bspline_surface
 
 QUICK = {"pso": {"iterations": 4, "population": 4}, "optimal": {"max_evaluations": 15}}
 # OCC's distance from a point to a face (Face.distToShape) misses the foot point of a point whose

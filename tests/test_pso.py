@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from cmmsampling.pso import SwarmSettings, inertia, particle_swarm
+from cmmsampling.strategies.pso import SwarmSettings, inertia, particle_swarm
 
 LOWER, UPPER = np.zeros(2), np.ones(2)
 TARGET = np.array([[0.3, 0.7], [0.8, 0.1], [0.5, 0.5]])

@@ -8,7 +8,7 @@ from geometry import TESTDATA, FreeCAD, Part, rational_patch_face
 
 import cmmsampling
 from cmmsampling.cli import main as cli_main
-from cmmsampling.sampling import make_problem
+from cmmsampling.strategies.sampling import make_problem
 
 EDGE_OFFSET = 2.0
 SPACING = 3.0

@@ -10,7 +10,7 @@ from geometry import FreeCAD, Part, closed, reference_document
 
 import cmmsampling
 from cmmsampling import document
-from cmmsampling.surface import make_bspline_surface, reference_poles
+from cmmsampling.geometry.surface import make_bspline_surface, reference_poles
 
 RUN = {"n": 16, "strategy": "pso", "population": 6, "iterations": 10, "seed": 4}
 

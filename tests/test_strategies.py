@@ -4,7 +4,7 @@ import pytest
 from geometry import Part, cartesian_refuses, rational_patch_face
 
 import cmmsampling
-from cmmsampling.strategies import allocate, grid_shape, thin_evenly
+from cmmsampling.strategies.blind import allocate, grid_shape, thin_evenly
 
 BLIND = [name for name, s in cmmsampling.STRATEGIES.items() if not s.optimiser]
 FACES = {
@@ -59,7 +59,7 @@ def test_random_strategies_follow_the_seed(reference):
 
 def test_curvature_strategy_puts_more_points_where_the_face_bends():
     """On a face flat on one half and wavy on the other, most points go to the wavy half."""
-    from cmmsampling.surface import make_bspline_surface
+    from cmmsampling.geometry.surface import make_bspline_surface
 
     x, y = np.meshgrid(np.linspace(0, 100, 12), np.linspace(0, 100, 12), indexing="ij")
     z = np.where(x > 50, 6 * np.sin(x / 4) * np.cos(y / 5), 0.0)

@@ -7,9 +7,10 @@ import pytest
 from geometry import Part
 
 import cmmsampling
-from cmmsampling.report import FIGURES, footprint, write_report
-from cmmsampling.study import MEASURES, compare, study_time
-from cmmsampling.surface import SurfaceModel
+from cmmsampling.report import FIGURES, write_report
+from cmmsampling.strategies.result import footprint
+from cmmsampling.study import MEASURES, compare, hand_over, study_time
+from cmmsampling.geometry.surface import SurfaceModel
 
 SAMPLE_OPTIONS = {"pso": {"iterations": 20, "population": 10}, "optimal": {"max_evaluations": 150}}
 SMALL = {"grid": 20, "options": SAMPLE_OPTIONS, "workers": 1}
@@ -220,3 +221,16 @@ def test_the_study_time_counts_every_run_and_names_the_open_ended(reference):
                               options={"pso": {"iterations": 5000}}, grid=20)
     assert longer > seconds
     assert study_time(reference, ns=(16,), strategies=("random", "halton"), seeds=(0, 1, 2), grid=20).runs == 4
+
+
+def test_a_handed_over_study_is_returned_once_for_exactly_its_call(reference):
+    arguments = {"ns": [16], "strategies": ["halton"], "grid": 20}
+    made = compare(reference, **arguments)
+    hand_over(reference, arguments, made)
+    assert compare(reference, grid=20, ns=[16], strategies=["halton"]) is made
+    again = compare(reference, **arguments)
+    assert again is not made and again.rows[0].max_mm == made.rows[0].max_mm
+    hand_over(reference, arguments, made)
+    assert compare(reference, ns=[16], strategies=["hammersley"], grid=20) is not made
+    hand_over(reference, arguments, made)
+    assert compare(cmmsampling.reference_face(), **arguments) is not made

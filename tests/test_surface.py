@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 from geometry import FreeCAD, Part, holed_face, sample_faces, uv_samples
 
-from cmmsampling.surface import ON_FACE_MM, SurfaceModel, reference_poles
+from cmmsampling.geometry.surface import ON_FACE_MM, SurfaceModel, reference_poles
 
 FACES = sample_faces()
 

@@ -2,7 +2,7 @@
 
 tests/test_strategy_records.py and the GUI tests register it and see it offered everywhere."""
 import cmmsampling
-from cmmsampling.strategies import StrategyOutcome, halton
+from cmmsampling.strategies.blind import StrategyOutcome, halton
 
 
 def mirrored_halton(problem, progress, flips):

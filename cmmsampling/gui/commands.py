@@ -1,17 +1,19 @@
 """The workbench's commands. Each is active only when it can act; otherwise its status tip and
 tooltip say why. What they change in the document goes through the console API, echoed in the
 Python console (``Gui.doCommand``)."""
-import __main__
 import os
 import re
 
 import FreeCAD
 import FreeCADGui
+from FreeCAD import Qt
 from PySide import QtGui
 
 from .. import document
+from ..formats.exporting import export
+from ..object_types import source_face
 from . import icon
-from .export_options import ask_export_options, export_keywords, show_export_report
+from .export_options import ask_export_options, export_arguments, export_keywords, show_export_report
 from .selection import SelectionError, selected_face
 
 
@@ -88,11 +90,13 @@ class SampleFace(FaceCommand):
     """*Sample face...*: open the task panel for the one selected face."""
 
     NAME = "CMMSampling_SampleFace"
-    TITLE = "Sample face"
-    MENU = "Sample face..."
+    TITLE = Qt.QT_TRANSLATE_NOOP("CMMSampling_SampleFace", "Sample face")
+    MENU = Qt.QT_TRANSLATE_NOOP("CMMSampling_SampleFace", "Sample face...")
     ICON = "SampleFace.svg"
-    TIP = ("Place CMM probe points on the selected face with a sampling strategy, fit the "
-           "substitute surface and report its deviation (mm)")
+    TIP = Qt.QT_TRANSLATE_NOOP(
+        "CMMSampling_SampleFace",
+        "Place CMM probe points on the selected face with a sampling strategy, fit the "
+        "substitute surface and report its deviation (mm)")
 
     def panel(self, source):
         from .task_panel import SampleFaceTaskPanel
@@ -104,11 +108,13 @@ class Reevaluate(GuardedCommand):
     """*Re-evaluate*: measure the selected probe points again on their (changed) source face."""
 
     NAME = "CMMSampling_Reevaluate"
-    TITLE = "Re-evaluate"
-    MENU = "Re-evaluate"
+    TITLE = Qt.QT_TRANSLATE_NOOP("CMMSampling_Reevaluate", "Re-evaluate")
+    MENU = Qt.QT_TRANSLATE_NOOP("CMMSampling_Reevaluate", "Re-evaluate")
     ICON = "Reevaluate.svg"
-    TIP = ("Project the selected probe points (same u, v) onto their source face as it is now, "
-           "refit the substitute surface and update the deviation, without a new optimisation")
+    TIP = Qt.QT_TRANSLATE_NOOP(
+        "CMMSampling_Reevaluate",
+        "Project the selected probe points (same u, v) onto their source face as it is now, "
+        "refit the substitute surface and update the deviation, without a new optimisation")
 
     def reason(self):
         """Why the command cannot act now, or None."""
@@ -117,7 +123,7 @@ class Reevaluate(GuardedCommand):
             return "Select probe points or their Sampling group to re-evaluate them."
         problems = []
         for obj in points:
-            face, why = document.source_face(obj)
+            face, why = source_face(obj)
             if face is None:
                 problems.append(f"{obj.Label} cannot be re-evaluated: {why}.")
         return " ".join(problems) if len(problems) == len(points) else None
@@ -125,7 +131,7 @@ class Reevaluate(GuardedCommand):
     def act(self):
         FreeCADGui.doCommand("import cmmsampling.document")
         for points in selected_probe_points():
-            if document.source_face(points)[0] is None:
+            if source_face(points)[0] is None:
                 continue
             try:
                 FreeCADGui.doCommand(
@@ -139,11 +145,13 @@ class ExportProbePoints(GuardedCommand):
     """*Export probe points...*: write the selected probe points for the CMM (DMIS, XYZ or CSV)."""
 
     NAME = "CMMSampling_Export"
-    TITLE = "Export probe points"
-    MENU = "Export probe points..."
+    TITLE = Qt.QT_TRANSLATE_NOOP("CMMSampling_Export", "Export probe points")
+    MENU = Qt.QT_TRANSLATE_NOOP("CMMSampling_Export", "Export probe points...")
     ICON = "Export.svg"
-    TIP = ("Write the selected probe points with their approach vectors for the CMM: "
-           "DMIS input program, PC-DMIS XYZIJK text or CSV")
+    TIP = Qt.QT_TRANSLATE_NOOP(
+        "CMMSampling_Export",
+        "Write the selected probe points with their approach vectors for the CMM: "
+        "DMIS input program, PC-DMIS XYZIJK text or CSV")
 
     def reason(self):
         """Why the command cannot act now, or None."""
@@ -162,20 +170,21 @@ class ExportProbePoints(GuardedCommand):
         options = ask_export_options(points)
         if options is None:
             return
-        FreeCADGui.doCommand("import cmmsampling")
         try:
-            FreeCADGui.doCommand(
-                f"report = cmmsampling.export(App.getDocument({points.Document.Name!r})"
-                f".getObject({points.Name!r}), {path!r}{export_keywords(options)})")
+            report = export(points, path, **export_arguments(options))
         except Exception as exc:
             warn("Export probe points", str(exc))
             return
-        show_export_report(__main__.report)
+        FreeCADGui.doCommand("import cmmsampling")
+        FreeCADGui.doCommand(
+            f"# report = cmmsampling.export(App.getDocument({points.Document.Name!r})"
+            f".getObject({points.Name!r}), {path!r}{export_keywords(options)})  # written by the dialog")
+        show_export_report(report)
 
 
 def export_filters():
     """File dialog filters, one per export format: [(filter text, extensions)]."""
-    from ..pointfiles import EXTENSIONS, FORMATS
+    from ..formats.pointfiles import EXTENSIONS, FORMATS
 
     filters = []
     for name, description in FORMATS.items():

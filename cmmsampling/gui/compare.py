@@ -8,17 +8,17 @@ Nothing is added to the document: the comparison is a report (HTML and PNG figur
 FreeCAD's web view or the system's web browser. The calls are echoed in the Python console, where
 ``study`` holds the result.
 """
-import __main__
 import os
 
 import FreeCAD
 import FreeCADGui
+from FreeCAD import Qt
 from PySide import QtCore, QtGui
 
-from ..deviation import DEFAULT_GRID
+from ..fitting.deviation import DEFAULT_GRID
 from ..report import write_report
-from ..sampling import STRATEGIES
-from ..study import DEFAULT_NS, DEFAULT_SEEDS, compare, study_time
+from ..strategies.sampling import STRATEGIES
+from ..study import DEFAULT_NS, DEFAULT_SEEDS, compare, hand_over, study_time
 from . import settings
 from .commands import FaceCommand
 from .task_panel import (AUTO, ERROR_STYLE, BackgroundRunPanel, duration_text, edge_offset_argument,
@@ -155,7 +155,8 @@ class BackgroundComparison(BackgroundTask):
 
     def __init__(self, face, arguments, folder):
         super().__init__("cmmsampling-compare")
-        self.face = face
+        self.taken_face = face
+        self.face = face.copy()
         self.arguments = dict(arguments)
         self.folder = folder
         self.done = 0
@@ -368,7 +369,7 @@ class CompareTaskPanel(BackgroundRunPanel):
             self.show_status(f"The report folder cannot be made: {exc}", error=True)
             return
         save_values(values)
-        self.run = BackgroundComparison(face.copy(), arguments, folder)
+        self.run = BackgroundComparison(face, arguments, folder)
         self.form.progress.setRange(0, 0)
         self.form.progress.setTextVisible(True)
         self.show_status(self.run.message)
@@ -404,17 +405,16 @@ class CompareTaskPanel(BackgroundRunPanel):
         if run.study is None:
             self.show_status(error, error=True)
             return
-        echo_study(self.face, run.arguments, run.folder, run.study, None,
-                   alive=self.source_face() is not None)
-        self.show_status(f"The report could not be written ({error}). The study is kept in the "
-                         "Python console as study: write it with cmmsampling.write_report(study, "
-                         "folder).", error=True)
+        kept = echo_study(self.face, run, alive=self.source_face() is not None)
+        where = ("The study is kept in the Python console as study: write it with "
+                 "cmmsampling.write_report(study, folder)." if kept else
+                 "Its face was deleted meanwhile, so the study is not kept.")
+        self.show_status(f"The report could not be written ({error}). {where}", error=True)
 
     def finish(self, run):
         """Echo the study, open its report; close when complete, say what was kept when cancelled."""
         study = run.study
-        echo_study(self.face, run.arguments, run.folder, study, run.report,
-                   alive=self.source_face() is not None)
+        echo_study(self.face, run, alive=self.source_face() is not None)
         if run.report is not None:
             FreeCAD.Console.PrintMessage(f"Strategy comparison, {len(study.rows)} runs in "
                                          f"{study.elapsed_s:.0f} s: {run.report}\n")
@@ -443,35 +443,45 @@ def face_expression(source):
     return f"App.getDocument({obj.Document.Name!r}).getObject({obj.Name!r}).getSubObject({name!r})"
 
 
-def echo_study(face, arguments, folder, study, report, alive=True):
-    """Echo a study that ran in the panel in the Python console and bind it to ``study`` there.
+def echo_study(face, run, alive=True):
+    """Echo a study that ran in the panel in the Python console; returns True when the console
+    holds it as ``study``.
 
-    face: the face's console expression (:func:`face_expression`), bound to ``face`` unless its
-    object was deleted meanwhile (alive False); the compare() and write_report() calls are echoed
-    as comments (they ran in the worker thread).
+    face: the face's console expression (:func:`face_expression`), bound to ``face``; the study
+    (run: the finished BackgroundComparison) is handed over to the echoed compare() call, so the
+    line binds it without running again (replayed as a macro, it runs). A face deleted meanwhile
+    (alive False) cannot be named: both lines are echoed as comments. The write_report() call
+    ran in the worker thread and is echoed as a comment.
     """
     note = "ran in the task panel"
-    if study.cancelled:
-        note += f", cancelled after {len(study.rows)} runs"
-    call = ", ".join(["face"] + [f"{key}={value!r}" for key, value in arguments.items()])
+    if run.study.cancelled:
+        note += f", cancelled after {len(run.study.rows)} runs (a replay runs it whole)"
+    call = ", ".join(["face"] + [f"{key}={value!r}" for key, value in run.arguments.items()])
     FreeCADGui.doCommand("import cmmsampling")
-    FreeCADGui.doCommand(f"face = {face}" if alive else f"# face = {face}  # deleted since")
-    FreeCADGui.doCommand(f"# study = cmmsampling.compare({call})  # {note}")
-    __main__.__dict__["study"] = study
-    if report is not None:
-        FreeCADGui.doCommand(f"# cmmsampling.write_report(study, {folder!r})  # ran in the task panel")
+    if alive:
+        FreeCADGui.doCommand(f"face = {face}")
+        hand_over(run.taken_face, run.arguments, run.study)
+        FreeCADGui.doCommand(f"study = cmmsampling.compare({call})  # {note}")
+    else:
+        FreeCADGui.doCommand(f"# face = {face}  # deleted since")
+        FreeCADGui.doCommand(f"# study = cmmsampling.compare({call})  # {note}")
+    if run.report is not None:
+        FreeCADGui.doCommand(f"# cmmsampling.write_report(study, {run.folder!r})  # ran in the task panel")
+    return alive
 
 
 class CompareStrategies(FaceCommand):
     """*Compare strategies...*: open the comparison panel for the one selected face."""
 
     NAME = "CMMSampling_Compare"
-    TITLE = "Compare strategies"
-    MENU = "Compare strategies..."
+    TITLE = Qt.QT_TRANSLATE_NOOP("CMMSampling_Compare", "Compare strategies")
+    MENU = Qt.QT_TRANSLATE_NOOP("CMMSampling_Compare", "Compare strategies...")
     ICON = "Compare.svg"
-    TIP = ("Run the sampling strategies over a list of point counts N on the selected face and "
-           "write an HTML report: maximum deviation (mm) against N with the local bound, "
-           "the paper's figures and tables")
+    TIP = Qt.QT_TRANSLATE_NOOP(
+        "CMMSampling_Compare",
+        "Run the sampling strategies over a list of point counts N on the selected face and "
+        "write an HTML report: maximum deviation (mm) against N with the local bound, "
+        "the paper's figures and tables")
 
     def panel(self, source):
         return CompareTaskPanel(source)

@@ -7,11 +7,13 @@ path). :func:`ask_export_options` returns them in the form the Export command wr
 echoed ``cmmsampling.export(...)`` call (:func:`export_keywords`); :func:`show_export_report`
 tells the user what was written. The values persist in the workbench's parameter group.
 """
+import re
+
 import FreeCAD
 import FreeCADGui
 from PySide import QtCore, QtGui
 
-from ..exporting import ORDERS
+from ..formats.exporting import ORDERS
 from . import icon, settings
 from .qt_compat import run_modal
 
@@ -24,6 +26,7 @@ DEFAULTS = {"ExportFrame": "", "ExportProbeRadius": 0.0, "ExportOrder": "short_p
 MAX_RADIUS_MM = 100.0
 RADIUS_DECIMALS = 3
 STATUS_MS = 20000
+FRAME_EXPRESSION = re.compile(r"App\.getDocument\('([^']*)'\)\.getObject\('([^']*)'\)")
 
 
 def frame_objects(doc):
@@ -59,6 +62,16 @@ def export_keywords(options):
     if options["order"] != "as_optimised":
         words.append(f"order={options['order']!r}")
     return "".join(f", {word}" for word in words)
+
+
+def export_arguments(options):
+    """The options of :func:`ask_export_options` as keyword arguments of cmmsampling.export (the
+    frame's console expression evaluated to its document object)."""
+    frame = options["frame"]
+    if frame is not None:
+        document, name = FRAME_EXPRESSION.fullmatch(frame).groups()
+        frame = FreeCAD.getDocument(document).getObject(name)
+    return {"frame": frame, "probe_radius": options["probe_radius"], "order": options["order"]}
 
 
 def show_export_report(report):

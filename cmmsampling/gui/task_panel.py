@@ -6,14 +6,17 @@ a QTimer; Cancel stops it and leaves the document untouched. The result is writt
 thread through the console API (``cmmsampling.add_to_document``), echoed in the Python
 console.
 """
+import json
+
 import FreeCAD
 import FreeCADGui
 import Part
 from PySide import QtCore, QtGui
 
-from .. import memory, sampling
-from ..deviation import DEFAULT_GRID
-from ..fitting import DEFAULT_DEGREE, default_pole_count
+from ..fitting.deviation import DEFAULT_GRID
+from ..fitting.substitute import DEFAULT_DEGREE, default_pole_count
+from ..object_types import source_face
+from ..strategies import memory, sampling
 from . import icon, resource, settings
 from .qt_compat import flag_value, forget_when_destroyed
 from .selection import SelectionError, selected_face
@@ -663,7 +666,7 @@ def add_result(source, face, arguments, result):
 
     The echo replays as a macro: ``face = ...``, ``result = cmmsampling.sample(face, ...)`` with
     the run's arguments, then ``add_to_document``. Here the sample() line does not run again: the
-    run made in the worker thread is handed over to it (cmmsampling.sampling.hand_over).
+    run made in the worker thread is handed over to it (cmmsampling.strategies.sampling.hand_over).
     face: the face the run was made on, as the panel took it from the source.
     """
     obj, name = source
@@ -679,3 +682,39 @@ def add_result(source, face, arguments, result):
         f"group = cmmsampling.add_to_document(result, {doc}, source=({source_expr}, {name!r}))")
     return next(o for o in obj.Document.Objects
                 if o.Name not in before and o.TypeId == "App::DocumentObjectGroup")
+
+
+def run_values(parameters):
+    """The panel's values that repeat a finished run, from its probe points' Parameters (a dict
+    from their JSON): strategy, N, seed, the strategy's options, the edge offset and spacing the
+    run used (mm), the fit and the grid (pairs with equal halves as one number)."""
+    values = {}
+    for name, default in panel_defaults().items():
+        value = parameters.get(name)
+        if name in STAND_INS and name in parameters and value is None:
+            values[name] = STAND_INS[name]
+        elif isinstance(value, list) and len(set(value)) == 1:
+            values[name] = value[0]
+        elif value is not None and not isinstance(value, list):
+            values[name] = value
+    poles = parameters.get("fit_poles")
+    if isinstance(poles, list) and len(poles) == 2 and "n" in parameters:
+        values["auto_poles"] = poles == [default_pole_count(parameters["n"])] * 2
+        values["fit_poles_u"], values["fit_poles_v"] = poles
+    return values
+
+
+def reopen(points):
+    """Open Sample face on probe points' source face with the values of their run (what a
+    double click on the points does); returns the panel, or None with the reason in the Report
+    view when their face is gone or another task panel is open."""
+    face, why = source_face(points)
+    if face is None or FreeCADGui.Control.activeDialog():
+        reason = f"{why}; select a face and use Sample face" if face is None else "close the open task panel first"
+        FreeCAD.Console.PrintWarning(f"Cannot open {points.Label} again: {reason}.\n")
+        return None
+    obj, names = points.Source
+    panel = SampleFaceTaskPanel((obj, names[0]))
+    panel.set_values(run_values(json.loads(points.Parameters or "{}")))
+    FreeCADGui.Control.showDialog(panel)
+    return panel

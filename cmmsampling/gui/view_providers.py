@@ -3,14 +3,15 @@
 Attached by :mod:`cmmsampling.document` when ``FreeCAD.GuiUp``; they only draw what the
 document objects hold.
 """
+import FreeCAD
 import numpy as np
 from pivy import coin
 from scipy.interpolate import RegularGridInterpolator
 from scipy.ndimage import distance_transform_edt
-from PySide import QtCore
+from PySide import QtCore, QtGui
 
-from .. import document
-from ..strategies import spaced
+from ..object_types import is_probe_points, is_substitute_surface, source_face
+from ..strategies.blind import spaced
 from . import colormap, icon
 
 LABEL_COLOUR = (0.0, 0.0, 0.0)
@@ -108,6 +109,18 @@ class ViewProviderProbePoints(Stateless):
             labels = [obj.Labels[i] for i in shown]
             self.annotation.addChild(point_labels(labels, tips[shown], vobj.LabelSize))
 
+    def doubleClicked(self, vobj):
+        """Open Sample face again on the points' face with the values of their run."""
+        from .task_panel import reopen
+
+        return reopen(vobj.Object) is not None
+
+    def setupContextMenu(self, vobj, menu):
+        """'Sample again...' in the tree's context menu: what a double click does."""
+        text = FreeCAD.Qt.translate("CMMSampling", "Sample again...")
+        action = menu.addAction(QtGui.QIcon(icon("SampleFace.svg")), text)
+        action.triggered.connect(lambda: self.doubleClicked(vobj))
+
     def getIcon(self):
         return icon("ProbePoints.svg")
 
@@ -191,13 +204,13 @@ def in_front():
 
 def probe_points_of(surface):
     """The probe-points object that uses this substitute, or None."""
-    return next((points for points in surface.InList if document.is_probe_points(points)), None)
+    return next((points for points in surface.InList if is_probe_points(points)), None)
 
 
 def source_of(surface):
     """The source face (Part.Face) of the probe points that use this substitute, or None."""
     points = probe_points_of(surface)
-    return None if points is None else document.source_face(points)[0]
+    return None if points is None else source_face(points)[0]
 
 
 def face_mesh(face, u, v, field, maximum):
@@ -230,7 +243,7 @@ def legend_title(surface):
 def hide_other_legends(obj):
     """Switch off ShowLegend on every other substitute surface in obj's document."""
     for other in obj.Document.Objects:
-        if other is obj or not isinstance(getattr(other, "Proxy", None), document.SubstituteSurface):
+        if other is obj or not is_substitute_surface(other):
             continue
         view = other.ViewObject
         if view is not None and getattr(view, "ShowLegend", False):
@@ -253,9 +266,9 @@ def _attach_if_missing(obj):
     own = (ViewProviderProbePoints, ViewProviderSubstituteSurface)
     if vobj is None or isinstance(getattr(vobj, "Proxy", None), own):
         return
-    if document.is_probe_points(obj):
+    if is_probe_points(obj):
         provider = ViewProviderProbePoints(vobj)
-    elif isinstance(obj.Proxy, document.SubstituteSurface):
+    elif is_substitute_surface(obj):
         provider = ViewProviderSubstituteSurface(vobj)
     else:
         return
@@ -268,7 +281,7 @@ def _attach_if_missing(obj):
 
 def approach_length(obj):
     """Default length of the drawn approach vectors: 5 % of the source face's diagonal (mm)."""
-    face, _ = document.source_face(obj) if document.is_probe_points(obj) else (None, None)
+    face, _ = source_face(obj) if is_probe_points(obj) else (None, None)
     if face is None:
         return DEFAULT_APPROACH_MM
     return APPROACH_FRACTION * face.BoundBox.DiagonalLength

@@ -4,7 +4,7 @@ cancel, any one call (:class:`BackgroundCall`, the time estimates), and the
 import threading
 import traceback
 
-from ..sampling import sample
+from ..strategies.sampling import sample
 
 
 class BackgroundTask:

@@ -18,7 +18,7 @@ import cmmsampling
 from cmmsampling import document
 from cmmsampling.gui import compare as compare_panel
 from cmmsampling.gui import export_options, settings
-from cmmsampling.probe_path import path_length
+from cmmsampling.planning.probe_path import path_length
 
 from toy_strategy import TOY
 
@@ -94,7 +94,8 @@ def hold_study_at(monkeypatch, step):
                 hold()
             return progress(done, total, message)
 
-        return run(face, progress=watched, **arguments)
+        hold.study = run(face, progress=watched, **arguments)
+        return hold.study
 
     monkeypatch.setattr(compare_panel, "compare", held)
     return hold
@@ -254,9 +255,10 @@ def test_tiny_comparison_runs_in_the_background_and_opens_its_report(doc, comman
     for name in ("report.html", "max_vs_n.png", "substitutes.png", "deviation_maps.png"):
         assert os.path.getsize(os.path.join(folder, name)) > 1000, name
     study = __main__.study
+    assert study is hold.study, "the echoed compare() call computed the study again"
     assert not study.cancelled and len(study.rows) == 4 and sorted(study.bounds) == [16, 25]
     console = dock_text("Python console")
-    assert f"# study = {TINY_CALL}  # ran in the task panel" in console
+    assert f"study = {TINY_CALL}  # ran in the task panel" in console
     assert f"# cmmsampling.write_report(study, {folder!r})  # ran in the task panel" in console
     assert f"face = App.getDocument({doc.Name!r}).getObject('Body').getSubObject('Face1')" in console
     assert [o.Name for o in doc.Objects] == names and doc.UndoCount == undo
@@ -283,23 +285,26 @@ def test_cancel_midway_keeps_the_finished_runs_in_a_partial_report(doc, command,
     assert report in dock_text("Report view")
     form.grab().save(os.path.join(artifacts, "compare_cancelled_form.png"))
     study = __main__.study
-    assert study.cancelled and [(r.strategy, r.n) for r in study.rows] == [
+    assert study is hold.study and study.cancelled and [(r.strategy, r.n) for r in study.rows] == [
         ("uniform_parametric", 16), ("pso", 16)]
-    assert f"# study = {TINY_CALL}  # ran in the task panel, cancelled after 2 runs" in \
-        dock_text("Python console")
+    assert f"study = {TINY_CALL}  # ran in the task panel, cancelled after 2 runs (a replay runs it " \
+        "whole)" in dock_text("Python console")
     task_button(CANCEL).click()
     assert wait_until(lambda: not FreeCADGui.Control.activeDialog(), 2)
 
 
 def test_a_face_deleted_during_the_study_is_still_reported(doc, command, opened, tmp_path, monkeypatch):
+    __main__.__dict__.pop("study", None)
     hold, form = start_held_study(doc, monkeypatch, str(tmp_path))
     doc.removeObject("Body")
     doc.recompute()
     hold.released.set()
     assert wait_until(lambda: not FreeCADGui.Control.activeDialog(), 60), form.status.text()
-    assert opened == [os.path.join(str(tmp_path), "report.html")] and len(__main__.study.rows) == 4
+    assert opened == [os.path.join(str(tmp_path), "report.html")] and "study" not in __main__.__dict__
+    console = dock_text("Python console")
     assert f"# face = App.getDocument({doc.Name!r}).getObject('Body').getSubObject('Face1')  # deleted " \
-        "since" in dock_text("Python console")
+        "since" in console
+    assert f"# study = {TINY_CALL}  # ran in the task panel" in console
 
 
 def test_bad_settings_are_refused_with_what_to_change(doc, command, opened, tmp_path):

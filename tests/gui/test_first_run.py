@@ -180,3 +180,37 @@ def test_the_echo_replays_in_a_fresh_document_to_the_same_points(workbench):
     finally:
         FreeCAD.closeDocument(fresh.Name)
     assert task_form() is None
+
+
+def test_a_double_click_on_probe_points_reopens_their_run(workbench, artifacts):
+    doc = part_document("Again", cmmsampling.reference_face())
+    try:
+        group = run_panel(doc, "Face1", "halton", n=36, seed=3, edge_offset=2.0, min_spacing=1.0, grid=40)
+        points = group.Group[0]
+        assert points.ViewObject.Proxy.doubleClicked(points.ViewObject)
+        assert wait_until(lambda: task_form() is not None and task_button(OK) is not None, 5)
+        form = task_form()
+        assert form.faceLabel.text() == "Body.Face1"
+        assert (form.strategy.currentData(), form.n.value(), form.seed.value()) == ("halton", 36, 3)
+        assert (form.edge_offset.value(), form.min_spacing.value(), form.grid.value()) == (2.0, 1.0, 40)
+        assert form.auto_poles.isChecked()
+        FreeCADGui.getMainWindow().grab().save(os.path.join(artifacts, "sample_again.png"))
+        task_button(OK).click()
+        assert wait_until(lambda: not FreeCADGui.Control.activeDialog(), 120), form.status.text()
+        again = groups(doc)[-1].Group[0]
+        assert again is not points
+        np.testing.assert_allclose([tuple(p) for p in again.Points], [tuple(p) for p in points.Points], atol=1e-9)
+        menu = QtGui.QMenu()
+        points.ViewObject.Proxy.setupContextMenu(points.ViewObject, menu)
+        [action] = [a for a in menu.actions() if a.text() == "Sample again..."]
+        action.trigger()
+        assert wait_until(lambda: task_form() is not None, 5) and task_form().n.value() == 36
+        FreeCADGui.Control.closeDialog()
+        assert wait_until(lambda: task_form() is None, 5)
+        doc.removeObject(points.Source[0].Name)
+        doc.recompute()
+        assert not points.ViewObject.Proxy.doubleClicked(points.ViewObject)
+        assert wait_until(lambda: "Cannot open Probe points again: its source face" in dock_text("Report view"), 5)
+        assert task_form() is None
+    finally:
+        FreeCAD.closeDocument(doc.Name)

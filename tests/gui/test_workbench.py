@@ -16,7 +16,7 @@ from PySide import QtCore, QtGui
 import cmmsampling
 from cmmsampling import document
 from cmmsampling.gui import colormap, commands, export_options, qt_compat, settings, task_panel, view_providers
-from cmmsampling.surface import make_bspline_surface, reference_poles
+from cmmsampling.geometry.surface import make_bspline_surface, reference_poles
 
 from .helpers import (
     child, dock_text, drawn, fill, groups, main_window, modal_message, open_panel, process_events, running_workers,

@@ -3,7 +3,7 @@
 For a point set uv: (N, 2) the substitute's poles C solve (B^T B + lam R) C = B^T Q with Q the face's
 points at uv. The surrogate is the log-sum-exp  f = log(sum_g exp(tau d_g)) / tau  of the node
 deviations d_g, which tends to max_g d_g as tau grows. The d_g are the exact deviations of the
-best point set so far, linearised about its substitute (cmmsampling.deviation.Linearisation:
+best point set so far, linearised about its substitute (cmmsampling.fitting.deviation.Linearisation:
 exact there in value and gradient). The gradient of f with respect to every (u_i, v_i) follows
 from one adjoint solve A Z = B_g^T (s E / d) (s: the softmax weights; E: d_g times its direction):
 
@@ -24,8 +24,8 @@ from scipy.optimize import minimize
 from scipy.spatial import cKDTree
 from scipy.special import logsumexp, softmax
 
-from .bspline import kron_rows
-from .deviation import Linearisation
+from ..fitting.deviation import Linearisation
+from ..geometry.bspline import kron_rows
 
 KAPPAS = (10.0, 30.0, 100.0, 300.0, 1000.0, 3000.0, 10000.0)
 STAGE_ITERATIONS = 800
@@ -150,7 +150,7 @@ def descend(objective, start, lower, upper, judge, min_spacing=0.0, time_limit=N
     that keep min_spacing (the start if none is better).
 
     The descent runs in chunks of L-BFGS-B iterations from the best point set so far, on the exact
-    deviations linearised about its substitute (cmmsampling.deviation.Linearisation: exact there
+    deviations linearised about its substitute (cmmsampling.fitting.deviation.Linearisation: exact there
     in value and gradient); the chunk's best iterate is then judged exactly and accepted only if
     it is better. Chunks shrink after a failure and grow after a success (:func:`_stage`).
     """

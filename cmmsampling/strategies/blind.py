@@ -1,7 +1,7 @@
 """Blind and curvature-adaptive sampling strategies.
 
 Every strategy has the signature ``strategy(problem, **options) -> StrategyOutcome`` where
-``problem`` is a :class:`cmmsampling.problem.SamplingProblem` (face model, N, domain, seed) and
+``problem`` is a :class:`cmmsampling.strategies.problem.SamplingProblem` (face model, N, domain, seed) and
 the outcome holds exactly N parameter pairs ``uv: (N, 2)`` inside the face's domain. Points and
 normals follow from ``problem.model``.
 """
@@ -10,7 +10,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.spatial import cKDTree
 
-from .bspline import radical_inverse
+from ..geometry.bspline import radical_inverse
 
 CARTESIAN_RASTER = 121
 NEWTON_STEPS = 30
@@ -155,7 +155,7 @@ def _dense_enough(make_candidates, problem, start, keep_first=False, with_layout
     """
     n = problem.n
     m = start
-    spacing = max(problem.min_spacing, COINCIDENT * problem.model.face.BoundBox.DiagonalLength)
+    spacing = max(problem.min_spacing, COINCIDENT * problem.model.diagonal)
     while m <= MAX_LAYOUT:
         uv = make_candidates(m)
         inside = uv[problem.domain.contains(uv)]

@@ -12,7 +12,7 @@ The deviation of a substitute S at a node is the signed closest-point distance f
 so |d| is OpenCASCADE's closest-point distance from the node to the substitute surface, and the
 sign says on which side of the face the substitute runs. Nodes whose foot is not on the face
 (outside its trimming loops) do not count. The substitute is taken with
-its natural extension a little beyond its parameter rectangle (cmmsampling.fitting.FittedSurface),
+its natural extension a little beyond its parameter rectangle (cmmsampling.fitting.substitute.FittedSurface),
 so that where its parametrisation runs short of the face's edge the form is still measured.
 
 The optimisers use an expansion of d about the raster: with e = S(h) - F_g,
@@ -31,7 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
-from .bspline import design_matrices
+from ..geometry.bspline import design_matrices
 
 DEFAULT_GRID = 60
 # closest_squared compares all pairs of each point set up to this many pairs in all (32 MB of
@@ -436,7 +436,7 @@ class Linearisation:
 
     objective: the DeviationObjective whose nodes are measured; poles: (n_u, n_v, 3) mm of S0;
     signed: (g_u, g_v) its exact deviations (NaN where not counted); closest: (g_u, g_v, 2) the
-    parameters p_g of its closest points (cmmsampling.deviation.substitute_distances). With
+    parameters p_g of its closest points (cmmsampling.fitting.deviation.substitute_distances). With
     w_g = (S0(p_g) - F_g) / d_g, the direction each deviation is measured along (the face's normal
     where d_g = 0), a substitute S deviates at node g, to first order in S - S0,
 
@@ -481,7 +481,7 @@ class DeviationStats:
     grid_uv: (g_u, g_v, 2) the raster h the nodes come from (where the substitute runs next to
     them); nodes: (g_u, g_v, 3) the nodes on the face, mm;
     occ_maximum: OpenCASCADE's closest-point distance from the nodes to the substitute, the largest
-    over the nodes of largest deviation (see cmmsampling.crosscheck).
+    over the nodes of largest deviation (see cmmsampling.fitting.crosscheck).
     """
 
     maximum: float
@@ -493,6 +493,12 @@ class DeviationStats:
     grid_uv: np.ndarray
     nodes: np.ndarray
     occ_maximum: float = float("nan")
+
+    def figures(self):
+        """The summary figures by their keys in reports and point files, mm: max_mm, mean_mm,
+        rms_mm, std_mm and occ_max_mm."""
+        return {"max_mm": self.maximum, "mean_mm": self.mean, "rms_mm": self.rms, "std_mm": self.std,
+                "occ_max_mm": self.occ_maximum}
 
     @classmethod
     def from_signed(cls, signed, objective):

@@ -5,10 +5,11 @@ range, i.e. what ``face.valueAt(u, v)`` takes on :attr:`SurfaceModel.face` (for 
 to be converted with ``toNurbs()`` this is the converted face, whose parametrisation differs
 from the original analytic one).
 """
+from functools import cached_property
+
 import numpy as np
 
-from .bspline import clamped_uniform_knots, design_matrices, full_knots
-from .fitting import FittedSurface
+from .bspline import clamped_uniform_knots, full_knots
 from .freecad_env import import_part
 from .nurbs import NurbsPatch
 
@@ -19,6 +20,9 @@ import FreeCAD  # noqa: E402  (importable once import_part() has set the path)
 # farther off (beyond a trimmed boundary, or past an edge whose parameter range is wider than
 # the face) are moved onto the face by SurfaceModel.onto_face.
 ON_FACE_MM = 1e-5
+# Samples per edge of a trimming loop at least; relative area difference that makes a face trimmed.
+LOOP_SAMPLES_PER_EDGE = 200
+TRIM_AREA_TOLERANCE = 1e-7
 INWARD_STEP = 1e-7
 INWARD_DOUBLINGS = 40
 
@@ -60,6 +64,48 @@ class SurfaceModel(NurbsPatch):
         if surface.isVPeriodic():
             surface.setVNotPeriodic()
         return cls(evaluated, face, surface)
+
+    @cached_property
+    def area(self):
+        """The face's area, mm^2 (OCC)."""
+        return float(self.face.Area)
+
+    @cached_property
+    def extent(self):
+        """(3,) lengths of the face's bounding box along x, y and z, mm (OCC)."""
+        box = self.face.BoundBox
+        return np.array([box.XLength, box.YLength, box.ZLength])
+
+    @property
+    def diagonal(self):
+        """Length of the face's bounding-box diagonal, mm."""
+        return float(np.linalg.norm(self.extent))
+
+    @cached_property
+    def trimmed(self):
+        """True when the face is smaller than its surface over the face's parameter range (a
+        trimmed boundary or holes)."""
+        full = self.face.Surface.toShape(*self.face.ParameterRange)
+        return (abs(full.Area - self.area) > TRIM_AREA_TOLERANCE * full.Area
+                or len(self.face.Wires) > 1)
+
+    def trim_loops(self, step):
+        """The face's boundary loops as (u, v) polygons: list of (K, 2) arrays, one per wire.
+
+        Each edge's curve on the surface is sampled at least LOOP_SAMPLES_PER_EDGE times and at
+        most ``step`` mm apart along the edge (3D), so the samples serve the edge clearance too.
+        """
+        loops = []
+        for wire in self.face.Wires:
+            pieces = []
+            for edge in wire.OrderedEdges or wire.Edges:
+                curve, first, last = self.face.curveOnSurface(edge)[:3]
+                count = max(LOOP_SAMPLES_PER_EDGE, int(np.ceil(edge.Length / step)) + 1)
+                piece = np.array([(p.x, p.y) for p in map(curve.value, np.linspace(first, last, count))])
+                pieces.append(piece[::-1] if edge.Orientation == "Reversed" else piece)
+            if pieces:
+                loops.append(np.concatenate(pieces))
+        return loops
 
     def distance_to_face(self, uv):
         """OCC's distance (mm) from the model's points at uv (N, 2) to the face, and the nearest
@@ -178,32 +224,6 @@ def make_bspline_surface(poles, degrees, weights=None, uknots=None, vknots=None)
         args.append(np.asarray(weights, dtype=float).tolist())
     surface.buildFromPolesMultsKnots(*args)
     return surface
-
-
-def substitute_surface(space, poles, extended=False):
-    """The substitute fitted in ``space`` (a SubstituteSpace) as a Part.BSplineSurface.
-
-    poles: (n_u, n_v, 3) mm. The surface spans the face's parameter range, or with ``extended``
-    the wider range of cmmsampling.fitting.FittedSurface, over which the deviation is measured:
-    the same polynomials, its end spans lengthened (exactly representable, so the poles follow
-    from a least-squares fit to the surface sampled over the wider range).
-    """
-    if not extended:
-        return make_bspline_surface(poles, space.degrees, uknots=space.uknots, vknots=space.vknots)
-    surface = FittedSurface(space, poles)
-    u0, u1, v0, v1 = surface.bounds
-    uknots = np.concatenate([[u0] * (space.degrees[0] + 1), space.uknots[space.degrees[0] + 1:-space.degrees[0] - 1],
-                             [u1] * (space.degrees[0] + 1)])
-    vknots = np.concatenate([[v0] * (space.degrees[1] + 1), space.vknots[space.degrees[1] + 1:-space.degrees[1] - 1],
-                             [v1] * (space.degrees[1] + 1)])
-    su = np.linspace(u0, u1, 4 * space.poles[0])
-    sv = np.linspace(v0, v1, 4 * space.poles[1])
-    grid = np.stack(np.meshgrid(su, sv, indexing="ij"), -1)
-    samples = surface.points(grid.reshape(-1, 2)).reshape(grid.shape[:2] + (3,))
-    bu = np.linalg.pinv(design_matrices(uknots, space.degrees[0], su)[0])
-    bv = np.linalg.pinv(design_matrices(vknots, space.degrees[1], sv)[0])
-    extended_poles = np.einsum("ai,ijc,bj->abc", bu, samples, bv)
-    return make_bspline_surface(extended_poles, space.degrees, uknots=uknots, vknots=vknots)
 
 
 def reference_face():

@@ -2,7 +2,7 @@
 
 The reference substitute S_ref is the fit to the face's points at every grid node (what a fit to
 very many probe points tends to), with feet f*, F* = F(f*) and n* = n_F(f*) on the face
-(cmmsampling.deviation). The surfaces considered are S_x = S_ref + sum_m x_m N_m nu_m: each pole m
+(cmmsampling.fitting.deviation). The surfaces considered are S_x = S_ref + sum_m x_m N_m nu_m: each pole m
 moved by x_m mm along the unit normal nu_m of S_ref at the pole's Greville point. They keep the
 reference's parametrisation, which a least-squares fit at the face's own parameters also keeps,
 so their first-order deviation d_lin(g) = n*(g) . (S_x(g) - F*(g)) is linear in x and close to the
@@ -22,9 +22,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .bspline import greville_abscissae, kron_rows
+from ..geometry.bspline import greville_abscissae, kron_rows
 from .deviation import substitute_distances
-from .fitting import FittedSurface
+from .substitute import FittedSurface
 
 DEFAULT_TOLERANCE = 1e-3
 DEFAULT_ITERATIONS = 4000

@@ -1,4 +1,4 @@
-"""The worker process of :mod:`cmmsampling.parallel`: ``python -m cmmsampling.worker READ_FD WRITE_FD``.
+"""The worker process of :mod:`cmmsampling.strategies.parallel`: ``python -m cmmsampling.strategies.worker READ_FD WRITE_FD``.
 
 It receives a batched objective once (pickled, pure numpy) and then evaluates the point sets it
 is sent, until the parent closes the pipe. Requests: ("load", token, objective),

@@ -3,7 +3,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .surface import substitute_surface
+from ..fitting.occ_surface import substitute_surface
+from .blind import projection_frame
 
 EXACT_FIT = 1e-10
 
@@ -15,7 +16,7 @@ class SamplingResult:
     strategy: its name; n: number of points; uv: (N, 2) on ``model.face``; points: (N, 3) mm;
     normals: (N, 3) unit vectors out of the material (the probe approaches along -normal);
     poles: (n_u, n_v, 3) mm, the substitute's poles; space: its SubstituteSpace;
-    deviation: DeviationStats at the nodes of the evaluation grid (cmmsampling.deviation); history: best maximum deviation (mm) per
+    deviation: DeviationStats at the nodes of the evaluation grid (cmmsampling.fitting.deviation); history: best maximum deviation (mm) per
     iteration for the optimisers, else None; evaluations: fitness evaluations;
     timings: seconds per phase; settings: every parameter of the run; cancelled: stopped early;
     check: DeviationStats on the check grid (3x denser than the grid optimised on), computed on
@@ -52,7 +53,7 @@ class SamplingResult:
     def exact(self):
         """True when the substitute reproduces the face to rounding (e.g. a plane): every point set
         is then as good as any other."""
-        return self.deviation.maximum <= EXACT_FIT * self.model.face.BoundBox.DiagonalLength
+        return self.deviation.maximum <= EXACT_FIT * self.model.diagonal
 
     @property
     def n(self):
@@ -71,7 +72,7 @@ class SamplingResult:
 
     def bounds(self):
         """Local bounds about this result's substitute, mm: the least maximum deviation that
-        moving its poles along its normals could reach (cmmsampling.bound).
+        moving its poles along its normals could reach (cmmsampling.fitting.bound).
 
         {"grid": MinimaxBound on the evaluation grid, "check": on the check grid}; computed on first
         call (about a second), then kept.
@@ -97,15 +98,10 @@ class SamplingResult:
 
     def summary(self):
         """The headline figures as a dict (deviations in mm, times in s)."""
-        d = self.deviation
         return {
             "strategy": self.strategy,
             "n": self.n,
-            "max_mm": d.maximum,
-            "mean_mm": d.mean,
-            "rms_mm": d.rms,
-            "std_mm": d.std,
-            "occ_max_mm": d.occ_maximum,
+            **self.deviation.figures(),
             "check_max_mm": self.check.maximum,
             "time_s": self.timings.get("total_s", float("nan")),
             "evaluations": self.evaluations,
@@ -120,9 +116,45 @@ class SamplingResult:
             f"{' (cancelled)' if self.cancelled else ''}>"
         )
 
+    def substitute_grid(self):
+        """The substitute surface on the evaluation raster: (g_u, g_v, 3) mm."""
+        return self.space.evaluate(self.poles, self.deviation.grid_uv)
+
+    def map_coordinates(self):
+        """Plot coordinates of the deviation grid and of the probe points, with axis labels.
+
+        Returns (grid (g_u, g_v, 2), points (N, 2), (x label, y label)): the machine footprint in
+        mm where it is one-to-one (:func:`footprint`), else the face's (u, v) parameters.
+        """
+        uv = self.deviation.grid_uv
+        view = footprint(self.model, uv)
+        if view is None:
+            return uv, self.uv, ("u (face parameter)", "v (face parameter)")
+        xy, names, frame = view
+        return xy, self.points @ frame[:2].T, tuple(f"{name} (mm)" for name in names)
+
     def point_table(self):
         """Per-point rows (label, x, y, z, i, j, k, u, v) as a list of tuples."""
         return [
             (label, *map(float, p), *map(float, nrm), *map(float, uv))
             for label, p, nrm, uv in zip(self.labels, self.points, self.normals, self.uv)
         ]
+
+
+def footprint(model, uv):
+    """The face seen along the machine axis closest to its mean normal.
+
+    model: the face's SurfaceModel; uv: (g_u, g_v, 2) grid of parameters. Returns (xy (g_u, g_v,
+    2) mm, (name_1, name_2), frame (3, 3)) where the view is one-to-one on the grid (every cell
+    keeps its orientation), else None (a face that folds over itself in every machine view, e.g. a
+    whole cylinder).
+    """
+    frame = projection_frame(model)
+    xy = model.points(uv.reshape(-1, 2)).reshape(uv.shape[:2] + (3,)) @ frame[:2].T
+    along_u = xy[1:, :-1] - xy[:-1, :-1]
+    along_v = xy[:-1, 1:] - xy[:-1, :-1]
+    turn = along_u[..., 0] * along_v[..., 1] - along_u[..., 1] * along_v[..., 0]
+    if not (np.all(turn > 0) or np.all(turn < 0)):
+        return None
+    names = tuple("xyz"[int(np.argmax(np.abs(axis)))] for axis in frame[:2])
+    return xy, names, frame

@@ -29,13 +29,7 @@ class PointSet:
     def from_result(cls, result, source=""):
         """The probe points of a SamplingResult; source names the face (e.g. 'Body:Face3')."""
         substitute = result.space.evaluate(result.poles, result.uv)
-        d = result.deviation
-        metadata = {
-            "source": source,
-            **result.settings,
-            "max_mm": d.maximum, "mean_mm": d.mean, "rms_mm": d.rms, "std_mm": d.std,
-            "occ_max_mm": d.occ_maximum,
-        }
+        metadata = {"source": source, **result.settings, **result.deviation.figures()}
         return cls(
             labels=result.labels,
             points=np.array(result.points, dtype=float),

@@ -1,23 +1,22 @@
 """The scripting entry points: :func:`sample` runs a strategy, :func:`evaluate` judges any point set."""
-import inspect
 import os
 import time
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import memory
-from . import strategies as blind
-from .crosscheck import occ_cross_check
-from .deviation import DEFAULT_GRID
-from .fitting import DEFAULT_DEGREE, DEFAULT_SMOOTHING
-from .domain import face_domain
-from .problem import SamplingProblem, resolve_fit_poles
+from ..fitting.crosscheck import occ_cross_check
+from ..fitting.deviation import DEFAULT_GRID
+from ..fitting.occ_surface import substitute_surface
+from ..fitting.substitute import DEFAULT_DEGREE, DEFAULT_SMOOTHING
+from ..geometry.domain import face_domain
+from ..geometry.surface import SurfaceModel
+from . import blind, handover, memory
+from .blind import StrategyOutcome
 from .optimal import default_min_spacing, descend
+from .problem import SamplingProblem, resolve_fit_poles
 from .pso import SwarmSettings, particle_swarm
 from .result import EXACT_FIT, SamplingResult
-from .strategies import StrategyOutcome
-from .surface import SurfaceModel, substitute_surface
 from .threads import blas_threads
 from .validation import check_choice, check_int, check_pair, check_real, check_uv
 
@@ -56,8 +55,8 @@ class Strategy:
     studies' and tables' ratios divide by (one strategy has it);
     settings: the options the command line and the comparison panel offer (Setting);
     memory: (n, poles (n_u, n_v), grid nodes, options, workers) -> bytes it needs beyond every
-    run's base (cmmsampling.memory), None for nothing that grows with N.
-    Every strategy keeps the same default minimum spacing (cmmsampling.optimal.default_min_spacing).
+    run's base (cmmsampling.strategies.memory), None for nothing that grows with N.
+    Every strategy keeps the same default minimum spacing (cmmsampling.strategies.optimal.default_min_spacing).
     """
 
     name: str
@@ -102,7 +101,7 @@ def run_pso(problem, progress, population, iterations, w1, w2, c1, c2, velocity_
             start_from_uniform):
     """The paper's PSO (eq. 7-9) on the problem's maximum-deviation objective.
 
-    The swarm scores point sets by the expanded deviation (cmmsampling.deviation). With
+    The swarm scores point sets by the expanded deviation (cmmsampling.fitting.deviation). With
     start_from_uniform, particles 0 and 1 start at the uniform parametric and uniform Cartesian
     layouts (the latter where it covers the face), and the swarm's best is judged against them by
     the exact deviation, so the result is never worse than either.
@@ -160,7 +159,7 @@ def _best_exact(problem, found, seeds):
 
 
 def run_optimal(problem, progress, start, time_limit, max_evaluations):
-    """Near-optimal points by gradient descent on a smoothed maximum (see cmmsampling.optimal).
+    """Near-optimal points by gradient descent on a smoothed maximum (see cmmsampling.strategies.optimal).
 
     start: "best" (the best of BEST_STARTS by the exact deviation), a strategy name or an (N, 2)
     uv array; time_limit: s; max_evaluations: surrogate evaluations (None: no limit). Points keep
@@ -327,7 +326,7 @@ def make_problem(face, n, fit_degree=DEFAULT_DEGREE, fit_poles=None, smoothing=D
                  strategy=None, options=None):
     """Validate the common inputs and build a SamplingProblem (see :func:`sample`).
 
-    min_spacing None: the default (cmmsampling.optimal.default_min_spacing), lowered where the
+    min_spacing None: the default (cmmsampling.strategies.optimal.default_min_spacing), lowered where the
     face's feasible part cannot hold N points that far apart. strategy, options (checked): the
     run it is for, whose memory is checked (:func:`memory_needed`) before anything is built;
     None checks every run's base.
@@ -350,11 +349,11 @@ def make_problem(face, n, fit_degree=DEFAULT_DEGREE, fit_poles=None, smoothing=D
     if min_spacing is not None:
         min_spacing = check_real("min_spacing", min_spacing, 0.0)
     model = SurfaceModel.from_face(face)
-    _check_area(model.face)
+    _check_area(model)
     problem = SamplingProblem(model, n, degree, poles, smoothing, grid, seed, workers, edge_offset,
                               min_spacing or 0.0)
     if min_spacing is None:
-        problem.min_spacing = default_min_spacing(model.face.Area, n, problem.domain.feasible_area)
+        problem.min_spacing = default_min_spacing(model.area, n, problem.domain.feasible_area)
         problem.spacing_by_default = True
     _check_room(problem)
     return problem
@@ -365,7 +364,7 @@ def memory_needed(n, strategy=DEFAULT_STRATEGY, *, fit_degree=DEFAULT_DEGREE, fi
     """Estimated peak memory (bytes) of :func:`sample` with these arguments, before any run.
 
     The arguments as in :func:`sample` (strategy None: what every run needs). sample() refuses
-    a run whose estimate exceeds 80 % of the memory the machine has free (cmmsampling.memory).
+    a run whose estimate exceeds 80 % of the memory the machine has free (cmmsampling.strategies.memory).
     """
     n = check_int("n", n, MIN_POINTS)
     degree = check_pair("fit_degree", fit_degree, 1)
@@ -486,12 +485,12 @@ def _check_workers(workers):
     return workers
 
 
-def _check_area(face):
-    """ValueError for a face without usable area."""
-    diagonal = face.BoundBox.DiagonalLength
-    if not np.isfinite(face.Area) or face.Area <= MIN_AREA_RATIO * max(diagonal, 1e-300) ** 2:
+def _check_area(model):
+    """ValueError for a face (its SurfaceModel) without usable area."""
+    diagonal = model.diagonal
+    if not np.isfinite(model.area) or model.area <= MIN_AREA_RATIO * max(diagonal, 1e-300) ** 2:
         raise ValueError(
-            f"the face has no usable area ({face.Area:.3g} mm^2 for a {diagonal:.3g} mm bounding box); "
+            f"the face has no usable area ({model.area:.3g} mm^2 for a {diagonal:.3g} mm bounding box); "
             "pick a face that is not degenerate"
         )
 
@@ -517,7 +516,7 @@ def sample(face, n=81, strategy=DEFAULT_STRATEGY, *, fit_degree=DEFAULT_DEGREE, 
     w2, c1, c2, velocity_limit, start_from_uniform).
     Returns a SamplingResult.
     """
-    handed = _take_handed_over(face, {"n": n, "strategy": strategy, "fit_degree": fit_degree,
+    handed = handover.take(sample, face, {"n": n, "strategy": strategy, "fit_degree": fit_degree,
                                       "fit_poles": fit_poles, "smoothing": smoothing, "grid": grid,
                                       "seed": seed, "occ_check": occ_check, "workers": workers,
                                       "edge_offset": edge_offset, "min_spacing": min_spacing, **options})
@@ -539,42 +538,13 @@ def sample(face, n=81, strategy=DEFAULT_STRATEGY, *, fit_degree=DEFAULT_DEGREE, 
     return _judge(problem, outcome, strategy, settings, strategy_s, occ_check)
 
 
-_HANDED_OVER = []
-
-
 def hand_over(face, arguments, result):
-    """Let the next ``sample(face, **arguments)`` in this process return ``result`` at once.
+    """Let the next ``sample(face, **arguments)`` in this process return ``result`` at once (the
+    task panel's run, echoed in the console: see :mod:`cmmsampling.strategies.handover`).
 
-    For a run already made elsewhere in this process with exactly these arguments: the task
-    panel runs sample() in a thread (progress, cancel), then echoes the call in the Python
-    console, where it must not run a second time; replayed as a macro in another session, the
-    same line runs it. face: the Part.Face given (the same shape, ``isSame``); arguments: the
-    keyword arguments of sample() other than progress. Only the next call can take it: a call
-    with other arguments or another face drops it and runs.
+    arguments: the keyword arguments of sample() other than face and progress.
     """
-    _HANDED_OVER[:] = [(face, _full_call(arguments), result)]
-
-
-def _full_call(arguments):
-    """sample()'s arguments (a dict of keywords, without face and progress) with the defaults
-    filled in, options flattened, for comparing two calls."""
-    bound = inspect.signature(sample).bind(None, **arguments)
-    bound.apply_defaults()
-    call = dict(bound.arguments)
-    options = call.pop("options")
-    del call["face"], call["progress"]
-    return dict(sorted({**call, **options}.items()))
-
-
-def _take_handed_over(face, call):
-    """The result handed over for exactly this call (face and full arguments), or None; what
-    was handed over is dropped either way."""
-    if not _HANDED_OVER:
-        return None
-    [(handed_face, handed_call, result)] = _HANDED_OVER
-    _HANDED_OVER.clear()
-    same_face = isinstance(face, type(handed_face)) and face.isSame(handed_face)
-    return result if same_face and repr(handed_call) == repr(_full_call(call)) else None
+    handover.give(sample, face, arguments, result)
 
 
 def _exact_outcome(problem, strategy):
@@ -586,7 +556,7 @@ def _exact_outcome(problem, strategy):
     name = baseline()
     uv = STRATEGIES[name].run(problem, None, **STRATEGIES[name].options).uv
     maximum = problem.exact_maximum(uv)
-    if maximum > EXACT_FIT * problem.model.face.BoundBox.DiagonalLength:
+    if maximum > EXACT_FIT * problem.model.diagonal:
         return None
     return StrategyOutcome(uv, notes=[f"{strategy} was not run: the {STRATEGIES[name].label} layout "
                                       "already fits this face exactly"])

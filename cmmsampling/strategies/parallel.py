@@ -1,11 +1,11 @@
 """Evaluate a swarm's batched objective on two cores: this process and one worker process.
 
 The swarm's many small numpy operations hold the GIL, so threads do not help; a second process
-does. The worker is a plain ``python -m cmmsampling.worker`` started once (with Debian's Python,
+does. The worker is a plain ``python -m cmmsampling.strategies.worker`` started once (with Debian's Python,
 also from inside FreeCAD, whose ``sys.executable`` is the FreeCAD binary) and kept for the
 session. Each particle's fitness is computed exactly as in one process, so results are identical.
 While a run goes on, both sides poll for the other's message instead of blocking (see
-:func:`cmmsampling.worker.wait_for`). If the worker cannot be started or fails, evaluation
+:func:`cmmsampling.strategies.worker.wait_for`). If the worker cannot be started or fails, evaluation
 continues in this process alone.
 """
 import atexit
@@ -42,7 +42,7 @@ class Worker:
         env = dict(os.environ, PYTHONPATH=package_root, OPENBLAS_NUM_THREADS="1",
                    OMP_NUM_THREADS="1", MKL_NUM_THREADS="1")
         self.process = subprocess.Popen(
-            [executable, "-m", "cmmsampling.worker", str(to_child_r), str(from_child_w)],
+            [executable, "-m", "cmmsampling.strategies.worker", str(to_child_r), str(from_child_w)],
             pass_fds=(to_child_r, from_child_w), env=env, stdin=subprocess.DEVNULL,
             close_fds=True,
         )

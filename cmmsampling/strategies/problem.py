@@ -1,10 +1,10 @@
 """SamplingProblem: everything a strategy needs to place N points on one face."""
 import numpy as np
 
-from .bound import minimax_bound
-from .deviation import DeviationStats, EvaluationGrid, deviation_objective, substitute_distances
-from .domain import face_domain
-from .fitting import FittedSurface, SubstituteSpace, default_pole_count
+from ..fitting.bound import minimax_bound
+from ..fitting.deviation import DeviationStats, EvaluationGrid, deviation_objective, substitute_distances
+from ..fitting.substitute import FittedSurface, SubstituteSpace, default_pole_count
+from ..geometry.domain import face_domain
 from .parallel import TwoProcessObjective
 
 
@@ -95,7 +95,7 @@ class SamplingProblem:
     def bounds(self, poles=None):
         """Local bounds (MinimaxBound, mm) about a substitute on the grid and on the check grid:
         the least maximum deviation that moving its poles along its normals could reach (see
-        cmmsampling.bound). poles: (n_u, n_v, 3) mm, default the reference fit's (then computed
+        cmmsampling.fitting.bound). poles: (n_u, n_v, 3) mm, default the reference fit's (then computed
         once). Returns {"grid": MinimaxBound, "check": MinimaxBound}.
         """
         if poles is not None:

@@ -27,8 +27,6 @@ from scipy.spatial import cKDTree
 CELLS = 256 * 256
 MIN_CELLS_PER_SIDE = 16
 SHAPE_SAMPLES = 17
-LOOP_SAMPLES_PER_EDGE = 200
-AREA_TOLERANCE = 1e-7
 NEAR_CELLS = 5
 
 
@@ -147,16 +145,15 @@ class FaceDomain:
 
 def face_domain(model, edge_offset=0.0):
     """The FaceDomain of a SurfaceModel's face, keeping ``edge_offset`` mm from its edges."""
-    face = model.face
-    trimmed = _is_trimmed(face)
+    trimmed = model.trimmed
     if not trimmed and edge_offset <= 0:
-        return FaceDomain(model.bounds, area=float(face.Area))
+        return FaceDomain(model.bounds, area=model.area)
     shape = raster_shape(model)
     centres = _cell_centres(model.bounds, shape)
     points = model.points(centres.reshape(-1, 2)).reshape(*shape, 3)
     half_diagonals = 0.5 * _cell_diagonals(points)
-    step = max(min(face.BoundBox.DiagonalLength / 1000.0, float(half_diagonals.max())), 1e-6)
-    loops = _loops(face, step)
+    step = max(min(model.diagonal / 1000.0, float(half_diagonals.max())), 1e-6)
+    loops = model.trim_loops(step)
     on_face = _inside_loops(loops, centres) if trimmed else np.ones(shape, bool)
     samples = [model.points(loop) for loop in loops]
     distance = _edge_distance(np.concatenate(samples), points)
@@ -185,38 +182,12 @@ def raster_shape(model):
     return cells_u, max(CELLS // cells_u, MIN_CELLS_PER_SIDE)
 
 
-def _is_trimmed(face):
-    """True when the face is smaller than its surface over the face's parameter range."""
-    full = face.Surface.toShape(*face.ParameterRange)
-    return abs(full.Area - face.Area) > AREA_TOLERANCE * full.Area or len(face.Wires) > 1
-
-
 def _cell_centres(bounds, shape):
     """(R_u, R_v, 2) centres of the raster cells of ``shape`` (R_u, R_v) over the rectangle."""
     u0, u1, v0, v1 = bounds
     u = u0 + (np.arange(shape[0]) + 0.5) * (u1 - u0) / shape[0]
     v = v0 + (np.arange(shape[1]) + 0.5) * (v1 - v0) / shape[1]
     return np.stack(np.meshgrid(u, v, indexing="ij"), axis=-1)
-
-
-def _loops(face, step):
-    """The face's trimming loops as (u, v) polygons: list of (K, 2) arrays.
-
-    Each edge's curve on the surface is sampled at least LOOP_SAMPLES_PER_EDGE times and at most
-    ``step`` mm apart along the edge (3D), so the samples serve the edge clearance too.
-    """
-    loops = []
-    for wire in face.Wires:
-        pieces = []
-        for edge in wire.OrderedEdges or wire.Edges:
-            curve, first, last = face.curveOnSurface(edge)[:3]
-            count = max(LOOP_SAMPLES_PER_EDGE, int(np.ceil(edge.Length / step)) + 1)
-            ts = np.linspace(first, last, count)
-            piece = np.array([(p.x, p.y) for p in map(curve.value, ts)])
-            pieces.append(piece[::-1] if edge.Orientation == "Reversed" else piece)
-        if pieces:
-            loops.append(np.concatenate(pieces))
-    return loops
 
 
 def _inside_loops(loops, centres):

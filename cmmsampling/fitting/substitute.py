@@ -13,7 +13,7 @@ depend on N. Many point sets are fitted in one call.
 """
 import numpy as np
 
-from .bspline import KnotBasis, clamped_uniform_knots, design_matrices, kron_rows, second_difference_matrix
+from ..geometry.bspline import KnotBasis, clamped_uniform_knots, design_matrices, kron_rows, second_difference_matrix
 
 DEFAULT_DEGREE = 3
 DEFAULT_SMOOTHING = 1e-8

@@ -2,7 +2,7 @@
 nodes to the substitute surface, at the nodes of largest deviation."""
 import numpy as np
 
-from .freecad_env import import_part
+from ..geometry.freecad_env import import_part
 
 Part = import_part()
 
@@ -14,7 +14,7 @@ def occ_cross_check(stats, substitute):
     from the nodes to the substitute, over the OCC_DISTANCE_NODES nodes of largest |d|.
 
     stats: DeviationStats; substitute: the fitted Part.BSplineSurface over the range the
-    deviation is measured on (cmmsampling.surface.substitute_surface with ``extended``).
+    deviation is measured on (cmmsampling.geometry.surface.substitute_surface with ``extended``).
     """
     counted = ~np.isnan(stats.field)
     nodes = stats.nodes[counted]

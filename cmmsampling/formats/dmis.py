@@ -1,0 +1,166 @@
+"""DMIS 5.2 input programs: writing probe points as FEAT/POINT, MEAS/POINT, PTMEAS statements and
+reading the points (nominal ``F(...)`` or measured ``FA(...)``) and the ``$$ key: value`` comments
+back; the DMIS rules for labels, program names and line lengths."""
+import re
+
+import numpy as np
+
+from .pointset import PointSet
+from .text import (COORDINATE_DECIMALS, VECTOR_DECIMALS, comment_entries, fixed, metadata_comment_lines, numbers,
+                   parse_metadata_comments)
+
+NAME = "DMIS"
+DESCRIPTION = "DMIS 5.2 input program (FEAT/POINT, MEAS/POINT, PTMEAS)"
+EXTENSIONS = (".dmi", ".dmis")
+ENCODING = "ascii"
+DMIS_VERSION = "05.2"
+DMIS_LINE_LIMIT = 80
+DMIS_LABEL = re.compile(r"[A-Za-z0-9_.-]{1,64}\Z")
+DMIS_LABEL_RULE = "1 to 64 characters of A-Z, a-z, 0-9, '-', '_' and '.'"
+DMIS_NAME_LIMIT = DMIS_LINE_LIMIT - len(f"DMISMN/'',{DMIS_VERSION}")
+LABEL_LIMIT = 64
+DMIS_COMMENT = "$$"
+DMIS_COMMENT_CONTINUED = "$$+"
+DMIS_CONTINUATION = "$"
+DMIS_FEATURE_POINT = re.compile(r"(FA?)\(([^()]*)\)=FEAT/POINT,([A-Z]+),(.*)\Z", re.IGNORECASE)
+
+
+def write(point_set, facts, options):
+    """A DMIS 5.2 input program measuring each point once: FEAT/POINT, MEAS/POINT, PTMEAS, ENDMES."""
+    check_dmis_labels(point_set.labels)
+    xyz = fixed(point_set.points, COORDINATE_DECIMALS)
+    ijk = fixed(point_set.normals, VECTOR_DECIMALS)
+    entries = [(key, text.encode("ascii", "backslashreplace").decode("ascii"))
+               for key, text in comment_entries(point_set, facts, options)]
+    lines = [f"DMISMN/'{options.name}',{DMIS_VERSION}", f"{DMIS_COMMENT} probe points written by cmmsampling"]
+    lines += metadata_comment_lines(entries, f"{DMIS_COMMENT} ", DMIS_COMMENT_CONTINUED, DMIS_LINE_LIMIT)
+    lines += ["UNITS/MM,ANGDEC", "MODE/PROG,MAN"]
+    distances = {"APPRCH": options.approach, "RETRCT": options.retract, "SEARCH": options.search}
+    lines += [f"SNSET/{word},{fixed(value, COORDINATE_DECIMALS).item()}" for word, value in distances.items()]
+    for label, position, vector in zip(point_set.labels, xyz.tolist(), ijk.tolist()):
+        lines += dmis_statement([f"F({label})=FEAT/POINT", "CART", *position], vector)
+        lines += dmis_statement(["MEAS/POINT", f"F({label})", "1"])
+        lines += dmis_statement(["PTMEAS/CART", *position], vector)
+        lines.append("ENDMES")
+    lines.append("ENDFIL")
+    return "\n".join(lines) + "\n"
+
+
+def read(text, path="<text>"):
+    """PointSet from DMIS text: FEAT/POINT,CART statements, metadata from ``$$ key: value`` comments."""
+    statements, comments = dmis_statements(text)
+    found = {"F": {}, "FA": {}}
+    for number, statement in statements:
+        match = DMIS_FEATURE_POINT.match(_without_blanks(statement))
+        if match is None:
+            continue
+        kind, label, system, fields = match.groups()
+        if system.upper() != "CART":
+            raise ValueError(f"{path}, line {number}: only Cartesian points (CART) can be read, got {system}")
+        found[kind.upper()][label] = numbers(fields.split(","), 6, path, number)
+    points = found["FA"] or found["F"]
+    if not points:
+        raise ValueError(f"{path}: no F(label)=FEAT/POINT,CART,x,y,z,i,j,k statement found")
+    metadata = parse_metadata_comments(comments)
+    metadata["dmis_features"] = "actual" if found["FA"] else "nominal"
+    data = np.array(list(points.values()))
+    return PointSet(list(points), data[:, :3], data[:, 3:], metadata=metadata)
+
+
+def dmis_statements(text):
+    """Logical DMIS statements and comments of text.
+
+    Returns ([(line number, statement)], [(continued, comment body)]): a line ending in ``$`` goes
+    on in the next one; ``$$`` starts a comment (``$$+`` a continued one) to the end of the line.
+    """
+    statements, comments = [], []
+    pending, first = "", None
+    for number, line in enumerate(text.splitlines(), start=1):
+        code, comment = _split_comment(line)
+        if comment is not None:
+            continued = comment.startswith("+")
+            comments.append((continued, comment[1:] if continued else comment))
+        code = code.rstrip()
+        if not code:
+            continue
+        first = first or number
+        if code.endswith(DMIS_CONTINUATION):
+            pending += code[:-1]
+            continue
+        statements.append((first, pending + code))
+        pending, first = "", None
+    return statements, comments
+
+
+def _split_comment(line):
+    """(code, comment body after '$$' or None) of one DMIS line; '$$' inside quotes is text."""
+    quoted = False
+    for index, character in enumerate(line):
+        if character == "'":
+            quoted = not quoted
+        elif not quoted and line.startswith(DMIS_COMMENT, index):
+            return line[:index], line[index + len(DMIS_COMMENT):]
+    return line, None
+
+
+def _without_blanks(statement):
+    """The statement without blanks (DMIS ignores them outside text strings)."""
+    return re.sub(r"\s+", "", statement)
+
+
+def sanitise_labels(labels):
+    """Labels valid in DMIS: other characters become '_', at most 64 characters, an empty label
+    becomes P<i>, repeated ones get _2, _3, ... Returns a list of str."""
+    clean, seen = [], set()
+    for index, label in enumerate(labels):
+        base = re.sub(r"[^A-Za-z0-9_.-]", "_", str(label))[:LABEL_LIMIT] or f"P{index + 1}"
+        candidate, copy = base, 1
+        while candidate in seen:
+            copy += 1
+            suffix = f"_{copy}"
+            candidate = base[:LABEL_LIMIT - len(suffix)] + suffix
+        seen.add(candidate)
+        clean.append(candidate)
+    return clean
+
+
+def check_dmis_labels(labels):
+    """ValueError naming labels DMIS cannot take (rule: DMIS_LABEL_RULE) or repeated labels."""
+    bad = [(index, label) for index, label in enumerate(labels) if not DMIS_LABEL.match(label)]
+    if bad:
+        shown = ", ".join(f"{label!r} (point {index + 1})" for index, label in bad[:5])
+        raise ValueError(
+            f"{len(bad)} label(s) cannot be used in DMIS, where a label is {DMIS_LABEL_RULE}: {shown}; "
+            "cmmsampling.sanitise_labels(labels) makes valid ones"
+        )
+    first = {}
+    for index, label in enumerate(labels):
+        if label in first:
+            raise ValueError(f"label {label!r} is used by points {first[label] + 1} and {index + 1}; "
+                             "DMIS labels must be unique")
+        first[label] = index
+
+
+def dmis_program_name(name):
+    """A DMISMN program name: printable ASCII without quotes, at most DMIS_NAME_LIMIT characters."""
+    clean = re.sub(r"[^ -~]|'", "_", str(name)).strip()[:DMIS_NAME_LIMIT]
+    return clean or "cmmsampling"
+
+
+def dmis_statement(*groups):
+    """Physical lines of one DMIS statement whose fields (text) come in groups.
+
+    Fields are joined by commas; each group starts a line, and a line that would pass 80
+    characters breaks after a comma and ends in the continuation mark '$'.
+    """
+    fields = [field for group in groups for field in group]
+    starts = set(np.cumsum([len(group) for group in groups[:-1]]).tolist())
+    tokens = [field + "," for field in fields[:-1]] + fields[-1:]
+    lines, line = [], ""
+    for index, token in enumerate(tokens):
+        room = DMIS_LINE_LIMIT - (0 if index == len(tokens) - 1 else 1)
+        if line and (index in starts or len(line) + len(token) > room):
+            lines.append(line + "$")
+            line = ""
+        line += token
+    return lines + [line]

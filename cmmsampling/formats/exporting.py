@@ -1,0 +1,241 @@
+"""Export probe points for a CMM.
+
+:func:`export` writes a PointSet (or a SamplingResult, or a document object whose Proxy offers
+``point_set(obj)``) as a DMIS input program, a PC-DMIS XYZ file or a CSV file (one module per
+format, :mod:`cmmsampling.formats.pointfiles`), in the global frame or in a local coordinate
+system, optionally as probe-ball centres and in a short probing order. Files are replaced
+atomically (:mod:`cmmsampling.formats.files`): a failed export leaves an existing file as it was.
+"""
+import os
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..planning.probe_path import short_path, unchanged
+from ..strategies.result import SamplingResult
+from ..strategies.validation import check_choice, check_real
+from .dmis import dmis_program_name
+from .files import write_atomically
+from .frames import FRAME_KEYS, frame_facts, resolve_frame, to_local
+from .pointfiles import MODULES, READER_KEYS, resolve_format
+from .pointset import PointSet
+
+ORDERS = ("as_optimised", "short_path")
+UNIT_TOLERANCE = 1e-3
+PROBE_KEYS = ("probe_radius_mm", "points")
+ORDER_KEYS = ("order", "path_length_mm")
+WRITTEN_KEYS = FRAME_KEYS + PROBE_KEYS + ORDER_KEYS + ("count", "units") + READER_KEYS
+
+
+@dataclass(frozen=True)
+class WriteOptions:
+    """What the writers need besides the points: DMIS program name, approach, retract and search
+    distances (mm), and whether to write the descriptive comments."""
+
+    name: str
+    approach: float
+    retract: float
+    search: float
+    comments: bool
+
+
+@dataclass(frozen=True)
+class ExportReport:
+    """What :func:`export` wrote.
+
+    path: absolute path; format: 'dmis', 'xyz' or 'csv'; count: points written; order: the order
+    asked for; length_before, length_after: mm, open 3D path through the written points in the
+    source's order and in the written order; frame: 'global' or 'local'; probe_radius: mm added
+    along the normals (0: contact points).
+    """
+
+    path: str
+    format: str
+    count: int
+    order: str
+    length_before: float
+    length_after: float
+    frame: str
+    probe_radius: float
+
+    @property
+    def saving(self):
+        """Path shortening in mm."""
+        return self.length_before - self.length_after
+
+    def __str__(self):
+        what = "contact points" if self.probe_radius == 0 else f"ball centres, probe radius {self.probe_radius:g} mm"
+        line = (f"Wrote {self.count} points to {self.path} ({MODULES[self.format].NAME}, "
+                f"{self.frame} frame, {what}). ")
+        if self.order == "short_path":
+            line += f"Probe path {self.length_after:.1f} mm in the short-path order"
+            if self.saving > 0:
+                line += (f" ({self.length_before:.1f} mm in the optimised order: "
+                         f"{100 * self.saving / self.length_before:.0f} % shorter)")
+            return line + "."
+        return line + f"Probe path {self.length_before:.1f} mm in the optimised order."
+
+
+def export(source, path, format=None, *, frame=None, probe_radius=0.0, order="as_optimised", name=None,
+           approach=2.0, retract=2.0, search=5.0, comments=True):
+    """Write probe points to a file for a CMM.
+
+    source: a PointSet, a SamplingResult, or a document object whose Proxy has ``point_set(obj)``;
+    points: (N, 3) mm, normals (N, 3) unit vectors out of the material (the probe travels along
+    -normal), both global. path: the file; format: 'dmis', 'xyz' or 'csv', by default from the
+    extension (.dmi/.dmis, .xyz/.txt, .csv).
+    frame: None for global coordinates, or the local coordinate system as a FreeCAD.Placement or an
+    object with a Placement (e.g. a datum coordinate system; its global placement is used): points
+    are written as placement.inverse() * p, normals rotated only.
+    probe_radius: mm; when positive the points are probe-ball centres p + r * n (the radius is
+    stated in DMIS and CSV comments; the XYZ format has no comments, so an XYZ file holds the
+    points as written and the caller has to keep the radius with it).
+    order: 'as_optimised' keeps the source's order, 'short_path' visits the points along a short
+    path (nearest neighbour + 2-opt, :mod:`cmmsampling.planning.probe_path`).
+    name: DMIS program name (default: the file name without extension); approach, retract,
+    search: DMIS SNSET distances, mm; comments: write the source's metadata (source face,
+    strategy, parameters, deviation figures) as comments; the frame, probe radius and order are
+    stated in DMIS and CSV files either way.
+    The file is written to a temporary file in the same folder and then moved over the target, so
+    an existing file survives any failure. Returns an ExportReport; ValueError or TypeError for bad
+    input, ExportError (an OSError) naming the path and the reason when it cannot be written.
+    """
+    fmt = resolve_format(path, format)
+    check_choice("order", order, list(ORDERS))
+    radius = check_real("probe_radius", probe_radius, minimum=0.0)
+    options = WriteOptions(
+        name=dmis_program_name(_stem(path) if name is None else name),
+        approach=check_real("approach", approach, above=0.0),
+        retract=check_real("retract", retract, above=0.0),
+        search=check_real("search", search, above=0.0),
+        comments=bool(comments),
+    )
+    placement, frame_name = resolve_frame(frame)
+    point_set, facts = prepared(as_point_set(source), placement, radius, frame_name)
+    path_order = short_path(point_set.points) if order == "short_path" else unchanged(point_set.points)
+    point_set = reordered(point_set, path_order.order)
+    facts.update(order=order, path_length_mm=path_order.length_after)
+    text = MODULES[fmt].write(point_set, facts, options)
+    target = write_atomically(path, text, MODULES[fmt].ENCODING)
+    return ExportReport(target, fmt, len(point_set), order, path_order.length_before, path_order.length_after,
+                        facts["frame"], facts["probe_radius_mm"])
+
+
+def _stem(path):
+    """The file name of path without folder and extension."""
+    return os.path.splitext(os.path.basename(os.fspath(path)))[0]
+
+
+def as_point_set(source):
+    """The PointSet of a PointSet, a SamplingResult or a document object whose Proxy has point_set(obj)."""
+    if isinstance(source, PointSet):
+        return source
+    if isinstance(source, SamplingResult):
+        return PointSet.from_result(source)
+    method = getattr(getattr(source, "Proxy", None), "point_set", None)
+    if callable(method):
+        point_set = method(source)
+        if isinstance(point_set, PointSet):
+            return point_set
+        raise TypeError(
+            f"{source.Name}.Proxy.point_set() returned {type(point_set).__name__}, not a PointSet"
+        )
+    raise TypeError(
+        f"cannot export a {type(source).__name__}; give a PointSet, a SamplingResult or a document "
+        "object whose Proxy has point_set(obj)"
+    )
+
+
+def prepared(point_set, placement, radius, frame_name=""):
+    """The point set as it is written, and the facts that say what its numbers mean.
+
+    Checks the point set, moves the points to the ball centres p + radius * n, then into the
+    placement's frame. A point set whose metadata already states a local frame or a probe radius
+    (e.g. one read from a file) keeps those facts when neither is applied again, and is refused
+    when one would be applied on top. Returns (PointSet, facts dict).
+    """
+    point_set = checked(point_set)
+    stated = point_set.metadata
+    if placement is not None and stated.get("frame", "global") != "global":
+        raise ValueError("these points are already in a local frame; export them with frame=None, "
+                         "or export the global points")
+    stated_radius = float(stated.get("probe_radius_mm", 0.0))
+    if radius > 0 and stated_radius > 0:
+        raise ValueError(f"these points are already probe-ball centres (radius {stated_radius} mm); "
+                         "export them with probe_radius=0, or export the contact points")
+    points = point_set.points + radius * point_set.normals
+    normals = point_set.normals
+    if placement is None:
+        facts = {key: stated[key] for key in FRAME_KEYS if key in stated} or {"frame": "global"}
+    else:
+        facts = frame_facts(placement, frame_name)
+        points, normals = to_local(points, normals, placement)
+    total = radius + stated_radius
+    facts["probe_radius_mm"] = total
+    facts["points"] = (f"probe-ball centres (contact point + {total:g} mm * normal)" if total > 0
+                       else "contact points on the face")
+    metadata = {key: value for key, value in stated.items() if key not in WRITTEN_KEYS}
+    return PointSet(point_set.labels, points, normals, point_set.uv, point_set.deviation, metadata), facts
+
+
+def checked(point_set):
+    """A copy of point_set with float arrays, str labels and normalised normals.
+
+    ValueError naming the problem: no points, wrong shapes, NaN or infinite values, a normal whose
+    length differs from 1 by more than 1e-3.
+    """
+    points = np.asarray(point_set.points, dtype=float)
+    count = len(points)
+    if count == 0:
+        raise ValueError("the point set has no points")
+    if points.shape != (count, 3):
+        raise ValueError(f"points must be an (N, 3) array in mm, got shape {points.shape}")
+    normals = np.asarray(point_set.normals, dtype=float)
+    if normals.shape != (count, 3):
+        raise ValueError(
+            f"normals must be an (N, 3) array like the points {points.shape}, got {normals.shape}"
+        )
+    if len(point_set.labels) != count:
+        raise ValueError(f"{len(point_set.labels)} labels for {count} points")
+    labels = [str(label) for label in point_set.labels]
+    _check_finite("points", points, labels)
+    _check_finite("normals", normals, labels)
+    lengths = np.linalg.norm(normals, axis=1)
+    bad = np.flatnonzero(np.abs(lengths - 1.0) > UNIT_TOLERANCE)
+    if bad.size:
+        raise ValueError(f"the normal of point {labels[bad[0]]} has length {lengths[bad[0]]:.6g}; "
+                         "approach vectors must be unit vectors")
+    uv = _optional(point_set.uv, (count, 2), "uv", labels)
+    deviation = _optional(point_set.deviation, (count,), "deviation", labels)
+    return PointSet(labels, points, normals / lengths[:, None], uv, deviation, dict(point_set.metadata))
+
+
+def _check_finite(name, values, labels):
+    """ValueError naming the first point whose row of values (N, k) is not finite."""
+    bad = np.flatnonzero(~np.all(np.isfinite(values.reshape(len(labels), -1)), axis=1))
+    if bad.size:
+        raise ValueError(
+            f"{name} of point {labels[bad[0]]} contain NaN or infinite values ({bad.size} points)"
+        )
+
+
+def _optional(values, shape, name, labels):
+    """values as a finite float array of shape, or None when None; ValueError otherwise."""
+    if values is None:
+        return None
+    array = np.asarray(values, dtype=float)
+    if array.shape != shape:
+        raise ValueError(f"{name} must have shape {shape}, got {array.shape}")
+    _check_finite(name, array, labels)
+    return array
+
+
+def reordered(point_set, order):
+    """point_set with its points, labels and per-point values in order (N,) int."""
+    return PointSet([point_set.labels[i] for i in order], point_set.points[order], point_set.normals[order],
+                    _taken(point_set.uv, order), _taken(point_set.deviation, order), point_set.metadata)
+
+
+def _taken(values, order):
+    """values[order], or None for None."""
+    return None if values is None else values[order]

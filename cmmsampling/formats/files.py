@@ -1,0 +1,117 @@
+"""Writing a point file so that it is whole or not there: a temporary file beside the target,
+fsync, then a rename; the temporary files of writes killed midway are removed later."""
+import os
+import re
+import tempfile
+
+class ExportError(OSError):
+    """A point file could not be written; the message names the path and the reason."""
+
+
+# The temporary files of write_atomically: .<file name>.<process id>.<random>.tmp
+TEMPORARY = re.compile(r"^\..+\.(?P<pid>\d+)\.[A-Za-z0-9_]{8}\.tmp$")
+
+
+def check_writable(path):
+    """ExportError naming the path and the reason unless a file can be written at path: the
+    folder exists and takes new files (a temporary file is created there and removed), and path
+    is no folder. Returns the absolute path. For checking output paths before a long run."""
+    target = os.path.abspath(os.fspath(path))
+    if os.path.isdir(target):
+        raise ExportError(f"could not write {target}: it is a folder; give a file name")
+    descriptor, temporary = _temporary_file(target)
+    os.close(descriptor)
+    os.unlink(temporary)
+    return target
+
+
+def _temporary_file(target):
+    """(descriptor, path) of a new temporary file beside target, named after it and this process;
+    ExportError naming the reason when the folder takes no new file."""
+    try:
+        descriptor, temporary = tempfile.mkstemp(
+            prefix=f".{os.path.basename(target)}.{os.getpid()}.", suffix=".tmp",
+            dir=os.path.dirname(target))
+    except OSError as exc:
+        raise ExportError(f"could not write {target}: {_reason(exc, target)}") from exc
+    return descriptor, temporary
+
+
+def remove_stale_temporaries(folder):
+    """Remove the temporary files that writes killed midway (kill -9, power loss) left in folder:
+    those of write_atomically whose process is gone. Returns the paths removed."""
+    removed = []
+    for name in os.listdir(folder):
+        match = TEMPORARY.match(name)
+        if match and not _process_alive(int(match["pid"])):
+            try:
+                os.unlink(os.path.join(folder, name))
+                removed.append(os.path.join(folder, name))
+            except OSError:
+                pass
+    return removed
+
+
+def _process_alive(pid):
+    """True when a process with this id runs on this machine (or may: no permission to ask)."""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+def write_atomically(path, text, encoding):
+    """Write text to path through a temporary file in the same folder (fsync, then os.replace).
+
+    On any failure the temporary file is removed and an existing file at path is untouched;
+    temporary files of earlier writes that were killed midway are removed first
+    (:func:`remove_stale_temporaries`). Returns the absolute path; ExportError naming the path
+    and the reason when it cannot be written.
+    """
+    target = os.path.abspath(os.fspath(path))
+    folder = os.path.dirname(target)
+    data = text.encode(encoding)
+    descriptor, temporary = _temporary_file(target)
+    remove_stale_temporaries(folder)
+    try:
+        with os.fdopen(descriptor, "wb") as stream:
+            stream.write(data)
+            stream.flush()
+            os.fsync(stream.fileno())
+        os.chmod(temporary, _file_mode(target))
+        os.replace(temporary, target)
+    except BaseException as exc:
+        os.unlink(temporary)
+        if isinstance(exc, OSError):
+            raise ExportError(f"could not write {target}: {_reason(exc, target)}") from exc
+        raise
+    return target
+
+
+def _reason(exc, target):
+    """Why target could not be written, in words, from the OSError raised."""
+    folder = os.path.dirname(target)
+    if isinstance(exc, NotADirectoryError):
+        blocker = folder
+        while blocker and not os.path.exists(blocker):
+            blocker = os.path.dirname(blocker)
+        return f"{blocker} is a file, not a folder"
+    if isinstance(exc, FileNotFoundError) and not os.path.isdir(folder):
+        return f"the folder {folder} does not exist"
+    if isinstance(exc, IsADirectoryError):
+        return f"{target} is a folder"
+    if isinstance(exc, PermissionError):
+        return f"no permission to write in {folder} ({exc.strerror})"
+    return f"the folder {folder} takes no new files ({exc.strerror or exc}); choose another folder"
+
+
+def _file_mode(target):
+    """Permission bits for the new file: those of the file it replaces, else 0o666 less the umask."""
+    if os.path.exists(target):
+        return os.stat(target).st_mode & 0o7777
+    umask = os.umask(0)
+    os.umask(umask)
+    return 0o666 & ~umask

@@ -1,0 +1,54 @@
+"""Point files: the formats probe points are written in and read from, one module each
+(:mod:`.dmis`, :mod:`.xyzijk`, :mod:`.csv_points`), found by name or by a file's extension.
+
+All three hold, per point, x, y, z in mm and the unit approach vector i, j, k (out of the
+material: the probe travels along -ijk). DMIS and CSV also hold labels and ``key: value``
+comments with the facts of the points (source face, strategy, frame, probe radius, deviation
+figures); CSV adds the face parameters u, v and each point's deviation where known.
+"""
+import os
+
+from ..strategies.validation import check_choice
+from . import csv_points, dmis, xyzijk
+
+MODULES = {"dmis": dmis, "xyz": xyzijk, "csv": csv_points}
+FORMATS = {name: module.DESCRIPTION for name, module in MODULES.items()}
+EXTENSIONS = {extension: name for name, module in MODULES.items() for extension in module.EXTENSIONS}
+READER_KEYS = ("format", "path", "dmis_features", "xyz_units")
+
+
+def resolve_format(path, format=None):
+    """The format name for path: ``format`` if given, else from the extension (see EXTENSIONS).
+
+    ValueError listing the formats and their extensions when neither tells.
+    """
+    if format is not None:
+        return check_choice("format", str(format).lower(), list(FORMATS))
+    extension = os.path.splitext(os.fspath(path))[1].lower()
+    if extension in EXTENSIONS:
+        return EXTENSIONS[extension]
+    known = "; ".join(
+        f"{name!r} ({', '.join(e for e, f in EXTENSIONS.items() if f == name)})" for name in FORMATS
+    )
+    raise ValueError(
+        f"cannot tell the format of {os.fspath(path)!r} from its extension {extension!r}; "
+        f"use one of these extensions or give format=: {known}"
+    )
+
+
+def read_points(path, format=None):
+    """Read probe points from a DMIS, PC-DMIS XYZ or CSV file (format from the extension unless given).
+
+    DMIS: the FEAT/POINT,CART statements (the actual ``FA(...)`` ones of a DMIS output file when
+    there are any, else the nominal ``F(...)`` ones); XYZ: labels P1..PN by position, INCH files
+    converted to mm; CSV: label, x..k and, where present, u, v and deviation.
+    Metadata stated in the file's comments comes back in ``metadata`` (``probe_radius_mm``, ``frame``,
+    ``frame_origin_mm``, ... where stated), plus ``format`` and ``path``.
+    Returns a PointSet; ValueError naming the file and line for what cannot be read.
+    """
+    fmt = resolve_format(path, format)
+    with open(path, encoding="utf-8", errors="replace", newline="") as stream:
+        text = stream.read()
+    point_set = MODULES[fmt].read(text, os.fspath(path))
+    point_set.metadata.update({"format": fmt, "path": os.path.abspath(path)})
+    return point_set

@@ -1,0 +1,88 @@
+"""Measured points against the CAD face: OCC closest-point distances, signed (the reverse flow of
+an export: points a CMM measured, read from its file, judged against the face they came from)."""
+import os
+from dataclasses import dataclass
+
+import numpy as np
+
+from .formats.exporting import as_point_set, checked
+from .formats.frames import placement_from_metadata, resolve_frame, to_global
+from .formats.pointfiles import read_points
+from .geometry.freecad_env import import_part
+from .geometry.surface import as_face
+from .strategies.validation import check_real
+
+Part = import_part()
+import FreeCAD  # noqa: E402  (importable once import_part() has set the path)
+
+
+@dataclass(frozen=True)
+class MeasuredDeviation:
+    """Measured points against the CAD face.
+
+    labels: N strings; distances: (N,) mm, signed closest-point distance of each contact point from
+    the face, positive outside the material (excess), negative inside; closest: (N, 3) mm, global,
+    the closest points on the face; probe_radius: mm, taken off the ball-centre distances.
+    """
+
+    labels: list
+    distances: np.ndarray
+    closest: np.ndarray
+    probe_radius: float
+
+    @property
+    def maximum(self):
+        """Largest |distance|, mm."""
+        return float(np.abs(self.distances).max())
+
+    @property
+    def mean(self):
+        """Mean |distance|, mm."""
+        return float(np.abs(self.distances).mean())
+
+    @property
+    def rms(self):
+        """Root mean square distance, mm."""
+        return float(np.sqrt(np.mean(self.distances ** 2)))
+
+    def summary(self):
+        """The figures as a dict: n, max_mm, mean_mm, rms_mm, lowest_mm and highest_mm (signed)."""
+        return {"n": len(self.labels), "max_mm": self.maximum, "mean_mm": self.mean, "rms_mm": self.rms,
+                "lowest_mm": float(self.distances.min()), "highest_mm": float(self.distances.max())}
+
+
+def measured_deviation(face, points, *, frame=None, probe_radius=None):
+    """How far measured points lie from the CAD face: OCC closest-point distances, signed.
+
+    face: a Part.Face (or a shape with one face); points: a path to a DMIS/XYZ/CSV file, a
+    PointSet, a SamplingResult or a document object whose Proxy has point_set(obj).
+    frame: the local coordinate system the points are given in (as in :func:`export`); None takes
+    the frame the file states (global when none). probe_radius: mm; the points are ball centres
+    and the radius is taken off each distance; None takes the radius the file states (0 when none).
+    Returns a MeasuredDeviation (distances positive where material is in excess).
+    """
+    face = as_face(face)
+    point_set = read_points(points) if isinstance(points, (str, os.PathLike)) else as_point_set(points)
+    placement = resolve_frame(frame)[0] if frame is not None else placement_from_metadata(point_set.metadata)
+    radius = (float(point_set.metadata.get("probe_radius_mm", 0.0)) if probe_radius is None
+              else check_real("probe_radius", probe_radius, minimum=0.0))
+    measured = checked(point_set)
+    positions = measured.points
+    if placement is not None:
+        positions = to_global(measured.points, measured.normals, placement)[0]
+    closest, normals, distances = closest_points(face, positions)
+    side = np.sign(np.einsum("ij,ij->i", positions - closest, normals))
+    return MeasuredDeviation(measured.labels, side * distances - radius, closest, radius)
+
+
+def closest_points(face, points):
+    """For points (N, 3) mm: the closest points on face (N, 3) mm, the face's outward unit normals
+    there (N, 3) and the distances (N,) mm, by OCC (``face.distToShape``)."""
+    rows = []
+    for point in points:
+        distance, pairs, _ = face.distToShape(Part.Vertex(FreeCAD.Vector(*point)))
+        foot = pairs[0][0]
+        u, v = face.Surface.parameter(foot)
+        rows.append((*foot, *face.normalAt(u, v), distance))
+    data = np.array(rows, dtype=float)
+    return data[:, :3], data[:, 3:6], data[:, 6]

@@ -1,0 +1,41 @@
+"""What the workbench's document objects are, told by their proxy's Type (FEM's way), and the
+face that probe points were made on.
+
+Both the document layer (cmmsampling.document) and the view providers (cmmsampling.gui) read
+this module, so neither imports the other's classes: the view providers never import document.
+"""
+from .geometry.freecad_env import import_part
+
+Part = import_part()
+
+PROBE_POINTS = "CMMSampling::ProbePoints"
+SUBSTITUTE_SURFACE = "CMMSampling::SubstituteSurface"
+
+
+def type_of(obj):
+    """The Type of obj's Python proxy ('' for objects without one)."""
+    return getattr(getattr(obj, "Proxy", None), "Type", "")
+
+
+def is_probe_points(obj):
+    """True for a probe-points object of this workbench."""
+    return type_of(obj) == PROBE_POINTS
+
+
+def is_substitute_surface(obj):
+    """True for a substitute-surface object of this workbench."""
+    return type_of(obj) == SUBSTITUTE_SURFACE
+
+
+def source_face(points):
+    """The probe points' source face as it is now: (Part.Face, None), or (None, why not)."""
+    if points.Source is None:
+        if points.SourceName:
+            return None, f"its source face {points.SourceName} was deleted"
+        return None, "it was made without a source face"
+    obj, names = points.Source
+    name = names[0] if names else ""
+    face = obj.getSubObject(name) if name else None
+    if not isinstance(face, Part.Face):
+        return None, f"{obj.Label} has no {name or 'face'} any more"
+    return face, None

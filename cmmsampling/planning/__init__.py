@@ -1,0 +1,1 @@
+"""Beyond one run on one face: the probe path. Imports the rooms below it."""

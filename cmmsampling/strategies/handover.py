@@ -1,0 +1,46 @@
+"""A run made elsewhere in this process, handed over to the one call that would make it again.
+
+The task panels run sample() and compare() in a worker thread (progress, cancel) and then echo
+the call in FreeCAD's Python console, where it must not run a second time; replayed as a macro
+in another session, the same line runs it. The echoed call takes what was handed over when its
+face and its arguments are exactly those of the run, and only once.
+"""
+import inspect
+
+_HANDED = {}
+
+
+def give(function, face, arguments, value):
+    """Let the next ``function(face, **arguments)`` in this process return ``value`` at once.
+
+    function: the API function (sample or compare); face: the Part.Face it ran on (the same
+    shape, ``isSame``); arguments: its keyword arguments other than face and progress.
+    """
+    _HANDED[function.__qualname__] = (face, full_call(function, arguments), value)
+
+
+def take(function, face, arguments):
+    """What was handed over to exactly this call (face and arguments), or None; what was handed
+    over to ``function`` is dropped either way, so that a later call computes."""
+    handed = _HANDED.pop(function.__qualname__, None)
+    if handed is None:
+        return None
+    handed_face, handed_call, value = handed
+    same_face = isinstance(face, type(handed_face)) and face.isSame(handed_face)
+    return value if same_face and repr(handed_call) == repr(full_call(function, arguments)) else None
+
+
+def full_call(function, arguments):
+    """function's keyword arguments (a dict, without the face and progress) with the defaults
+    filled in and a ``**options`` catch-all flattened, sorted, for comparing two calls."""
+    signature = inspect.signature(function)
+    bound = signature.bind(None, **arguments)
+    bound.apply_defaults()
+    call = dict(bound.arguments)
+    first = next(iter(signature.parameters))
+    call.pop(first)
+    call.pop("progress", None)
+    for name, parameter in signature.parameters.items():
+        if parameter.kind is inspect.Parameter.VAR_KEYWORD:
+            call.update(call.pop(name))
+    return dict(sorted(call.items()))

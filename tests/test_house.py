@@ -1,0 +1,98 @@
+"""The package's rooms and the one-way imports between them, read from the code itself.
+
+geometry <- fitting <- strategies <- planning <- formats <- the hall (the package's face, object_types, measurement,
+study, report, document, cli) <- gui: a module imports from its own room or from rooms below it,
+and no modules import each other in a circle. The one arrow allowed up is FreeCAD's pattern for
+document objects: the document layer attaches view providers when the GUI is up.
+"""
+import ast
+import os
+
+import pytest
+
+PACKAGE = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "cmmsampling")
+ROOMS = ("geometry", "fitting", "strategies", "planning", "formats", "hall", "gui")
+HALL = ("__init__", "object_types", "measurement", "study", "report", "document", "cli", "__main__")
+ALLOWED_UP = {("document", "gui.view_providers")}
+
+
+def modules():
+    """{dotted name inside the package: path} of every module."""
+    found = {}
+    for folder, _, names in os.walk(PACKAGE):
+        for name in names:
+            if name.endswith(".py"):
+                path = os.path.join(folder, name)
+                parts = os.path.relpath(path, PACKAGE)[:-3].split(os.sep)
+                found[".".join(parts)] = path
+    return found
+
+
+def imports(name, path):
+    """The package's modules that module ``name`` imports (at the top or inside functions)."""
+    known = modules()
+    package = name.split(".")[:-1]
+    found = set()
+    for node in ast.walk(ast.parse(open(path, encoding="utf-8").read())):
+        if isinstance(node, ast.ImportFrom) and node.level:
+            base = package[:len(package) - node.level + 1]
+            target = ".".join(base + ([node.module] if node.module else []))
+            for alias in node.names:
+                candidate = f"{target}.{alias.name}".strip(".")
+                found.add(candidate if candidate in known else (target or "__init__"))
+        elif isinstance(node, ast.ImportFrom) and (node.module or "").startswith("cmmsampling"):
+            found.add(node.module.partition(".")[2] or "__init__")
+    return {module if module in known else f"{module}.__init__" for module in found} - {name}
+
+
+def room(module):
+    """The room of a module: its folder, or 'hall' for the package's own top level."""
+    first = module.split(".")[0]
+    return "hall" if first in HALL else first
+
+
+def level(module):
+    """(room's rank, rank inside the hall) of a module: lower is further down the house."""
+    first = module.split(".")[0]
+    return ROOMS.index(room(module)), HALL.index(first) if first in HALL else 0
+
+
+GRAPH = {name: imports(name, path) for name, path in modules().items()}
+
+
+def test_every_module_lives_in_a_room():
+    assert all(room(module) in ROOMS for module in GRAPH), sorted(GRAPH)
+    assert {room(module) for module in GRAPH} == set(ROOMS)
+
+
+@pytest.mark.parametrize("module", sorted(GRAPH))
+def test_no_import_runs_up_the_house(module):
+    up = [target for target in GRAPH[module]
+          if level(target) > level(module) and (module, target) not in ALLOWED_UP]
+    assert not up, f"{module} ({room(module)}) imports from higher up: {up}"
+
+
+def test_no_modules_import_each_other_in_a_circle():
+    state = {}
+
+    def visit(module, trail):
+        state[module] = "open"
+        for target in GRAPH[module]:
+            if (module, target) in ALLOWED_UP:
+                continue
+            if state.get(target) == "open":
+                raise AssertionError(" -> ".join(trail[trail.index(target):] + [target]))
+            if target not in state:
+                visit(target, trail + [target])
+        state[module] = "done"
+
+    for module in sorted(GRAPH):
+        if module not in state:
+            visit(module, [module])
+
+
+def test_the_checker_sees_an_arrow_up_and_a_circle():
+    assert level("gui.commands") > level("document") > level("study") > level("formats.dmis")
+    assert "object_types" in GRAPH["gui.view_providers"] and "document" not in GRAPH["gui.view_providers"]
+    assert "gui.view_providers" in GRAPH["document"]
+    assert "geometry.surface" in GRAPH["fitting.occ_surface"]
