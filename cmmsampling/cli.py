@@ -20,6 +20,8 @@ examples:
   python -m cmmsampling faces part.step
   python -m cmmsampling sample part.step --face 3 -n 49 --out face3.dmi --out face3.csv
   python -m cmmsampling sample part.igs --face 1 --strategy pso --edge-offset 2 --fcstd out.FCStd
+  python -m cmmsampling plan part.step --faces 1,3,5 --tolerance 0.05 --out plan.dmi --out plan.csv
+  python -m cmmsampling plan part.step --points 300 --out plan.dmi --scheduler tcp://host:8786
   python -m cmmsampling demo"""
 
 
@@ -42,7 +44,50 @@ def build_parser():
     faces.add_argument("file", help="a .step/.stp, .iges/.igs or .brep/.brp file")
     one = commands.add_parser("sample", help="sample one face of a STEP, IGES or BREP file")
     _sample_arguments(one)
+    part = commands.add_parser("plan", help="plan a whole part: every face (or --faces) to a tolerance "
+                                            "or a total of points, in parallel, written as one program")
+    _plan_arguments(part)
     return parser
+
+
+def _plan_arguments(parser):
+    """Arguments of the ``plan`` sub-command."""
+    parser.add_argument("file", help="a .step/.stp, .iges/.igs or .brep/.brp file (lengths in mm)")
+    parser.add_argument("--faces", type=_face_numbers, default=None, metavar="1,3,5",
+                        help="the faces to plan, numbered as 'faces' lists them (default: all)")
+    goal = parser.add_mutually_exclusive_group(required=True)
+    goal.add_argument("--tolerance", type=float, metavar="MM",
+                      help="each face gets the fewest points whose substitute deviates at most this")
+    goal.add_argument("--points", type=int, metavar="N",
+                      help="points for the whole part, spent where the worst face gains most")
+    parser.add_argument("--strategy", default=BEST_STRATEGY, choices=list(STRATEGIES), metavar="STRATEGY",
+                        help=f"where the points go on each face (default {BEST_STRATEGY})")
+    parser.add_argument("--max-points", type=int, default=400, metavar="N",
+                        help="with --tolerance, the most points a face may get (default 400)")
+    parser.add_argument("--time-limit", type=float, default=None, metavar="S",
+                        help="seconds each run of the optimal strategy may take (default: until it converges)")
+    parser.add_argument("--processes", type=int, default=None, metavar="K",
+                        help="local processes the faces run on (default: all cores)")
+    parser.add_argument("--scheduler", default=None, metavar="tcp://HOST:PORT",
+                        help="run the faces on this Dask cluster instead of local processes")
+    parser.add_argument("--out", action="append", default=[], metavar="FILE",
+                        help="write all points as one program in one short probe path: .dmi, .xyz or "
+                             ".csv (with a face column); repeat for several files")
+    parser.add_argument("--probe-radius", type=float, default=0.0, metavar="MM",
+                        help="write ball centres instead of contact points (default 0)")
+    parser.add_argument("--fcstd", metavar="FILE",
+                        help="also save a FreeCAD document: the part, one group per face, the plan's table")
+
+
+def _face_numbers(text):
+    """'1,3,5' -> [1, 3, 5]; argparse's error for anything else."""
+    try:
+        numbers = [int(part) for part in text.split(",") if part.strip()]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"face numbers are whole numbers separated by commas, got {text!r}")
+    if not numbers:
+        raise argparse.ArgumentTypeError("give at least one face number")
+    return numbers
 
 
 def _sample_arguments(parser):
@@ -285,6 +330,62 @@ def run_sample(args):
     return 0
 
 
+def run_plan(args):
+    """Plan the faces of a CAD file and write the program and the document asked for."""
+    from .document import add_plan_to_document
+    from .formats.exporting import export
+    from .planning.part_plan import plan
+
+    _check_outputs(args)
+    shape = read_shape(args.file)
+    options = {} if args.time_limit is None or args.strategy != BEST_STRATEGY else {"time_limit": args.time_limit}
+    progress = FaceProgress()
+    result = plan(shape, tolerance=args.tolerance, n_total=args.points, strategy=args.strategy, faces=args.faces,
+                  n_max=args.max_points, processes=args.processes, scheduler=args.scheduler, progress=progress,
+                  **options)
+    progress.finish()
+    goal = f"tolerance {args.tolerance:g} mm" if args.tolerance is not None else f"{args.points} points"
+    print(f"{os.path.basename(args.file)}: {len(result.faces)} faces, {goal}, {args.strategy}: "
+          f"{result.n_total} points on {len(result.placed)} faces in {result.seconds:.1f} s")
+    print(result.table())
+    for path in args.out:
+        print(export(result, path, probe_radius=args.probe_radius, order="short_path"))
+    if args.fcstd:
+        _save_plan_document(result, args, add_plan_to_document)
+    return 0
+
+
+class FaceProgress(TerminalProgress):
+    """Progress of a plan on stderr: faces done of all."""
+
+    def __init__(self):
+        super().__init__("plan")
+
+    def __call__(self, done, total, message):
+        self.stream.write(f"\rplan {done}/{total} faces, {message[:50]:<50}")
+        self.stream.flush()
+        return False
+
+
+def _save_plan_document(result, args, add_plan_to_document):
+    """Save a plan in a new FreeCAD document with the source shape."""
+    import FreeCAD
+
+    document = FreeCAD.newDocument("cmmsampling")
+    try:
+        part = document.addObject("Part::Feature", os.path.splitext(os.path.basename(args.file))[0])
+        part.Shape = read_shape(args.file)
+        document.recompute()
+        add_plan_to_document(result, document, part)
+        try:
+            document.saveAs(os.path.abspath(args.fcstd))
+        except Exception as exc:   # FreeCAD raises its own exception types here
+            raise OSError(f"could not save {args.fcstd}: {_freecad_reason(exc)}") from exc
+        print(f"saved {args.fcstd}")
+    finally:
+        FreeCAD.closeDocument(document.Name)
+
+
 def _check_outputs(args):
     """ValueError or OSError before any computation when an output cannot be written: an
     unknown point-file extension, an --fcstd name without .FCStd, a folder that takes no file."""
@@ -342,7 +443,7 @@ def main(argv=None):
     line saying what to do), 1 for anything unexpected; a traceback only with --debug."""
     args = build_parser().parse_args(argv)
     try:
-        return {"demo": run_demo, "faces": run_faces, "sample": run_sample}[args.command](args)
+        return {"demo": run_demo, "faces": run_faces, "sample": run_sample, "plan": run_plan}[args.command](args)
     except (ValueError, TypeError, OSError) as exc:
         return _fail(args, f"error: {exc}", 2)
     except MemoryError:

@@ -70,16 +70,83 @@ def add_to_document(result, doc, source=None, hide_source=False, hide_others=Tru
         if hide_others:
             hide_results(doc)
         group.Label = _group_label(result, source)
-        surface = make_substitute_surface(doc)
-        report = doc.addObject("Spreadsheet::Sheet", "DeviationReport")
-        report.Label = "Deviation report"
-        points = make_probe_points(doc, source, surface, report)
-        group.addObjects([points, surface, report])
-        write_result(points, result, dict(result.settings), result.timings.get("total_s", 0.0))
+        objects = _fill_result_group(group, result, source)
         if source is not None and hide_source:
             source[0].Visibility = False
-        recompute(doc, [points, surface, report])
+        recompute(doc, objects)
     return group
+
+
+def _fill_result_group(group, result, source):
+    """Add a result's probe points, substitute surface and deviation report to ``group`` (inside a
+    transaction); returns the three objects."""
+    doc = group.Document
+    surface = make_substitute_surface(doc)
+    report = doc.addObject("Spreadsheet::Sheet", "DeviationReport")
+    report.Label = "Deviation report"
+    points = make_probe_points(doc, source, surface, report)
+    group.addObjects([points, surface, report])
+    write_result(points, result, dict(result.settings), result.timings.get("total_s", 0.0))
+    return [points, surface, report]
+
+
+def add_plan_to_document(plan, doc, part, hide_others=True):
+    """Add a PartPlan to ``doc`` in one transaction (one Undo removes it all).
+
+    plan: a :class:`cmmsampling.planning.part_plan.PartPlan` of ``part``'s faces (a document
+    object whose shape the plan's face names, Face1.., refer to); hide_others: as in
+    :func:`add_to_document`. Creates a group "Plan <part label> (<strategy>)" holding a sub-group
+    per face with points (as :func:`add_to_document` makes it) and a "Plan report" spreadsheet:
+    face, area (mm^2), N, maximum deviation and bound (mm), tolerance met, notes, one row per
+    face and a row for the part. Returns the group.
+    """
+    sources = [_check_source((part, face.name), doc) for face in plan.placed]
+    results = [plan.result(face.name) for face in plan.placed]
+    with transaction(doc, "Add part plan"):
+        group = doc.addObject("App::DocumentObjectGroup", "Plan")
+        if hide_others:
+            hide_results(doc)
+        group.Label = f"Plan {part.Label} ({plan.strategy})"
+        objects = []
+        for source, result in zip(sources, results):
+            face_group = doc.addObject("App::DocumentObjectGroup", "Sampling")
+            face_group.Label = _group_label(result, source)
+            group.addObject(face_group)
+            objects += _fill_result_group(face_group, result, source)
+        sheet = doc.addObject("Spreadsheet::Sheet", "PlanReport")
+        sheet.Label = "Plan report"
+        group.addObject(sheet)
+        write_plan_report(sheet, plan)
+        recompute(doc, objects + [sheet])
+    return group
+
+
+PLAN_COLUMNS = ("Face", "Area (mm^2)", "N", "Max deviation (mm)", "Bound (mm)", "Tolerance met", "Notes")
+
+
+def write_plan_report(sheet, plan):
+    """The per-part table of a plan in a spreadsheet: a title, the goal, one row per face and a
+    row for the part (points in all, the worst face's deviation)."""
+    goal = (f"tolerance {plan.tolerance:g} mm" if plan.tolerance is not None else f"{plan.budget} points")
+    rows = [("CMM sampling plan",), ("Goal", goal), ("Strategy", plan.strategy), (), PLAN_COLUMNS]
+    for face in plan.faces:
+        met = "" if face.met is None else ("yes" if face.met else "no")
+        rows.append((face.name, f"{face.area:.2f}", face.n, _figure(face.maximum), _figure(face.bound), met,
+                     face.reason))
+    rows.append(("Part", f"{sum(f.area for f in plan.faces):.2f}", plan.n_total, _figure(plan.worst), "",
+                 "", f"{len(plan.refused)} faces without points" if plan.refused else ""))
+    for row, values in enumerate(rows, start=1):
+        for column, value in zip(REPORT_COLUMNS, values):
+            sheet.set(f"{column}{row}", _cell_text(value))
+    sheet.setStyle("A1", "bold")
+    sheet.setStyle("A5:G5", "bold")
+    sheet.setColumnWidth("A", 110)
+    sheet.setColumnWidth("G", 400)
+
+
+def _figure(value):
+    """A deviation in mm as text at the CMM's resolution ('' for NaN)."""
+    return "" if not np.isfinite(value) else f"{value:.6f}"
 
 
 def hide_results(doc):

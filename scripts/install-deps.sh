@@ -1,10 +1,11 @@
 #!/usr/bin/env bash
 # Install what cmmsampling needs on Debian (12, 13 or sid), only what is missing: FreeCAD (Part/OCC),
-# numpy, scipy, Xvfb for the GUI tests, pytest, hypothesis, matplotlib, threadpoolctl.
+# numpy, scipy, Xvfb for the GUI tests, pytest, hypothesis, matplotlib, threadpoolctl, Dask's
+# distributed (a part plan on a cluster).
 # --list prints the package names instead (scripts/test-matrix.sh installs the same into its roots).
 set -euo pipefail
 PACKAGES=(freecad python3-numpy python3-scipy xvfb xauth python3-pytest python3-matplotlib
-          python3-hypothesis python3-threadpoolctl)
+          python3-hypothesis python3-threadpoolctl python3-distributed)
 if [ "${1:-}" = "--list" ]; then
   printf '%s\n' "${PACKAGES[@]}"
   exit 0

@@ -15,11 +15,12 @@ EXTENSIONS = (".csv",)
 ENCODING = "utf-8"
 CSV_COMMENT = "#"
 CSV_COLUMNS = ("label", "x", "y", "z", "i", "j", "k", "u", "v")
+TEXT_COLUMNS = ("label", "face")
 
 
 def write(point_set, facts, options):
-    """CSV: '# key: value' comments, header label,x,y,z,i,j,k,u,v[,deviation], one row per point
-    (u, v empty where unknown)."""
+    """CSV: '# key: value' comments, header label,x,y,z,i,j,k,u,v[,deviation][,face], one row per
+    point (u, v empty where unknown; face: the face a plan's point lies on)."""
     count = len(point_set)
     columns = [np.array(point_set.labels, dtype=object)[:, None],
                fixed(point_set.points, COORDINATE_DECIMALS), fixed(point_set.normals, VECTOR_DECIMALS),
@@ -28,6 +29,9 @@ def write(point_set, facts, options):
     if point_set.deviation is not None:
         columns.append(fixed(point_set.deviation, COORDINATE_DECIMALS)[:, None])
         header.append("deviation")
+    if point_set.faces is not None:
+        columns.append(np.array(point_set.faces, dtype=object)[:, None])
+        header.append("face")
     buffer = io.StringIO()
     buffer.write("".join(f"{line}\n" for line in metadata_comment_lines(
         comment_entries(point_set, facts, options), f"{CSV_COMMENT} ")))
@@ -39,7 +43,7 @@ def write(point_set, facts, options):
 
 def read(text, path="<text>"):
     """PointSet from CSV: leading ``# key: value`` comment lines, a header with label,x,y,z,i,j,k and
-    optionally u,v (empty where unknown) and deviation (mm), then one line per point."""
+    optionally u,v (empty where unknown), deviation (mm) and face, then one line per point."""
     lines = list(enumerate(text.splitlines(), start=1))
     lines = [(n, line) for n, line in lines if line.strip()]
     head = next((i for i, (_, line) in enumerate(lines) if not line.startswith(CSV_COMMENT)), len(lines))
@@ -58,7 +62,8 @@ def read(text, path="<text>"):
     cells = [row + [""] * (len(header) - len(row)) for row in rows[1:]]
     columns = dict(zip(header, map(list, zip(*cells))))
     line_numbers = [n for n, _ in numbered[1:]]
-    numbers = {name: _column(columns[name], name, path, line_numbers) for name in header if name != "label"}
+    numbers = {name: _column(columns[name], name, path, line_numbers) for name in header
+               if name not in TEXT_COLUMNS}
     empty = np.full(len(cells), np.nan)
     return PointSet(
         labels=columns["label"],
@@ -67,6 +72,7 @@ def read(text, path="<text>"):
         uv=_known(np.column_stack([numbers.get(c, empty) for c in "uv"]), "u, v", path),
         deviation=_known(numbers.get("deviation", empty), "deviation", path),
         metadata=parse_metadata_comments(comments),
+        faces=columns.get("face"),
     )
 
 

@@ -11,6 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..planning.part_plan import PartPlan
 from ..planning.probe_path import short_path, unchanged
 from ..strategies.result import SamplingResult
 from ..strategies.validation import check_choice, check_real
@@ -127,11 +128,14 @@ def _stem(path):
 
 
 def as_point_set(source):
-    """The PointSet of a PointSet, a SamplingResult or a document object whose Proxy has point_set(obj)."""
+    """The PointSet of a PointSet, a SamplingResult, a PartPlan or a document object whose Proxy
+    has point_set(obj)."""
     if isinstance(source, PointSet):
         return source
     if isinstance(source, SamplingResult):
         return PointSet.from_result(source)
+    if isinstance(source, PartPlan):
+        return plan_point_set(source)
     method = getattr(getattr(source, "Proxy", None), "point_set", None)
     if callable(method):
         point_set = method(source)
@@ -144,6 +148,27 @@ def as_point_set(source):
         f"cannot export a {type(source).__name__}; give a PointSet, a SamplingResult or a document "
         "object whose Proxy has point_set(obj)"
     )
+
+
+def plan_point_set(plan):
+    """The points of a PartPlan as one PointSet: labels '<face>_P<i>' (unique across the faces),
+    the face of each point, and the plan's facts (strategy, tolerance or budget, the worst face's
+    deviation, the faces without points and why)."""
+    placed = plan.placed
+    if not placed:
+        raise ValueError("the plan has no points: " + "; ".join(f"{f.name}: {f.reason}" for f in plan.faces))
+    labels = [f"{face.name}_P{i}" for face in placed for i in range(1, face.n + 1)]
+    metadata = {"source": "part plan", "strategy": plan.strategy, "mode": plan.mode, "faces": len(plan.faces),
+                "points_per_face": {face.name: face.n for face in placed}, "worst_max_mm": plan.worst}
+    if plan.tolerance is not None:
+        metadata["tolerance_mm"] = plan.tolerance
+    if plan.budget is not None:
+        metadata["budget"] = plan.budget
+    if plan.refused:
+        metadata["faces_without_points"] = {face.name: face.reason for face in plan.refused}
+    return PointSet(labels, np.concatenate([f.points for f in placed]), np.concatenate([f.normals for f in placed]),
+                    np.concatenate([f.uv for f in placed]), None, metadata,
+                    [face.name for face in placed for _ in range(face.n)])
 
 
 def prepared(point_set, placement, radius, frame_name=""):
@@ -175,7 +200,8 @@ def prepared(point_set, placement, radius, frame_name=""):
     facts["points"] = (f"probe-ball centres (contact point + {total:g} mm * normal)" if total > 0
                        else "contact points on the face")
     metadata = {key: value for key, value in stated.items() if key not in WRITTEN_KEYS}
-    return PointSet(point_set.labels, points, normals, point_set.uv, point_set.deviation, metadata), facts
+    return PointSet(point_set.labels, points, normals, point_set.uv, point_set.deviation, metadata,
+                    point_set.faces), facts
 
 
 def checked(point_set):
@@ -207,7 +233,10 @@ def checked(point_set):
                          "approach vectors must be unit vectors")
     uv = _optional(point_set.uv, (count, 2), "uv", labels)
     deviation = _optional(point_set.deviation, (count,), "deviation", labels)
-    return PointSet(labels, points, normals / lengths[:, None], uv, deviation, dict(point_set.metadata))
+    faces = None if point_set.faces is None else [str(face) for face in point_set.faces]
+    if faces is not None and len(faces) != count:
+        raise ValueError(f"{len(faces)} face names for {count} points")
+    return PointSet(labels, points, normals / lengths[:, None], uv, deviation, dict(point_set.metadata), faces)
 
 
 def _check_finite(name, values, labels):
@@ -233,7 +262,8 @@ def _optional(values, shape, name, labels):
 def reordered(point_set, order):
     """point_set with its points, labels and per-point values in order (N,) int."""
     return PointSet([point_set.labels[i] for i in order], point_set.points[order], point_set.normals[order],
-                    _taken(point_set.uv, order), _taken(point_set.deviation, order), point_set.metadata)
+                    _taken(point_set.uv, order), _taken(point_set.deviation, order), point_set.metadata,
+                    None if point_set.faces is None else [point_set.faces[i] for i in order])
 
 
 def _taken(values, order):

@@ -12,7 +12,8 @@ class PointSet:
     material (the probe travels along -normal); uv: (N, 2) face parameters or None when unknown;
     deviation: (N,) mm, the substitute's distance from the CAD face at each point, or None;
     metadata: JSON-friendly facts about where the points came from (source face, strategy, n,
-    parameters, deviation figures in mm).
+    parameters, deviation figures in mm); faces: N names of the faces the points lie on (a part
+    plan's points), or None.
     """
 
     labels: list
@@ -21,6 +22,7 @@ class PointSet:
     uv: np.ndarray = None
     deviation: np.ndarray = None
     metadata: dict = field(default_factory=dict)
+    faces: list = None
 
     def __len__(self):
         return len(self.labels)

@@ -1,0 +1,103 @@
+"""Part plans: parallel speed-up, and the points a tolerance needs with each strategy.
+
+    /usr/bin/python3 benchmarks/part_plan.py speed      # a 20-face plan on 1 and 2 local
+                                                        # processes and a 2-worker LocalCluster
+    /usr/bin/python3 benchmarks/part_plan.py points     # total points for a tolerance: optimal
+                                                        # against uniform parametric
+
+Prints figures; asserts nothing. The 20 faces are rational and non-rational bicubic patches
+made here from seeds; ``points`` also plans faces of ../shared/testdata/Ventilator.stp when the
+file is there.
+"""
+import argparse
+import os
+import sys
+import time
+
+import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+import cmmsampling  # noqa: E402
+from cmmsampling.geometry.surface import make_bspline_surface  # noqa: E402
+
+VENTILATOR = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "shared", "testdata",
+                          "Ventilator.stp")
+
+
+def patch(seed):
+    """A bicubic patch about 60 x 40 mm with random bumps; rational for odd seeds."""
+    rng = np.random.default_rng(seed)
+    x, y = np.meshgrid(np.linspace(0, 60, 6), np.linspace(0, 40, 5), indexing="ij")
+    z = 6 * np.sin(x / (10 + seed)) * np.cos(y / 9) + rng.normal(0, 1.0, x.shape)
+    weights = rng.uniform(0.6, 1.8, x.shape) if seed % 2 else None
+    return make_bspline_surface(np.stack([x, y, z], -1), (3, 3), weights=weights).toShape()
+
+
+def twenty_faces():
+    return [(f"Patch{seed}", patch(seed)) for seed in range(20)]
+
+
+def timed(label, **arguments):
+    start = time.perf_counter()
+    plan = cmmsampling.plan(twenty_faces(), **arguments)
+    seconds = time.perf_counter() - start
+    print(f"{label:<28} {seconds:7.1f} s  {plan.n_total:5d} points  worst {plan.worst:.4f} mm", flush=True)
+    return seconds, plan
+
+
+def speed(args):
+    import distributed
+
+    settings = dict(tolerance=args.tolerance, strategy=args.strategy, grid=args.grid, edge_offset=1.5, n_max=200)
+    print(f"20 faces, tolerance {args.tolerance} mm, {args.strategy}, grid {args.grid}, {os.cpu_count()} cores")
+    one, first = timed("1 process (this one)", processes=1, **settings)
+    two, second = timed("2 local processes", processes=2, **settings)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+        with distributed.Client(cluster) as client:
+            dask, third = timed("2-worker Dask LocalCluster", scheduler=client, **settings)
+    same = all(a.n == b.n == c.n for a, b, c in zip(first.faces, second.faces, third.faces))
+    print(f"speed-up: 2 processes {one / two:.2f}x, LocalCluster {one / dask:.2f}x; same plan: {same}")
+
+
+def points(args):
+    parts = [("built: 20 patches", twenty_faces(), None)]
+    if os.path.isfile(VENTILATOR):
+        import Part
+
+        parts.append(("Ventilator.stp", Part.read(VENTILATOR), args.ventilator_faces))
+    print(f"tolerance {args.tolerance} mm, grid {args.grid}, optimal time limit {args.time_limit} s per run")
+    for name, shape, faces in parts:
+        totals = {}
+        for strategy, options in (("uniform_parametric", {}), ("optimal", {"time_limit": args.time_limit})):
+            start = time.perf_counter()
+            plan = cmmsampling.plan(shape, tolerance=args.tolerance, strategy=strategy, faces=faces, grid=args.grid,
+                                    n_max=args.n_max, **options)
+            met = [f for f in plan.faces if f.met]
+            totals[strategy] = {f.name: f.n for f in met}
+            print(f"{name:<20} {strategy:<20} {plan.n_total:5d} points, {len(met)} of {len(plan.faces)} faces "
+                  f"meet it, {len(plan.refused)} hold none, {time.perf_counter() - start:.0f} s", flush=True)
+            print(plan.table(), flush=True)
+        both = set(totals["uniform_parametric"]) & set(totals["optimal"])
+        uniform = sum(totals["uniform_parametric"][f] for f in both)
+        optimal = sum(totals["optimal"][f] for f in both)
+        if both:
+            print(f"{name}: on the {len(both)} faces both meet, uniform parametric needs {uniform} points, "
+                  f"optimal {optimal}: {uniform / optimal:.2f}x", flush=True)
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("what", choices=["speed", "points"])
+    parser.add_argument("--tolerance", type=float, default=0.05)
+    parser.add_argument("--strategy", default="uniform_parametric")
+    parser.add_argument("--grid", type=int, default=30)
+    parser.add_argument("--time-limit", type=float, default=5.0)
+    parser.add_argument("--n-max", type=int, default=200)
+    parser.add_argument("--ventilator-faces", type=lambda t: [int(k) for k in t.split(",")],
+                        default=[11, 61, 101, 151, 201, 251])
+    args = parser.parse_args()
+    {"speed": speed, "points": points}[args.what](args)
+
+
+if __name__ == "__main__":
+    main()

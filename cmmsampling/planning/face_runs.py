@@ -1,0 +1,107 @@
+"""Independent per-face runs, in parallel: in this process, on local processes or on a Dask cluster.
+
+A job is plain data (the face as a BREP string, numbers, names) and its outcome is plain data,
+so both cross process and machine boundaries. Local processes are started with this Python
+(also from inside FreeCAD, whose ``sys.executable`` is the FreeCAD binary) by the ``spawn``
+method; a Dask cluster is reached through ``distributed.Client`` (Debian's python3-distributed).
+"""
+import concurrent.futures
+import multiprocessing
+import os
+
+from ..strategies.parallel import python_executable
+
+
+def run_all(function, jobs, processes=None, scheduler=None, progress=None):
+    """``function(job)`` for every job; returns the outcomes in the jobs' order.
+
+    function: a module-level function (picklable); jobs: a list of picklable jobs;
+    processes: local processes (None: all cores; 1 runs here, one job after another);
+    scheduler: a Dask scheduler address ("tcp://host:8786") or a distributed.Client, which then
+    runs the jobs instead of local processes; progress: callable(done, total, message) after
+    each job ends, returning True to cancel: jobs not started are dropped, running ones are
+    stopped, and their outcomes are None.
+    """
+    total = len(jobs)
+    outcomes = [None] * total
+    if scheduler is not None:
+        runner = _dask_runs
+    elif _process_count(processes, total) == 1:
+        runner = _here
+    else:
+        runner = _local_processes
+    runs = runner(function, jobs, processes, scheduler)
+    try:
+        for done, (index, outcome, message) in enumerate(runs, start=1):
+            outcomes[index] = outcome
+            if progress is not None and progress(done, total, message):
+                break
+    finally:
+        runs.close()
+    return outcomes
+
+
+def _process_count(processes, jobs):
+    """Processes to start: the given count (>= 1) or all cores, never more than jobs."""
+    if processes is None:
+        processes = os.cpu_count() or 1
+    if not isinstance(processes, int) or isinstance(processes, bool) or processes < 1:
+        raise ValueError(f"processes must be a whole number >= 1 or None (all cores), got {processes!r}")
+    return max(1, min(processes, jobs))
+
+
+def _here(function, jobs, processes, scheduler):
+    """Each job in this process, in order: (index, outcome, message)."""
+    for index, job in enumerate(jobs):
+        yield index, function(job), _message(job)
+
+
+def _local_processes(function, jobs, processes, scheduler):
+    """The jobs on local processes as they end: (index, outcome, message); closing the
+    generator early stops the processes."""
+    context = multiprocessing.get_context("spawn")
+    executable = python_executable()
+    if executable is not None:
+        context.set_executable(executable)
+    pool = concurrent.futures.ProcessPoolExecutor(_process_count(processes, len(jobs)), mp_context=context)
+    futures = {pool.submit(function, job): index for index, job in enumerate(jobs)}
+    try:
+        for future in concurrent.futures.as_completed(futures):
+            index = futures[future]
+            yield index, future.result(), _message(jobs[index])
+    finally:
+        _stop(pool)
+
+
+def _stop(pool):
+    """Shut a process pool down now: pending jobs cancelled, running processes terminated."""
+    processes = list((getattr(pool, "_processes", None) or {}).values())
+    pool.shutdown(wait=False, cancel_futures=True)
+    for process in processes:
+        if process.is_alive():
+            process.terminate()
+    for process in processes:
+        process.join(5)
+
+
+def _dask_runs(function, jobs, processes, scheduler):
+    """The jobs on a Dask cluster as they end: (index, outcome, message); closing the
+    generator early cancels the jobs still queued or running."""
+    from distributed import Client, as_completed
+
+    client = scheduler if isinstance(scheduler, Client) else Client(scheduler)
+    futures = [client.submit(function, job, pure=False) for job in jobs]
+    where = {future.key: index for index, future in enumerate(futures)}
+    try:
+        for future in as_completed(futures):
+            index = where[future.key]
+            yield index, future.result(), _message(jobs[index])
+    finally:
+        client.cancel([future for future in futures if not future.done()])
+        if client is not scheduler:
+            client.close()
+
+
+def _message(job):
+    """What a finished job's progress line says: its name where it has one."""
+    return f"{getattr(job, 'name', 'job')} done"

@@ -1,0 +1,288 @@
+"""A whole part: points on many faces, to a tolerance or within a total budget, run in parallel.
+
+:func:`plan` takes a shape (all its faces, or those numbered in ``faces``) or a list of faces and
+returns a :class:`PartPlan`: a :class:`FacePlan` per face with its points, its deviation and the
+local bound, or the reason the face holds no points (too narrow for the edge offset, no usable
+area), never silently dropped.
+
+- With a tolerance, each face gets its own fewest N (:func:`points_needed`); faces run in
+  parallel (:mod:`cmmsampling.planning.face_runs`).
+- With a total budget, every face starts at the first pole step (16 points) and the face with
+  the largest deviation takes its next step while the budget lasts (greedy on the faces'
+  deviation curves, run one step at a time). For curves that fall with N this is the best
+  allocation for the worst face: any allocation with a lower maximum must give that face its next
+  step too. Points the worst face cannot use (its next step does not fit) are left unspent.
+"""
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..fitting.substitute import DEFAULT_DEGREE
+from ..geometry.freecad_env import import_part
+from ..geometry.surface import as_face
+from ..strategies.sampling import BEST_STRATEGY, evaluate, probe_edge_offset, sample
+from ..strategies.threads import blas_threads
+from ..strategies.validation import check_int, check_real
+from . import face_runs
+from .points_needed import DEFAULT_MAX_POINTS, points_needed, step_counts
+
+Part = import_part()
+FIT_KEYS = ("fit_degree", "fit_poles", "smoothing", "grid")
+
+
+@dataclass
+class FaceJob:
+    """One face's share of a plan, as plain data: name ('Face3'), the face as BREP text, mode
+    ('tolerance' or 'points'), tolerance (mm) or n, strategy, n_max and the keyword arguments
+    of sample()."""
+
+    name: str
+    brep: str
+    mode: str
+    strategy: str
+    tolerance: float = None
+    n: int = 0
+    n_max: int = DEFAULT_MAX_POINTS
+    arguments: dict = field(default_factory=dict)
+
+
+@dataclass
+class FacePlan:
+    """One face of a plan.
+
+    name: 'Face3'; area: mm^2; n: points (0 when the face holds none); uv (n, 2), points (n, 3)
+    mm, normals (n, 3) unit, out of the material; maximum: the substitute's maximum deviation,
+    mm; bound: the local bound about it, mm (the least maximum that reshaping it could reach);
+    met: the tolerance is met (None without a tolerance); edge_offset: mm; settings: the run's
+    parameters; tried: the N a tolerance search ran (cmmsampling.planning.points_needed.Tried);
+    reason: why the face holds no points, or why no N met the tolerance; seconds: time taken.
+    """
+
+    name: str
+    area: float
+    n: int = 0
+    uv: np.ndarray = None
+    points: np.ndarray = None
+    normals: np.ndarray = None
+    maximum: float = float("nan")
+    bound: float = float("nan")
+    met: bool = None
+    edge_offset: float = 0.0
+    strategy: str = ""
+    settings: dict = field(default_factory=dict)
+    tried: list = field(default_factory=list)
+    reason: str = ""
+    seconds: float = 0.0
+
+    @property
+    def placed(self):
+        """True when the face holds points."""
+        return self.n > 0
+
+
+@dataclass
+class PartPlan:
+    """A plan of a part: faces (FacePlan, in the order given), the mode ('tolerance' or
+    'points'), tolerance (mm) or budget (points), the strategy and the seconds it took;
+    cancelled when stopped early (faces not run have no points and say so)."""
+
+    faces: list
+    mode: str
+    strategy: str
+    tolerance: float = None
+    budget: int = None
+    seconds: float = 0.0
+    cancelled: bool = False
+    shapes: dict = field(default_factory=dict, repr=False)
+
+    @property
+    def placed(self):
+        """The faces that hold points."""
+        return [face for face in self.faces if face.placed]
+
+    @property
+    def refused(self):
+        """The faces that hold no points, each with its reason."""
+        return [face for face in self.faces if not face.placed]
+
+    @property
+    def n_total(self):
+        """Points over all faces."""
+        return sum(face.n for face in self.faces)
+
+    @property
+    def worst(self):
+        """The largest maximum deviation over the faces with points, mm (NaN without any)."""
+        return max((face.maximum for face in self.placed), default=float("nan"))
+
+    def result(self, name):
+        """The SamplingResult of a face of the plan (computed again from its points: the fit,
+        the deviation and OCC's check), for the document."""
+        face = self.faces[[f.name for f in self.faces].index(name)]
+        fit = {key: face.settings[key] for key in FIT_KEYS if key in face.settings}
+        return evaluate(self.shapes[name], face.uv, strategy=face.strategy, **fit)
+
+    def table(self):
+        """The per-part table as text: face, area, N, deviation, bound, tolerance met, notes."""
+        lines = [f"{'face':<10} {'area mm^2':>10} {'N':>5} {'max mm':>9} {'bound mm':>9} {'met':>4}  notes"]
+        for face in self.faces:
+            met = "" if face.met is None else ("yes" if face.met else "no")
+            lines.append(f"{face.name:<10} {face.area:>10.1f} {face.n:>5} {face.maximum:>9.4f} {face.bound:>9.4f} "
+                         f"{met:>4}  {face.reason}")
+        lines.append(f"{'part':<10} {sum(f.area for f in self.faces):>10.1f} {self.n_total:>5} {self.worst:>9.4f}")
+        return "\n".join(lines)
+
+
+def plan(shape_or_faces, tolerance=None, n_total=None, strategy=BEST_STRATEGY, *, faces=None, n_max=DEFAULT_MAX_POINTS,
+         edge_offset=None, processes=None, scheduler=None, progress=None, **arguments):
+    """Probe points for a whole part: to a tolerance on every face, or a total of points.
+
+    shape_or_faces: a Part.Shape (its faces, or those numbered from 1 in ``faces``, e.g.
+    [1, 3, 5]) or a list of Part.Face (named Face1.. by position) or of (name, Part.Face);
+    tolerance: mm, each face gets the fewest N that meets it (up to n_max); n_total: the points
+    of the whole part, spent to make the worst face's deviation smallest; exactly one of the two.
+    strategy and ``arguments``: as in :func:`cmmsampling.sample` (workers default 1: the faces
+    are the parallel part); edge_offset: mm, None for each face's probe edge offset;
+    processes: local processes (None: all cores); scheduler: a Dask scheduler address or
+    distributed.Client; progress: callable(done, total, message) after each face's run,
+    returning True to cancel. Returns a PartPlan.
+    """
+    if (tolerance is None) == (n_total is None):
+        raise ValueError("give either tolerance= (mm, the deviation every face must meet) or n_total= "
+                         "(the points of the whole part), not both or neither")
+    named = named_faces(shape_or_faces, faces)
+    arguments = {"workers": 1, **arguments}
+    if edge_offset is not None:
+        arguments["edge_offset"] = check_real("edge_offset", edge_offset, 0.0)
+    start = time.perf_counter()
+    if tolerance is not None:
+        tolerance = check_real("tolerance", tolerance, above=0.0)
+        jobs = [FaceJob(name, face.exportBrepToString(), "tolerance", strategy, tolerance=tolerance,
+                        n_max=check_int("n_max", n_max, 4), arguments=arguments) for name, face in named]
+        outcomes, cancelled = _run(jobs, processes, scheduler, progress)
+        result = PartPlan(_completed(outcomes, named, "cancelled before this face ran"), "tolerance", strategy,
+                          tolerance=tolerance, cancelled=cancelled)
+    else:
+        result = _plan_budget(named, check_int("n_total", n_total, 1), strategy, arguments, processes, scheduler,
+                              progress)
+    result.seconds = time.perf_counter() - start
+    result.shapes = dict(named)
+    return result
+
+
+def named_faces(shape_or_faces, numbers=None):
+    """[(name, Part.Face)] of a shape (faces numbered from 1, optionally only ``numbers``) or of a
+    list of faces or (name, face) pairs. ValueError naming a face number the shape lacks."""
+    if isinstance(shape_or_faces, Part.Shape):
+        faces = shape_or_faces.Faces
+        if not faces:
+            raise ValueError("the shape has no faces to plan")
+        chosen = range(1, len(faces) + 1) if numbers is None else list(numbers)
+        bad = [k for k in chosen if not isinstance(k, int) or not 1 <= k <= len(faces)]
+        if bad:
+            raise ValueError(f"the shape has faces 1 to {len(faces)}; there is no face {bad[0]!r}")
+        return [(f"Face{k}", faces[k - 1]) for k in chosen]
+    named = [item if isinstance(item, tuple) else (f"Face{k}", item)
+             for k, item in enumerate(shape_or_faces, start=1)]
+    if not named:
+        raise ValueError("no faces to plan")
+    names = [name for name, _ in named]
+    if len(set(names)) != len(names):
+        raise ValueError("the faces' names must be unique")
+    return [(name, as_face(face)) for name, face in named]
+
+
+def solve_face(job):
+    """A FaceJob's FacePlan (runs in a worker process, or here, with one BLAS thread: the faces
+    are the parallel part): the tolerance search, or one run at job.n; a refused face gets its
+    reason."""
+    with blas_threads(1):
+        return _solve_face(job)
+
+
+def _solve_face(job):
+    """solve_face() without the thread limit."""
+    started = time.perf_counter()
+    shape = Part.Shape()
+    shape.importBrepFromString(job.brep)
+    face = shape.Faces[0]
+    planned = FacePlan(job.name, float(face.Area), strategy=job.strategy, met=None)
+    arguments = dict(job.arguments)
+    try:
+        if "edge_offset" not in arguments:
+            arguments["edge_offset"] = probe_edge_offset(face)
+        planned.edge_offset = arguments["edge_offset"]
+        if job.mode == "tolerance":
+            answer = points_needed(face, job.tolerance, job.strategy, n_max=job.n_max, **arguments)
+            planned.tried, planned.met, planned.reason = answer.tried, answer.met, answer.reason
+            result = answer.result
+        else:
+            result = sample(face, job.n, job.strategy, **arguments)
+    except ValueError as exc:
+        result, planned.reason = None, str(exc)
+    if result is not None:
+        _take(planned, result)
+    planned.seconds = time.perf_counter() - started
+    return planned
+
+
+def _take(planned, result):
+    """Copy what a plan keeps of a SamplingResult into a FacePlan."""
+    planned.n = result.n
+    planned.uv, planned.points, planned.normals = result.uv, result.points, result.normals
+    planned.maximum = result.deviation.maximum
+    planned.bound = result.bounds()["grid"].lower
+    planned.settings = dict(result.settings)
+
+
+def _run(jobs, processes, scheduler, progress):
+    """(outcomes, cancelled) of the jobs through face_runs.run_all."""
+    stopped = []
+
+    def watched(done, total, message):
+        if progress is not None and progress(done, total, message):
+            stopped.append(True)
+            return True
+        return False
+
+    outcomes = face_runs.run_all(solve_face, jobs, processes, scheduler, watched)
+    return outcomes, bool(stopped)
+
+
+def _completed(outcomes, named, why):
+    """FacePlans for every face: the outcomes, and for a face without one (cancelled) a plan
+    that says so."""
+    return [outcome if outcome is not None else FacePlan(name, float(face.Area), reason=why)
+            for outcome, (name, face) in zip(outcomes, named)]
+
+
+def _plan_budget(named, budget, strategy, arguments, processes, scheduler, progress):
+    """The greedy allocation of a total of points (see the module docstring)."""
+    degree = arguments.get("fit_degree", DEFAULT_DEGREE)
+    steps = step_counts(max(budget, 16), degree if isinstance(degree, int) else max(degree))
+    first = steps[0][1]
+    jobs = [FaceJob(name, face.exportBrepToString(), "points", strategy, n=first, arguments=arguments)
+            for name, face in named]
+    if budget < first * len(jobs):
+        raise ValueError(f"{budget} points give fewer than {first} to each of the {len(jobs)} faces; give "
+                         f"n_total of at least {first * len(jobs)}, or fewer faces")
+    outcomes, cancelled = _run(jobs, processes, scheduler, progress)
+    faces = _completed(outcomes, named, "cancelled before this face ran")
+    spent = sum(face.n for face in faces)
+    firsts = [s[1] for s in steps]
+    while not cancelled:
+        worst = max((k for k, face in enumerate(faces) if face.placed), key=lambda k: faces[k].maximum, default=None)
+        if worst is None:
+            break
+        later = [n for n in firsts if n > faces[worst].n]
+        if not later or spent - faces[worst].n + later[0] > budget:
+            break
+        job = FaceJob(faces[worst].name, jobs[worst].brep, "points", strategy, n=later[0], arguments=arguments)
+        [stepped], cancelled = _run([job], 1, scheduler, progress)
+        if stepped is None or not stepped.placed or not stepped.maximum < faces[worst].maximum:
+            faces[worst].reason = f"its next step ({later[0]} points) did not lower its deviation"
+            break
+        spent += stepped.n - faces[worst].n
+        faces[worst] = stepped
+    return PartPlan(faces, "points", strategy, budget=budget, cancelled=cancelled)

@@ -1,0 +1,183 @@
+"""How many points does a face need? The fewest N whose strategy result meets a tolerance.
+
+The substitute's space follows N through the pole rule (``default_pole_count``: round(2 sqrt(N) /
+3) poles per direction, at least degree + 1), so the best deviation any N points can reach moves
+in steps: inside one step the space is the same and more points cannot lower its bound, they only
+help the strategy come closer to it. The search therefore runs over the steps, each tried at its
+fewest points (:func:`step_counts`: the rule's first N with that pole count, and never fewer
+points than poles), with a galloping search for the first step that meets the tolerance and a
+bisection back down between the last step that failed and that one. A step whose result misses
+the tolerance while its local bound (the least maximum deviation reshaping that substitute could
+reach, :meth:`SamplingResult.bounds`) is within it is tried once more at the most points of the
+step before the search moves on. The result of each N tried is kept in ``tried``.
+"""
+import time
+from dataclasses import dataclass, field
+
+from ..fitting.substitute import DEFAULT_DEGREE, default_pole_count
+from ..strategies.sampling import BEST_STRATEGY, MIN_POINTS, probe_edge_offset, sample
+from ..strategies.validation import check_int, check_real
+
+DEFAULT_MAX_POINTS = 400
+
+
+def step_counts(n_max, degree=DEFAULT_DEGREE):
+    """The pole-rule steps up to n_max points: [(poles per direction, fewest N, most N)], in
+    increasing order; the fewest N of a step is at least its number of poles (p * p)."""
+    steps, n = [], MIN_POINTS
+    while n <= n_max:
+        poles = default_pole_count(n, degree)
+        last = n
+        while last + 1 <= n_max and default_pole_count(last + 1, degree) == poles:
+            last += 1
+        first = max(n, poles * poles)
+        if first <= last:
+            steps.append((poles, first, last))
+        n = last + 1
+    return steps
+
+
+@dataclass
+class Tried:
+    """One N tried: points, the maximum deviation its result reached (mm), the local bound about
+    its substitute (mm), seconds; or the reason the strategy refused that N."""
+
+    n: int
+    maximum: float = float("nan")
+    bound: float = float("nan")
+    seconds: float = 0.0
+    refused: str = ""
+
+
+@dataclass
+class PointsNeeded:
+    """The answer of :func:`points_needed`.
+
+    n: the fewest points found that meet the tolerance (mm), or the N of the best result reached
+    when none does; result: that SamplingResult (None when every N was refused); met: whether it
+    meets the tolerance; tolerance: mm; tried: a Tried per N run, in the order run; reason: why no
+    N met it (empty when one did).
+    """
+
+    n: int
+    result: object
+    met: bool
+    tolerance: float
+    tried: list = field(default_factory=list)
+    reason: str = ""
+
+    @property
+    def maximum(self):
+        """Maximum deviation of the result, mm (NaN without one)."""
+        return self.result.deviation.maximum if self.result is not None else float("nan")
+
+    @property
+    def bound(self):
+        """Local bound about the result's substitute, mm: the best its space lets any N reach."""
+        return self.result.bounds()["grid"].lower if self.result is not None else float("nan")
+
+
+def points_needed(face, tolerance, strategy=BEST_STRATEGY, *, n_max=DEFAULT_MAX_POINTS, edge_offset=None,
+                  fit_degree=DEFAULT_DEGREE, progress=None, **arguments):
+    """The fewest probe points whose ``strategy`` result deviates at most ``tolerance`` mm.
+
+    face: a Part.Face; tolerance: mm (> 0); n_max: the most points to try; edge_offset: mm, None
+    for the face's probe edge offset (:func:`cmmsampling.probe_edge_offset`); fit_degree and
+    ``arguments``: as in :func:`cmmsampling.sample` (e.g. grid, seed, workers, time_limit);
+    progress: callable(n, message) before each run, returning True to stop the search (the best
+    found so far is returned). Returns a PointsNeeded; when no N up to n_max meets the tolerance,
+    ``met`` is False and ``reason`` names the best figure reached.
+    """
+    tolerance = check_real("tolerance", tolerance, above=0.0)
+    n_max = check_int("n_max", n_max, MIN_POINTS)
+    if edge_offset is None:
+        edge_offset = probe_edge_offset(face)
+    steps = step_counts(n_max, fit_degree if isinstance(fit_degree, int) else max(fit_degree))
+    search = _Search(face, strategy, tolerance, progress,
+                     dict(arguments, edge_offset=edge_offset, fit_degree=fit_degree))
+    search.first_step_that_meets(steps)
+    return search.answer(n_max)
+
+
+class _Search:
+    """The runs of one points_needed() search: each N run once, its result kept."""
+
+    def __init__(self, face, strategy, tolerance, progress, arguments):
+        self.face, self.strategy, self.tolerance = face, strategy, tolerance
+        self.progress, self.arguments = progress, arguments
+        self.results, self.tried, self.stopped = {}, [], False
+
+    def meets(self, n):
+        """True when the result at n meets the tolerance (runs it once)."""
+        result = self.run(n)
+        return result is not None and result.deviation.maximum <= self.tolerance
+
+    def run(self, n):
+        """The strategy's result at n (None when refused or stopped)."""
+        if n in self.results:
+            return self.results[n]
+        if self.stopped or (self.progress is not None and self.progress(n, f"N = {n}")):
+            self.stopped = True
+            return None
+        start = time.perf_counter()
+        try:
+            result = sample(self.face, n, self.strategy, **self.arguments)
+        except ValueError as exc:
+            self.tried.append(Tried(n, seconds=time.perf_counter() - start, refused=str(exc)))
+            self.results[n] = None
+            return None
+        bound = result.bounds()["grid"].lower
+        self.tried.append(Tried(n, result.deviation.maximum, bound, time.perf_counter() - start))
+        self.results[n] = result
+        return result
+
+    def step_meets(self, step):
+        """True when the step meets the tolerance at its fewest points, or at its most points
+        where its bound says the space can."""
+        _, first, last = step
+        if self.meets(first):
+            return True
+        result = self.results[first]
+        reachable = result is not None and result.bounds()["grid"].lower <= self.tolerance
+        return reachable and last != first and self.meets(last)
+
+    def first_step_that_meets(self, steps):
+        """Index of the first step found to meet the tolerance (galloping up, then bisecting
+        down), or None; steps: non-empty, as :func:`step_counts`. A face that refuses the
+        fewest points (too narrow for the edge offset, no usable area) refuses more too: the
+        search ends there."""
+        low, index, stride = -1, 0, 1
+        while not self.stopped:
+            if self.step_meets(steps[index]):
+                break
+            if index == len(steps) - 1 or self.tried[0].refused:
+                return None
+            low, index, stride = index, min(index + stride, len(steps) - 1), stride * 2
+        if self.stopped:
+            return None
+        while index - low > 1 and not self.stopped:
+            middle = (low + index) // 2
+            if self.step_meets(steps[middle]):
+                index = middle
+            else:
+                low = middle
+        return index
+
+    def answer(self, n_max):
+        """The PointsNeeded of the runs made."""
+        meeting = [n for n, r in self.results.items() if r is not None and r.deviation.maximum <= self.tolerance]
+        if meeting:
+            n = min(meeting)
+            return PointsNeeded(n, self.results[n], True, self.tolerance, self.tried)
+        made = {n: r for n, r in self.results.items() if r is not None}
+        if not made:
+            why = self.tried[-1].refused if self.tried else "the search was stopped before any run"
+            return PointsNeeded(0, None, False, self.tolerance, self.tried, f"no N could be placed: {why}")
+        n = min(made, key=lambda k: made[k].deviation.maximum)
+        best = made[n]
+        reason = (f"no N up to {n_max} meets {self.tolerance:g} mm: the best reached is "
+                  f"{best.deviation.maximum:.4g} mm with {n} points (local bound {best.bounds()['grid'].lower:.4g} mm)")
+        if self.stopped:
+            reason = f"stopped before a result met {self.tolerance:g} mm; the best so far is " \
+                     f"{best.deviation.maximum:.4g} mm with {n} points"
+        return PointsNeeded(n, best, False, self.tolerance, self.tried, reason)

@@ -1,0 +1,182 @@
+"""A whole part: the fewest N for a tolerance, a plan over many faces (tolerance or budget), run
+in this process, on local processes and on a Dask LocalCluster, written as one program and into
+a document. The faces are built here (a rational saddle, a plate with a hole, a 2 mm strip, a
+rational patch); blind strategies and a coarse grid keep the runs short."""
+import os
+
+import dmis_syntax
+import numpy as np
+import pytest
+from geometry import FreeCAD, Part, closed, holed_face, rational_patch_face, rational_saddle, strip_face
+
+import cmmsampling
+from cmmsampling import cli
+from cmmsampling.planning.part_plan import named_faces
+from cmmsampling.planning.points_needed import step_counts
+
+FAST = {"grid": 20}
+TOLERANCE = 0.1
+
+
+@pytest.fixture(scope="module")
+def part():
+    """Four faces as one shape: Face1 saddle, Face2 plate with a hole, Face3 strip (2 mm wide:
+    too narrow for a 1.5 mm edge offset), Face4 rational patch."""
+    return Part.Compound([rational_saddle(), holed_face(), strip_face(), rational_patch_face()])
+
+
+@pytest.fixture(scope="module")
+def tolerance_plan(part):
+    return cmmsampling.plan(part, tolerance=TOLERANCE, strategy="uniform_parametric", edge_offset=1.5, n_max=200,
+                            processes=2, **FAST)
+
+
+def test_the_steps_follow_the_pole_rule():
+    steps = step_counts(400)
+    assert steps[0] == (4, 16, 45) and steps[1] == (5, 46, 68)
+    for (poles, first, last), following in zip(steps, steps[1:]):
+        assert first >= poles * poles and following[1] == last + 1 and following[0] == poles + 1
+        assert {cmmsampling.default_pole_count(n) for n in range(first, last + 1)} == {poles}
+    assert steps[-1][2] == 400
+
+
+def test_the_fewest_points_are_the_first_step_that_meets(reference):
+    answer = cmmsampling.points_needed(reference, 0.5, "uniform_parametric", **FAST)
+    assert answer.met and answer.maximum <= 0.5 and answer.n in [s[1] for s in step_counts(400)]
+    earlier = [t for t in answer.tried if t.n < answer.n]
+    assert earlier and all(t.maximum > 0.5 for t in earlier)
+    again = cmmsampling.sample(reference, answer.n, "uniform_parametric", edge_offset=answer.result.settings[
+        "edge_offset"], **FAST)
+    np.testing.assert_array_equal(again.uv, answer.result.uv)
+    assert answer.bound == pytest.approx(answer.result.bounds()["grid"].lower)
+
+
+def test_a_tolerance_no_n_meets_names_the_best_reached(reference):
+    answer = cmmsampling.points_needed(reference, 1e-5, "uniform_parametric", n_max=60, **FAST)
+    assert not answer.met and answer.result is not None
+    assert answer.reason.startswith("no N up to 60 meets 1e-05 mm: the best reached is ")
+    assert answer.maximum == min(t.maximum for t in answer.tried)
+    with pytest.raises(ValueError, match="tolerance must be"):
+        cmmsampling.points_needed(reference, 0.0)
+
+
+def test_every_face_that_holds_points_meets_the_tolerance_or_says_why(tolerance_plan):
+    faces = {face.name: face for face in tolerance_plan.faces}
+    assert list(faces) == ["Face1", "Face2", "Face3", "Face4"]
+    assert faces["Face2"].met and faces["Face4"].met
+    assert faces["Face2"].maximum <= TOLERANCE and faces["Face4"].maximum <= TOLERANCE
+    strip = faces["Face3"]
+    assert not strip.placed and "too narrow" in strip.reason and strip in tolerance_plan.refused
+    saddle = faces["Face1"]
+    assert saddle.placed and (saddle.met or saddle.reason.startswith("no N up to 200 meets"))
+    assert tolerance_plan.n_total == sum(face.n for face in tolerance_plan.placed)
+    assert "Face3" in tolerance_plan.table() and "too narrow" in tolerance_plan.table()
+
+
+def test_local_processes_and_this_process_plan_alike(part, tolerance_plan):
+    here = cmmsampling.plan(part, tolerance=TOLERANCE, strategy="uniform_parametric", edge_offset=1.5, n_max=200,
+                            processes=1, faces=[2, 4], **FAST)
+    for face in here.faces:
+        same = next(f for f in tolerance_plan.faces if f.name == face.name)
+        assert face.n == same.n
+        np.testing.assert_array_equal(face.uv, same.uv)
+
+
+def test_a_dask_local_cluster_with_two_workers_plans_alike(part, tolerance_plan):
+    distributed = pytest.importorskip("distributed")
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+        with distributed.Client(cluster) as client:
+            on_cluster = cmmsampling.plan(part, tolerance=TOLERANCE, strategy="uniform_parametric", edge_offset=1.5,
+                                          n_max=200, scheduler=client, faces=[2, 3, 4], **FAST)
+    for face in on_cluster.faces:
+        same = next(f for f in tolerance_plan.faces if f.name == face.name)
+        assert (face.n, face.reason) == (same.n, same.reason)
+
+
+def test_a_budget_goes_to_the_worst_face_and_is_never_exceeded(part):
+    budget = cmmsampling.plan(part, n_total=120, strategy="uniform_parametric", edge_offset=1.5, processes=2,
+                              **FAST)
+    placed = budget.placed
+    assert [f.name for f in budget.refused] == ["Face3"] and budget.n_total <= 120
+    firsts = [s[1] for s in step_counts(400)]
+    assert all(face.n in firsts for face in placed)
+    worst = max(placed, key=lambda face: face.maximum)
+    following = firsts[firsts.index(worst.n) + 1]
+    assert budget.n_total - worst.n + following > 120, "the worst face could still have taken its next step"
+    with pytest.raises(ValueError, match="give n_total of at least 64"):
+        cmmsampling.plan(part, n_total=50, strategy="uniform_parametric")
+    with pytest.raises(ValueError, match="either tolerance="):
+        cmmsampling.plan(part, tolerance=0.1, n_total=100)
+
+
+def test_cancel_keeps_the_faces_done_and_names_the_others(part):
+    plan = cmmsampling.plan(part, tolerance=TOLERANCE, strategy="uniform_parametric", edge_offset=1.5, n_max=200,
+                            processes=1, progress=lambda done, total, message: done == 1, **FAST)
+    assert plan.cancelled and plan.faces[0].placed
+    assert [f.reason for f in plan.faces[1:]] == ["cancelled before this face ran"] * 3
+
+
+def test_faces_are_named_and_checked():
+    faces = named_faces([rational_saddle(), ("blade", strip_face())])
+    assert [name for name, _ in faces] == ["Face1", "blade"]
+    with pytest.raises(ValueError, match="there is no face 7"):
+        named_faces(Part.Compound([rational_saddle()]), [1, 7])
+
+
+def test_the_plan_is_one_program_with_unique_labels_and_a_face_column(tolerance_plan, tmp_path):
+    dmis = tmp_path / "plan.dmi"
+    report = cmmsampling.export(tolerance_plan, str(dmis), order="short_path")
+    text = dmis.read_text()
+    assert dmis_syntax.check(text) == [] and report.count == tolerance_plan.n_total
+    assert text.count("=FEAT/POINT") == tolerance_plan.n_total and text.count("DMISMN/") == 1
+    back = cmmsampling.read_points(str(dmis))
+    assert len(set(back.labels)) == tolerance_plan.n_total
+    assert {label.split("_P")[0] for label in back.labels} == {f.name for f in tolerance_plan.placed}
+    assert "the face is too narrow" in back.metadata["faces_without_points"]["Face3"]
+    csv_file = tmp_path / "plan.csv"
+    cmmsampling.export(tolerance_plan, str(csv_file), order="short_path")
+    read = cmmsampling.read_points(str(csv_file))
+    assert read.faces is not None and all(label.startswith(face + "_P") for label, face in zip(read.labels, read.faces))
+    by_label = dict(zip(back.labels, back.points))
+    np.testing.assert_allclose([by_label[label] for label in read.labels], read.points, atol=1e-6)
+    assert report.length_after <= report.length_before
+
+
+def test_the_plan_goes_into_the_document_in_one_step(part, tolerance_plan):
+    doc = FreeCAD.newDocument("PlanDocument")
+    try:
+        body = doc.addObject("Part::Feature", "Body")
+        body.Shape = part
+        doc.recompute()
+        doc.UndoMode = 1
+        group = cmmsampling.add_plan_to_document(tolerance_plan, doc, body)
+        assert group.Label == "Plan Body (uniform_parametric)"
+        faces = [g for g in group.Group if g.TypeId == "App::DocumentObjectGroup"]
+        assert [g.Label for g in faces] == [f"Sampling Body {f.name} (uniform_parametric)" for f in tolerance_plan.placed]
+        for sub, planned in zip(faces, tolerance_plan.placed):
+            points = sub.Group[0]
+            assert len(points.Labels) == planned.n and points.MaxDeviation.Value == pytest.approx(planned.maximum)
+        sheet = doc.getObject("PlanReport")
+        assert sheet.get("A5") == "Face" and sheet.get("A8") == "Face3" and "too narrow" in sheet.get("G8")
+        assert sheet.get("A10") == "Part" and int(sheet.get("C10")) == tolerance_plan.n_total
+        doc.undo()
+        assert doc.getObject("PlanReport") is None and [o.Name for o in doc.Objects] == ["Body"]
+    finally:
+        closed("PlanDocument")
+
+
+def test_the_command_line_plans_a_file(part, tmp_path, capsys):
+    brep = tmp_path / "part.brep"
+    part.exportBrep(str(brep))
+    out = tmp_path / "plan.dmi"
+    code = cli.main(["plan", str(brep), "--faces", "2,3", "--tolerance", "0.1", "--strategy", "uniform_parametric",
+                     "--max-points", "100",
+                     "--processes", "2", "--out", str(out)])
+    printed = capsys.readouterr().out
+    assert code == 0, printed
+    assert "part.brep: 2 faces, tolerance 0.1 mm, uniform_parametric:" in printed and "Face3" in printed
+    assert dmis_syntax.check(out.read_text()) == [] and "Wrote " in printed
+    assert cli.main(["plan", str(brep), "--faces", "2,9", "--points", "100"]) == 2
+    assert "there is no face 9" in capsys.readouterr().err
+    assert FreeCAD.ActiveDocument is None or FreeCAD.ActiveDocument.Name != "cmmsampling"
+    assert os.path.getsize(out) > 0
