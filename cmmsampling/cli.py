@@ -351,7 +351,7 @@ def run_plan(args):
     for path in args.out:
         print(export(result, path, probe_radius=args.probe_radius, order="short_path"))
     if args.fcstd:
-        _save_plan_document(result, args, add_plan_to_document)
+        _save_document(args, lambda document, part: add_plan_to_document(result, document, part))
     return 0
 
 
@@ -365,25 +365,6 @@ class FaceProgress(TerminalProgress):
         self.stream.write(f"\rplan {done}/{total} faces, {message[:50]:<50}")
         self.stream.flush()
         return False
-
-
-def _save_plan_document(result, args, add_plan_to_document):
-    """Save a plan in a new FreeCAD document with the source shape."""
-    import FreeCAD
-
-    document = FreeCAD.newDocument("cmmsampling")
-    try:
-        part = document.addObject("Part::Feature", os.path.splitext(os.path.basename(args.file))[0])
-        part.Shape = read_shape(args.file)
-        document.recompute()
-        add_plan_to_document(result, document, part)
-        try:
-            document.saveAs(os.path.abspath(args.fcstd))
-        except Exception as exc:   # FreeCAD raises its own exception types here
-            raise OSError(f"could not save {args.fcstd}: {_freecad_reason(exc)}") from exc
-        print(f"saved {args.fcstd}")
-    finally:
-        FreeCAD.closeDocument(document.Name)
 
 
 def _check_outputs(args):
@@ -414,21 +395,23 @@ def _write_outputs(result, args):
     for path in args.out:
         print(export(points, path, probe_radius=args.probe_radius, order=args.order))
     if args.fcstd:
-        _save_document(result, args)
+        from .document import add_to_document
+
+        _save_document(args, lambda document, part: add_to_document(result, document,
+                                                                   source=(part, f"Face{args.face}")))
 
 
-def _save_document(result, args):
-    """Save the result in a new FreeCAD document, the source shape included."""
+def _save_document(args, add):
+    """Save a new FreeCAD document (args.fcstd) holding the source shape (args.file) and what
+    ``add(document, part)`` adds to it."""
     import FreeCAD
-
-    from .document import add_to_document
 
     document = FreeCAD.newDocument("cmmsampling")
     try:
         part = document.addObject("Part::Feature", os.path.splitext(os.path.basename(args.file))[0])
         part.Shape = read_shape(args.file)
         document.recompute()
-        add_to_document(result, document, source=(part, f"Face{args.face}"))
+        add(document, part)
         try:
             document.saveAs(os.path.abspath(args.fcstd))
         except Exception as exc:   # FreeCAD raises its own exception types here

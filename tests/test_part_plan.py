@@ -171,11 +171,17 @@ def test_the_command_line_plans_a_file(part, tmp_path, capsys):
     out = tmp_path / "plan.dmi"
     code = cli.main(["plan", str(brep), "--faces", "2,3", "--tolerance", "0.1", "--strategy", "uniform_parametric",
                      "--max-points", "100",
-                     "--processes", "2", "--out", str(out)])
+                     "--processes", "2", "--out", str(out), "--fcstd", str(tmp_path / "plan.FCStd")])
     printed = capsys.readouterr().out
     assert code == 0, printed
     assert "part.brep: 2 faces, tolerance 0.1 mm, uniform_parametric:" in printed and "Face3" in printed
     assert dmis_syntax.check(out.read_text()) == [] and "Wrote " in printed
+    assert f"saved {tmp_path / 'plan.FCStd'}" in printed
+    saved = FreeCAD.openDocument(str(tmp_path / "plan.FCStd"))
+    try:
+        assert saved.getObject("PlanReport").get("A7") == "Face3"
+    finally:
+        FreeCAD.closeDocument(saved.Name)
     assert cli.main(["plan", str(brep), "--faces", "2,9", "--points", "100"]) == 2
     assert "there is no face 9" in capsys.readouterr().err
     assert FreeCAD.ActiveDocument is None or FreeCAD.ActiveDocument.Name != "cmmsampling"
