@@ -64,8 +64,7 @@ def _plan_arguments(parser):
                         help=f"where the points go on each face (default {BEST_STRATEGY})")
     parser.add_argument("--max-points", type=int, default=400, metavar="N",
                         help="with --tolerance, the most points a face may get (default 400)")
-    parser.add_argument("--time-limit", type=float, default=None, metavar="S",
-                        help="seconds each run of the optimal strategy may take (default: until it converges)")
+    _strategy_settings(parser)
     parser.add_argument("--processes", type=int, default=None, metavar="K",
                         help="local processes the faces run on (default: all cores)")
     parser.add_argument("--scheduler", default=None, metavar="tcp://HOST:PORT",
@@ -338,7 +337,7 @@ def run_plan(args):
 
     _check_outputs(args)
     shape = read_shape(args.file)
-    options = {} if args.time_limit is None or args.strategy != BEST_STRATEGY else {"time_limit": args.time_limit}
+    options = given_settings(args.strategy, args)
     progress = FaceProgress()
     result = plan(shape, tolerance=args.tolerance, n_total=args.points, strategy=args.strategy, faces=args.faces,
                   n_max=args.max_points, processes=args.processes, scheduler=args.scheduler, progress=progress,

@@ -13,7 +13,7 @@ from .. import document
 from ..formats.exporting import export
 from ..object_types import source_face
 from . import icon
-from .export_options import ask_export_options, export_arguments, export_keywords, show_export_report
+from .export_options import ask_export_options, export_keywords, show_export_report
 from .selection import SelectionError, selected_face
 
 
@@ -171,7 +171,7 @@ class ExportProbePoints(GuardedCommand):
         if options is None:
             return
         try:
-            report = export(points, path, **export_arguments(options))
+            report = export(points, path, **options)
         except Exception as exc:
             warn("Export probe points", str(exc))
             return

@@ -3,12 +3,10 @@
 The frame of the coordinates (the document's global frame, or a local coordinate system of the
 document: the part's measurement frame), the probe radius (0: contact points on the face; r > 0:
 probe-ball centres p + r n, stated in the file) and the point order (as optimised, or a short probe
-path). :func:`ask_export_options` returns them in the form the Export command writes into its
-echoed ``cmmsampling.export(...)`` call (:func:`export_keywords`); :func:`show_export_report`
+path). :func:`ask_export_options` returns them as keyword arguments of ``cmmsampling.export``,
+which :func:`export_keywords` turns into the echoed call's text; :func:`show_export_report`
 tells the user what was written. The values persist in the workbench's parameter group.
 """
-import re
-
 import FreeCAD
 import FreeCADGui
 from PySide import QtCore, QtGui
@@ -26,7 +24,6 @@ DEFAULTS = {"ExportFrame": "", "ExportProbeRadius": 0.0, "ExportOrder": "short_p
 MAX_RADIUS_MM = 100.0
 RADIUS_DECIMALS = 3
 STATUS_MS = 20000
-FRAME_EXPRESSION = re.compile(r"App\.getDocument\('([^']*)'\)\.getObject\('([^']*)'\)")
 
 
 def frame_objects(doc):
@@ -56,22 +53,12 @@ def export_keywords(options):
     the defaults of cmmsampling.export (global frame, contact points, as optimised) are left out."""
     words = []
     if options["frame"] is not None:
-        words.append(f"frame={options['frame']}")
+        words.append(f"frame={frame_expression(options['frame'])}")
     if options["probe_radius"] > 0:
         words.append(f"probe_radius={options['probe_radius']!r}")
     if options["order"] != "as_optimised":
         words.append(f"order={options['order']!r}")
     return "".join(f", {word}" for word in words)
-
-
-def export_arguments(options):
-    """The options of :func:`ask_export_options` as keyword arguments of cmmsampling.export (the
-    frame's console expression evaluated to its document object)."""
-    frame = options["frame"]
-    if frame is not None:
-        document, name = FRAME_EXPRESSION.fullmatch(frame).groups()
-        frame = FreeCAD.getDocument(document).getObject(name)
-    return {"frame": frame, "probe_radius": options["probe_radius"], "order": options["order"]}
 
 
 def show_export_report(report):
@@ -138,10 +125,10 @@ class ExportOptionsDialog(QtGui.QDialog):
         layout.addRow(buttons)
 
     def options(self):
-        """{"frame": console expression of the frame or None (global), "probe_radius": mm,
-        "order": "as_optimised" or "short_path"}."""
+        """{"frame": the frame's document object or None (global), "probe_radius": mm,
+        "order": "as_optimised" or "short_path"}: keyword arguments of cmmsampling.export."""
         name = self.frame.currentData()
-        return {"frame": None if name is None else frame_expression(self.doc.getObject(name)),
+        return {"frame": None if name is None else self.doc.getObject(name),
                 "probe_radius": self.probe_radius.value(), "order": self.order.currentData()}
 
     def stored(self):
@@ -153,8 +140,9 @@ class ExportOptionsDialog(QtGui.QDialog):
 def ask_export_options(points):
     """Ask the export options for a probe-points object; None when the user cancels.
 
-    Returns {"frame": e.g. "App.getDocument('D').getObject('LCS')" or None, "probe_radius": mm,
-    "order": "as_optimised" or "short_path"}; see :func:`export_keywords`."""
+    Returns {"frame": a coordinate system's document object or None, "probe_radius": mm, "order":
+    "as_optimised" or "short_path"}, keyword arguments of cmmsampling.export; see
+    :func:`export_keywords` for their console text."""
     groups = [o.Label for o in points.InList if o.isDerivedFrom("App::DocumentObjectGroup")]
     dialog = ExportOptionsDialog(points.Document, (groups or [points.Label])[0], FreeCADGui.getMainWindow())
     try:

@@ -17,6 +17,7 @@ from ..fitting.deviation import DEFAULT_GRID
 from ..fitting.substitute import DEFAULT_DEGREE, default_pole_count
 from ..object_types import source_face
 from ..strategies import memory, sampling
+from ..strategies.problem import resolve_fit_poles
 from . import icon, resource, settings
 from .qt_compat import flag_value, forget_when_destroyed
 from .selection import SelectionError, selected_face
@@ -689,7 +690,7 @@ def run_values(parameters):
     from their JSON): strategy, N, seed, the strategy's options, the edge offset and spacing the
     run used (mm), the fit and the grid (pairs with equal halves as one number)."""
     values = {}
-    for name, default in panel_defaults().items():
+    for name in panel_defaults():
         value = parameters.get(name)
         if name in STAND_INS and name in parameters and value is None:
             values[name] = STAND_INS[name]
@@ -699,7 +700,8 @@ def run_values(parameters):
             values[name] = value
     poles = parameters.get("fit_poles")
     if isinstance(poles, list) and len(poles) == 2 and "n" in parameters:
-        values["auto_poles"] = poles == [default_pole_count(parameters["n"])] * 2
+        degree = tuple(parameters.get("fit_degree", (DEFAULT_DEGREE, DEFAULT_DEGREE)))
+        values["auto_poles"] = poles == list(resolve_fit_poles(None, parameters["n"], degree))
         values["fit_poles_u"], values["fit_poles_v"] = poles
     return values
 

@@ -10,6 +10,7 @@ import multiprocessing
 import os
 
 from ..strategies.parallel import python_executable
+from ..strategies.validation import check_int
 
 
 def run_all(function, jobs, processes=None, scheduler=None, progress=None):
@@ -25,12 +26,10 @@ def run_all(function, jobs, processes=None, scheduler=None, progress=None):
     total = len(jobs)
     outcomes = [None] * total
     if scheduler is not None:
-        runner = _dask_runs
-    elif _process_count(processes, total) == 1:
-        runner = _here
+        runs = _dask_runs(function, jobs, scheduler)
     else:
-        runner = _local_processes
-    runs = runner(function, jobs, processes, scheduler)
+        count = _process_count(processes, total)
+        runs = _here(function, jobs) if count == 1 else _local_processes(function, jobs, count)
     try:
         for done, (index, outcome, message) in enumerate(runs, start=1):
             outcomes[index] = outcome
@@ -43,27 +42,24 @@ def run_all(function, jobs, processes=None, scheduler=None, progress=None):
 
 def _process_count(processes, jobs):
     """Processes to start: the given count (>= 1) or all cores, never more than jobs."""
-    if processes is None:
-        processes = os.cpu_count() or 1
-    if not isinstance(processes, int) or isinstance(processes, bool) or processes < 1:
-        raise ValueError(f"processes must be a whole number >= 1 or None (all cores), got {processes!r}")
-    return max(1, min(processes, jobs))
+    count = (os.cpu_count() or 1) if processes is None else check_int("processes", processes, 1)
+    return max(1, min(count, jobs))
 
 
-def _here(function, jobs, processes, scheduler):
+def _here(function, jobs):
     """Each job in this process, in order: (index, outcome, message)."""
     for index, job in enumerate(jobs):
         yield index, function(job), _message(job)
 
 
-def _local_processes(function, jobs, processes, scheduler):
-    """The jobs on local processes as they end: (index, outcome, message); closing the
+def _local_processes(function, jobs, count):
+    """The jobs on ``count`` local processes as they end: (index, outcome, message); closing the
     generator early stops the processes."""
     context = multiprocessing.get_context("spawn")
     executable = python_executable()
     if executable is not None:
         context.set_executable(executable)
-    pool = concurrent.futures.ProcessPoolExecutor(_process_count(processes, len(jobs)), mp_context=context)
+    pool = concurrent.futures.ProcessPoolExecutor(count, mp_context=context)
     futures = {pool.submit(function, job): index for index, job in enumerate(jobs)}
     try:
         for future in concurrent.futures.as_completed(futures):
@@ -84,7 +80,7 @@ def _stop(pool):
         process.join(5)
 
 
-def _dask_runs(function, jobs, processes, scheduler):
+def _dask_runs(function, jobs, scheduler):
     """The jobs on a Dask cluster as they end: (index, outcome, message); closing the
     generator early cancels the jobs still queued or running."""
     from distributed import Client, as_completed

@@ -158,11 +158,12 @@ def plan(shape_or_faces, tolerance=None, n_total=None, strategy=BEST_STRATEGY, *
     start = time.perf_counter()
     if tolerance is not None:
         tolerance = check_real("tolerance", tolerance, above=0.0)
-        jobs = [FaceJob(name, face.exportBrepToString(), "tolerance", strategy, tolerance=tolerance,
-                        n_max=check_int("n_max", n_max, 4), arguments=arguments) for name, face in named]
+        n_max = check_int("n_max", n_max, 4)
+        jobs = [FaceJob(name, face.exportBrepToString(), "tolerance", strategy, tolerance=tolerance, n_max=n_max,
+                        arguments=arguments) for name, face in named]
         outcomes, cancelled = _run(jobs, processes, scheduler, progress)
-        result = PartPlan(_completed(outcomes, named, "cancelled before this face ran"), "tolerance", strategy,
-                          tolerance=tolerance, cancelled=cancelled)
+        result = PartPlan(_completed(outcomes, named), "tolerance", strategy, tolerance=tolerance,
+                          cancelled=cancelled)
     else:
         result = _plan_budget(named, check_int("n_total", n_total, 1), strategy, arguments, processes, scheduler,
                               progress)
@@ -250,17 +251,17 @@ def _run(jobs, processes, scheduler, progress):
     return outcomes, bool(stopped)
 
 
-def _completed(outcomes, named, why):
+def _completed(outcomes, named):
     """FacePlans for every face: the outcomes, and for a face without one (cancelled) a plan
     that says so."""
+    why = "cancelled before this face ran"
     return [outcome if outcome is not None else FacePlan(name, float(face.Area), reason=why)
             for outcome, (name, face) in zip(outcomes, named)]
 
 
 def _plan_budget(named, budget, strategy, arguments, processes, scheduler, progress):
     """The greedy allocation of a total of points (see the module docstring)."""
-    degree = arguments.get("fit_degree", DEFAULT_DEGREE)
-    steps = step_counts(max(budget, 16), degree if isinstance(degree, int) else max(degree))
+    steps = step_counts(max(budget, 16), arguments.get("fit_degree", DEFAULT_DEGREE))
     first = steps[0][1]
     jobs = [FaceJob(name, face.exportBrepToString(), "points", strategy, n=first, arguments=arguments)
             for name, face in named]
@@ -268,7 +269,7 @@ def _plan_budget(named, budget, strategy, arguments, processes, scheduler, progr
         raise ValueError(f"{budget} points give fewer than {first} to each of the {len(jobs)} faces; give "
                          f"n_total of at least {first * len(jobs)}, or fewer faces")
     outcomes, cancelled = _run(jobs, processes, scheduler, progress)
-    faces = _completed(outcomes, named, "cancelled before this face ran")
+    faces = _completed(outcomes, named)
     spent = sum(face.n for face in faces)
     firsts = [s[1] for s in steps]
     while not cancelled:

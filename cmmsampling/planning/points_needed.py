@@ -23,7 +23,9 @@ DEFAULT_MAX_POINTS = 400
 
 def step_counts(n_max, degree=DEFAULT_DEGREE):
     """The pole-rule steps up to n_max points: [(poles per direction, fewest N, most N)], in
-    increasing order; the fewest N of a step is at least its number of poles (p * p)."""
+    increasing order; the fewest N of a step is at least its number of poles (p * p).
+    degree: the substitute's degree, an int or a (u, v) pair (the higher one sets the steps)."""
+    degree = degree if isinstance(degree, int) else max(degree)
     steps, n = [], MIN_POINTS
     while n <= n_max:
         poles = default_pole_count(n, degree)
@@ -92,10 +94,9 @@ def points_needed(face, tolerance, strategy=BEST_STRATEGY, *, n_max=DEFAULT_MAX_
     n_max = check_int("n_max", n_max, MIN_POINTS)
     if edge_offset is None:
         edge_offset = probe_edge_offset(face)
-    steps = step_counts(n_max, fit_degree if isinstance(fit_degree, int) else max(fit_degree))
     search = _Search(face, strategy, tolerance, progress,
                      dict(arguments, edge_offset=edge_offset, fit_degree=fit_degree))
-    search.first_step_that_meets(steps)
+    search.run_steps(step_counts(n_max, fit_degree))
     return search.answer(n_max)
 
 
@@ -141,27 +142,24 @@ class _Search:
         reachable = result is not None and result.bounds()["grid"].lower <= self.tolerance
         return reachable and last != first and self.meets(last)
 
-    def first_step_that_meets(self, steps):
-        """Index of the first step found to meet the tolerance (galloping up, then bisecting
-        down), or None; steps: non-empty, as :func:`step_counts`. A face that refuses the
-        fewest points (too narrow for the edge offset, no usable area) refuses more too: the
+    def run_steps(self, steps):
+        """Run the steps the search needs to find the first that meets the tolerance: galloping
+        up, then bisecting down (steps: non-empty, as :func:`step_counts`). A face that refuses
+        the fewest points (too narrow for the edge offset, no usable area) refuses more too: the
         search ends there."""
         low, index, stride = -1, 0, 1
         while not self.stopped:
             if self.step_meets(steps[index]):
                 break
             if index == len(steps) - 1 or self.tried[0].refused:
-                return None
+                return
             low, index, stride = index, min(index + stride, len(steps) - 1), stride * 2
-        if self.stopped:
-            return None
         while index - low > 1 and not self.stopped:
             middle = (low + index) // 2
             if self.step_meets(steps[middle]):
                 index = middle
             else:
                 low = middle
-        return index
 
     def answer(self, n_max):
         """The PointsNeeded of the runs made."""

@@ -452,8 +452,7 @@ def test_export_options_write_ball_centres_in_a_local_frame_along_a_short_path(d
     assert seen["title"] == "Export options: Sampling Body Face1 (halton)"
     assert seen["frames"] == ["Global (document)", "Measurement frame", "Fixture"]
     assert "PartDesign::CoordinateSystem" in seen["tip"] and "origin (" in seen["tip"]
-    assert options == {"frame": f"App.getDocument({doc.Name!r}).getObject('LCS')", "probe_radius": 1.5,
-                       "order": "short_path"}
+    assert options == {"frame": lcs, "probe_radius": 1.5, "order": "short_path"}
 
     target = str(tmp_path / "points.csv")
     call = (f"report = cmmsampling.export(App.getDocument({doc.Name!r}).getObject({points.Name!r}), "

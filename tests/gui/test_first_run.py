@@ -214,3 +214,13 @@ def test_a_double_click_on_probe_points_reopens_their_run(workbench, artifacts):
         assert task_form() is None
     finally:
         FreeCAD.closeDocument(doc.Name)
+
+
+def test_a_runs_default_poles_reopen_as_auto_for_its_own_degree(workbench):
+    from cmmsampling.gui.task_panel import run_values
+
+    assert run_values({"n": 81, "fit_degree": [7, 7], "fit_poles": [8, 8]})["auto_poles"]
+    assert not run_values({"n": 81, "fit_degree": [7, 7], "fit_poles": [9, 9]})["auto_poles"]
+    values = run_values({"strategy": "optimal", "n": 49, "fit_degree": [3, 3], "fit_poles": [5, 5], "grid": [40, 50],
+                         "time_limit": None})
+    assert values["auto_poles"] and values["time_limit"] == 0.0 and "grid" not in values
