@@ -130,10 +130,9 @@ def write_plan_report(sheet, plan):
     goal = (f"tolerance {plan.tolerance:g} mm" if plan.tolerance is not None else f"{plan.budget} points")
     rows = [("CMM sampling plan",), ("Goal", goal), ("Strategy", plan.strategy), (), PLAN_COLUMNS]
     for face in plan.faces:
-        met = "" if face.met is None else ("yes" if face.met else "no")
-        rows.append((face.name, f"{face.area:.2f}", face.n, _figure(face.maximum), _figure(face.bound), met,
-                     face.reason))
-    rows.append(("Part", f"{sum(f.area for f in plan.faces):.2f}", plan.n_total, _figure(plan.worst), "",
+        rows.append((face.name, f"{face.area:.2f}", face.n, _figure(face.maximum), _figure(face.bound),
+                     face.met_text, face.reason))
+    rows.append(("Part", f"{plan.area:.2f}", plan.n_total, _figure(plan.worst), "",
                  "", f"{len(plan.refused)} faces without points" if plan.refused else ""))
     for row, values in enumerate(rows, start=1):
         for column, value in zip(REPORT_COLUMNS, values):

@@ -21,7 +21,7 @@ from ..strategies.sampling import STRATEGIES
 from ..study import DEFAULT_NS, DEFAULT_SEEDS, compare, hand_over, study_time
 from . import settings
 from .commands import FaceCommand
-from .task_panel import (AUTO, ERROR_STYLE, BackgroundRunPanel, duration_text, edge_offset_argument,
+from .task_panel import (AUTO, ERROR_STYLE, BackgroundRunPanel, call_text, duration_text, edge_offset_argument,
                          snap_to_auto, source_text, spacing_argument)
 from .worker import BackgroundTask
 
@@ -405,9 +405,10 @@ class CompareTaskPanel(BackgroundRunPanel):
         if run.study is None:
             self.show_status(error, error=True)
             return
-        kept = echo_study(self.face, run, alive=self.source_face() is not None)
+        alive = self.source_face() is not None
+        echo_study(self.face, run, alive)
         where = ("The study is kept in the Python console as study: write it with "
-                 "cmmsampling.write_report(study, folder)." if kept else
+                 "cmmsampling.write_report(study, folder)." if alive else
                  "Its face was deleted meanwhile, so the study is not kept.")
         self.show_status(f"The report could not be written ({error}). {where}", error=True)
 
@@ -444,8 +445,8 @@ def face_expression(source):
 
 
 def echo_study(face, run, alive=True):
-    """Echo a study that ran in the panel in the Python console; returns True when the console
-    holds it as ``study``.
+    """Echo a study that ran in the panel in the Python console (the console holds it as
+    ``study`` when its face is alive).
 
     face: the face's console expression (:func:`face_expression`), bound to ``face``; the study
     (run: the finished BackgroundComparison) is handed over to the echoed compare() call, so the
@@ -456,7 +457,7 @@ def echo_study(face, run, alive=True):
     note = "ran in the task panel"
     if run.study.cancelled:
         note += f", cancelled after {len(run.study.rows)} runs (a replay runs it whole)"
-    call = ", ".join(["face"] + [f"{key}={value!r}" for key, value in run.arguments.items()])
+    call = call_text(run.arguments)
     FreeCADGui.doCommand("import cmmsampling")
     if alive:
         FreeCADGui.doCommand(f"face = {face}")
@@ -467,7 +468,6 @@ def echo_study(face, run, alive=True):
         FreeCADGui.doCommand(f"# study = cmmsampling.compare({call})  # {note}")
     if run.report is not None:
         FreeCADGui.doCommand(f"# cmmsampling.write_report(study, {run.folder!r})  # ran in the task panel")
-    return alive
 
 
 class CompareStrategies(FaceCommand):

@@ -673,7 +673,7 @@ def add_result(source, face, arguments, result):
     obj, name = source
     doc = f"App.getDocument({obj.Document.Name!r})"
     source_expr = f"{doc}.getObject({obj.Name!r})"
-    call = ", ".join(["face"] + [f"{key}={value!r}" for key, value in arguments.items()])
+    call = call_text(arguments)
     before = set(o.Name for o in obj.Document.Objects)
     FreeCADGui.doCommand("import cmmsampling")
     FreeCADGui.doCommand(f"face = {source_expr}.getSubObject({name!r})")
@@ -683,6 +683,11 @@ def add_result(source, face, arguments, result):
         f"group = cmmsampling.add_to_document(result, {doc}, source=({source_expr}, {name!r}))")
     return next(o for o in obj.Document.Objects
                 if o.Name not in before and o.TypeId == "App::DocumentObjectGroup")
+
+
+def call_text(arguments):
+    """The arguments of an echoed call on ``face``: "face, n=49, strategy='pso', ..."."""
+    return ", ".join(["face"] + [f"{key}={value!r}" for key, value in arguments.items()])
 
 
 def run_values(parameters):

@@ -80,6 +80,11 @@ class FacePlan:
         """True when the face holds points."""
         return self.n > 0
 
+    @property
+    def met_text(self):
+        """'yes' or 'no' for the tolerance met, '' without a tolerance."""
+        return "" if self.met is None else ("yes" if self.met else "no")
+
 
 @dataclass
 class PartPlan:
@@ -112,6 +117,11 @@ class PartPlan:
         return sum(face.n for face in self.faces)
 
     @property
+    def area(self):
+        """Area of all the faces, mm^2."""
+        return sum(face.area for face in self.faces)
+
+    @property
     def worst(self):
         """The largest maximum deviation over the faces with points, mm (NaN without any)."""
         return max((face.maximum for face in self.placed), default=float("nan"))
@@ -127,10 +137,9 @@ class PartPlan:
         """The per-part table as text: face, area, N, deviation, bound, tolerance met, notes."""
         lines = [f"{'face':<10} {'area mm^2':>10} {'N':>5} {'max mm':>9} {'bound mm':>9} {'met':>4}  notes"]
         for face in self.faces:
-            met = "" if face.met is None else ("yes" if face.met else "no")
             lines.append(f"{face.name:<10} {face.area:>10.1f} {face.n:>5} {face.maximum:>9.4f} {face.bound:>9.4f} "
-                         f"{met:>4}  {face.reason}")
-        lines.append(f"{'part':<10} {sum(f.area for f in self.faces):>10.1f} {self.n_total:>5} {self.worst:>9.4f}")
+                         f"{face.met_text:>4}  {face.reason}")
+        lines.append(f"{'part':<10} {self.area:>10.1f} {self.n_total:>5} {self.worst:>9.4f}")
         return "\n".join(lines)
 
 
