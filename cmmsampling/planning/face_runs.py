@@ -13,7 +13,7 @@ from ..strategies.parallel import python_executable
 from ..strategies.validation import check_int
 
 
-def run_all(function, jobs, processes=None, scheduler=None, progress=None):
+def run_all(function, jobs, processes=None, scheduler=None, progress=None, describe=None):
     """``function(job)`` for every job; returns the outcomes in the jobs' order.
 
     function: a module-level function (picklable); jobs: a list of picklable jobs;
@@ -21,7 +21,8 @@ def run_all(function, jobs, processes=None, scheduler=None, progress=None):
     scheduler: a Dask scheduler address ("tcp://host:8786") or a distributed.Client, which then
     runs the jobs instead of local processes; progress: callable(done, total, message) after
     each job ends, returning True to cancel: jobs not started are dropped, running ones are
-    stopped, and their outcomes are None.
+    stopped, and their outcomes are None; describe: callable(job, outcome) -> the progress
+    message of a finished job (default: "<job.name> done").
     """
     total = len(jobs)
     outcomes = [None] * total
@@ -30,10 +31,11 @@ def run_all(function, jobs, processes=None, scheduler=None, progress=None):
     else:
         count = _process_count(processes, total)
         runs = _here(function, jobs) if count == 1 else _local_processes(function, jobs, count)
+    describe = describe or _message
     try:
-        for done, (index, outcome, message) in enumerate(runs, start=1):
+        for done, (index, outcome) in enumerate(runs, start=1):
             outcomes[index] = outcome
-            if progress is not None and progress(done, total, message):
+            if progress is not None and progress(done, total, describe(jobs[index], outcome)):
                 break
     finally:
         runs.close()
@@ -47,13 +49,13 @@ def _process_count(processes, jobs):
 
 
 def _here(function, jobs):
-    """Each job in this process, in order: (index, outcome, message)."""
+    """Each job in this process, in order: (index, outcome)."""
     for index, job in enumerate(jobs):
-        yield index, function(job), _message(job)
+        yield index, function(job)
 
 
 def _local_processes(function, jobs, count):
-    """The jobs on ``count`` local processes as they end: (index, outcome, message); closing the
+    """The jobs on ``count`` local processes as they end: (index, outcome); closing the
     generator early stops the processes."""
     context = multiprocessing.get_context("spawn")
     executable = python_executable()
@@ -63,8 +65,7 @@ def _local_processes(function, jobs, count):
     futures = {pool.submit(function, job): index for index, job in enumerate(jobs)}
     try:
         for future in concurrent.futures.as_completed(futures):
-            index = futures[future]
-            yield index, future.result(), _message(jobs[index])
+            yield futures[future], future.result()
     finally:
         _stop(pool)
 
@@ -81,7 +82,7 @@ def _stop(pool):
 
 
 def _dask_runs(function, jobs, scheduler):
-    """The jobs on a Dask cluster as they end: (index, outcome, message); closing the
+    """The jobs on a Dask cluster as they end: (index, outcome); closing the
     generator early cancels the jobs still queued or running."""
     from distributed import Client, as_completed
 
@@ -90,14 +91,13 @@ def _dask_runs(function, jobs, scheduler):
     where = {future.key: index for index, future in enumerate(futures)}
     try:
         for future in as_completed(futures):
-            index = where[future.key]
-            yield index, future.result(), _message(jobs[index])
+            yield where[future.key], future.result()
     finally:
         client.cancel([future for future in futures if not future.done()])
         if client is not scheduler:
             client.close()
 
 
-def _message(job):
-    """What a finished job's progress line says: its name where it has one."""
+def _message(job, outcome):
+    """What a finished job's progress line says by default: its name where it has one."""
     return f"{getattr(job, 'name', 'job')} done"

@@ -21,6 +21,7 @@ import numpy as np
 from ..fitting.substitute import DEFAULT_DEGREE
 from ..geometry.freecad_env import import_part
 from ..geometry.surface import as_face
+from ..strategies import handover
 from ..strategies.sampling import BEST_STRATEGY, evaluate, probe_edge_offset, sample
 from ..strategies.threads import blas_threads
 from ..strategies.validation import check_int, check_real
@@ -84,6 +85,15 @@ class FacePlan:
     def met_text(self):
         """'yes' or 'no' for the tolerance met, '' without a tolerance."""
         return "" if self.met is None else ("yes" if self.met else "no")
+
+    @property
+    def line(self):
+        """One line on the face's outcome, e.g. 'Face3: 46 points, max 0.0312 mm, tolerance met'
+        or 'Face7: no points (the face is narrower than ...)'."""
+        if not self.placed:
+            return f"{self.name}: no points ({self.reason})"
+        met = {None: "", True: ", tolerance met", False: ", tolerance not met"}[self.met]
+        return f"{self.name}: {self.n} points, max {self.maximum:.4f} mm{met}"
 
 
 @dataclass
@@ -154,9 +164,14 @@ def plan(shape_or_faces, tolerance=None, n_total=None, strategy=BEST_STRATEGY, *
     strategy and ``arguments``: as in :func:`cmmsampling.sample` (workers default 1: the faces
     are the parallel part); edge_offset: mm, None for each face's probe edge offset;
     processes: local processes (None: all cores); scheduler: a Dask scheduler address or
-    distributed.Client; progress: callable(done, total, message) after each face's run,
-    returning True to cancel. Returns a PartPlan.
+    distributed.Client; progress: callable(done, total, message) after each face's run (message:
+    the face's :attr:`FacePlan.line`), returning True to cancel. Returns a PartPlan.
     """
+    handed = handover.take(plan, shape_or_faces, {
+        "tolerance": tolerance, "n_total": n_total, "strategy": strategy, "faces": faces, "n_max": n_max,
+        "edge_offset": edge_offset, "processes": processes, "scheduler": scheduler, **arguments})
+    if handed is not None:
+        return handed
     if (tolerance is None) == (n_total is None):
         raise ValueError("give either tolerance= (mm, the deviation every face must meet) or n_total= "
                          "(the points of the whole part), not both or neither")
@@ -179,6 +194,16 @@ def plan(shape_or_faces, tolerance=None, n_total=None, strategy=BEST_STRATEGY, *
     result.seconds = time.perf_counter() - start
     result.shapes = dict(named)
     return result
+
+
+def hand_over(shape, arguments, part_plan):
+    """Let the next ``plan(shape, **arguments)`` in this process return ``part_plan`` at once (the
+    Plan part panel's plan, echoed in the console: see :mod:`cmmsampling.strategies.handover`).
+
+    shape: the Part.Shape planned; arguments: plan()'s keyword arguments other than the shape
+    and progress.
+    """
+    handover.give(plan, shape, arguments, part_plan)
 
 
 def named_faces(shape_or_faces, numbers=None):
@@ -256,8 +281,13 @@ def _run(jobs, processes, scheduler, progress):
             return True
         return False
 
-    outcomes = face_runs.run_all(solve_face, jobs, processes, scheduler, watched)
+    outcomes = face_runs.run_all(solve_face, jobs, processes, scheduler, watched, describe=_outcome_line)
     return outcomes, bool(stopped)
+
+
+def _outcome_line(job, outcome):
+    """The progress message of a finished face: its FacePlan's line."""
+    return outcome.line
 
 
 def _completed(outcomes, named):

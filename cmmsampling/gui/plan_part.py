@@ -1,0 +1,376 @@
+"""*Plan part*: probe points on many faces of one part, to a tolerance or a total of points.
+
+The task panel composes a ``cmmsampling.plan(shape, faces=[...], ...)`` call for the selected
+faces (or every face of a part selected whole); the plan runs in a worker thread
+(:class:`BackgroundPlan`) polled by a QTimer, the faces on local processes, with a progress bar
+of faces done and a line per face as it ends. Cancel stops the faces under way and keeps those
+done. The plan is written through the console API (``cmmsampling.add_plan_to_document``: a
+group per face and the plan's spreadsheet, one Undo), echoed in the Python console, where
+``plan`` holds it.
+"""
+import os
+
+import FreeCAD
+import FreeCADGui
+from FreeCAD import Qt
+from PySide import QtGui
+
+from ..fitting.deviation import DEFAULT_GRID
+from ..planning.part_plan import hand_over, plan
+from ..planning.points_needed import DEFAULT_MAX_POINTS
+from ..strategies.sampling import BEST_STRATEGY, STRATEGIES
+from . import settings
+from .commands import GuardedCommand
+from .selection import SelectionError, selected_part_faces
+from .task_panel import AUTO, ERROR_STYLE, BackgroundRunPanel, add_choice, snap_to_auto
+from .worker import BackgroundTask
+
+SETTINGS_PREFIX = "Plan_"
+# Points per face a budget starts with: the second of the pole steps (16, 46, ...).
+POINTS_PER_FACE = 46
+# What the panel shows for an option whose default None means "no limit".
+NO_LIMIT = {"time_limit": "until it converges"}
+# The panel's own default of those options: a plan runs the strategy several times per face.
+PLAN_OPTION_DEFAULTS = {"time_limit": 10.0}
+# Labels of settings whose one-line help is too long for a label.
+SETTING_LABELS = {"time_limit": "Time limit per run"}
+SPIN_BOXES = ("tolerance", "points", "n_max", "grid", "processes")
+
+
+def strategy_settings():
+    """{option: (Setting, default)} of every strategy's offered settings (its record's
+    ``settings``), with the plan's own defaults where the core has none."""
+    offered = {}
+    for entry in STRATEGIES.values():
+        for setting in entry.settings:
+            default = PLAN_OPTION_DEFAULTS.get(setting.option, entry.options[setting.option])
+            offered.setdefault(setting.option, (setting, default))
+    return offered
+
+
+def panel_defaults():
+    """The panel's values by name with their defaults: a 0.05 mm tolerance, the best strategy,
+    400 points at most per face, the 60 x 60 grid, one process per core, the faces' own edge
+    offsets and the strategies' settings."""
+    return {
+        "by_tolerance": True, "tolerance": 0.05, "points": 0, "strategy": BEST_STRATEGY,
+        "n_max": DEFAULT_MAX_POINTS, "grid": DEFAULT_GRID, "processes": os.cpu_count() or 1, "edge_offset": AUTO,
+        **{option: default for option, (_, default) in strategy_settings().items()},
+    }
+
+
+def plan_arguments(values, numbers):
+    """plan()'s keyword arguments for the panel's values and the face numbers planned: the goal,
+    the strategy with the settings it offers (0 for "no limit" becomes None), n_max, grid,
+    processes and the edge offset ("auto": each face's own, left out)."""
+    goal = {"tolerance": values["tolerance"]} if values["by_tolerance"] else {"n_total": values["points"]}
+    arguments = {"faces": list(numbers), **goal, "strategy": values["strategy"], "n_max": values["n_max"],
+                 "processes": values["processes"], "grid": values["grid"]}
+    if values["edge_offset"] >= 0:
+        arguments["edge_offset"] = values["edge_offset"]
+    for setting in STRATEGIES[values["strategy"]].settings:
+        value = values[setting.option]
+        arguments[setting.option] = None if setting.option in NO_LIMIT and not value else value
+    return arguments
+
+
+def part_text(obj, numbers):
+    """'Body: 3 of 12 faces (Face1, Face4, Face7)' or 'Body: all 12 faces'."""
+    count = len(obj.Shape.Faces)
+    if len(numbers) == count:
+        return f"{obj.Label}: all {count} faces"
+    names = ", ".join(f"Face{k}" for k in numbers)
+    return f"{obj.Label}: {len(numbers)} of {count} faces ({names})"
+
+
+class BackgroundPlan(BackgroundTask):
+    """Runs ``plan(shape, progress=..., **arguments)`` in a daemon thread.
+
+    The GUI thread polls ``done``/``total`` (faces), ``lines`` (one per face done, see
+    FacePlan.line), ``running``, then ``plan`` or ``error``/``details``; ``cancel()`` makes the
+    progress callback stop the plan after the next face ends (the processes under way are
+    stopped, the faces done kept). The thread never touches the document.
+    """
+
+    def __init__(self, shape, arguments):
+        super().__init__("cmmsampling-plan")
+        self.shape = shape
+        self.arguments = dict(arguments)
+        self.done = 0
+        self.total = 0
+        self.lines = []
+        self.plan = None
+
+    def cancel(self):
+        """Ask the plan to stop when the next face ends."""
+        self._stop.set()
+
+    def _progress(self, done, total, message):
+        self.done, self.total = done, total
+        self.lines.append(message)
+        return self.cancelled
+
+    def _work(self):
+        self.plan = plan(self.shape, progress=self._progress, **self.arguments)
+
+
+class PlanPartTaskPanel(BackgroundRunPanel):
+    """Task panel of *Plan part*. source: (obj, [K, ...]), the part and its face numbers."""
+
+    OK_TEXT = "Plan"
+    OK_TIP = "Plan every face; the points are added when the plan ends"
+
+    def __init__(self, source):
+        self._set_up("plan_part.ui", "PlanPart.svg", source)
+        obj, numbers = source
+        self.form.partLabel.setText(part_text(obj, numbers))
+        for name, entry in STRATEGIES.items():
+            add_choice(self.form.strategy, name, entry.label, entry.description)
+        self._add_setting_boxes()
+        self.edge_offset = self._add_edge_offset()
+        values = load_values()
+        values["points"] = values["points"] or POINTS_PER_FACE * len(numbers)
+        self.set_values(values)
+        self.form.strategy.currentIndexChanged.connect(self.update_enabled)
+        self.form.byTolerance.toggled.connect(self.update_enabled)
+        self.form.progress.setTextVisible(False)
+        self.update_enabled()
+
+    # --- FreeCAD task dialog interface
+    def modifyStandardButtons(self, box):
+        super().modifyStandardButtons(box)
+        self.update_enabled()
+
+    def reject(self):
+        """While a plan runs: ask it to stop and keep the panel open (the faces done are added
+        when it has stopped). Otherwise close."""
+        if self.run is not None:
+            self.run.cancel()
+            self.show_status("Cancelling: the faces under way are stopped when the next one ends; the "
+                             "faces done are kept and added.")
+            return False
+        self.timer.stop()
+        return True
+
+    # --- values
+    def _add_setting_boxes(self):
+        """A spin box per strategy setting (:func:`strategy_settings`) below the fixed settings,
+        enabled when the chosen strategy offers it; 0 shows "no limit" where the core's None does."""
+        layout = self.form.settingsGroup.layout()
+        self.setting_boxes = {}
+        for option, (setting, _) in strategy_settings().items():
+            box = QtGui.QSpinBox(self.form) if setting.kind is int else QtGui.QDoubleSpinBox(self.form)
+            box.setObjectName(option)
+            box.setRange(0 if option in NO_LIMIT else 1, 10 ** 7)
+            if option in NO_LIMIT:
+                box.setSpecialValueText(NO_LIMIT[option])
+            if setting.kind is float:
+                box.setDecimals(1)
+                box.setSuffix(" s" if option == "time_limit" else "")
+            box.setToolTip(f"{setting.help}; per run, and a face's search runs it several times")
+            text = SETTING_LABELS.get(option, setting.help.split(" (")[0])
+            label = QtGui.QLabel(text[0].upper() + text[1:], self.form)
+            layout.addRow(label, box)
+            self.setting_boxes[option] = box
+
+    def _add_edge_offset(self):
+        """The edge offset's spin box (mm), "auto" below zero: each face's probe edge offset."""
+        box = QtGui.QDoubleSpinBox(self.form)
+        box.setObjectName("edge_offset")
+        box.setRange(AUTO, 1000.0)
+        box.setDecimals(3)
+        box.setSingleStep(0.5)
+        box.setSuffix(" mm")
+        box.setSpecialValueText("auto")
+        box.setToolTip("Distance (mm) every point keeps from its face's edges. auto: each face's own (the "
+                       "probe ball radius plus a margin, or half the widest clearance of a narrower face).")
+        box.valueChanged.connect(lambda value: snap_to_auto(box, value))
+        self.form.settingsGroup.layout().addRow(QtGui.QLabel("Edge offset", self.form), box)
+        return box
+
+    def values(self):
+        """The panel's values by name (see :func:`panel_defaults`)."""
+        out = {"by_tolerance": self.form.byTolerance.isChecked(),
+               "strategy": self.form.strategy.itemData(self.form.strategy.currentIndex())}
+        out.update({name: getattr(self.form, name).value() for name in SPIN_BOXES})
+        out["edge_offset"] = self.edge_offset.value()
+        out.update({option: box.value() for option, box in self.setting_boxes.items()})
+        return out
+
+    def set_values(self, values):
+        """Show values by name; an unknown strategy leaves the choice as it is."""
+        (self.form.byTolerance if values["by_tolerance"] else self.form.byPoints).setChecked(True)
+        index = self.form.strategy.findData(values["strategy"])
+        if index >= 0:
+            self.form.strategy.setCurrentIndex(index)
+        for name in SPIN_BOXES:
+            getattr(self.form, name).setValue(values[name])
+        self.edge_offset.setValue(values["edge_offset"])
+        for option, box in self.setting_boxes.items():
+            box.setValue(values[option])
+
+    def update_enabled(self):
+        """The goal's field by the chosen goal, each strategy setting when the chosen strategy
+        offers it; nothing (but Cancel) while a plan runs."""
+        idle = self.run is None
+        strategy = self.form.strategy.itemData(self.form.strategy.currentIndex())
+        offered = {setting.option for setting in STRATEGIES[strategy].settings} if strategy in STRATEGIES else set()
+        by_tolerance = self.form.byTolerance.isChecked()
+        for widget in (self.form.byTolerance, self.form.byPoints, self.form.strategy, self.form.n_max,
+                       self.form.grid, self.form.processes, self.edge_offset):
+            widget.setEnabled(idle)
+        self.form.tolerance.setEnabled(idle and by_tolerance)
+        self.form.points.setEnabled(idle and not by_tolerance)
+        self.form.n_max.setEnabled(idle and by_tolerance)
+        for option, box in self.setting_boxes.items():
+            box.setEnabled(idle and option in offered)
+        if self.buttons is not None:
+            self.buttons.button(QtGui.QDialogButtonBox.Ok).setEnabled(idle)
+
+    # --- the run
+    def part_shape(self):
+        """The part's shape as it is now, or None when the part was deleted or lost faces."""
+        obj, numbers = self.source
+        try:
+            shape = obj.Shape
+        except ReferenceError:
+            return None
+        return shape if len(shape.Faces) >= max(numbers) else None
+
+    def start(self):
+        """Save the values and start the plan in the background."""
+        shape = self.part_shape()
+        if shape is None:
+            self.show_status(f"{self.form.partLabel.text()}: the part is not in the document any more, or "
+                             "has fewer faces now.", error=True)
+            return
+        values = self.values()
+        save_values(values)
+        self.run = BackgroundPlan(shape, plan_arguments(values, self.source[1]))
+        self.form.faceLines.clear()
+        self.form.progress.setRange(0, len(self.source[1]))
+        self.form.progress.setValue(0)
+        self.form.progress.setTextVisible(True)
+        self.show_status(f"Planning {len(self.source[1])} faces on {values['processes']} processes...")
+        self.update_enabled()
+        self.run.start()
+        self.timer.start()
+
+    def poll(self):
+        """Show the faces done; when the plan has ended, add it to the document or show the error."""
+        run = self.run
+        if run is None:
+            self.timer.stop()
+            return
+        self.show_lines(run.lines)
+        if run.total:
+            self.form.progress.setRange(0, run.total)
+            self.form.progress.setValue(run.done)
+        if run.running:
+            return
+        self.timer.stop()
+        self.run = None
+        self.update_enabled()
+        if run.error is not None:
+            self.show_status(self.report_failure(run), error=True)
+            return
+        self.finish(run)
+
+    def show_lines(self, lines):
+        """Add the face lines not shown yet to the list, the newest in view."""
+        shown = self.form.faceLines.count()
+        for line in lines[shown:]:
+            item = QtGui.QListWidgetItem(line, self.form.faceLines)
+            item.setToolTip(line)
+        if len(lines) > shown:
+            self.form.faceLines.scrollToBottom()
+
+    def finish(self, run):
+        """Add the plan to the document (echoed); close when complete, say what was kept when
+        cancelled."""
+        result = run.plan
+        FreeCAD.Console.PrintMessage(f"cmmsampling: plan of {self.form.partLabel.text()}, {result.strategy}: "
+                                     f"{result.n_total} points on {len(result.placed)} faces in "
+                                     f"{result.seconds:.0f} s\n{result.table()}\n")
+        if not result.placed:
+            self.show_status("No face holds points" + (" yet: the plan was cancelled." if result.cancelled
+                                                       else ": see the reasons above.") + " Nothing was added.",
+                             error=not result.cancelled)
+            return
+        try:
+            add_plan(self.source[0], run, result)
+        except Exception as exc:
+            self.show_status(f"The plan could not be added to the document: {exc}", error=True)
+            return
+        if not result.cancelled:
+            FreeCADGui.Control.closeDialog()
+            return
+        self.show_status(f"Cancelled: the {len(result.placed)} faces done were added ({result.n_total} points); "
+                         "the plan's report names the faces not run.")
+
+    def show_status(self, text, error=False):
+        self.form.status.setText(text)
+        self.form.status.setStyleSheet(ERROR_STYLE if error else "")
+
+
+def load_values():
+    """The values stored by the last plan, else the defaults."""
+    stored = settings.load({SETTINGS_PREFIX + name: value for name, value in panel_defaults().items()})
+    return {name[len(SETTINGS_PREFIX):]: value for name, value in stored.items()}
+
+
+def save_values(values):
+    settings.save({SETTINGS_PREFIX + name: value for name, value in values.items()})
+
+
+def add_plan(part, run, result):
+    """Write a finished plan into the part's document through the console API, echoed so that it
+    replays as a macro: ``plan = cmmsampling.plan(<part>.Shape, ...)`` (handed the plan made in
+    the worker thread, so it does not run again here) and ``add_plan_to_document``."""
+    doc = f"App.getDocument({part.Document.Name!r})"
+    part_expr = f"{doc}.getObject({part.Name!r})"
+    call = ", ".join([f"{part_expr}.Shape"] + [f"{key}={value!r}" for key, value in run.arguments.items()])
+    note = "ran in the task panel"
+    if result.cancelled:
+        note += f", cancelled after {len(result.placed)} faces (a replay runs it whole)"
+    FreeCADGui.doCommand("import cmmsampling")
+    hand_over(run.shape, run.arguments, result)
+    FreeCADGui.doCommand(f"plan = cmmsampling.plan({call})  # {note}")
+    FreeCADGui.doCommand(f"group = cmmsampling.add_plan_to_document(plan, {doc}, {part_expr})")
+
+
+class PlanPart(GuardedCommand):
+    """*Plan part...*: open the plan panel for the selected faces, or every face of a selected part."""
+
+    NAME = "CMMSampling_PlanPart"
+    TITLE = Qt.QT_TRANSLATE_NOOP("CMMSampling_PlanPart", "Plan part")
+    MENU = Qt.QT_TRANSLATE_NOOP("CMMSampling_PlanPart", "Plan part...")
+    ICON = "PlanPart.svg"
+    TIP = Qt.QT_TRANSLATE_NOOP(
+        "CMMSampling_PlanPart",
+        "Place probe points on several faces of a part (the selected faces, or all faces of a part "
+        "selected in the tree): the fewest points that meet a tolerance on each face, or a total of "
+        "points shared out; one group per face and a plan report")
+
+    def reason(self):
+        """Why the command cannot act now, or None."""
+        if FreeCAD.ActiveDocument is None:
+            return "Open a document with a part first."
+        if FreeCADGui.Control.activeDialog():
+            return "Close the open task panel first."
+        try:
+            selected_part_faces(FreeCADGui.Selection.getSelectionEx())
+        except SelectionError as exc:
+            return str(exc)
+        return None
+
+    def act(self):
+        source = selected_part_faces(FreeCADGui.Selection.getSelectionEx())
+        FreeCADGui.Control.showDialog(PlanPartTaskPanel(source))
+
+
+def register():
+    """Add the command to FreeCAD (once); returns its name."""
+    if PlanPart.NAME not in FreeCADGui.listCommands():
+        FreeCADGui.addCommand(PlanPart.NAME, PlanPart())
+    return PlanPart.NAME

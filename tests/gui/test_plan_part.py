@@ -1,0 +1,201 @@
+"""Plan part (selection, task panel, background plan on local processes, a line per face,
+cancel, the document and its Undo, the echo) in the real FreeCAD GUI, on a four-face part built
+here: a rational saddle, a plate with a hole, a 2 mm strip (too narrow for the edge offset) and a
+rational patch."""
+import __main__
+import os
+
+import FreeCAD
+import FreeCADGui
+import Part
+import pytest
+from geometry import holed_face, rational_patch_face, rational_saddle, strip_face
+from PySide import QtGui
+
+from cmmsampling.gui import plan_part
+
+from .helpers import Hold, child, dock_text, main_window, process_events, task_button, wait_until, widgets
+
+OK, CANCEL = QtGui.QDialogButtonBox.Ok, QtGui.QDialogButtonBox.Cancel
+# A plan small enough for a shared two-core machine: blind strategy, coarse grid.
+QUICK = {"strategy": "uniform_parametric", "tolerance": 0.1, "grid": 20, "n_max": 200, "edge_offset": 1.5}
+
+
+@pytest.fixture
+def part_doc(workbench):
+    """A new active document holding the four faces as Part::Feature 'Part' and the reference
+    face as 'Other'."""
+    import cmmsampling
+
+    d = FreeCAD.newDocument("PlanGui")
+    d.addObject("Part::Feature", "Part").Shape = Part.Compound(
+        [rational_saddle(), holed_face(), strip_face(), rational_patch_face()])
+    d.addObject("Part::Feature", "Other").Shape = cmmsampling.reference_face()
+    d.recompute()
+    FreeCADGui.ActiveDocument.ActiveView.viewIsometric()
+    FreeCADGui.SendMsgToActiveView("ViewFit")
+    FreeCADGui.Selection.clearSelection()
+    name = d.Name
+    yield d
+    if FreeCADGui.Control.activeDialog():
+        FreeCADGui.Control.closeDialog()
+    FreeCADGui.Selection.clearSelection()
+    if name in FreeCAD.listDocuments():
+        FreeCAD.closeDocument(name)
+    process_events(0.1)
+
+
+def plan_form():
+    """The Plan part panel's form while it is open, else None."""
+    return next((w for w in widgets() if w.objectName() == "PlanPart"), None)
+
+
+def open_plan(doc, *faces):
+    """Select the Part's faces (none: the whole part), run Plan part, return the panel's form."""
+    assert wait_until(lambda: plan_form() is None, 5), "the last panel's form is still there"
+    FreeCADGui.Selection.clearSelection()
+    if faces:
+        for face in faces:
+            FreeCADGui.Selection.addSelection(doc.Part, face)
+    else:
+        FreeCADGui.Selection.addSelection(doc.Part)
+    FreeCADGui.runCommand(plan_part.PlanPart.NAME)
+    assert wait_until(lambda: plan_form() is not None, 5), plan_part.PlanPart().reason()
+    return plan_form()
+
+
+def fill(form, strategy, **values):
+    """Set the strategy and the spin boxes (the panel's own ones by object name)."""
+    form.strategy.setCurrentIndex(form.strategy.findData(strategy))
+    for name, value in values.items():
+        (getattr(form, name, None) or child(form, name)).setValue(value)
+
+
+def hold_plan_at(monkeypatch, faces_done):
+    """Hold the plan's worker thread when ``faces_done`` faces have ended, before it reads
+    whether Cancel was pressed; keeps every plan made in the panel (``hold.plans``)."""
+    hold = Hold(limit_s=60)
+    hold.plans = []
+    work = plan_part.BackgroundPlan._work
+
+    def held(self, done, total, message):
+        self.done, self.total = done, total
+        self.lines.append(message)
+        if done == faces_done and not hold.reached.is_set():
+            hold()
+        return self.cancelled
+
+    def kept(self):
+        work(self)
+        hold.plans.append(self.plan)
+
+    monkeypatch.setattr(plan_part.BackgroundPlan, "_progress", held)
+    monkeypatch.setattr(plan_part.BackgroundPlan, "_work", kept)
+    return hold
+
+
+def test_the_command_takes_faces_of_one_part_or_a_whole_part(part_doc, artifacts):
+    form = open_plan(part_doc)
+    assert form.partLabel.text() == "Part: all 4 faces"
+    assert form.tolerance.value() == 0.05 and form.byTolerance.isChecked() and not form.points.isEnabled()
+    assert form.strategy.itemData(form.strategy.currentIndex()) == "optimal"
+    assert child(form, "time_limit").value() == 10.0 and child(form, "time_limit").isEnabled()
+    assert not child(form, "iterations").isEnabled()
+    assert form.processes.value() == (os.cpu_count() or 1) and child(form, "edge_offset").text() == "auto"
+    assert form.points.value() == 4 * plan_part.POINTS_PER_FACE
+    form.byPoints.setChecked(True)
+    assert form.points.isEnabled() and not form.tolerance.isEnabled() and not form.n_max.isEnabled()
+    fill(form, "pso")
+    assert child(form, "iterations").isEnabled() and not child(form, "time_limit").isEnabled()
+    process_events(0.2)
+    form.grab().save(os.path.join(artifacts, "plan_part_form.png"))
+    assert task_button(OK).text() == "Plan"
+    task_button(CANCEL).click()
+    assert wait_until(lambda: not FreeCADGui.Control.activeDialog(), 2)
+
+    form = open_plan(part_doc, "Face4", "Face2")
+    assert form.partLabel.text() == "Part: 2 of 4 faces (Face2, Face4)"
+    assert form.points.value() == 2 * plan_part.POINTS_PER_FACE
+    task_button(CANCEL).click()
+    assert wait_until(lambda: not FreeCADGui.Control.activeDialog(), 2)
+
+    FreeCADGui.Selection.clearSelection()
+    FreeCADGui.Selection.addSelection(part_doc.Part, "Face1")
+    FreeCADGui.Selection.addSelection(part_doc.Other, "Face1")
+    reason = plan_part.PlanPart().reason()
+    assert reason.startswith("Faces of 2 objects are selected (Part, Other)")
+    FreeCADGui.Selection.clearSelection()
+    FreeCADGui.Selection.addSelection(part_doc.Part, "Edge1")
+    assert plan_part.PlanPart().reason() == "Part.Edge1 is an edge: select a face."
+    FreeCADGui.Selection.clearSelection()
+    assert plan_part.PlanPart().reason().startswith("Nothing is selected")
+
+
+def test_a_plan_runs_face_by_face_and_adds_a_group_per_face(part_doc, monkeypatch, artifacts):
+    names, undo = [o.Name for o in part_doc.Objects], part_doc.UndoCount
+    hold = hold_plan_at(monkeypatch, 2)
+    form = open_plan(part_doc)
+    fill(form, processes=2, **QUICK)
+    task_button(OK).click()
+    assert wait_until(hold.reached.is_set, 180), form.status.text()
+    assert wait_until(lambda: form.faceLines.count() == 2, 2)
+    assert form.progress.text() == "2 / 4 faces" and not task_button(OK).isEnabled()
+    assert not form.strategy.isEnabled() and not form.tolerance.isEnabled()
+    lines = [form.faceLines.item(k) for k in range(2)]
+    assert all(line.text().startswith("Face") and line.toolTip() == line.text() for line in lines)
+    main_window().grab().save(os.path.join(artifacts, "plan_part_running.png"))
+    hold.released.set()
+
+    assert wait_until(lambda: not FreeCADGui.Control.activeDialog(), 240), form.status.text()
+    [made] = hold.plans
+    assert __main__.plan is made, "the echoed plan() call planned again"
+    assert [face.n > 0 for face in made.faces] == [True, True, False, True]
+    assert "too narrow" in made.faces[2].reason
+    assert all(face.met for face in made.faces if face.placed and face.name != "Face1")
+    console = dock_text("Python console")
+    part = f"App.getDocument({part_doc.Name!r}).getObject('Part')"
+    assert (f"plan = cmmsampling.plan({part}.Shape, faces=[1, 2, 3, 4], tolerance=0.1, "
+            "strategy='uniform_parametric', n_max=200, processes=2, grid=20, edge_offset=1.5)  "
+            "# ran in the task panel") in console
+    assert f"group = cmmsampling.add_plan_to_document(plan, App.getDocument({part_doc.Name!r}), {part})" in console
+
+    group = next(o for o in part_doc.Objects if o.Label == "Plan Part (uniform_parametric)")
+    subgroups = [o for o in group.Group if o.TypeId == "App::DocumentObjectGroup"]
+    assert [s.Label for s in subgroups] == [f"Sampling Part Face{k} (uniform_parametric)" for k in (1, 2, 4)]
+    sheet = part_doc.getObject("PlanReport")
+    assert sheet.get("A8") == "Face3" and "too narrow" in sheet.get("G8")
+    assert int(sheet.get("C10")) == made.n_total
+    FreeCADGui.Selection.clearSelection()
+    FreeCADGui.SendMsgToActiveView("ViewFit")
+    process_events(0.5)
+    main_window().grab().save(os.path.join(artifacts, "plan_part_done.png"))
+    FreeCADGui.ActiveDocument.ActiveView.saveImage(os.path.join(artifacts, "plan_part_view.png"), 1200, 900,
+                                                   "White")
+    assert part_doc.UndoCount == undo + 1
+    part_doc.undo()
+    assert [o.Name for o in part_doc.Objects] == names
+
+
+def test_cancel_keeps_the_faces_done_and_names_the_others(part_doc, monkeypatch, artifacts):
+    hold = hold_plan_at(monkeypatch, 1)
+    form = open_plan(part_doc, "Face2", "Face4")
+    fill(form, processes=1, **QUICK)
+    task_button(OK).click()
+    assert wait_until(hold.reached.is_set, 120), form.status.text()
+    task_button(CANCEL).click()
+    assert FreeCADGui.Control.activeDialog() and form.status.text().startswith("Cancelling")
+    hold.released.set()
+
+    assert wait_until(lambda: task_button(OK).isEnabled(), 60), form.status.text()
+    [made] = hold.plans
+    assert made.cancelled and [face.placed for face in made.faces] == [True, False]
+    assert form.status.text() == (f"Cancelled: the 1 faces done were added ({made.n_total} points); the plan's "
+                                  "report names the faces not run.")
+    assert form.faceLines.item(0).text() == made.faces[0].line
+    form.grab().save(os.path.join(artifacts, "plan_part_cancelled_form.png"))
+    sheet = part_doc.getObject("PlanReport")
+    assert sheet.get("A6") == "Face2" and sheet.get("A7") == "Face4"
+    assert sheet.get("G7") == "cancelled before this face ran"
+    assert "cancelled after 1 faces (a replay runs it whole)" in dock_text("Python console")
+    task_button(CANCEL).click()
+    assert wait_until(lambda: not FreeCADGui.Control.activeDialog(), 2)
