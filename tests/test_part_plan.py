@@ -93,6 +93,34 @@ def test_a_dask_local_cluster_with_two_workers_plans_alike(part, tolerance_plan)
         assert (face.n, face.reason) == (same.n, same.reason)
 
 
+PAGE_FAULTS = """
+import resource, sys
+import numpy as np
+sys.path.insert(0, {root!r})
+from cmmsampling.planning.face_runs import set_heap_thresholds
+if {tuned}:
+    assert set_heap_thresholds()
+before = resource.getrusage(resource.RUSAGE_SELF).ru_minflt
+for _ in range(100):
+    np.ones(2 ** 18).sum()
+print(resource.getrusage(resource.RUSAGE_SELF).ru_minflt - before)
+"""
+
+
+def test_dask_workers_heap_thresholds_keep_temporary_arrays_in_the_heap():
+    """Dask's nanny sets MALLOC_TRIM_THRESHOLD_=65536: each 2 MiB temporary is then mapped anew,
+    512 page faults a time; with the thresholds set again the heap keeps it."""
+    import subprocess
+    import sys
+
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    environment = {**os.environ, "MALLOC_TRIM_THRESHOLD_": "65536"}
+    faults = {tuned: int(subprocess.run([sys.executable, "-c", PAGE_FAULTS.format(root=root, tuned=tuned)],
+                                        env=environment, capture_output=True, text=True, check=True).stdout)
+              for tuned in (False, True)}
+    assert faults[False] > 100 * 400 and faults[True] < faults[False] / 20
+
+
 def test_a_budget_goes_to_the_worst_face_and_is_never_exceeded(part):
     budget = cmmsampling.plan(part, n_total=120, strategy="uniform_parametric", edge_offset=1.5, processes=2,
                               **FAST)

@@ -4,8 +4,14 @@ A job is plain data (the face as a BREP string, numbers, names) and its outcome 
 so both cross process and machine boundaries. Local processes are started with this Python
 (also from inside FreeCAD, whose ``sys.executable`` is the FreeCAD binary) by the ``spawn``
 method; a Dask cluster is reached through ``distributed.Client`` (Debian's python3-distributed).
+
+Dask's nanny starts its workers with ``MALLOC_TRIM_THRESHOLD_=65536``, which also fixes glibc's
+mmap threshold at 128 KiB: every temporary array of the fit and the deviation is then mapped and
+unmapped anew, and a face took 1.65x as long (22.5 s against 13.6 s, measured). A job run on Dask
+first sets glibc's thresholds back to sizes that keep those arrays in the heap.
 """
 import concurrent.futures
+import ctypes
 import multiprocessing
 import os
 
@@ -87,7 +93,7 @@ def _dask_runs(function, jobs, scheduler):
     from distributed import Client, as_completed
 
     client = scheduler if isinstance(scheduler, Client) else Client(scheduler)
-    futures = [client.submit(function, job, pure=False) for job in jobs]
+    futures = [client.submit(run_with_heap_thresholds, function, job, pure=False) for job in jobs]
     where = {future.key: index for index, future in enumerate(futures)}
     try:
         for future in as_completed(futures):
@@ -96,6 +102,27 @@ def _dask_runs(function, jobs, scheduler):
         client.cancel([future for future in futures if not future.done()])
         if client is not scheduler:
             client.close()
+
+
+# glibc's mallopt parameters and the sizes set for a Dask worker's jobs (bytes).
+M_TRIM_THRESHOLD, M_MMAP_THRESHOLD = -1, -3
+HEAP_THRESHOLDS = {M_TRIM_THRESHOLD: 128 * 2 ** 20, M_MMAP_THRESHOLD: 32 * 2 ** 20}
+
+
+def run_with_heap_thresholds(function, job):
+    """``function(job)`` after :func:`set_heap_thresholds` (a job on a Dask worker)."""
+    set_heap_thresholds()
+    return function(job)
+
+
+def set_heap_thresholds():
+    """Let glibc keep arrays up to 32 MiB in the heap and return freed memory to the system only
+    above 128 MiB (HEAP_THRESHOLDS), for this process; True when set, False where the C library
+    is not glibc."""
+    mallopt = getattr(ctypes.CDLL(None), "mallopt", None)
+    if mallopt is None:
+        return False
+    return all(mallopt(parameter, size) == 1 for parameter, size in HEAP_THRESHOLDS.items())
 
 
 def _message(job, outcome):
