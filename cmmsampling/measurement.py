@@ -10,7 +10,7 @@ from .formats.frames import placement_from_metadata, resolve_frame, to_global
 from .formats.pointfiles import read_points
 from .geometry.freecad_env import import_part
 from .geometry.surface import as_face
-from .strategies.validation import check_real
+from .geometry.validation import check_real
 
 Part = import_part()
 import FreeCAD  # noqa: E402  (importable once import_part() has set the path)

@@ -11,7 +11,7 @@ import os
 import pytest
 
 PACKAGE = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "cmmsampling")
-ROOMS = ("geometry", "fitting", "strategies", "planning", "formats", "hall", "gui")
+ROOMS = ("geometry", "access", "fitting", "strategies", "planning", "formats", "hall", "gui")
 HALL = ("__init__", "object_types", "measurement", "study", "report", "document", "cli", "__main__")
 ALLOWED_UP = {("document", "gui.view_providers")}
 

@@ -14,7 +14,7 @@ import numpy as np
 from ..planning.part_plan import PartPlan
 from ..planning.probe_path import short_path, unchanged
 from ..strategies.result import SamplingResult
-from ..strategies.validation import check_choice, check_real
+from ..geometry.validation import check_choice, check_real
 from .dmis import dmis_program_name
 from .files import write_atomically
 from .frames import FRAME_KEYS, frame_facts, resolve_frame, to_local

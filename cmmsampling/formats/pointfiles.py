@@ -8,7 +8,7 @@ figures); CSV adds the face parameters u, v and each point's deviation where kno
 """
 import os
 
-from ..strategies.validation import check_choice
+from ..geometry.validation import check_choice
 from . import csv_points, dmis, xyzijk
 
 MODULES = {"dmis": dmis, "xyz": xyzijk, "csv": csv_points}

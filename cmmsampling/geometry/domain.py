@@ -21,13 +21,15 @@ margin below, is as small as CELLS allows:
 Points outside the feasible cells are moved to the nearest feasible cell centre.
 """
 import numpy as np
-from scipy.ndimage import distance_transform_edt, maximum_filter
+from scipy.ndimage import distance_transform_edt, maximum_filter, minimum_filter
 from scipy.spatial import cKDTree
 
 CELLS = 256 * 256
 MIN_CELLS_PER_SIDE = 16
 SHAPE_SAMPLES = 17
 NEAR_CELLS = 5
+# Cells of the coarser raster on which a probe's reach is judged.
+REACH_CELLS = 32 * 32
 
 
 class FaceDomain:
@@ -143,10 +145,15 @@ class FaceDomain:
         return self.lower + np.asarray(unit, dtype=float) * (self.upper - self.lower)
 
 
-def face_domain(model, edge_offset=0.0):
-    """The FaceDomain of a SurfaceModel's face, keeping ``edge_offset`` mm from its edges."""
+def face_domain(model, edge_offset=0.0, reachable=None):
+    """The FaceDomain of a SurfaceModel's face, keeping ``edge_offset`` mm from its edges.
+
+    reachable: None, or callable(points (M, 3) mm, normals (M, 3) unit) -> (M,) bool, where a
+    probe can touch the face (cmmsampling.access.reach.Reachability): the cells it cannot reach
+    are infeasible too, judged once on a coarser raster (:func:`reachable_cells`).
+    """
     trimmed = model.trimmed
-    if not trimmed and edge_offset <= 0:
+    if not trimmed and edge_offset <= 0 and reachable is None:
         return FaceDomain(model.bounds, area=model.area)
     shape = raster_shape(model)
     centres = _cell_centres(model.bounds, shape)
@@ -160,11 +167,34 @@ def face_domain(model, edge_offset=0.0):
     gap = max(float(np.linalg.norm(np.diff(loop, axis=0), axis=1).max(initial=0.0)) for loop in samples)
     clearance = distance - 0.5 * gap - half_diagonals
     feasible = on_face & (clearance >= edge_offset)
+    if reachable is not None:
+        feasible &= reachable_cells(model, feasible, reachable)
     cell_areas = _cell_areas(points)
     reach = float(clearance[on_face].max(initial=0.0))
     margin = 0.5 * gap + 2.0 * float(half_diagonals[on_face].max(initial=0.0))
     return FaceDomain(model.bounds, trimmed, edge_offset, on_face, feasible,
                       float(cell_areas[feasible].sum()), loops, reach, margin)
+
+
+def reachable_cells(model, feasible, reachable):
+    """(R_u, R_v) bool: the cells of the raster ``feasible`` whose coarse cell (about
+    REACH_CELLS in all, each covering whole cells of it) and its eight neighbours a probe reaches
+    at their centres (so that a cell's far corner is judged too); only coarse cells over
+    feasible cells are asked (reachable: see :func:`face_domain`)."""
+    shape = np.array(feasible.shape)
+    factor = max(1, int(np.ceil(np.sqrt(feasible.size / REACH_CELLS))))
+    coarse = tuple(-(-shape // factor))
+    cells = np.zeros(coarse, dtype=bool)
+    rows, cols = np.nonzero(feasible)
+    cells[rows // factor, cols // factor] = True
+    u0, u1, v0, v1 = model.bounds
+    span = np.array([u1 - u0, v1 - v0]) / shape * factor
+    wanted = np.argwhere(cells)
+    centres = np.array([u0, v0]) + (wanted + 0.5) * span
+    centres = np.minimum(centres, [u1, v1])
+    cells[tuple(wanted.T)] = reachable(model.points(centres), model.normals(centres))
+    cells = minimum_filter(cells, size=3, mode="nearest")
+    return cells[np.arange(shape[0])[:, None] // factor, np.arange(shape[1])[None, :] // factor]
 
 
 def raster_shape(model):

@@ -16,7 +16,7 @@ import multiprocessing
 import os
 
 from ..strategies.parallel import python_executable
-from ..strategies.validation import check_int
+from ..geometry.validation import check_int
 
 
 def run_all(function, jobs, processes=None, scheduler=None, progress=None, describe=None):

@@ -24,7 +24,7 @@ from ..geometry.surface import as_face
 from ..strategies import handover
 from ..strategies.sampling import BEST_STRATEGY, evaluate, probe_edge_offset, sample
 from ..strategies.threads import blas_threads
-from ..strategies.validation import check_int, check_real
+from ..geometry.validation import check_int, check_real
 from . import face_runs
 from .points_needed import DEFAULT_MAX_POINTS, points_needed, step_counts
 

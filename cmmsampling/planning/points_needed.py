@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 
 from ..fitting.substitute import DEFAULT_DEGREE, default_pole_count
 from ..strategies.sampling import BEST_STRATEGY, MIN_POINTS, probe_edge_offset, sample
-from ..strategies.validation import check_int, check_real
+from ..geometry.validation import check_int, check_real
 
 DEFAULT_MAX_POINTS = 400
 

@@ -15,7 +15,7 @@ Pairs of points are found by neighbour searches, so nothing of size N^2 is left.
 """
 import os
 
-from .validation import check_int
+from ..geometry.validation import check_int
 
 FIXED_BYTES = 80 * 2**20
 FIT_ARRAYS = 6

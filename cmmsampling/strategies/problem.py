@@ -18,18 +18,21 @@ class SamplingProblem:
     substitute; smoothing: its second-difference weight; grid: (g_u, g_v) evaluation raster;
     seed: for the random parts of the strategies; workers: processes an optimiser's swarm is
     spread over (1 or 2); edge_offset: mm every point keeps from the face's edges; min_spacing:
-    mm between any two points; spacing_by_default: min_spacing is the default, not the caller's.
+    mm between any two points; spacing_by_default: min_spacing is the default, not the caller's;
+    reachability: None, or where a probe reaches the part the face belongs to
+    (cmmsampling.access.reach.Reachability): what it cannot reach is infeasible, like the trim.
     """
 
     def __init__(self, model, n, fit_degree, fit_poles, smoothing, grid, seed, workers=1,
-                 edge_offset=0.0, min_spacing=0.0):
+                 edge_offset=0.0, min_spacing=0.0, reachability=None):
         self.model = model
+        self.reachability = reachability
         self.n = n
         self.seed = seed
         self.workers = workers
         self.min_spacing = min_spacing
         self.spacing_by_default = False
-        self.domain = face_domain(model, edge_offset)
+        self.domain = face_domain(model, edge_offset, reachability)
         self.space = SubstituteSpace(fit_degree, fit_poles, model.bounds, smoothing)
         self.grid = EvaluationGrid(model, grid)
         self._objective = None

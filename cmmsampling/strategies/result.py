@@ -21,7 +21,9 @@ class SamplingResult:
     timings: seconds per phase; settings: every parameter of the run; cancelled: stopped early;
     check: DeviationStats on the check grid (3x denser than the grid optimised on), computed on
     first use (about half a second);
-    problem: the SamplingProblem it was computed for (grids, objective, bounds).
+    problem: the SamplingProblem it was computed for (grids, objective, bounds); access: how the
+    probe reaches each point when the run was given the part (cmmsampling.access.reach.Access:
+    reachable, axes, tilts, head angles), else None.
     """
 
     strategy: str
@@ -39,6 +41,7 @@ class SamplingResult:
     cancelled: bool = False
     problem: object = None
     notes: list = field(default_factory=list)
+    access: object = None
     _bounds: dict = field(default=None, repr=False)
     _check: object = field(default=None, repr=False)
 

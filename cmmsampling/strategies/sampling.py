@@ -1,16 +1,20 @@
 """The scripting entry points: :func:`sample` runs a strategy, :func:`evaluate` judges any point set."""
 import os
 import time
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
+from ..access.probe import Probe
+from ..access.reach import Reachability
 from ..fitting.crosscheck import occ_cross_check
 from ..fitting.deviation import DEFAULT_GRID
 from ..fitting.occ_surface import substitute_surface
 from ..fitting.substitute import DEFAULT_DEGREE, DEFAULT_SMOOTHING
 from ..geometry.domain import face_domain
+from ..geometry.freecad_env import import_part
 from ..geometry.surface import SurfaceModel
+from ..geometry.validation import check_choice, check_int, check_pair, check_real, check_uv
 from . import blind, handover, memory
 from .blind import StrategyOutcome
 from .optimal import default_min_spacing, descend
@@ -18,7 +22,8 @@ from .problem import SamplingProblem, resolve_fit_poles
 from .pso import SwarmSettings, particle_swarm
 from .result import EXACT_FIT, SamplingResult
 from .threads import blas_threads
-from .validation import check_choice, check_int, check_pair, check_real, check_uv
+
+Part = import_part()
 
 MIN_POINTS = 4
 SIGNIFICANT_MM = 1e-9
@@ -323,7 +328,7 @@ def strategy_options(strategy, options):
 
 def make_problem(face, n, fit_degree=DEFAULT_DEGREE, fit_poles=None, smoothing=DEFAULT_SMOOTHING,
                  grid=DEFAULT_GRID, seed=0, workers=None, edge_offset=0.0, min_spacing=0.0,
-                 strategy=None, options=None):
+                 strategy=None, options=None, part=None, probe=None):
     """Validate the common inputs and build a SamplingProblem (see :func:`sample`).
 
     min_spacing None: the default (cmmsampling.strategies.optimal.default_min_spacing), lowered where the
@@ -351,12 +356,27 @@ def make_problem(face, n, fit_degree=DEFAULT_DEGREE, fit_poles=None, smoothing=D
     model = SurfaceModel.from_face(face)
     _check_area(model)
     problem = SamplingProblem(model, n, degree, poles, smoothing, grid, seed, workers, edge_offset,
-                              min_spacing or 0.0)
+                              min_spacing or 0.0, _reachability(part, probe))
     if min_spacing is None:
         problem.min_spacing = default_min_spacing(model.area, n, problem.domain.feasible_area)
         problem.spacing_by_default = True
     _check_room(problem)
     return problem
+
+
+def _reachability(part, probe):
+    """The Reachability of a probe on a part, None without a part; TypeError for a part that is
+    no shape or a probe that is no Probe."""
+    if part is None:
+        if probe is not None:
+            raise ValueError("a probe is checked against the part its face belongs to: give part= (the "
+                             "solid or shape) with probe=")
+        return None
+    if not isinstance(part, Part.Shape) or part.isNull() or not part.Faces:
+        raise TypeError(f"part must be the Part.Shape the face belongs to (a solid, a shell), got {part!r}")
+    if probe is not None and not isinstance(probe, Probe):
+        raise TypeError(f"probe must be a cmmsampling.Probe, got {probe!r}")
+    return Reachability(part, probe)
 
 
 def memory_needed(n, strategy=DEFAULT_STRATEGY, *, fit_degree=DEFAULT_DEGREE, fit_poles=None,
@@ -451,8 +471,13 @@ def _check_memory(n, degree, given_poles, grid, workers, strategy, options):
 
 
 def _check_room(problem):
-    """ValueError when the face cannot hold N points with the edge offset and spacing asked for."""
+    """ValueError when the face cannot hold N points with the edge offset and spacing asked for,
+    or the probe reaches none of them."""
     domain = problem.domain
+    if domain.empty and problem.reachability is not None and not face_domain(problem.model,
+                                                                              domain.edge_offset).empty:
+        raise ValueError("the probe reaches no point of this face on the part: choose a smaller stylus or a "
+                         "larger max_tilt, or leave part= out to sample without the probe's reach")
     if domain.empty:
         raise ValueError(
             f"the face is too narrow for edge_offset {domain.edge_offset:g} mm: none of its points "
@@ -497,7 +522,7 @@ def _check_area(model):
 
 def sample(face, n=81, strategy=DEFAULT_STRATEGY, *, fit_degree=DEFAULT_DEGREE, fit_poles=None,
            smoothing=DEFAULT_SMOOTHING, grid=DEFAULT_GRID, seed=0, progress=None, occ_check=True,
-           workers=None, edge_offset=0.0, min_spacing=None, **options):
+           workers=None, edge_offset=0.0, min_spacing=None, part=None, probe=None, **options):
     """Place n probe points on a face with a strategy and judge them.
 
     face: a Part.Face (or a Shape holding one face), e.g. ``cmmsampling.reference_face()``;
@@ -511,7 +536,10 @@ def sample(face, n=81, strategy=DEFAULT_STRATEGY, *, fit_degree=DEFAULT_DEGREE, 
     machine; the results are identical); edge_offset: mm every point keeps from the face's edges
     (3D; 0, the paper's setting, allows points on the edges); min_spacing: mm between any two
     points (None: a tenth of the even spacing sqrt(area / n), at least 5 um, lowered where the
-    face cannot hold N points that far apart; 0 allows any);
+    face cannot hold N points that far apart; 0 allows any); part: the Part.Shape the face
+    belongs to (a solid), whose other faces may block the probe: the face's points the probe
+    cannot reach become infeasible, and each final point's probe pose is measured with OCC
+    (``result.access``); probe: a cmmsampling.Probe (default: a 2 mm ball on a 20 mm stylus);
     options: the strategy's own (see ``STRATEGIES[name].options``; PSO: population, iterations, w1,
     w2, c1, c2, velocity_limit, start_from_uniform).
     Returns a SamplingResult.
@@ -519,14 +547,15 @@ def sample(face, n=81, strategy=DEFAULT_STRATEGY, *, fit_degree=DEFAULT_DEGREE, 
     handed = handover.take(sample, face, {"n": n, "strategy": strategy, "fit_degree": fit_degree,
                                       "fit_poles": fit_poles, "smoothing": smoothing, "grid": grid,
                                       "seed": seed, "occ_check": occ_check, "workers": workers,
-                                      "edge_offset": edge_offset, "min_spacing": min_spacing, **options})
+                                      "edge_offset": edge_offset, "min_spacing": min_spacing, "part": part,
+                                      "probe": probe, **options})
     if handed is not None:
         return handed
     check_choice("strategy", strategy, list(STRATEGIES))
     options = strategy_options(strategy, options)
     n = check_int("n", n, MIN_POINTS)
     problem = make_problem(face, n, fit_degree, fit_poles, smoothing, grid, seed, workers, edge_offset,
-                           min_spacing, strategy, options)
+                           min_spacing, strategy, options, part, probe)
     start = time.perf_counter()
     with blas_threads(1):
         outcome = _exact_outcome(problem, strategy) or STRATEGIES[strategy].run(problem, progress, **options)
@@ -639,6 +668,24 @@ def evaluate(face, uv, *, strategy="given", fit_degree=DEFAULT_DEGREE, fit_poles
     return _judge(problem, StrategyOutcome(uv), strategy, settings, 0.0, occ_check)
 
 
+def _check_reach(problem, result):
+    """The probe's pose at each final point, measured with OCC (result.access), its settings,
+    and notes on the points tilted or refused."""
+    started = time.perf_counter()
+    result.access, refused = problem.reachability.final(result.points, result.normals)
+    result.settings["probe"] = asdict(problem.reachability.probe)
+    tilted = int(result.access.tilted.sum())
+    if tilted:
+        result.notes.append(f"{tilted} of {result.n} points are reached with the stylus tilted off their normal "
+                            f"(up to {np.nanmax(result.access.tilts):.1f} deg)")
+    blocked = np.flatnonzero(~result.access.reachable)
+    if blocked.size:
+        names = ", ".join(f"P{k + 1}" for k in blocked[:10]) + (" ..." if blocked.size > 10 else "")
+        result.notes.append(f"{blocked.size} point(s) cannot be reached by the probe without touching the part "
+                            f"elsewhere ({names}): measured with OCC at the final points")
+    result.timings["reach_s"] = time.perf_counter() - started
+
+
 def _common_settings(problem):
     """The fit and grid settings of a problem, JSON-friendly."""
     return {
@@ -674,6 +721,8 @@ def _judge(problem, outcome, strategy, settings, strategy_s, occ_check):
         occ_s = time.perf_counter() - start
     result.timings = {"strategy_s": strategy_s, "evaluation_s": evaluation_s, "occ_check_s": occ_s,
                       "total_s": strategy_s + evaluation_s + occ_s}
+    if problem.reachability is not None:
+        _check_reach(problem, result)
     if result.exact:
         result.notes.append(
             f"the substitute reproduces this face exactly (maximum deviation {stats.maximum:.1e} mm, "

@@ -1,0 +1,130 @@
+"""A part as points on its faces, for fast clearance tests of a probe's pieces.
+
+Points on every face (OCC's tessellation, its triangles filled to ``spacing`` mm) sit in a
+KD-tree. A ball swept along a segment (a capsule) or a flat-ended cylinder is blocked when a
+part point lies within it grown by ``margin`` (the spacing and the tessellation's deflection:
+how far the surface may lie from its nearest point), so the tests err on the side of blocking.
+"""
+import numpy as np
+from scipy.spatial import cKDTree
+
+# Ball centres along a swept ball are this fraction of its radius apart.
+SPHERE_STEP = 0.5
+
+
+class Obstacles:
+    """A part as points for fast clearance tests.
+
+    part: a Part.Shape (solid, shell or faces); spacing: mm between neighbouring points on its
+    faces (default: a fortieth of the part's diagonal, at most 0.5 mm); deflection: OCC's
+    tessellation tolerance, mm (default spacing / 5). box: (2, 3) the part's bounding box, mm;
+    margin: mm added to every capsule's radius.
+    """
+
+    def __init__(self, part, spacing=None, deflection=None):
+        box = part.BoundBox
+        self.box = np.array([[box.XMin, box.YMin, box.ZMin], [box.XMax, box.YMax, box.ZMax]])
+        self.spacing = float(spacing or min(0.5, box.DiagonalLength / 40.0))
+        self.deflection = float(deflection or self.spacing / 5.0)
+        self.points = np.concatenate([_fill(face, self.spacing, self.deflection) for face in part.Faces])
+        self.tree = cKDTree(self.points)
+        self.margin = self.spacing + self.deflection
+
+    def swept_blocked(self, starts, ends, radii, margin=True):
+        """Balls swept along segments (capsules from starts (M, 3) to ends (M, 3), radius radii
+        (M,), mm) that a part point lies within (plus the margin unless margin=False): (M,) bool.
+        The capsule is covered by balls along its segment, a little larger than it between them."""
+        centres, owner, steps = along_segments(starts, ends, np.maximum(SPHERE_STEP * np.asarray(radii, float), self.spacing))
+        radii = np.broadcast_to(np.asarray(radii, float), (len(starts),))
+        reach = np.sqrt(radii ** 2 + (0.5 * steps) ** 2)[owner] + (self.margin if margin else 0.0)
+        hit = np.zeros(owner.size, dtype=bool)
+        for value in np.unique(reach):
+            chosen = reach == value
+            distances, _ = self.tree.query(centres[chosen], k=1, distance_upper_bound=value)
+            hit[chosen] = np.isfinite(distances)
+        return np.bincount(owner, weights=hit, minlength=len(starts)) > 0
+
+    def cylinders_blocked(self, starts, ends, radii):
+        """Flat-ended cylinders (axis from starts (M, 3) to ends (M, 3), radius radii (M,), mm),
+        each grown by the margin, that hold a part point: (M,) bool.
+
+        Balls around pieces of each axis find the part points near it: a piece with no point in
+        its ball is clear, one at least a radius from both ends with a point within the radius is
+        blocked (that ball lies inside the cylinder); only the others test their points against
+        the cylinder itself."""
+        starts, ends = np.asarray(starts, float), np.asarray(ends, float)
+        radii = np.broadcast_to(np.asarray(radii, float), (len(starts),)) + self.margin
+        centres, owner, steps = along_segments(starts, ends, np.maximum(SPHERE_STEP * radii, self.spacing))
+        lengths = np.linalg.norm(ends - starts, axis=1)
+        bounding = np.sqrt(radii ** 2 + (0.5 * steps) ** 2)[owner]
+        distances = np.full(len(centres), np.inf)
+        for value in np.unique(bounding):
+            chosen = bounding == value
+            distances[chosen] = self.tree.query(centres[chosen], k=1, distance_upper_bound=value)[0]
+        along = np.linalg.norm(centres - starts[owner], axis=1)
+        interior = (along >= radii[owner]) & (lengths[owner] - along >= radii[owner])
+        hit = interior & (distances <= radii[owner])
+        unsure = np.isfinite(distances) & ~hit
+        if unsure.any():
+            hit[unsure] = self._pieces_hold_points(centres[unsure], bounding[unsure], owner[unsure], starts, ends,
+                                                   radii)
+        return np.bincount(owner, weights=hit, minlength=len(starts)) > 0
+
+    def _pieces_hold_points(self, centres, bounding, owner, starts, ends, radii):
+        """(P,) bool: pieces (ball centres (P, 3), radii bounding (P,)) of the cylinders ``owner``
+        (P,) whose balls hold a point inside the cylinder (starts, ends (M, 3), radii (M,))."""
+        found = self.tree.query_ball_point(centres, bounding, return_sorted=False)
+        counts = np.fromiter(map(len, found), dtype=int, count=len(found))
+        indices = np.concatenate([np.asarray(f, dtype=int) for f in found]) if counts.sum() else np.zeros(0, int)
+        piece = np.repeat(np.arange(len(centres)), counts)
+        cylinder = owner[piece]
+        axis = ends - starts
+        length = np.linalg.norm(axis, axis=1)
+        unit = axis / np.maximum(length, 1e-12)[:, None]
+        offset = self.points[indices] - starts[cylinder]
+        along = np.einsum("pc,pc->p", offset, unit[cylinder])
+        across = np.linalg.norm(offset - along[:, None] * unit[cylinder], axis=1)
+        inside = (along >= -self.margin) & (along <= length[cylinder] + self.margin) & (across <= radii[cylinder])
+        return np.bincount(piece, weights=inside, minlength=len(centres)) > 0
+
+    def exit_distance(self, starts, axes, grow):
+        """How far along axes (M, 3) unit the points starts (M, 3) leave the part's box grown by
+        ``grow`` mm: (M,) mm (0 for a start already outside)."""
+        low, high = self.box[0] - grow, self.box[1] + grow
+        with np.errstate(divide="ignore", invalid="ignore"):
+            far = np.where(axes > 0, (high - starts) / axes, np.where(axes < 0, (low - starts) / axes, np.inf))
+        return np.maximum(far.min(axis=1), 0.0)
+
+
+def along_segments(starts, ends, steps):
+    """Points along segments from starts (M, 3) to ends (M, 3), at most steps (M,) apart, both
+    ends included: (points (P, 3), owner (P,) the segment of each, steps (M,) as used)."""
+    starts, ends = np.asarray(starts, float), np.asarray(ends, float)
+    steps = np.broadcast_to(np.asarray(steps, float), (len(starts),))
+    lengths = np.linalg.norm(ends - starts, axis=1)
+    counts = np.ceil(lengths / steps).astype(int) + 1
+    owner = np.repeat(np.arange(len(starts)), counts)
+    first = np.cumsum(counts) - counts
+    t = (np.arange(owner.size) - first[owner]) / np.maximum(counts[owner] - 1, 1)
+    return starts[owner] + t[:, None] * (ends - starts)[owner], owner, lengths / np.maximum(counts - 1, 1)
+
+
+def _fill(face, spacing, deflection):
+    """Points on a face: its tessellation's vertices and its triangles filled on a barycentric
+    grid whose steps are at most ``spacing`` mm: (P, 3)."""
+    vertices, triangles = face.tessellate(deflection)
+    vertices = np.array([[v.x, v.y, v.z] for v in vertices], dtype=float).reshape(-1, 3)
+    triangles = np.array(triangles, dtype=int).reshape(-1, 3)
+    if not len(triangles):
+        return vertices
+    corners = vertices[triangles]
+    longest = np.linalg.norm(corners - np.roll(corners, 1, axis=1), axis=2).max(axis=1)
+    divisions = np.maximum(np.ceil(longest / spacing).astype(int), 1)
+    filled = [vertices]
+    for k in np.unique(divisions):
+        i, j = np.meshgrid(np.arange(k + 1), np.arange(k + 1), indexing="ij")
+        keep = i + j <= k
+        weights = np.stack([i[keep], j[keep], k - i[keep] - j[keep]], axis=1) / k
+        chosen = corners[divisions == k]
+        filled.append(np.einsum("wc,tcd->twd", weights, chosen).reshape(-1, 3))
+    return np.concatenate(filled)

@@ -1,0 +1,190 @@
+"""Which points a probe can reach on a part, and with which axis.
+
+The part is stood in for by :class:`cmmsampling.access.obstacles.Obstacles` (points on its faces,
+erring on the side of blocking): the fast test, made for a raster of a face or the pairs of a
+path. :func:`exact_gaps` measures one probe pose with OCC's distance between solids, the truth
+a final point is held to.
+
+A point ``p`` with normal ``n`` (out of the material) is reachable along an axis ``a`` when
+(see :class:`cmmsampling.access.probe.Probe` for the pose):
+
+- the ball at ``c = p + r n`` touches only: no part point nearer ``c`` than ``r`` less the
+  touch tolerance (the tessellation's deflection), and likewise along the approach to
+  ``s = c + approach n``;
+- the stylus and the body at ``c`` are clear of the part;
+- from ``s`` the probe can leave along ``a`` out of the part's box (grown by the ball radius
+  and the clearance): the ball's, stylus's and body's sweeps along ``a`` are clear of the part.
+  Moves along the probe's own axis (the approach, this exit) need not keep the clearance, which
+  a narrow slot may not leave; travel moves do (:mod:`cmmsampling.planning.probe_moves`).
+
+The head tries the axes nearest the normal first (:func:`cmmsampling.access.probe.candidate_axes`).
+"""
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..geometry.freecad_env import import_part
+from .obstacles import Obstacles
+from .probe import Probe, Vector, candidate_axes, head_angles
+
+Part = import_part()
+
+
+@dataclass
+class Access:
+    """How each point is reached: reachable (N,) bool; axes (N, 3) unit, the probe's axis at
+    each reachable point (NaN where none); tilts (N,) degrees between axis and normal; angles
+    (N, 2) head angles A, B in degrees (see :func:`cmmsampling.planning.probe.head_angles`)."""
+
+    reachable: np.ndarray
+    axes: np.ndarray
+    tilts: np.ndarray
+    angles: np.ndarray
+
+    @property
+    def tilted(self):
+        """(N,) bool: reached with the axis off the normal (by more than 0.01 degrees)."""
+        return self.reachable & (self.tilts > 0.01)
+
+
+def pose_pieces(probe, obstacles, points, normals, axes):
+    """What a probe touching points (M, 3) with normals (M, 3) along axes (M, 3) must keep clear:
+    (sweeps, cylinders), each (starts, ends, radii, owner) with owner the pose of each piece.
+
+    sweeps: the ball's exit along the axis (its touch, which no axis changes, is
+    :func:`touch_blocked`); cylinders: the stylus and the body at the contact, and their sweeps
+    along the axis on the exit.
+    """
+    r = probe.radius
+    centres = points + r * normals
+    ready = centres + probe.approach * normals
+    exits = obstacles.exit_distance(ready, axes, r + probe.clearance)[:, None]
+    stylus_r, body_r = 0.5 * probe.stylus_diameter, 0.5 * probe.body_diameter
+    inside = np.sqrt(max(r * r - stylus_r * stylus_r, 0.0))
+    length, reach_ = probe.stylus_length, probe.reach
+    sweeps = [(ready, ready + exits * axes, r)]
+    cylinders = [(centres + inside * axes, centres + length * axes, stylus_r),
+                 (centres + length * axes, centres + reach_ * axes, body_r),
+                 (ready + inside * axes, ready + (length + exits) * axes, stylus_r),
+                 (ready + length * axes, ready + (reach_ + exits) * axes, body_r)]
+    return _stacked(sweeps, len(points)), _stacked(cylinders, len(points))
+
+
+def _stacked(pieces, count):
+    """(starts, ends, radii, owner) of pieces [(starts (M, 3), ends (M, 3), radius)], M poses each."""
+    return (np.concatenate([p[0] for p in pieces]), np.concatenate([p[1] for p in pieces]),
+            np.concatenate([np.full(count, p[2]) for p in pieces]), np.tile(np.arange(count), len(pieces)))
+
+
+def touch_blocked(probe, obstacles, points, normals):
+    """(M,) bool: points whose ball cannot touch them from ``approach`` mm out along the normal
+    without cutting into the part elsewhere, whatever the axis (see :func:`pose_pieces`)."""
+    r = probe.radius
+    centres = points + r * normals
+    return obstacles.swept_blocked(centres, centres + probe.approach * normals, r - obstacles.deflection - 1e-3,
+                                   margin=False)
+
+
+def poses_blocked(probe, obstacles, points, normals, axes):
+    """(M,) bool: the probe poses (see :func:`pose_pieces`) that the part blocks on the way out."""
+    (s_starts, s_ends, s_radii, s_owner), (c_starts, c_ends, c_radii, c_owner) = pose_pieces(
+        probe, obstacles, points, normals, axes)
+    swept = obstacles.swept_blocked(s_starts, s_ends, s_radii)
+    blocked = np.bincount(s_owner, weights=swept, minlength=len(points)) > 0
+    cylinders = obstacles.cylinders_blocked(c_starts, c_ends, c_radii)
+    return blocked | (np.bincount(c_owner, weights=cylinders, minlength=len(points)) > 0) | _leave_below(
+        probe, obstacles, points, normals, axes)
+
+
+def _leave_below(probe, obstacles, points, normals, axes):
+    """(M,) bool: poses whose way out along the axis leaves the part's box through its bottom
+    (the clearance plane above could not be reached from there)."""
+    grow = probe.radius + probe.clearance
+    ready = points + (probe.radius + probe.approach) * normals
+    exits = ready + obstacles.exit_distance(ready, axes, grow)[:, None] * axes
+    return exits[:, 2] <= obstacles.box[0, 2] - grow + 1e-9
+
+
+def reach(probe, obstacles, points, normals):
+    """How the probe reaches each point: the first axis, nearest the normal, whose pose is clear
+    (:func:`candidate_axes`, tried for all points still blocked at once). points, normals: (N, 3)
+    mm and unit. Returns an Access."""
+    points = np.asarray(points, dtype=float).reshape(-1, 3)
+    normals = np.asarray(normals, dtype=float).reshape(-1, 3)
+    candidates, usable = candidate_axes(normals, probe)
+    axes = np.full((len(points), 3), np.nan)
+    searching = ~touch_blocked(probe, obstacles, points, normals)
+    refused = ~searching
+    for rank in range(candidates.shape[1]):
+        trying = np.flatnonzero(searching & usable[:, rank])
+        if not trying.size:
+            if not (searching & usable[:, rank:].any(axis=1)).any():
+                break
+            continue
+        tried = candidates[trying, rank]
+        clear = ~poses_blocked(probe, obstacles, points[trying], normals[trying], tried)
+        axes[trying[clear]] = tried[clear]
+        searching[trying[clear]] = False
+    reachable = ~searching & ~refused
+    tilts = np.full(len(points), np.nan)
+    tilts[reachable] = np.degrees(np.arccos(np.clip(np.einsum("nc,nc->n", axes[reachable], normals[reachable]),
+                                                    -1.0, 1.0)))
+    angles = np.full((len(points), 2), np.nan)
+    angles[reachable] = head_angles(axes[reachable])
+    return Access(reachable, axes, tilts, angles)
+
+
+def exact_gaps(part, probe, point, normal, axis):
+    """OCC's distances for one pose: (ball, stylus and body) in mm, where ball is the distance
+    from the ball centre to the part less the ball radius (0 when it just touches, negative when
+    the ball cuts into the part) and the second the distance from the stylus and body to the
+    part (0 when they touch or cut it)."""
+    centre = np.asarray(point, float) + probe.radius * np.asarray(normal, float)
+    ball = part.distToShape(Part.Vertex(Vector(centre)))[0] - probe.radius
+    if _inside(part, centre):
+        ball = -probe.radius
+    rest = part.distToShape(probe.solid(centre, axis, with_ball=False))[0]
+    return ball, rest
+
+
+def _inside(part, point):
+    """True when a closed part holds point (3,) strictly inside."""
+    return bool(part.Solids) and any(solid.isInside(Vector(point), 1e-7, False) for solid in part.Solids)
+
+
+# How far OCC may find the touching ball inside the part (mm) and still call it a touch.
+TOUCH_TOLERANCE = 1e-3
+
+
+class Reachability:
+    """Where a probe reaches a part: called with points (M, 3) mm and normals (M, 3) unit, it
+    answers (M,) bool (the fast test: a face's domain asks it on a raster).
+
+    part: the Part.Shape the faces belong to; probe: a Probe (default Probe()); spacing: the
+    obstacles' point spacing, mm (see :class:`cmmsampling.access.obstacles.Obstacles`).
+    """
+
+    def __init__(self, part, probe=None, spacing=None):
+        self.part = part
+        self.probe = probe if probe is not None else Probe()
+        self.obstacles = Obstacles(part, spacing)
+
+    def __call__(self, points, normals):
+        return reach(self.probe, self.obstacles, points, normals).reachable
+
+    def final(self, points, normals):
+        """The Access of final points: each point's axis from the fast test, then its pose
+        measured with OCC (:func:`exact_gaps`); a pose OCC finds touching the part anywhere but
+        at the ball's contact is unreachable. Returns (Access, [index of each point OCC refused])."""
+        access = reach(self.probe, self.obstacles, points, normals)
+        refused = []
+        for index in np.flatnonzero(access.reachable):
+            ball, rest = exact_gaps(self.part, self.probe, points[index], normals[index], access.axes[index])
+            if ball < -TOUCH_TOLERANCE or rest <= 0.0:
+                refused.append(int(index))
+        if refused:
+            access.reachable[refused] = False
+            access.axes[refused] = np.nan
+            access.tilts[refused] = np.nan
+            access.angles[refused] = np.nan
+        return access, refused

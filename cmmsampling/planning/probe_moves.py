@@ -1,0 +1,158 @@
+"""A collision-free probe path through reachable points, in the order that makes it short.
+
+Per point ``i`` (contact ``p``, normal ``n``, axis ``a``, from :mod:`cmmsampling.access.reach`): the ball
+centre touches at ``c = p + r n`` and waits ``approach`` mm out along the normal at ``s``; the
+touch is ``s -> c -> s``. From one point's ``s`` to the next the probe travels straight when
+both share an axis and the move keeps the clearance (the ball's sweep grown by the clearance,
+the stylus and the body at poses along the move, grown by it); otherwise it leaves along its
+axis to the part's box grown by the ball radius and the clearance (``e``), rises to the
+clearance plane above that box (``u``), crosses, and comes down the next point's way. The head
+turns to the next axis on the clearance plane. The order is a nearest-neighbour path improved
+by 2-opt on these travel lengths, never longer than the straight nearest-neighbour order with
+the detours it needs. All coordinates are ball centres, mm.
+"""
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial.distance import cdist
+
+from ..access.obstacles import along_segments
+from ..access.probe import Motion
+from .probe_path import nearest_neighbour, two_opt
+
+# Poses checked along a straight travel move are at most this many mm apart.
+POSE_STEP = 2.0
+AXIS_TOLERANCE = 1e-9
+
+
+@dataclass
+class ProbeMoves:
+    """A probe program's path.
+
+    order: (N,) int, the visiting order of the points; waypoints: (W, 3) mm, the ball centre's
+    path from the first clearance position to the last, touches included; kinds: (W - 1,) str,
+    'touch' (approach and retract), 'axis' (along the probe's axis, in or out of the part's box)
+    or 'travel' (keeps the clearance); travel: mm, the length of everything but the touches;
+    straight: mm, the straight nearest-neighbour path through the ready positions (collisions
+    ignored); baseline: mm, that order's travel with the detours it needs (``travel`` is never
+    longer); detours: the travel moves that go over the clearance plane; seconds: estimated
+    measuring time (Motion); ready: (N, 3) the ready positions in the points' own order.
+    """
+
+    order: np.ndarray
+    waypoints: np.ndarray
+    kinds: np.ndarray
+    travel: float
+    straight: float
+    baseline: float
+    detours: int
+    seconds: float
+    ready: np.ndarray
+
+    def segments(self, kind):
+        """(starts (S, 3), ends (S, 3)) of the path's moves of one kind."""
+        chosen = self.kinds == kind
+        return self.waypoints[:-1][chosen], self.waypoints[1:][chosen]
+
+
+def probe_moves(probe, obstacles, points, normals, axes, motion=None):
+    """The path through reachable points (N, 3) mm with normals (N, 3) and probe axes (N, 3)
+    unit (:func:`cmmsampling.access.reach.reach`); motion: speeds for the time estimate
+    (default Motion()). Returns ProbeMoves."""
+    points, normals, axes = (np.asarray(v, dtype=float).reshape(-1, 3) for v in (points, normals, axes))
+    motion = motion or Motion()
+    r = probe.radius
+    centres = points + r * normals
+    ready = centres + probe.approach * normals
+    exits = ready + obstacles.exit_distance(ready, axes, r + probe.clearance)[:, None] * axes
+    plane = obstacles.box[1, 2] + r + probe.clearance
+    above = np.column_stack([exits[:, :2], np.maximum(exits[:, 2], plane)])
+    direct = _direct_moves(probe, obstacles, ready, axes)
+    lengths = _travel_lengths(ready, exits, above, direct)
+    order = _short_order(lengths, cdist(ready, ready))
+    waypoints, kinds = _waypoints(order, centres, ready, exits, above, direct)
+    steps = np.linalg.norm(np.diff(waypoints, axis=0), axis=1)
+    travel = float(steps[kinds != "touch"].sum())
+    plain = nearest_neighbour(cdist(ready, ready))
+    straight = float(np.linalg.norm(np.diff(ready[plain], axis=0), axis=1).sum())
+    ends = _end_lengths(ready, exits, above)
+    baseline = float(lengths[plain[:-1], plain[1:]].sum() + ends[plain[0]] + ends[plain[-1]])
+    detours = int(np.count_nonzero(~direct[order[:-1], order[1:]]))
+    return ProbeMoves(order, waypoints, kinds, travel, straight, baseline, detours,
+                      motion.seconds(travel, len(points), probe.approach), ready)
+
+
+def _end_lengths(ready, exits, above):
+    """(N,) mm: from the clearance plane down to each ready position (the program's first and
+    last moves)."""
+    return np.linalg.norm(exits - ready, axis=1) + np.linalg.norm(above - exits, axis=1)
+
+
+def _direct_moves(probe, obstacles, ready, axes):
+    """(N, N) bool: the pairs of ready positions a straight move joins keeping the clearance
+    (same axis; the ball's sweep and the stylus and body at poses along it clear by it)."""
+    count = len(ready)
+    same = np.abs(np.einsum("ic,jc->ij", axes, axes) - 1.0) < AXIS_TOLERANCE
+    i, j = np.nonzero(np.triu(same, 1))
+    clear = ~obstacles.swept_blocked(ready[i], ready[j], probe.radius + probe.clearance)
+    i, j = i[clear], j[clear]
+    if i.size:
+        clear = ~_poses_blockedalong_segments(probe, obstacles, ready[i], ready[j], axes[i])
+        i, j = i[clear], j[clear]
+    direct = np.zeros((count, count), dtype=bool)
+    direct[i, j] = direct[j, i] = True
+    return direct
+
+
+def _poses_blockedalong_segments(probe, obstacles, starts, ends, axes):
+    """(M,) bool: moves from starts to ends (M, 3) of a probe on axes (M, 3) whose stylus or body,
+    grown by the clearance, meets the part at a pose along the move (POSE_STEP mm apart)."""
+    positions, owner, _ = along_segments(starts, ends, np.full(len(starts), POSE_STEP))
+    inside = np.sqrt(max(probe.radius ** 2 - (0.5 * probe.stylus_diameter) ** 2, 0.0))
+    along = axes[owner]
+    pieces = [(positions + inside * along, positions + probe.stylus_length * along,
+               0.5 * probe.stylus_diameter + probe.clearance),
+              (positions + probe.stylus_length * along, positions + probe.reach * along,
+               0.5 * probe.body_diameter + probe.clearance)]
+    hit = np.zeros(len(positions), dtype=bool)
+    for start, end, radius in pieces:
+        hit |= obstacles.cylinders_blocked(start, end, np.full(len(positions), radius))
+    return np.bincount(owner, weights=hit, minlength=len(starts)) > 0
+
+
+def _travel_lengths(ready, exits, above, direct):
+    """(N, N) mm: straight where ``direct``, else out along the axis, up, across the clearance
+    plane, down and in."""
+    out = _end_lengths(ready, exits, above)
+    detour = out[:, None] + out[None, :] + cdist(above, above)
+    return np.where(direct, cdist(ready, ready), detour)
+
+
+def _short_order(lengths, straight):
+    """A short open path on the travel lengths (N, N): 2-opt from the nearest-neighbour path on
+    them and from the straight nearest-neighbour order, the shorter."""
+    if len(lengths) < 3:
+        return np.arange(len(lengths))
+    tolerance = 1e-12 * max(float(lengths.max()), 1.0)
+    orders = [two_opt(lengths, nearest_neighbour(lengths), tolerance),
+              two_opt(lengths, nearest_neighbour(straight), tolerance)]
+    return min(orders, key=lambda order: float(lengths[order[:-1], order[1:]].sum()))
+
+
+def _waypoints(order, centres, ready, exits, above, direct):
+    """The ball centre's path (W, 3) and the kind of each move (W - 1,) for a visiting order."""
+    first, last = order[0], order[-1]
+    points = [above[first], exits[first], ready[first]]
+    kinds = ["travel", "axis"]
+    for a, b in zip(order[:-1], order[1:]):
+        points += [centres[a], ready[a]]
+        kinds += ["touch", "touch"]
+        if direct[a, b]:
+            points += [ready[b]]
+            kinds += ["travel"]
+        else:
+            points += [exits[a], above[a], above[b], exits[b], ready[b]]
+            kinds += ["axis", "travel", "travel", "travel", "axis"]
+    points += [centres[last], ready[last], exits[last], above[last]]
+    kinds += ["touch", "touch", "axis", "travel"]
+    return np.array(points), np.array(kinds)
