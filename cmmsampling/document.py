@@ -22,6 +22,7 @@ from .formats.pointset import PointSet
 from .geometry.freecad_env import import_part
 from .geometry.surface import SurfaceModel
 from .object_types import PROBE_POINTS, SUBSTITUTE_SURFACE, is_probe_points, source_face
+from .planning.probe_moves import probe_moves
 from .strategies.sampling import evaluate
 
 Part = import_part()
@@ -87,7 +88,36 @@ def _fill_result_group(group, result, source):
     points = make_probe_points(doc, source, surface, report)
     group.addObjects([points, surface, report])
     write_result(points, result, dict(result.settings), result.timings.get("total_s", 0.0))
-    return [points, surface, report]
+    paths = []
+    if result.access is not None and result.access.reachable.all():
+        paths = make_probe_path(doc, probe_moves(result))
+        group.addObjects(paths)
+    return [points, surface, report] + paths
+
+
+# Colours of a probe path: the moves between points and the touches (approach and retract).
+PATH_COLOURS = {"moves": (0.15, 0.35, 0.85), "touches": (0.85, 0.15, 0.1)}
+
+
+def make_probe_path(doc, moves):
+    """Two wire objects of a probe path (cmmsampling.planning.probe_moves.ProbeMoves): "Probe
+    moves" (travel and axis moves, blue) and "Probe touches" (approach and retract, red), ball
+    centres in mm; returns them."""
+    objects = []
+    for name, label, chosen in (("ProbeMoves", "Probe moves", moves.kinds != "touch"),
+                                ("ProbeTouches", "Probe touches", moves.kinds == "touch")):
+        starts, ends = moves.waypoints[:-1][chosen], moves.waypoints[1:][chosen]
+        keep = np.linalg.norm(ends - starts, axis=1) > 1e-9
+        edges = [Part.LineSegment(FreeCAD.Vector(*a), FreeCAD.Vector(*b)).toShape()
+                 for a, b in zip(starts[keep], ends[keep])]
+        obj = doc.addObject("Part::Feature", name)
+        obj.Label = label
+        obj.Shape = Part.Compound(edges)
+        if FreeCAD.GuiUp:
+            obj.ViewObject.LineColor = PATH_COLOURS["moves" if name == "ProbeMoves" else "touches"]
+            obj.ViewObject.LineWidth = 2.0
+        objects.append(obj)
+    return objects
 
 
 def add_plan_to_document(plan, doc, part, hide_others=True):
@@ -117,6 +147,10 @@ def add_plan_to_document(plan, doc, part, hide_others=True):
         sheet.Label = "Plan report"
         group.addObject(sheet)
         write_plan_report(sheet, plan)
+        if plan.probe is not None and plan.placed and not any(face.unreached for face in plan.placed):
+            paths = make_probe_path(doc, probe_moves(plan))
+            group.addObjects(paths)
+            objects += paths
         recompute(doc, objects + [sheet])
     return group
 
@@ -131,7 +165,7 @@ def write_plan_report(sheet, plan):
     rows = [("CMM sampling plan",), ("Goal", goal), ("Strategy", plan.strategy), (), PLAN_COLUMNS]
     for face in plan.faces:
         rows.append((face.name, f"{face.area:.2f}", face.n, _figure(face.maximum), _figure(face.bound),
-                     face.met_text, face.reason))
+                     face.met_text, face.notes))
     rows.append(("Part", f"{plan.area:.2f}", plan.n_total, _figure(plan.worst), "",
                  "", f"{len(plan.refused)} faces without points" if plan.refused else ""))
     for row, values in enumerate(rows, start=1):

@@ -16,11 +16,11 @@ import numpy as np
 
 from .fitting.deviation import DEFAULT_GRID
 from .fitting.substitute import DEFAULT_DEGREE, DEFAULT_SMOOTHING
+from .geometry.validation import check_choice, check_int
 from .strategies import handover
 from .strategies.sampling import MIN_POINTS, STRATEGIES, make_problem, sample, strategy_options, time_needed
 from .strategies.sampling import baseline as baseline_strategy
 from .strategies.threads import blas_threads
-from .geometry.validation import check_choice, check_int
 
 DEFAULT_NS = (25, 36, 49, 64, 81, 100, 121, 144)
 DEFAULT_SEEDS = (0, 1, 2, 3, 4)

@@ -5,6 +5,9 @@ ending in ``$`` goes on in the next one. Statements, in this order::
 
     DMISMN/'name',NN.N                        first
     UNITS/MM,ANGDEC   MODE/PROG,MAN   SNSET/(APPRCH|RETRCT|SEARCH),d
+    S(label)=SNSDEF/PROBE,INDEX,POL,a,b,i,j,k,l,d   label new, (i, j, k) unit, l and d positive
+    SNSLCT/S(label)                           label defined, not inside MEAS
+    GOTO/x,y,z                                not inside MEAS
     F(label)=FEAT/POINT,CART,x,y,z,i,j,k      label new, after UNITS
     MEAS/POINT,F(label),n                     label defined, not inside another MEAS
     PTMEAS/CART,x,y,z,i,j,k                   only inside MEAS, n of them
@@ -22,7 +25,7 @@ LABEL = r"[A-Za-z0-9_.-]{1,64}"
 VECTOR_TOLERANCE = 1e-6
 
 SIMPLE = {
-    "DMISMN": re.compile(rf"DMISMN/'[ -&(-~]*',\d\d\.\d\Z"),
+    "DMISMN": re.compile(r"DMISMN/'[ -&(-~]*',\d\d\.\d\Z"),
     "UNITS": re.compile(r"UNITS/MM,ANGDEC\Z"),
     "MODE": re.compile(r"MODE/PROG,MAN\Z"),
     "SNSET": re.compile(rf"SNSET/(APPRCH|RETRCT|SEARCH),{NUMBER}\Z"),
@@ -32,6 +35,9 @@ SIMPLE = {
 FEATURE = re.compile(r"F\(([^()]*)\)=FEAT/POINT,CART,(.*)\Z")
 MEASURE = re.compile(r"MEAS/POINT,F\(([^()]*)\),(.*)\Z")
 POINT = re.compile(r"PTMEAS/CART,(.*)\Z")
+SENSOR = re.compile(r"S\(([^()]*)\)=SNSDEF/PROBE,INDEX,POL,(.*)\Z")
+SELECT = re.compile(r"SNSLCT/S\(([^()]*)\)\Z")
+GOTO = re.compile(rf"GOTO/{NUMBER},{NUMBER},{NUMBER}\Z")
 
 
 def check(text):
@@ -85,6 +91,7 @@ class ProgramState:
     def __init__(self):
         self.units = False
         self.features = set()
+        self.sensors = set()
         self.measuring = None
         self.expected = 0
         self.points = 0
@@ -97,6 +104,10 @@ class ProgramState:
         keyword = re.match(r"[A-Z]*", statement).group()
         if keyword == "F" and statement.startswith("F("):
             return self.feature(statement)
+        if keyword == "S" and statement.startswith("S("):
+            return self.sensor(statement)
+        if keyword in ("SNSLCT", "GOTO"):
+            return self.move(keyword, statement)
         if keyword == "MEAS":
             return self.measure(statement)
         if keyword == "PTMEAS":
@@ -122,6 +133,36 @@ class ProgramState:
             self.ended = True
             return ["ENDFIL inside MEAS"] if self.measuring else []
         return ["statement inside MEAS"] if self.measuring else []
+
+    def sensor(self, statement):
+        """S(label)=SNSDEF/PROBE,INDEX,POL,a,b,i,j,k,length,diameter."""
+        match = SENSOR.match(statement)
+        if match is None:
+            return [f"malformed SNSDEF: {statement!r}"]
+        label, fields = match.groups()
+        values = fields.split(",")
+        errors = label_errors(label)
+        if len(values) != 7 or not all(re.fullmatch(NUMBER, v) for v in values):
+            return errors + [f"expected 7 fixed-notation numbers a,b,i,j,k,length,diameter, got {fields!r}"]
+        length = sum(float(v) ** 2 for v in values[2:5]) ** 0.5
+        if abs(length - 1.0) > VECTOR_TOLERANCE:
+            errors.append(f"the stylus direction has length {length:.9f}, not 1")
+        if float(values[5]) <= 0 or float(values[6]) <= 0:
+            errors.append("the stylus length and ball diameter must be positive")
+        if label in self.sensors:
+            errors.append(f"S({label}) defined twice")
+        self.sensors.add(label)
+        return errors + (["SNSDEF inside MEAS"] if self.measuring else [])
+
+    def move(self, keyword, statement):
+        """SNSLCT/S(label) of a defined sensor, GOTO/x,y,z; neither inside MEAS."""
+        errors = ["statement inside MEAS"] if self.measuring else []
+        if keyword == "GOTO":
+            return errors + ([] if GOTO.match(statement) else [f"malformed GOTO: {statement!r}"])
+        match = SELECT.match(statement)
+        if match is None:
+            return errors + [f"malformed SNSLCT: {statement!r}"]
+        return errors + ([] if match.group(1) in self.sensors else [f"SNSLCT of S({match.group(1)}) before its SNSDEF"])
 
     def feature(self, statement):
         """F(label)=FEAT/POINT,CART,x,y,z,i,j,k."""

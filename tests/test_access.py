@@ -11,7 +11,7 @@ import cmmsampling
 from cmmsampling.access.obstacles import Obstacles
 from cmmsampling.access.probe import Probe, candidate_axes, head_angles
 from cmmsampling.access.reach import reach
-from cmmsampling.planning.probe_moves import probe_moves
+from cmmsampling.planning.probe_moves import moves_through
 
 PROBE = Probe()
 UP = np.array([0.0, 0.0, 1.0])
@@ -136,7 +136,7 @@ def path_through(part, points, normals):
     obstacles = Obstacles(part)
     access = reach(PROBE, obstacles, points, normals)
     kept = access.reachable
-    return probe_moves(PROBE, obstacles, points[kept], normals[kept], access.axes[kept])
+    return moves_through(PROBE, obstacles, points[kept], normals[kept], access.axes[kept])
 
 
 @pytest.mark.parametrize("name", ["slot", "overhang", "beside_wall"])
@@ -178,3 +178,77 @@ def test_sampling_with_the_part_keeps_to_what_the_probe_reaches(slot):
         cmmsampling.sample(floor, 16, "halton", probe=PROBE)
     with pytest.raises(ValueError, match="the probe reaches no point of this face"):
         cmmsampling.sample(floor, 16, "halton", part=slot, probe=Probe(ball_diameter=7.0, stylus_diameter=2.0))
+
+
+def test_a_probe_path_program_names_its_sensors_and_moves(beside_wall, tmp_path):
+    import dmis_syntax
+
+    floor = floor_of(beside_wall, 10.0)
+    result = cmmsampling.sample(floor, 25, "uniform_parametric", part=beside_wall, grid=20, edge_offset=0.5)
+    assert result.access.reachable.all() and result.access.tilted.any()
+    assert any("tilted off their normal" in note for note in result.notes)
+    report = cmmsampling.export(result, tmp_path / "wall.dmi", order="probe_path")
+    text = (tmp_path / "wall.dmi").read_text()
+    assert dmis_syntax.check(text) == []
+    moves = moves_through(PROBE, result.problem.reachability.obstacles, result.points, result.normals,
+                        result.access.axes)
+    gotos = np.array([[float(v) for v in line[5:].split(",")] for line in text.splitlines()
+                      if line.startswith("GOTO/")])
+    expected = np.concatenate([np.concatenate(pair) for pair in moves.travel_pairs()])
+    np.testing.assert_allclose(gotos, expected, atol=1e-3)
+    sensors = {tuple(np.round(a, 4)) for a in head_angles(result.access.axes)}
+    assert text.count("=SNSDEF/PROBE,INDEX,POL,") == len(sensors) >= 2
+    assert text.count("SNSLCT/S(") >= 2 and "S(A0B0)=SNSDEF/PROBE,INDEX,POL,0.0000,0.0000," in text
+    assert report.order == "probe_path" and report.length_after == pytest.approx(moves.travel)
+    assert "Collision-free probe path" in str(report) and report.seconds > 0
+    back = cmmsampling.read_points(tmp_path / "wall.dmi")
+    assert sorted(back.labels) == sorted(result.labels)
+    cmmsampling.export(result, tmp_path / "wall.csv", order="probe_path")
+    table = cmmsampling.read_points(tmp_path / "wall.csv")
+    order = [result.labels.index(label) for label in table.labels]
+    np.testing.assert_allclose(table.axes, result.access.axes[order], atol=1e-6)
+    plain = cmmsampling.sample(floor, 16, "uniform_parametric", grid=20)
+    with pytest.raises(ValueError, match="sample the face with part="):
+        cmmsampling.export(plain, tmp_path / "plain.dmi", order="probe_path")
+
+
+def test_a_plan_with_a_probe_keeps_to_its_reach_and_writes_one_path(beside_wall, tmp_path):
+    import dmis_syntax
+
+    upward = [k for k, face in enumerate(beside_wall.Faces, start=1)
+              if face.normalAt(*face.Surface.parameter(face.CenterOfMass)).z > 0.5]
+    plan = cmmsampling.plan(beside_wall, tolerance=0.5, strategy="uniform_parametric", faces=upward, probe=PROBE,
+                            processes=1, grid=20, n_max=60)
+    assert len(plan.placed) == 2 and all(face.axes is not None and not face.unreached for face in plan.placed)
+    assert sum(face.tilted for face in plan.placed) > 0
+    assert any("tilted" in face.line for face in plan.placed)
+    report = cmmsampling.export(plan, tmp_path / "part.dmi", order="probe_path")
+    text = (tmp_path / "part.dmi").read_text()
+    assert dmis_syntax.check(text) == [] and "GOTO/" in text and report.count == plan.n_total
+    with pytest.raises(ValueError, match="give probe="):
+        cmmsampling.plan(beside_wall, tolerance=0.5, part=beside_wall)
+
+
+def test_the_document_draws_the_path_in_two_objects(beside_wall):
+    from geometry import closed
+
+    index = next(k for k, face in enumerate(beside_wall.Faces, start=1)
+                 if abs(face.BoundBox.ZMax - 10.0) < 1e-9 and face.Area > 1000)
+    result = cmmsampling.sample(beside_wall.Faces[index - 1], 16, "halton", part=beside_wall, grid=20)
+    doc = FreeCAD.newDocument("ProbePathDocument")
+    try:
+        doc.UndoMode = 1
+        body = doc.addObject("Part::Feature", "Body")
+        body.Shape = beside_wall
+        doc.recompute()
+        group = cmmsampling.add_to_document(result, doc, source=(body, f"Face{index}"))
+        labels = [obj.Label for obj in group.Group]
+        assert labels[-2:] == ["Probe moves", "Probe touches"]
+        moves = cmmsampling.probe_moves(result)
+        touches = doc.getObject("ProbeTouches").Shape.Edges
+        assert len(touches) == 2 * result.n
+        assert doc.getObject("ProbeMoves").Shape.Length == pytest.approx(moves.travel, rel=1e-9)
+        doc.undo()
+        assert doc.getObject("ProbeMoves") is None and [o.Name for o in doc.Objects] == ["Body"]
+    finally:
+        closed("ProbePathDocument")

@@ -161,16 +161,24 @@ class Reachability:
     answers (M,) bool (the fast test: a face's domain asks it on a raster).
 
     part: the Part.Shape the faces belong to; probe: a Probe (default Probe()); spacing: the
-    obstacles' point spacing, mm (see :class:`cmmsampling.access.obstacles.Obstacles`).
+    obstacles' point spacing, mm (see :class:`cmmsampling.access.obstacles.Obstacles`). One
+    Reachability serves many runs on the part's faces (``sample(face, part=reachability)``).
     """
 
     def __init__(self, part, probe=None, spacing=None):
         self.part = part
         self.probe = probe if probe is not None else Probe()
         self.obstacles = Obstacles(part, spacing)
+        self._answers = {}
 
     def __call__(self, points, normals):
-        return reach(self.probe, self.obstacles, points, normals).reachable
+        """(M,) bool; the same question (the same points and normals, as a face's raster asks it
+        at every N of a search) is answered once."""
+        points, normals = np.asarray(points, dtype=float), np.asarray(normals, dtype=float)
+        key = hash((points.tobytes(), normals.tobytes()))
+        if key not in self._answers:
+            self._answers[key] = reach(self.probe, self.obstacles, points, normals).reachable
+        return self._answers[key].copy()
 
     def final(self, points, normals):
         """The Access of final points: each point's axis from the fast test, then its pose

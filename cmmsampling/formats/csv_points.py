@@ -16,11 +16,14 @@ ENCODING = "utf-8"
 CSV_COMMENT = "#"
 CSV_COLUMNS = ("label", "x", "y", "z", "i", "j", "k", "u", "v")
 TEXT_COLUMNS = ("label", "face")
+# The probe's axis at each point (ball towards head), where the run knew the part.
+AXIS_COLUMNS = ("axis_i", "axis_j", "axis_k")
 
 
 def write(point_set, facts, options):
-    """CSV: '# key: value' comments, header label,x,y,z,i,j,k,u,v[,deviation][,face], one row per
-    point (u, v empty where unknown; face: the face a plan's point lies on)."""
+    """CSV: '# key: value' comments, header label,x,y,z,i,j,k,u,v[,deviation][,face][,axis_i,axis_j,
+    axis_k], one row per point (u, v empty where unknown; face: the face a plan's point lies on;
+    axis: the probe's axis, ball towards head, where the run knew the part)."""
     count = len(point_set)
     columns = [np.array(point_set.labels, dtype=object)[:, None],
                fixed(point_set.points, COORDINATE_DECIMALS), fixed(point_set.normals, VECTOR_DECIMALS),
@@ -32,6 +35,9 @@ def write(point_set, facts, options):
     if point_set.faces is not None:
         columns.append(np.array(point_set.faces, dtype=object)[:, None])
         header.append("face")
+    if point_set.axes is not None:
+        columns.append(fixed(point_set.axes, VECTOR_DECIMALS))
+        header += list(AXIS_COLUMNS)
     buffer = io.StringIO()
     buffer.write("".join(f"{line}\n" for line in metadata_comment_lines(
         comment_entries(point_set, facts, options), f"{CSV_COMMENT} ")))
@@ -73,6 +79,7 @@ def read(text, path="<text>"):
         deviation=_known(numbers.get("deviation", empty), "deviation", path),
         metadata=parse_metadata_comments(comments),
         faces=columns.get("face"),
+        axes=np.column_stack([numbers[c] for c in AXIS_COLUMNS]) if set(AXIS_COLUMNS) <= set(numbers) else None,
     )
 
 

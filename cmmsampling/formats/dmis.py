@@ -1,10 +1,12 @@
-"""DMIS 5.2 input programs: writing probe points as FEAT/POINT, MEAS/POINT, PTMEAS statements and
-reading the points (nominal ``F(...)`` or measured ``FA(...)``) and the ``$$ key: value`` comments
+"""DMIS 5.2 input programs: writing probe points as FEAT/POINT, MEAS/POINT, PTMEAS statements (with
+a probe path: the sensors as SNSDEF/PROBE,INDEX,POL and SNSLCT, and GOTO moves between the
+points) and reading the points (nominal ``F(...)`` or measured ``FA(...)``) and the ``$$ key: value`` comments
 back; the DMIS rules for labels, program names and line lengths."""
 import re
 
 import numpy as np
 
+from ..access.probe import head_angles
 from .pointset import PointSet
 from .text import (COORDINATE_DECIMALS, VECTOR_DECIMALS, comment_entries, fixed, metadata_comment_lines, numbers,
                    parse_metadata_comments)
@@ -22,6 +24,7 @@ LABEL_LIMIT = 64
 DMIS_COMMENT = "$$"
 DMIS_COMMENT_CONTINUED = "$$+"
 DMIS_CONTINUATION = "$"
+ANGLE_DECIMALS = 4
 DMIS_FEATURE_POINT = re.compile(r"(FA?)\(([^()]*)\)=FEAT/POINT,([A-Z]+),(.*)\Z", re.IGNORECASE)
 
 
@@ -37,13 +40,56 @@ def write(point_set, facts, options):
     lines += ["UNITS/MM,ANGDEC", "MODE/PROG,MAN"]
     distances = {"APPRCH": options.approach, "RETRCT": options.retract, "SEARCH": options.search}
     lines += [f"SNSET/{word},{fixed(value, COORDINATE_DECIMALS).item()}" for word, value in distances.items()]
-    for label, position, vector in zip(point_set.labels, xyz.tolist(), ijk.tolist()):
+    sensors = sensor_labels(point_set) if point_set.travel is not None else None
+    if sensors is not None:
+        lines += sensor_definitions(point_set.axes, sensors, options.probe or {})
+    selected = None
+    for index, (label, position, vector) in enumerate(zip(point_set.labels, xyz.tolist(), ijk.tolist())):
+        if sensors is not None:
+            leaving, arriving = point_set.travel[index]
+            lines += goto_lines(leaving)
+            if sensors[index] != selected:
+                selected = sensors[index]
+                lines.append(f"SNSLCT/S({selected})")
+            lines += goto_lines(arriving)
         lines += dmis_statement([f"F({label})=FEAT/POINT", "CART", *position], vector)
         lines += dmis_statement(["MEAS/POINT", f"F({label})", "1"])
         lines += dmis_statement(["PTMEAS/CART", *position], vector)
         lines.append("ENDMES")
+    if sensors is not None:
+        lines += goto_lines(point_set.travel[-1][0])
     lines.append("ENDFIL")
     return "\n".join(lines) + "\n"
+
+
+def sensor_labels(point_set):
+    """The sensor of each point of a probe path, named by its head angles: 'A30B-90' (A from
+    the vertical, B about it, degrees to 0.0001; cmmsampling.access.probe.head_angles)."""
+    angles = np.round(head_angles(point_set.axes), ANGLE_DECIMALS) + 0.0
+    return [f"A{a:g}B{b:g}" for a, b in angles.tolist()]
+
+
+def sensor_definitions(axes, sensors, probe):
+    """SNSDEF statements, one per sensor in the order first used: an indexed probe at its head
+    angles A, B, the stylus direction (head to ball, -axis), the stylus length and the ball
+    diameter (mm; probe: the run's Probe as a dict)."""
+    lines, seen = [], set()
+    length = fixed(probe.get("stylus_length", 0.0), COORDINATE_DECIMALS).item()
+    diameter = fixed(probe.get("ball_diameter", 0.0), COORDINATE_DECIMALS).item()
+    for axis, name in zip(axes, sensors):
+        if name in seen:
+            continue
+        seen.add(name)
+        a, b = name[1:].split("B")
+        lines += dmis_statement([f"S({name})=SNSDEF/PROBE", "INDEX", "POL", fixed(float(a), ANGLE_DECIMALS).item(),
+                                 fixed(float(b), ANGLE_DECIMALS).item()],
+                                fixed(-np.asarray(axis), VECTOR_DECIMALS).tolist() + [length, diameter])
+    return lines
+
+
+def goto_lines(positions):
+    """GOTO/x,y,z statements to ball-centre positions (M, 3), mm."""
+    return [f"GOTO/{','.join(fixed(p, COORDINATE_DECIMALS).tolist())}" for p in np.asarray(positions).reshape(-1, 3)]
 
 
 def read(text, path="<text>"):

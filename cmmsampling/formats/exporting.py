@@ -7,21 +7,22 @@ system, optionally as probe-ball centres and in a short probing order. Files are
 atomically (:mod:`cmmsampling.formats.files`): a failed export leaves an existing file as it was.
 """
 import os
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 
-from ..planning.part_plan import PartPlan
-from ..planning.probe_path import short_path, unchanged
-from ..strategies.result import SamplingResult
 from ..geometry.validation import check_choice, check_real
+from ..planning.part_plan import PartPlan
+from ..planning.probe_moves import probe_moves
+from ..planning.probe_path import PathOrder, short_path, unchanged
+from ..strategies.result import SamplingResult
 from .dmis import dmis_program_name
 from .files import write_atomically
 from .frames import FRAME_KEYS, frame_facts, resolve_frame, to_local
 from .pointfiles import MODULES, READER_KEYS, resolve_format
 from .pointset import PointSet
 
-ORDERS = ("as_optimised", "short_path")
+ORDERS = ("as_optimised", "short_path", "probe_path")
 UNIT_TOLERANCE = 1e-3
 PROBE_KEYS = ("probe_radius_mm", "points")
 ORDER_KEYS = ("order", "path_length_mm")
@@ -38,6 +39,7 @@ class WriteOptions:
     retract: float
     search: float
     comments: bool
+    probe: dict = None
 
 
 @dataclass(frozen=True)
@@ -47,7 +49,9 @@ class ExportReport:
     path: absolute path; format: 'dmis', 'xyz' or 'csv'; count: points written; order: the order
     asked for; length_before, length_after: mm, open 3D path through the written points in the
     source's order and in the written order; frame: 'global' or 'local'; probe_radius: mm added
-    along the normals (0: contact points).
+    along the normals (0: contact points); for a probe path: length_before is the straight
+    nearest-neighbour order with the detours it needs, length_after the path's travel, detours
+    its moves over the clearance plane and seconds the estimated measuring time.
     """
 
     path: str
@@ -58,6 +62,8 @@ class ExportReport:
     length_after: float
     frame: str
     probe_radius: float
+    detours: int = 0
+    seconds: float = None
 
     @property
     def saving(self):
@@ -68,6 +74,10 @@ class ExportReport:
         what = "contact points" if self.probe_radius == 0 else f"ball centres, probe radius {self.probe_radius:g} mm"
         line = (f"Wrote {self.count} points to {self.path} ({MODULES[self.format].NAME}, "
                 f"{self.frame} frame, {what}). ")
+        if self.order == "probe_path":
+            return line + (f"Collision-free probe path: {self.length_after:.1f} mm of moves, {self.detours} over the "
+                           f"clearance plane (the straight nearest-neighbour order with its detours: "
+                           f"{self.length_before:.1f} mm); about {self.seconds:.0f} s of measuring.")
         if self.order == "short_path":
             line += f"Probe path {self.length_after:.1f} mm in the short-path order"
             if self.saving > 0:
@@ -78,7 +88,7 @@ class ExportReport:
 
 
 def export(source, path, format=None, *, frame=None, probe_radius=0.0, order="as_optimised", name=None,
-           approach=2.0, retract=2.0, search=5.0, comments=True):
+           approach=2.0, retract=2.0, search=5.0, comments=True, motion=None):
     """Write probe points to a file for a CMM.
 
     source: a PointSet, a SamplingResult, or a document object whose Proxy has ``point_set(obj)``;
@@ -92,7 +102,11 @@ def export(source, path, format=None, *, frame=None, probe_radius=0.0, order="as
     stated in DMIS and CSV comments; the XYZ format has no comments, so an XYZ file holds the
     points as written and the caller has to keep the radius with it).
     order: 'as_optimised' keeps the source's order, 'short_path' visits the points along a short
-    path (nearest neighbour + 2-opt, :mod:`cmmsampling.planning.probe_path`).
+    path (nearest neighbour + 2-opt, :mod:`cmmsampling.planning.probe_path`), 'probe_path' along
+    the collision-free path of a run made with the part (``sample(..., part=)``,
+    :mod:`cmmsampling.planning.probe_moves`): DMIS then gets the sensors (SNSDEF, SNSLCT) and the
+    GOTO moves between the points, CSV the probe axis of each point; motion: the CMM's speeds for
+    the time estimate (cmmsampling.access.probe.Motion).
     name: DMIS program name (default: the file name without extension); approach, retract,
     search: DMIS SNSET distances, mm; comments: write the source's metadata (source face,
     strategy, parameters, deviation figures) as comments; the frame, probe radius and order are
@@ -112,14 +126,30 @@ def export(source, path, format=None, *, frame=None, probe_radius=0.0, order="as
         comments=bool(comments),
     )
     placement, frame_name = resolve_frame(frame)
-    point_set, facts = prepared(as_point_set(source), placement, radius, frame_name)
-    path_order = short_path(point_set.points) if order == "short_path" else unchanged(point_set.points)
-    point_set = reordered(point_set, path_order.order)
+    point_set, moves = as_point_set(source), None
+    if order == "probe_path":
+        moves = probe_moves(source, motion)
+        point_set = along_moves(point_set, moves)
+    point_set, facts = prepared(point_set, placement, radius, frame_name)
+    if moves is not None:
+        path_order = PathOrder(np.arange(len(point_set)), moves.baseline, moves.travel)
+        options = replace(options, probe=point_set.metadata.get("probe"))
+    else:
+        path_order = short_path(point_set.points) if order == "short_path" else unchanged(point_set.points)
+        point_set = reordered(point_set, path_order.order)
     facts.update(order=order, path_length_mm=path_order.length_after)
     text = MODULES[fmt].write(point_set, facts, options)
     target = write_atomically(path, text, MODULES[fmt].ENCODING)
     return ExportReport(target, fmt, len(point_set), order, path_order.length_before, path_order.length_after,
-                        facts["frame"], facts["probe_radius_mm"])
+                        facts["frame"], facts["probe_radius_mm"], 0 if moves is None else moves.detours,
+                        None if moves is None else moves.seconds)
+
+
+def along_moves(point_set, moves):
+    """The point set in the order of a probe path (ProbeMoves) with its travel moves."""
+    ordered = reordered(point_set, moves.order)
+    ordered.travel = moves.travel_pairs()
+    return ordered
 
 
 def _stem(path):
@@ -166,9 +196,13 @@ def plan_point_set(plan):
         metadata["budget"] = plan.budget
     if plan.refused:
         metadata["faces_without_points"] = {face.name: face.reason for face in plan.refused}
+    if plan.probe is not None:
+        metadata["probe"] = asdict(plan.probe)
+        metadata["points_tilted"] = sum(face.tilted for face in placed)
+    axes = np.concatenate([f.axes for f in placed]) if all(f.axes is not None for f in placed) else None
     return PointSet(labels, np.concatenate([f.points for f in placed]), np.concatenate([f.normals for f in placed]),
                     np.concatenate([f.uv for f in placed]), None, metadata,
-                    [face.name for face in placed for _ in range(face.n)])
+                    [face.name for face in placed for _ in range(face.n)], axes)
 
 
 def prepared(point_set, placement, radius, frame_name=""):
@@ -189,19 +223,26 @@ def prepared(point_set, placement, radius, frame_name=""):
         raise ValueError(f"these points are already probe-ball centres (radius {stated_radius} mm); "
                          "export them with probe_radius=0, or export the contact points")
     points = point_set.points + radius * point_set.normals
-    normals = point_set.normals
+    normals, axes, travel = point_set.normals, point_set.axes, point_set.travel
     if placement is None:
         facts = {key: stated[key] for key in FRAME_KEYS if key in stated} or {"frame": "global"}
     else:
         facts = frame_facts(placement, frame_name)
         points, normals = to_local(points, normals, placement)
+        axes = None if axes is None else to_local(np.zeros_like(axes), axes, placement)[1]
+        travel = None if travel is None else [tuple(_local(p, placement) for p in pair) for pair in travel]
     total = radius + stated_radius
     facts["probe_radius_mm"] = total
     facts["points"] = (f"probe-ball centres (contact point + {total:g} mm * normal)" if total > 0
                        else "contact points on the face")
     metadata = {key: value for key, value in stated.items() if key not in WRITTEN_KEYS}
     return PointSet(point_set.labels, points, normals, point_set.uv, point_set.deviation, metadata,
-                    point_set.faces), facts
+                    point_set.faces, axes, travel), facts
+
+
+def _local(positions, placement):
+    """Positions (M, 3) mm in the placement's frame."""
+    return to_local(positions, np.zeros_like(positions), placement)[0]
 
 
 def checked(point_set):
@@ -236,7 +277,11 @@ def checked(point_set):
     faces = None if point_set.faces is None else [str(face) for face in point_set.faces]
     if faces is not None and len(faces) != count:
         raise ValueError(f"{len(faces)} face names for {count} points")
-    return PointSet(labels, points, normals / lengths[:, None], uv, deviation, dict(point_set.metadata), faces)
+    axes = None if point_set.axes is None else np.asarray(point_set.axes, dtype=float)
+    if axes is not None and (axes.shape != (count, 3) or not np.isfinite(axes).all()):
+        axes = None
+    return PointSet(labels, points, normals / lengths[:, None], uv, deviation, dict(point_set.metadata), faces,
+                    axes, point_set.travel)
 
 
 def _check_finite(name, values, labels):
@@ -263,7 +308,8 @@ def reordered(point_set, order):
     """point_set with its points, labels and per-point values in order (N,) int."""
     return PointSet([point_set.labels[i] for i in order], point_set.points[order], point_set.normals[order],
                     _taken(point_set.uv, order), _taken(point_set.deviation, order), point_set.metadata,
-                    None if point_set.faces is None else [point_set.faces[i] for i in order])
+                    None if point_set.faces is None else [point_set.faces[i] for i in order],
+                    _taken(point_set.axes, order))
 
 
 def _taken(values, order):

@@ -13,7 +13,11 @@ class PointSet:
     deviation: (N,) mm, the substitute's distance from the CAD face at each point, or None;
     metadata: JSON-friendly facts about where the points came from (source face, strategy, n,
     parameters, deviation figures in mm); faces: N names of the faces the points lie on (a part
-    plan's points), or None.
+    plan's points), or None; axes: (N, 3) unit, the probe's axis (ball towards head) at each point
+    when the run knew the part (cmmsampling.access), else None; travel: for a probe path, N + 1
+    pairs (leaving, arriving) of (M, 3) ball-centre positions in mm: the moves before each point
+    (out of the previous one, then in to this one; the head turns between the two) and, last,
+    out of the last point; else None.
     """
 
     labels: list
@@ -23,6 +27,8 @@ class PointSet:
     deviation: np.ndarray = None
     metadata: dict = field(default_factory=dict)
     faces: list = None
+    axes: np.ndarray = None
+    travel: list = None
 
     def __len__(self):
         return len(self.labels)
@@ -39,4 +45,5 @@ class PointSet:
             uv=np.array(result.uv, dtype=float),
             deviation=np.linalg.norm(substitute - result.points, axis=1),
             metadata=metadata,
+            axes=None if result.access is None else np.array(result.access.axes, dtype=float),
         )

@@ -18,6 +18,10 @@ margin below, is as small as CELLS allows:
   wrong by. A face is refused only when none of its points lies farther than edge_offset +
   margin from its edges.
 
+Given where a probe reaches the part (``reachable``), the cells it cannot reach are infeasible too:
+asked once per face on a coarser raster of about REACH_CELLS cells, and a cell counts only when
+its coarse cell and their eight neighbours are reached (so a corner far from a centre is judged).
+
 Points outside the feasible cells are moved to the nearest feasible cell centre.
 """
 import numpy as np

@@ -15,8 +15,8 @@ import ctypes
 import multiprocessing
 import os
 
-from ..strategies.parallel import python_executable
 from ..geometry.validation import check_int
+from ..strategies.parallel import python_executable
 
 
 def run_all(function, jobs, processes=None, scheduler=None, progress=None, describe=None):

@@ -18,13 +18,14 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..access.reach import Reachability
 from ..fitting.substitute import DEFAULT_DEGREE
 from ..geometry.freecad_env import import_part
 from ..geometry.surface import as_face
+from ..geometry.validation import check_int, check_real
 from ..strategies import handover
 from ..strategies.sampling import BEST_STRATEGY, evaluate, probe_edge_offset, sample
 from ..strategies.threads import blas_threads
-from ..geometry.validation import check_int, check_real
 from . import face_runs
 from .points_needed import DEFAULT_MAX_POINTS, points_needed, step_counts
 
@@ -36,7 +37,8 @@ FIT_KEYS = ("fit_degree", "fit_poles", "smoothing", "grid")
 class FaceJob:
     """One face's share of a plan, as plain data: name ('Face3'), the face as BREP text, mode
     ('tolerance' or 'points'), tolerance (mm) or n, strategy, n_max and the keyword arguments
-    of sample()."""
+    of sample(); part_brep: the whole part as BREP text when the probe's reach is judged (with
+    probe, a cmmsampling.Probe), else ''."""
 
     name: str
     brep: str
@@ -46,6 +48,8 @@ class FaceJob:
     n: int = 0
     n_max: int = DEFAULT_MAX_POINTS
     arguments: dict = field(default_factory=dict)
+    part_brep: str = ""
+    probe: object = None
 
 
 @dataclass
@@ -57,7 +61,10 @@ class FacePlan:
     mm; bound: the local bound about it, mm (the least maximum that reshaping it could reach);
     met: the tolerance is met (None without a tolerance); edge_offset: mm; settings: the run's
     parameters; tried: the N a tolerance search ran (cmmsampling.planning.points_needed.Tried);
-    reason: why the face holds no points, or why no N met the tolerance; seconds: time taken.
+    reason: why the face holds no points, or why no N met the tolerance; seconds: time taken;
+    axes: (n, 3) the probe's axis at each point when the plan judged the probe's reach (NaN where
+    OCC found it blocked), else None; tilted: points reached with the stylus off their normal;
+    unreached: points OCC found the probe cannot reach.
     """
 
     name: str
@@ -75,6 +82,9 @@ class FacePlan:
     tried: list = field(default_factory=list)
     reason: str = ""
     seconds: float = 0.0
+    axes: np.ndarray = None
+    tilted: int = 0
+    unreached: int = 0
 
     @property
     def placed(self):
@@ -87,20 +97,32 @@ class FacePlan:
         return "" if self.met is None else ("yes" if self.met else "no")
 
     @property
+    def notes(self):
+        """Why the face holds no points or misses the tolerance, and how many points the probe
+        reaches tilted or not at all: one text ('' when there is nothing to say)."""
+        parts = [self.reason] if self.reason else []
+        parts += [f"{self.tilted} points tilted"] if self.tilted else []
+        parts += [f"{self.unreached} points the probe cannot reach"] if self.unreached else []
+        return "; ".join(parts)
+
+    @property
     def line(self):
         """One line on the face's outcome, e.g. 'Face3: 46 points, max 0.0312 mm, tolerance met'
         or 'Face7: no points (the face is narrower than ...)'."""
         if not self.placed:
             return f"{self.name}: no points ({self.reason})"
         met = {None: "", True: ", tolerance met", False: ", tolerance not met"}[self.met]
-        return f"{self.name}: {self.n} points, max {self.maximum:.4f} mm{met}"
+        reach = f", {self.tilted} tilted" if self.tilted else ""
+        reach += f", {self.unreached} unreachable" if self.unreached else ""
+        return f"{self.name}: {self.n} points, max {self.maximum:.4f} mm{met}{reach}"
 
 
 @dataclass
 class PartPlan:
     """A plan of a part: faces (FacePlan, in the order given), the mode ('tolerance' or
     'points'), tolerance (mm) or budget (points), the strategy and the seconds it took;
-    cancelled when stopped early (faces not run have no points and say so)."""
+    cancelled when stopped early (faces not run have no points and say so); part: the shape
+    planned and probe: the Probe whose reach was judged (None when not)."""
 
     faces: list
     mode: str
@@ -110,6 +132,8 @@ class PartPlan:
     seconds: float = 0.0
     cancelled: bool = False
     shapes: dict = field(default_factory=dict, repr=False)
+    part: object = field(default=None, repr=False)
+    probe: object = None
 
     @property
     def placed(self):
@@ -148,13 +172,13 @@ class PartPlan:
         lines = [f"{'face':<10} {'area mm^2':>10} {'N':>5} {'max mm':>9} {'bound mm':>9} {'met':>4}  notes"]
         for face in self.faces:
             lines.append(f"{face.name:<10} {face.area:>10.1f} {face.n:>5} {face.maximum:>9.4f} {face.bound:>9.4f} "
-                         f"{face.met_text:>4}  {face.reason}")
+                         f"{face.met_text:>4}  {face.notes}")
         lines.append(f"{'part':<10} {self.area:>10.1f} {self.n_total:>5} {self.worst:>9.4f}")
         return "\n".join(lines)
 
 
 def plan(shape_or_faces, tolerance=None, n_total=None, strategy=BEST_STRATEGY, *, faces=None, n_max=DEFAULT_MAX_POINTS,
-         edge_offset=None, processes=None, scheduler=None, progress=None, **arguments):
+         edge_offset=None, processes=None, scheduler=None, progress=None, probe=None, part=None, **arguments):
     """Probe points for a whole part: to a tolerance on every face, or a total of points.
 
     shape_or_faces: a Part.Shape (its faces, or those numbered from 1 in ``faces``, e.g.
@@ -165,17 +189,22 @@ def plan(shape_or_faces, tolerance=None, n_total=None, strategy=BEST_STRATEGY, *
     are the parallel part); edge_offset: mm, None for each face's probe edge offset;
     processes: local processes (None: all cores); scheduler: a Dask scheduler address or
     distributed.Client; progress: callable(done, total, message) after each face's run (message:
-    the face's :attr:`FacePlan.line`), returning True to cancel. Returns a PartPlan.
+    the face's :attr:`FacePlan.line`), returning True to cancel; probe: a cmmsampling.Probe whose
+    reach on the part is judged (each face keeps to what it reaches, and ``export(plan,
+    order="probe_path")`` writes a collision-free path); part: the shape the probe must keep
+    clear of (default: shape_or_faces when it is a shape). Returns a PartPlan.
     """
     handed = handover.take(plan, shape_or_faces, {
         "tolerance": tolerance, "n_total": n_total, "strategy": strategy, "faces": faces, "n_max": n_max,
-        "edge_offset": edge_offset, "processes": processes, "scheduler": scheduler, **arguments})
+        "edge_offset": edge_offset, "processes": processes, "scheduler": scheduler, "probe": probe, "part": part,
+        **arguments})
     if handed is not None:
         return handed
     if (tolerance is None) == (n_total is None):
         raise ValueError("give either tolerance= (mm, the deviation every face must meet) or n_total= "
                          "(the points of the whole part), not both or neither")
     named = named_faces(shape_or_faces, faces)
+    part, part_brep = _part(shape_or_faces, part, probe)
     arguments = {"workers": 1, **arguments}
     if edge_offset is not None:
         arguments["edge_offset"] = check_real("edge_offset", edge_offset, 0.0)
@@ -184,16 +213,30 @@ def plan(shape_or_faces, tolerance=None, n_total=None, strategy=BEST_STRATEGY, *
         tolerance = check_real("tolerance", tolerance, above=0.0)
         n_max = check_int("n_max", n_max, 4)
         jobs = [FaceJob(name, face.exportBrepToString(), "tolerance", strategy, tolerance=tolerance, n_max=n_max,
-                        arguments=arguments) for name, face in named]
+                        arguments=arguments, part_brep=part_brep, probe=probe) for name, face in named]
         outcomes, cancelled = _run(jobs, processes, scheduler, progress)
         result = PartPlan(_completed(outcomes, named), "tolerance", strategy, tolerance=tolerance,
                           cancelled=cancelled)
     else:
         result = _plan_budget(named, check_int("n_total", n_total, 1), strategy, arguments, processes, scheduler,
-                              progress)
+                              progress, part_brep, probe)
     result.seconds = time.perf_counter() - start
     result.shapes = dict(named)
+    result.part, result.probe = part, probe
     return result
+
+
+def _part(shape_or_faces, part, probe):
+    """(part, its BREP text) when the probe's reach is judged (a probe given), else (None, '');
+    ValueError for a probe without a part to judge it on."""
+    if probe is None:
+        if part is not None:
+            raise ValueError("part= is what a probe must keep clear of: give probe= (a cmmsampling.Probe) too")
+        return None, ""
+    part = shape_or_faces if part is None and isinstance(shape_or_faces, Part.Shape) else part
+    if not isinstance(part, Part.Shape):
+        raise ValueError("a probe's reach is judged on the whole part: give part= (the solid) with a list of faces")
+    return part, part.exportBrepToString()
 
 
 def hand_over(shape, arguments, part_plan):
@@ -244,6 +287,10 @@ def _solve_face(job):
     face = shape.Faces[0]
     planned = FacePlan(job.name, float(face.Area), strategy=job.strategy, met=None)
     arguments = dict(job.arguments)
+    if job.part_brep:
+        part = Part.Shape()
+        part.importBrepFromString(job.part_brep)
+        arguments["part"] = Reachability(part, job.probe)
     try:
         if "edge_offset" not in arguments:
             arguments["edge_offset"] = probe_edge_offset(face)
@@ -269,6 +316,10 @@ def _take(planned, result):
     planned.maximum = result.deviation.maximum
     planned.bound = result.bounds()["grid"].lower
     planned.settings = dict(result.settings)
+    if result.access is not None:
+        planned.axes = result.access.axes
+        planned.tilted = int(result.access.tilted.sum())
+        planned.unreached = int((~result.access.reachable).sum())
 
 
 def _run(jobs, processes, scheduler, progress):
@@ -298,12 +349,12 @@ def _completed(outcomes, named):
             for outcome, (name, face) in zip(outcomes, named)]
 
 
-def _plan_budget(named, budget, strategy, arguments, processes, scheduler, progress):
+def _plan_budget(named, budget, strategy, arguments, processes, scheduler, progress, part_brep, probe):
     """The greedy allocation of a total of points (see the module docstring)."""
     steps = step_counts(max(budget, 16), arguments.get("fit_degree", DEFAULT_DEGREE))
     first = steps[0][1]
-    jobs = [FaceJob(name, face.exportBrepToString(), "points", strategy, n=first, arguments=arguments)
-            for name, face in named]
+    jobs = [FaceJob(name, face.exportBrepToString(), "points", strategy, n=first, arguments=arguments,
+                    part_brep=part_brep, probe=probe) for name, face in named]
     if budget < first * len(jobs):
         raise ValueError(f"{budget} points give fewer than {first} to each of the {len(jobs)} faces; give "
                          f"n_total of at least {first * len(jobs)}, or fewer faces")
@@ -318,7 +369,8 @@ def _plan_budget(named, budget, strategy, arguments, processes, scheduler, progr
         later = [n for n in firsts if n > faces[worst].n]
         if not later or spent - faces[worst].n + later[0] > budget:
             break
-        job = FaceJob(faces[worst].name, jobs[worst].brep, "points", strategy, n=later[0], arguments=arguments)
+        job = FaceJob(faces[worst].name, jobs[worst].brep, "points", strategy, n=later[0], arguments=arguments,
+                      part_brep=part_brep, probe=probe)
         [stepped], cancelled = _run([job], 1, scheduler, progress)
         if stepped is None or not stepped.placed or not stepped.maximum < faces[worst].maximum:
             faces[worst].reason = f"its next step ({later[0]} points) did not lower its deviation"

@@ -14,9 +14,10 @@ step before the search moves on. The result of each N tried is kept in ``tried``
 import time
 from dataclasses import dataclass, field
 
+from ..access.reach import Reachability
 from ..fitting.substitute import DEFAULT_DEGREE, default_pole_count
-from ..strategies.sampling import BEST_STRATEGY, MIN_POINTS, probe_edge_offset, sample
 from ..geometry.validation import check_int, check_real
+from ..strategies.sampling import BEST_STRATEGY, MIN_POINTS, probe_edge_offset, sample
 
 DEFAULT_MAX_POINTS = 400
 
@@ -85,7 +86,8 @@ def points_needed(face, tolerance, strategy=BEST_STRATEGY, *, n_max=DEFAULT_MAX_
 
     face: a Part.Face; tolerance: mm (> 0); n_max: the most points to try; edge_offset: mm, None
     for the face's probe edge offset (:func:`cmmsampling.probe_edge_offset`); fit_degree and
-    ``arguments``: as in :func:`cmmsampling.sample` (e.g. grid, seed, workers, time_limit);
+    ``arguments``: as in :func:`cmmsampling.sample` (e.g. grid, seed, workers, time_limit; part
+    and probe: the probe's reach, judged once for all the N tried);
     progress: callable(n, message) before each run, returning True to stop the search (the best
     found so far is returned). Returns a PointsNeeded; when no N up to n_max meets the tolerance,
     ``met`` is False and ``reason`` names the best figure reached.
@@ -94,6 +96,8 @@ def points_needed(face, tolerance, strategy=BEST_STRATEGY, *, n_max=DEFAULT_MAX_
     n_max = check_int("n_max", n_max, MIN_POINTS)
     if edge_offset is None:
         edge_offset = probe_edge_offset(face)
+    if arguments.get("part") is not None and not isinstance(arguments["part"], Reachability):
+        arguments["part"] = Reachability(arguments["part"], arguments.pop("probe", None))
     search = _Search(face, strategy, tolerance, progress,
                      dict(arguments, edge_offset=edge_offset, fit_degree=fit_degree))
     search.run_steps(step_counts(n_max, fit_degree))

@@ -16,8 +16,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial.distance import cdist
 
-from ..access.obstacles import along_segments
+from ..access.obstacles import Obstacles, along_segments
 from ..access.probe import Motion
+from .part_plan import PartPlan
 from .probe_path import nearest_neighbour, two_opt
 
 # Poses checked along a straight travel move are at most this many mm apart.
@@ -36,7 +37,8 @@ class ProbeMoves:
     straight: mm, the straight nearest-neighbour path through the ready positions (collisions
     ignored); baseline: mm, that order's travel with the detours it needs (``travel`` is never
     longer); detours: the travel moves that go over the clearance plane; seconds: estimated
-    measuring time (Motion); ready: (N, 3) the ready positions in the points' own order.
+    measuring time (Motion); ready: (N, 3) the ready positions in the points' own order; legs:
+    the travel before each point in visiting order and after the last (see :func:`_legs`).
     """
 
     order: np.ndarray
@@ -48,6 +50,11 @@ class ProbeMoves:
     detours: int
     seconds: float
     ready: np.ndarray
+    legs: list
+
+    def travel_pairs(self):
+        """The legs as N + 1 pairs (leaving, arriving) of (M, 3) positions, mm (PointSet.travel)."""
+        return [tuple(np.array([p for p, _ in part]).reshape(-1, 3) for part in leg) for leg in self.legs]
 
     def segments(self, kind):
         """(starts (S, 3), ends (S, 3)) of the path's moves of one kind."""
@@ -55,7 +62,7 @@ class ProbeMoves:
         return self.waypoints[:-1][chosen], self.waypoints[1:][chosen]
 
 
-def probe_moves(probe, obstacles, points, normals, axes, motion=None):
+def moves_through(probe, obstacles, points, normals, axes, motion=None):
     """The path through reachable points (N, 3) mm with normals (N, 3) and probe axes (N, 3)
     unit (:func:`cmmsampling.access.reach.reach`); motion: speeds for the time estimate
     (default Motion()). Returns ProbeMoves."""
@@ -70,7 +77,8 @@ def probe_moves(probe, obstacles, points, normals, axes, motion=None):
     direct = _direct_moves(probe, obstacles, ready, axes)
     lengths = _travel_lengths(ready, exits, above, direct)
     order = _short_order(lengths, cdist(ready, ready))
-    waypoints, kinds = _waypoints(order, centres, ready, exits, above, direct)
+    legs = _legs(order, ready, exits, above, direct)
+    waypoints, kinds = _waypoints(order, centres, legs)
     steps = np.linalg.norm(np.diff(waypoints, axis=0), axis=1)
     travel = float(steps[kinds != "touch"].sum())
     plain = nearest_neighbour(cdist(ready, ready))
@@ -79,13 +87,49 @@ def probe_moves(probe, obstacles, points, normals, axes, motion=None):
     baseline = float(lengths[plain[:-1], plain[1:]].sum() + ends[plain[0]] + ends[plain[-1]])
     detours = int(np.count_nonzero(~direct[order[:-1], order[1:]]))
     return ProbeMoves(order, waypoints, kinds, travel, straight, baseline, detours,
-                      motion.seconds(travel, len(points), probe.approach), ready)
+                      motion.seconds(travel, len(points), probe.approach), ready, legs)
 
 
 def _end_lengths(ready, exits, above):
     """(N,) mm: from the clearance plane down to each ready position (the program's first and
     last moves)."""
     return np.linalg.norm(exits - ready, axis=1) + np.linalg.norm(above - exits, axis=1)
+
+
+def probe_moves(source, motion=None):
+    """The ProbeMoves of a SamplingResult run with the part (``sample(face, ..., part=)``) or of a
+    PartPlan made with a probe, through its points in their order (a plan's: face after face;
+    Motion: the time estimate). ValueError for a run without the part, or with points the probe
+    cannot reach."""
+    if isinstance(source, PartPlan):
+        return _plan_moves(source, motion)
+    access = getattr(source, "access", None)
+    if access is None:
+        raise ValueError("a probe path needs the part the points must keep clear of: sample the face with "
+                         "part=<the solid> (and probe=), or export with order='short_path'")
+    if not access.reachable.all():
+        blocked = ", ".join(f"P{k + 1}" for k in np.flatnonzero(~access.reachable)[:10])
+        raise ValueError(f"the probe cannot reach {np.count_nonzero(~access.reachable)} of the points ({blocked}); "
+                         "sample again with part= (the run keeps to what the probe reaches) or export with "
+                         "order='short_path'")
+    reachability = source.problem.reachability
+    return moves_through(reachability.probe, reachability.obstacles, source.points, source.normals, access.axes, motion)
+
+
+def _plan_moves(plan, motion):
+    """The ProbeMoves through every point of a plan made with a probe (see :func:`probe_moves`)."""
+    placed = plan.placed
+    if plan.probe is None or any(face.axes is None for face in placed):
+        raise ValueError("a probe path needs the probe's reach on the part: plan with probe=cmmsampling.Probe(...), "
+                         "or export with order='short_path'")
+    axes = np.concatenate([face.axes for face in placed])
+    unreached = [face.name for face in placed if face.unreached]
+    if unreached:
+        raise ValueError(f"the probe cannot reach some points of {', '.join(unreached)}; export with "
+                         "order='short_path', or plan again")
+    points = np.concatenate([face.points for face in placed])
+    normals = np.concatenate([face.normals for face in placed])
+    return moves_through(plan.probe, Obstacles(plan.part), points, normals, axes, motion)
 
 
 def _direct_moves(probe, obstacles, ready, axes):
@@ -139,20 +183,30 @@ def _short_order(lengths, straight):
     return min(orders, key=lambda order: float(lengths[order[:-1], order[1:]].sum()))
 
 
-def _waypoints(order, centres, ready, exits, above, direct):
-    """The ball centre's path (W, 3) and the kind of each move (W - 1,) for a visiting order."""
+def _legs(order, ready, exits, above, direct):
+    """The travel of a visiting order as N + 1 pairs (leaving, arriving), each a list of
+    (position (3,) mm, kind of the move that ends there): the moves out of the previous point
+    (none before the first) and in to this one; last, out of the last point. A detour leaves
+    along the axis and up to the clearance plane, and arrives across it, down and in along the
+    next axis; a straight move only arrives."""
     first, last = order[0], order[-1]
-    points = [above[first], exits[first], ready[first]]
-    kinds = ["travel", "axis"]
+    legs = [([], [(above[first], "travel"), (exits[first], "travel"), (ready[first], "axis")])]
     for a, b in zip(order[:-1], order[1:]):
-        points += [centres[a], ready[a]]
-        kinds += ["touch", "touch"]
         if direct[a, b]:
-            points += [ready[b]]
-            kinds += ["travel"]
+            legs.append(([], [(ready[b], "travel")]))
         else:
-            points += [exits[a], above[a], above[b], exits[b], ready[b]]
-            kinds += ["axis", "travel", "travel", "travel", "axis"]
-    points += [centres[last], ready[last], exits[last], above[last]]
-    kinds += ["touch", "touch", "axis", "travel"]
-    return np.array(points), np.array(kinds)
+            legs.append(([(exits[a], "axis"), (above[a], "travel")],
+                         [(above[b], "travel"), (exits[b], "travel"), (ready[b], "axis")]))
+    legs.append(([(exits[last], "axis"), (above[last], "travel")], []))
+    return legs
+
+
+def _waypoints(order, centres, legs):
+    """The ball centre's whole path (W, 3) and the kind of each move (W - 1,): the legs, with a
+    touch (to the contact's centre and back) at each point; the first position is the start."""
+    steps = []
+    for k, (leaving, arriving) in enumerate(legs):
+        steps += leaving + arriving
+        if k < len(order):
+            steps += [(centres[order[k]], "touch"), (arriving[-1][0], "touch")]
+    return np.array([position for position, _ in steps]), np.array([kind for _, kind in steps[1:]])

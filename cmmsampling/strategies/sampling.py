@@ -365,13 +365,17 @@ def make_problem(face, n, fit_degree=DEFAULT_DEGREE, fit_poles=None, smoothing=D
 
 
 def _reachability(part, probe):
-    """The Reachability of a probe on a part, None without a part; TypeError for a part that is
-    no shape or a probe that is no Probe."""
+    """The Reachability of a probe on a part (part itself when it is one), None without a part;
+    TypeError for a part that is no shape or a probe that is no Probe."""
     if part is None:
         if probe is not None:
             raise ValueError("a probe is checked against the part its face belongs to: give part= (the "
                              "solid or shape) with probe=")
         return None
+    if isinstance(part, Reachability):
+        if probe is not None and probe != part.probe:
+            raise ValueError("part= is a Reachability with its own probe; give no other probe=")
+        return part
     if not isinstance(part, Part.Shape) or part.isNull() or not part.Faces:
         raise TypeError(f"part must be the Part.Shape the face belongs to (a solid, a shell), got {part!r}")
     if probe is not None and not isinstance(probe, Probe):
@@ -537,7 +541,8 @@ def sample(face, n=81, strategy=DEFAULT_STRATEGY, *, fit_degree=DEFAULT_DEGREE, 
     (3D; 0, the paper's setting, allows points on the edges); min_spacing: mm between any two
     points (None: a tenth of the even spacing sqrt(area / n), at least 5 um, lowered where the
     face cannot hold N points that far apart; 0 allows any); part: the Part.Shape the face
-    belongs to (a solid), whose other faces may block the probe: the face's points the probe
+    belongs to (a solid), or a cmmsampling.access.reach.Reachability of it (kept for many runs),
+    whose other faces may block the probe: the face's points the probe
     cannot reach become infeasible, and each final point's probe pose is measured with OCC
     (``result.access``); probe: a cmmsampling.Probe (default: a 2 mm ball on a 20 mm stylus);
     options: the strategy's own (see ``STRATEGIES[name].options``; PSO: population, iterations, w1,
