@@ -186,7 +186,7 @@ def test_a_probe_path_program_names_its_sensors_and_moves(beside_wall, tmp_path)
     floor = floor_of(beside_wall, 10.0)
     result = cmmsampling.sample(floor, 25, "uniform_parametric", part=beside_wall, grid=20, edge_offset=0.5)
     assert result.access.reachable.all() and result.access.tilted.any()
-    assert any("tilted off their normal" in note for note in result.notes)
+    assert any("reached only with the stylus tilted" in note for note in result.notes)
     report = cmmsampling.export(result, tmp_path / "wall.dmi", order="probe_path")
     text = (tmp_path / "wall.dmi").read_text()
     assert dmis_syntax.check(text) == []

@@ -34,17 +34,21 @@ Part = import_part()
 class Access:
     """How each point is reached: reachable (N,) bool; axes (N, 3) unit, the probe's axis at
     each reachable point (NaN where none); tilts (N,) degrees between axis and normal; angles
-    (N, 2) head angles A, B in degrees (see :func:`cmmsampling.planning.probe.head_angles`)."""
+    (N, 2) head angles A, B in degrees (see :func:`cmmsampling.access.probe.head_angles`); ranks
+    (N,) int, which of the head's orientations nearest the normal reached it (0: the nearest,
+    -1: none)."""
 
     reachable: np.ndarray
     axes: np.ndarray
     tilts: np.ndarray
     angles: np.ndarray
+    ranks: np.ndarray
 
     @property
     def tilted(self):
-        """(N,) bool: reached with the axis off the normal (by more than 0.01 degrees)."""
-        return self.reachable & (self.tilts > 0.01)
+        """(N,) bool: reached only with the stylus tilted away from the head's orientation nearest
+        the normal (that one was blocked)."""
+        return self.reachable & (self.ranks > 0)
 
 
 def pose_pieces(probe, obstacles, points, normals, axes):
@@ -115,6 +119,7 @@ def reach(probe, obstacles, points, normals):
     axes = np.full((len(points), 3), np.nan)
     searching = ~touch_blocked(probe, obstacles, points, normals)
     refused = ~searching
+    ranks = np.full(len(points), -1)
     for rank in range(candidates.shape[1]):
         trying = np.flatnonzero(searching & usable[:, rank])
         if not trying.size:
@@ -124,6 +129,7 @@ def reach(probe, obstacles, points, normals):
         tried = candidates[trying, rank]
         clear = ~poses_blocked(probe, obstacles, points[trying], normals[trying], tried)
         axes[trying[clear]] = tried[clear]
+        ranks[trying[clear]] = rank
         searching[trying[clear]] = False
     reachable = ~searching & ~refused
     tilts = np.full(len(points), np.nan)
@@ -131,7 +137,7 @@ def reach(probe, obstacles, points, normals):
                                                     -1.0, 1.0)))
     angles = np.full((len(points), 2), np.nan)
     angles[reachable] = head_angles(axes[reachable])
-    return Access(reachable, axes, tilts, angles)
+    return Access(reachable, axes, tilts, angles, ranks)
 
 
 def exact_gaps(part, probe, point, normal, axis):
@@ -195,4 +201,5 @@ class Reachability:
             access.axes[refused] = np.nan
             access.tilts[refused] = np.nan
             access.angles[refused] = np.nan
+            access.ranks[refused] = -1
         return access, refused

@@ -15,6 +15,7 @@ import FreeCADGui
 from FreeCAD import Qt
 from PySide import QtGui
 
+from ..access.probe import PROBES
 from ..fitting.deviation import DEFAULT_GRID
 from ..planning.part_plan import hand_over, plan
 from ..planning.points_needed import DEFAULT_MAX_POINTS
@@ -51,10 +52,12 @@ def strategy_settings():
 def panel_defaults():
     """The panel's values by name with their defaults: a 0.05 mm tolerance, the best strategy,
     400 points at most per face, the 60 x 60 grid, one process per core, the faces' own edge
-    offsets and the strategies' settings."""
+    offsets, no probe reach judged ('' or a name of cmmsampling.PROBES) and the strategies'
+    settings."""
     return {
         "by_tolerance": True, "tolerance": 0.05, "points": 0, "strategy": BEST_STRATEGY,
         "n_max": DEFAULT_MAX_POINTS, "grid": DEFAULT_GRID, "processes": os.cpu_count() or 1, "edge_offset": AUTO,
+        "probe": "",
         **{option: default for option, (_, default) in strategy_settings().items()},
     }
 
@@ -62,12 +65,15 @@ def panel_defaults():
 def plan_arguments(values, numbers):
     """plan()'s keyword arguments for the panel's values and the face numbers planned: the goal,
     the strategy with the settings it offers (0 for "no limit" becomes None), n_max, grid,
-    processes and the edge offset ("auto": each face's own, left out)."""
+    processes, the edge offset ("auto": each face's own, left out) and the probe whose reach is
+    judged (a preset of cmmsampling.PROBES, left out for none)."""
     goal = {"tolerance": values["tolerance"]} if values["by_tolerance"] else {"n_total": values["points"]}
     arguments = {"faces": list(numbers), **goal, "strategy": values["strategy"], "n_max": values["n_max"],
                  "processes": values["processes"], "grid": values["grid"]}
     if values["edge_offset"] >= 0:
         arguments["edge_offset"] = values["edge_offset"]
+    if values["probe"] in PROBES:
+        arguments["probe"] = PROBES[values["probe"]]
     for setting in STRATEGIES[values["strategy"]].settings:
         value = values[setting.option]
         arguments[setting.option] = None if setting.option in NO_LIMIT and not value else value
@@ -128,6 +134,7 @@ class PlanPartTaskPanel(BackgroundRunPanel):
             add_choice(self.form.strategy, name, entry.label, entry.description)
         self._add_setting_boxes()
         self.edge_offset = self._add_edge_offset()
+        self.probe = self._add_probe_choice()
         values = load_values()
         values["points"] = values["points"] or POINTS_PER_FACE * len(numbers)
         self.set_values(values)
@@ -188,12 +195,26 @@ class PlanPartTaskPanel(BackgroundRunPanel):
         self.form.settingsGroup.layout().addRow(QtGui.QLabel("Edge offset", self.form), box)
         return box
 
+    def _add_probe_choice(self):
+        """The probe whose reach is judged: none, or a preset (cmmsampling.PROBES)."""
+        choice = QtGui.QComboBox(self.form)
+        choice.setObjectName("probe")
+        add_choice(choice, "", "not judged", "Every face's points are placed without regard to the probe")
+        for name, probe in PROBES.items():
+            add_choice(choice, name, name, f"Keep to what this probe reaches on the part, stylus tilted up to "
+                       f"{probe.max_tilt:g} deg in {probe.index_step:g} deg steps; the plan gets a collision-free "
+                       "path (moves and touches drawn in the document)")
+        choice.setToolTip("The probe whose reach on the whole part each face keeps to")
+        self.form.settingsGroup.layout().addRow(QtGui.QLabel("Probe", self.form), choice)
+        return choice
+
     def values(self):
         """The panel's values by name (see :func:`panel_defaults`)."""
         out = {"by_tolerance": self.form.byTolerance.isChecked(),
                "strategy": self.form.strategy.itemData(self.form.strategy.currentIndex())}
         out.update({name: getattr(self.form, name).value() for name in SPIN_BOXES})
         out["edge_offset"] = self.edge_offset.value()
+        out["probe"] = self.probe.itemData(self.probe.currentIndex())
         out.update({option: box.value() for option, box in self.setting_boxes.items()})
         return out
 
@@ -206,6 +227,7 @@ class PlanPartTaskPanel(BackgroundRunPanel):
         for name in SPIN_BOXES:
             getattr(self.form, name).setValue(values[name])
         self.edge_offset.setValue(values["edge_offset"])
+        self.probe.setCurrentIndex(max(self.probe.findData(values["probe"]), 0))
         for option, box in self.setting_boxes.items():
             box.setValue(values[option])
 
@@ -217,7 +239,7 @@ class PlanPartTaskPanel(BackgroundRunPanel):
         offered = {setting.option for setting in STRATEGIES[strategy].settings} if strategy in STRATEGIES else set()
         by_tolerance = self.form.byTolerance.isChecked()
         for widget in (self.form.byTolerance, self.form.byPoints, self.form.strategy, self.form.n_max,
-                       self.form.grid, self.form.processes, self.edge_offset):
+                       self.form.grid, self.form.processes, self.edge_offset, self.probe):
             widget.setEnabled(idle)
         self.form.tolerance.setEnabled(idle and by_tolerance)
         self.form.points.setEnabled(idle and not by_tolerance)
@@ -329,7 +351,7 @@ def add_plan(part, run, result):
     the worker thread, so it does not run again here) and ``add_plan_to_document``."""
     doc = f"App.getDocument({part.Document.Name!r})"
     part_expr = f"{doc}.getObject({part.Name!r})"
-    call = ", ".join([f"{part_expr}.Shape"] + [f"{key}={value!r}" for key, value in run.arguments.items()])
+    call = ", ".join([f"{part_expr}.Shape"] + [f"{key}={argument_text(value)}" for key, value in run.arguments.items()])
     note = "ran in the task panel"
     if result.cancelled:
         note += f", cancelled after {len(result.placed)} faces (a replay runs it whole)"
@@ -337,6 +359,13 @@ def add_plan(part, run, result):
     hand_over(run.shape, run.arguments, result)
     FreeCADGui.doCommand(f"plan = cmmsampling.plan({call})  # {note}")
     FreeCADGui.doCommand(f"group = cmmsampling.add_plan_to_document(plan, {doc}, {part_expr})")
+
+
+def argument_text(value):
+    """A plan() argument as console text: a preset probe as cmmsampling.PROBES['...'], anything
+    else as its repr."""
+    name = next((name for name, probe in PROBES.items() if probe is value), None)
+    return f"cmmsampling.PROBES[{name!r}]" if name is not None else repr(value)
 
 
 class PlanPart(GuardedCommand):

@@ -679,10 +679,11 @@ def _check_reach(problem, result):
     started = time.perf_counter()
     result.access, refused = problem.reachability.final(result.points, result.normals)
     result.settings["probe"] = asdict(problem.reachability.probe)
-    tilted = int(result.access.tilted.sum())
-    if tilted:
-        result.notes.append(f"{tilted} of {result.n} points are reached with the stylus tilted off their normal "
-                            f"(up to {np.nanmax(result.access.tilts):.1f} deg)")
+    tilted = result.access.tilted
+    if tilted.any():
+        result.notes.append(f"{tilted.sum()} of {result.n} points are reached only with the stylus tilted: the head's "
+                            f"orientation nearest their normal is blocked (up to {result.access.tilts[tilted].max():.1f} "
+                            "deg off the normal)")
     blocked = np.flatnonzero(~result.access.reachable)
     if blocked.size:
         names = ", ".join(f"P{k + 1}" for k in blocked[:10]) + (" ..." if blocked.size > 10 else "")

@@ -199,3 +199,42 @@ def test_cancel_keeps_the_faces_done_and_names_the_others(part_doc, monkeypatch,
     assert "cancelled after 1 faces (a replay runs it whole)" in dock_text("Python console")
     task_button(CANCEL).click()
     assert wait_until(lambda: not FreeCADGui.Control.activeDialog(), 2)
+
+
+def test_a_plan_with_a_probe_draws_its_path(part_doc, monkeypatch, artifacts):
+    from cmmsampling.access.probe import PROBES
+
+    walled = part_doc.addObject("Part::Feature", "Walled")
+    walled.Shape = Part.makeBox(60, 40, 10).fuse(Part.makeBox(10, 40, 50, FreeCAD.Vector(0, 0, 10))).removeSplitter()
+    part_doc.recompute()
+    upward = [f"Face{k}" for k, face in enumerate(walled.Shape.Faces, start=1)
+              if face.normalAt(*face.Surface.parameter(face.CenterOfMass)).z > 0.5]
+    hold = hold_plan_at(monkeypatch, 99)
+    FreeCADGui.Selection.clearSelection()
+    for name in upward:
+        FreeCADGui.Selection.addSelection(walled, name)
+    FreeCADGui.runCommand(plan_part.PlanPart.NAME)
+    assert wait_until(lambda: plan_form() is not None, 5), plan_part.PlanPart().reason()
+    form = plan_form()
+    fill(form, "uniform_parametric", tolerance=0.5, grid=20, n_max=60, processes=1)
+    probe = child(form, "probe")
+    probe.setCurrentIndex(probe.findData("2 mm ball, 20 mm stylus"))
+    task_button(OK).click()
+    assert wait_until(lambda: not FreeCADGui.Control.activeDialog(), 240), form.status.text()
+    [made] = hold.plans
+    assert made.probe is PROBES["2 mm ball, 20 mm stylus"] and sum(face.tilted for face in made.placed) > 0
+    assert "probe=cmmsampling.PROBES['2 mm ball, 20 mm stylus'])  # ran in the task panel" in dock_text(
+        "Python console")
+    assert __main__.plan is made
+    assert part_doc.getObject("ProbeMoves").Shape.Edges and part_doc.getObject("ProbeTouches").Shape.Edges
+    tilted = next(face for face in made.placed if face.tilted)
+    sheet = part_doc.getObject("PlanReport")
+    row = 6 + [face.name for face in made.faces].index(tilted.name)
+    assert sheet.get(f"A{row}") == tilted.name and f"{tilted.tilted} points tilted" in sheet.get(f"G{row}")
+    part_doc.Part.Visibility = False
+    part_doc.Other.Visibility = False
+    FreeCADGui.Selection.clearSelection()
+    FreeCADGui.SendMsgToActiveView("ViewFit")
+    process_events(0.5)
+    FreeCADGui.ActiveDocument.ActiveView.saveImage(os.path.join(artifacts, "plan_part_probe_path.png"), 1200, 900,
+                                                   "White")
