@@ -62,8 +62,18 @@ class GuardedCommand:
         self.act()
 
 
-class FaceCommand(GuardedCommand):
-    """A command that opens a task panel for the one selected face of an open document."""
+class PanelCommand(GuardedCommand):
+    """A command that opens a task panel for what is selected in an open document: subclasses
+    give :meth:`selected` (the selection -> the panel's source, or SelectionError saying what to
+    select) and :meth:`panel`."""
+
+    def selected(self, selection):
+        """The panel's source for a selection (Gui.Selection.getSelectionEx())."""
+        raise NotImplementedError
+
+    def panel(self, source):
+        """The task panel for a source."""
+        raise NotImplementedError
 
     def reason(self):
         """Why the command cannot act now, or None."""
@@ -72,18 +82,20 @@ class FaceCommand(GuardedCommand):
         if FreeCADGui.Control.activeDialog():
             return "Close the open task panel first."
         try:
-            selected_face(FreeCADGui.Selection.getSelectionEx())
+            self.selected(FreeCADGui.Selection.getSelectionEx())
         except SelectionError as exc:
             return str(exc)
         return None
 
-    def panel(self, source):
-        """The task panel for source, (obj, "FaceK")."""
-        raise NotImplementedError
-
     def act(self):
-        source = selected_face(FreeCADGui.Selection.getSelectionEx())
-        FreeCADGui.Control.showDialog(self.panel(source))
+        FreeCADGui.Control.showDialog(self.panel(self.selected(FreeCADGui.Selection.getSelectionEx())))
+
+
+class FaceCommand(PanelCommand):
+    """A command that opens a task panel for the one selected face, (obj, "FaceK")."""
+
+    def selected(self, selection):
+        return selected_face(selection)
 
 
 class SampleFace(FaceCommand):

@@ -369,13 +369,9 @@ class CompareTaskPanel(BackgroundRunPanel):
             self.show_status(f"The report folder cannot be made: {exc}", error=True)
             return
         save_values(values)
-        self.run = BackgroundComparison(face, arguments, folder)
-        self.form.progress.setRange(0, 0)
+        run = BackgroundComparison(face, arguments, folder)
         self.form.progress.setTextVisible(True)
-        self.show_status(self.run.message)
-        self.update_enabled()
-        self.run.start()
-        self.timer.start()
+        self.begin(run, 0, run.message)
 
     def poll(self):
         """Show the study's progress; when it has ended, echo it and open its report, or show

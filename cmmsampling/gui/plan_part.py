@@ -21,8 +21,8 @@ from ..planning.part_plan import hand_over, plan
 from ..planning.points_needed import DEFAULT_MAX_POINTS
 from ..strategies.sampling import BEST_STRATEGY, STRATEGIES
 from . import settings
-from .commands import GuardedCommand
-from .selection import SelectionError, selected_part_faces
+from .commands import PanelCommand
+from .selection import selected_part_faces
 from .task_panel import AUTO, ERROR_STYLE, BackgroundRunPanel, add_choice, snap_to_auto
 from .worker import BackgroundTask
 
@@ -268,15 +268,11 @@ class PlanPartTaskPanel(BackgroundRunPanel):
             return
         values = self.values()
         save_values(values)
-        self.run = BackgroundPlan(shape, plan_arguments(values, self.source[1]))
         self.form.faceLines.clear()
-        self.form.progress.setRange(0, len(self.source[1]))
-        self.form.progress.setValue(0)
         self.form.progress.setTextVisible(True)
-        self.show_status(f"Planning {len(self.source[1])} faces on {values['processes']} processes...")
-        self.update_enabled()
-        self.run.start()
-        self.timer.start()
+        faces = len(self.source[1])
+        self.begin(BackgroundPlan(shape, plan_arguments(values, self.source[1])), faces,
+                   f"Planning {faces} faces on {values['processes']} processes...")
 
     def poll(self):
         """Show the faces done; when the plan has ended, add it to the document or show the error."""
@@ -368,7 +364,7 @@ def argument_text(value):
     return f"cmmsampling.PROBES[{name!r}]" if name is not None else repr(value)
 
 
-class PlanPart(GuardedCommand):
+class PlanPart(PanelCommand):
     """*Plan part...*: open the plan panel for the selected faces, or every face of a selected part."""
 
     NAME = "CMMSampling_PlanPart"
@@ -381,21 +377,11 @@ class PlanPart(GuardedCommand):
         "selected in the tree): the fewest points that meet a tolerance on each face, or a total of "
         "points shared out; one group per face and a plan report")
 
-    def reason(self):
-        """Why the command cannot act now, or None."""
-        if FreeCAD.ActiveDocument is None:
-            return "Open a document with a part first."
-        if FreeCADGui.Control.activeDialog():
-            return "Close the open task panel first."
-        try:
-            selected_part_faces(FreeCADGui.Selection.getSelectionEx())
-        except SelectionError as exc:
-            return str(exc)
-        return None
+    def selected(self, selection):
+        return selected_part_faces(selection)
 
-    def act(self):
-        source = selected_part_faces(FreeCADGui.Selection.getSelectionEx())
-        FreeCADGui.Control.showDialog(PlanPartTaskPanel(source))
+    def panel(self, source):
+        return PlanPartTaskPanel(source)
 
 
 def register():

@@ -244,6 +244,17 @@ class BackgroundRunPanel:
             self.start()
         return False
 
+    def begin(self, run, total, status):
+        """Start a background run: the progress bar from 0 to ``total`` steps (0: busy), the
+        status line, the values disabled while it runs (``update_enabled``), the poll timer on."""
+        self.run = run
+        self.form.progress.setRange(0, total)
+        self.form.progress.setValue(0)
+        self.show_status(status)
+        self.update_enabled()
+        run.start()
+        self.timer.start()
+
     def source_face(self):
         """The chosen face as it is now, or None when it (or its object) is gone."""
         obj, name = self.source
@@ -555,14 +566,9 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
             return
         arguments = self.sample_arguments()
         self.run_face = face
-        self.run = BackgroundSampling(face.copy(), arguments)
         self.step, total = progress_total(arguments)
-        self.form.progress.setRange(0, total)
-        self.form.progress.setValue(0)
-        self.show_status(f"Running {sampling.STRATEGIES[arguments['strategy']].label} with N = {arguments['n']}...")
-        self.update_enabled()
-        self.run.start()
-        self.timer.start()
+        self.begin(BackgroundSampling(face.copy(), arguments), total,
+                   f"Running {sampling.STRATEGIES[arguments['strategy']].label} with N = {arguments['n']}...")
 
     def poll(self):
         """Show the run's progress; when it has ended, add the result or show the error."""

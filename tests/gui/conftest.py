@@ -16,7 +16,7 @@ else:
     import cmmsampling
     from cmmsampling.gui import settings
 
-    from .helpers import process_events
+    from .helpers import document_with, process_events
 
     ARTIFACTS = os.environ.get(
         "CMMSAMPLING_ARTIFACTS",
@@ -45,19 +45,4 @@ else:
     @pytest.fixture
     def doc(workbench):
         """A new active document holding the reference face as Part::Feature 'Body'."""
-        d = FreeCAD.newDocument("GuiTest")
-        body = d.addObject("Part::Feature", "Body")
-        body.Shape = cmmsampling.reference_face()
-        d.recompute()
-        FreeCADGui.ActiveDocument.ActiveView.viewIsometric()
-        FreeCADGui.SendMsgToActiveView("ViewFit")
-        FreeCADGui.Selection.clearSelection()
-        name = d.Name
-        yield d
-        if FreeCADGui.Control.activeDialog():
-            FreeCADGui.Control.closeDialog()
-        FreeCADGui.Selection.clearSelection()
-        if name in FreeCAD.listDocuments():
-            FreeCAD.closeDocument(name)
-        process_events(0.1)
-
+        yield from document_with("GuiTest", {"Body": cmmsampling.reference_face()})

@@ -232,3 +232,28 @@ class Hold:
     def release_after(self, seconds):
         """Release the run from another thread after ``seconds`` (while the GUI thread waits)."""
         threading.Timer(seconds, self.released.set).start()
+
+
+def document_with(name, shapes):
+    """A fixture's body: a new active document ``name`` holding a Part::Feature per (object name,
+    shape) of ``shapes``, viewed isometric and fitted, nothing selected; yielded, then closed
+    (its task panel closed first), also when the generator is closed early."""
+    import FreeCAD
+
+    d = FreeCAD.newDocument(name)
+    for object_name, shape in shapes.items():
+        d.addObject("Part::Feature", object_name).Shape = shape
+    d.recompute()
+    FreeCADGui.ActiveDocument.ActiveView.viewIsometric()
+    FreeCADGui.SendMsgToActiveView("ViewFit")
+    FreeCADGui.Selection.clearSelection()
+    opened = d.Name
+    try:
+        yield d
+    finally:
+        if FreeCADGui.Control.activeDialog():
+            FreeCADGui.Control.closeDialog()
+        FreeCADGui.Selection.clearSelection()
+        if opened in FreeCAD.listDocuments():
+            FreeCAD.closeDocument(opened)
+        process_events(0.1)

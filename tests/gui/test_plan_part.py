@@ -14,7 +14,9 @@ from PySide import QtGui
 
 from cmmsampling.gui import plan_part
 
-from .helpers import Hold, child, dock_text, main_window, process_events, task_button, wait_until, widgets
+from .helpers import (
+    Hold, child, dock_text, document_with, main_window, process_events, task_button, wait_until, widgets,
+)
 
 OK, CANCEL = QtGui.QDialogButtonBox.Ok, QtGui.QDialogButtonBox.Cancel
 # A plan small enough for a shared two-core machine: blind strategy, coarse grid.
@@ -27,22 +29,9 @@ def part_doc(workbench):
     face as 'Other'."""
     import cmmsampling
 
-    d = FreeCAD.newDocument("PlanGui")
-    d.addObject("Part::Feature", "Part").Shape = Part.Compound(
-        [rational_saddle(), holed_face(), strip_face(), rational_patch_face()])
-    d.addObject("Part::Feature", "Other").Shape = cmmsampling.reference_face()
-    d.recompute()
-    FreeCADGui.ActiveDocument.ActiveView.viewIsometric()
-    FreeCADGui.SendMsgToActiveView("ViewFit")
-    FreeCADGui.Selection.clearSelection()
-    name = d.Name
-    yield d
-    if FreeCADGui.Control.activeDialog():
-        FreeCADGui.Control.closeDialog()
-    FreeCADGui.Selection.clearSelection()
-    if name in FreeCAD.listDocuments():
-        FreeCAD.closeDocument(name)
-    process_events(0.1)
+    yield from document_with("PlanGui", {
+        "Part": Part.Compound([rational_saddle(), holed_face(), strip_face(), rational_patch_face()]),
+        "Other": cmmsampling.reference_face()})
 
 
 def plan_form():
@@ -238,3 +227,40 @@ def test_a_plan_with_a_probe_draws_its_path(part_doc, monkeypatch, artifacts):
     process_events(0.5)
     FreeCADGui.ActiveDocument.ActiveView.saveImage(os.path.join(artifacts, "plan_part_probe_path.png"), 1200, 900,
                                                    "White")
+
+
+def test_a_ventilator_plan_with_a_probe(workbench, monkeypatch, artifacts):
+    from geometry import TESTDATA
+
+    path = os.path.join(TESTDATA, "Ventilator.stp")
+    if not os.path.isfile(path):
+        pytest.skip("the shared test data (Ventilator.stp) is not here")
+    documents = document_with("VentilatorPlan", {"Ventilator": Part.read(path)})
+    doc = next(documents)
+    try:
+        hold = hold_plan_at(monkeypatch, 99)
+        for name in ("Face251", "Face11"):
+            FreeCADGui.Selection.addSelection(doc.Ventilator, name)
+        FreeCADGui.runCommand(plan_part.PlanPart.NAME)
+        assert wait_until(lambda: plan_form() is not None, 5), plan_part.PlanPart().reason()
+        form = plan_form()
+        fill(form, "uniform_parametric", tolerance=0.2, grid=20, n_max=46, processes=2)
+        probe = child(form, "probe")
+        probe.setCurrentIndex(probe.findData("2 mm ball, 20 mm stylus"))
+        task_button(OK).click()
+        assert wait_until(lambda: not FreeCADGui.Control.activeDialog(), 300), form.status.text()
+        [made] = hold.plans
+        faces = {face.name: face for face in made.faces}
+        assert not faces["Face11"].placed and "the probe reaches no point of this face" in faces["Face11"].reason
+        assert faces["Face251"].placed
+        tilted = sum(face.tilted for face in made.placed)
+        print(f"Ventilator plan: {made.n_total} points, {tilted} tilted, "
+              f"{sum(face.unreached for face in made.placed)} unreachable; Face11 refused")
+        assert doc.getObject("ProbeMoves").Shape.Edges
+        FreeCADGui.Selection.clearSelection()
+        FreeCADGui.SendMsgToActiveView("ViewFit")
+        process_events(0.5)
+        FreeCADGui.ActiveDocument.ActiveView.saveImage(os.path.join(artifacts, "plan_ventilator_probe_path.png"),
+                                                       1200, 900, "White")
+    finally:
+        documents.close()
