@@ -11,13 +11,14 @@ import FreeCAD
 import FreeCADGui
 from PySide import QtCore, QtGui
 
-from ..formats.exporting import ORDERS
 from . import icon, settings
 from .qt_compat import run_modal
 
 GLOBAL = "Global (document)"
 # Document objects that are coordinate systems; types unknown to this FreeCAD are never matched.
 FRAME_TYPES = ("PartDesign::CoordinateSystem", "Part::LocalCoordinateSystem", "App::Placement")
+# The orders offered for probe points in the document (export()'s "probe_path" needs the run's
+# reach on the part, which the document's probe points do not keep).
 ORDER_TEXTS = {"as_optimised": "As optimised",
                "short_path": "Short probe path (nearest neighbour + 2-opt)"}
 DEFAULTS = {"ExportFrame": "", "ExportProbeRadius": 0.0, "ExportOrder": "short_path"}
@@ -110,8 +111,8 @@ class ExportOptionsDialog(QtGui.QDialog):
         layout.addRow("Probe radius", self.probe_radius)
         self.order = QtGui.QComboBox(self)
         self.order.setObjectName("order")
-        for name in ORDERS:
-            self.order.addItem(ORDER_TEXTS[name], name)
+        for name, text in ORDER_TEXTS.items():
+            self.order.addItem(text, name)
         self.order.setCurrentIndex(max(self.order.findData(stored["ExportOrder"]), 0))
         self.order.setToolTip(
             "As optimised: the order of the sampling result (P1, P2, ...). Short probe path: the "
