@@ -87,14 +87,14 @@ class Obstacles:
         inside = (along >= -self.margin) & (along <= length[cylinder] + self.margin) & (across <= radii[cylinder])
         return np.bincount(piece, weights=inside, minlength=len(centres)) > 0
 
-    def exit_distance(self, starts, axes, grow):
-        """How far along axes (M, 3) unit the points starts (M, 3) leave the part's box grown by
-        ``grow`` mm: (M,) mm (0 for a start already outside)."""
+    def exits(self, starts, axes, grow):
+        """(lengths (M,) mm, points (M, 3) mm): how far along axes (M, 3) unit the starts (M, 3)
+        leave the part's box grown by ``grow`` mm (0 for a start already outside), and where."""
         low, high = self.box[0] - grow, self.box[1] + grow
         with np.errstate(divide="ignore", invalid="ignore"):
             far = np.where(axes > 0, (high - starts) / axes, np.where(axes < 0, (low - starts) / axes, np.inf))
-        return np.maximum(far.min(axis=1), 0.0)
-
+        lengths = np.maximum(far.min(axis=1), 0.0)
+        return lengths, starts + lengths[:, None] * axes
 
 def along_segments(starts, ends, steps):
     """Points along segments from starts (M, 3) to ends (M, 3), at most steps (M,) apart, both

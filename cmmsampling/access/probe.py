@@ -64,6 +64,17 @@ class Probe:
         """From the ball centre to the end of the body, mm."""
         return self.stylus_length + self.body_length
 
+    @property
+    def stylus_start(self):
+        """Where the stylus leaves the ball, mm along the axis from the ball centre."""
+        return float(np.sqrt(max(self.radius ** 2 - (0.5 * self.stylus_diameter) ** 2, 0.0)))
+
+    def stations(self, points, normals):
+        """(centres, ready) (N, 3) mm: the ball centres touching points (N, 3) with normals (N, 3)
+        unit, c = p + r n, and the ready positions ``approach`` mm out along the normals."""
+        centres = points + self.radius * normals
+        return centres, centres + self.approach * normals
+
     def with_values(self, **values):
         """A copy with some values changed (checked again)."""
         return replace(self, **values)

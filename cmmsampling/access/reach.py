@@ -51,27 +51,25 @@ class Access:
         return self.reachable & (self.ranks > 0)
 
 
-def pose_pieces(probe, obstacles, points, normals, axes):
-    """What a probe touching points (M, 3) with normals (M, 3) along axes (M, 3) must keep clear:
-    (sweeps, cylinders), each (starts, ends, radii, owner) with owner the pose of each piece.
+def pose_pieces(probe, centres, ready, axes, exits):
+    """What a probe touching at ball centres (M, 3) from ready positions (M, 3) along axes (M, 3)
+    must keep clear, leaving ``exits`` (M,) mm along the axis (Probe.stations,
+    Obstacles.exits): (sweeps, cylinders), each (starts, ends, radii, owner) with owner the pose
+    of each piece.
 
     sweeps: the ball's exit along the axis (its touch, which no axis changes, is
     :func:`touch_blocked`); cylinders: the stylus and the body at the contact, and their sweeps
     along the axis on the exit.
     """
-    r = probe.radius
-    centres = points + r * normals
-    ready = centres + probe.approach * normals
-    exits = obstacles.exit_distance(ready, axes, r + probe.clearance)[:, None]
     stylus_r, body_r = 0.5 * probe.stylus_diameter, 0.5 * probe.body_diameter
-    inside = np.sqrt(max(r * r - stylus_r * stylus_r, 0.0))
-    length, reach_ = probe.stylus_length, probe.reach
-    sweeps = [(ready, ready + exits * axes, r)]
-    cylinders = [(centres + inside * axes, centres + length * axes, stylus_r),
+    start, length, reach_ = probe.stylus_start, probe.stylus_length, probe.reach
+    exits = exits[:, None]
+    sweeps = [(ready, ready + exits * axes, probe.radius)]
+    cylinders = [(centres + start * axes, centres + length * axes, stylus_r),
                  (centres + length * axes, centres + reach_ * axes, body_r),
-                 (ready + inside * axes, ready + (length + exits) * axes, stylus_r),
+                 (ready + start * axes, ready + (length + exits) * axes, stylus_r),
                  (ready + length * axes, ready + (reach_ + exits) * axes, body_r)]
-    return _stacked(sweeps, len(points)), _stacked(cylinders, len(points))
+    return _stacked(sweeps, len(axes)), _stacked(cylinders, len(axes))
 
 
 def _stacked(pieces, count):
@@ -83,30 +81,24 @@ def _stacked(pieces, count):
 def touch_blocked(probe, obstacles, points, normals):
     """(M,) bool: points whose ball cannot touch them from ``approach`` mm out along the normal
     without cutting into the part elsewhere, whatever the axis (see :func:`pose_pieces`)."""
-    r = probe.radius
-    centres = points + r * normals
-    return obstacles.swept_blocked(centres, centres + probe.approach * normals, r - obstacles.deflection - 1e-3,
-                                   margin=False)
+    centres, ready = probe.stations(points, normals)
+    return obstacles.swept_blocked(centres, ready, probe.radius - obstacles.deflection - 1e-3, margin=False)
 
 
 def poses_blocked(probe, obstacles, points, normals, axes):
-    """(M,) bool: the probe poses (see :func:`pose_pieces`) that the part blocks on the way out."""
+    """(M,) bool: the probe poses (see :func:`pose_pieces`) that the part blocks on the way out,
+    or whose way out leaves the part's box through its bottom (the clearance plane above could
+    not be reached from there)."""
+    centres, ready = probe.stations(points, normals)
+    grow = probe.radius + probe.clearance
+    lengths, exits = obstacles.exits(ready, axes, grow)
     (s_starts, s_ends, s_radii, s_owner), (c_starts, c_ends, c_radii, c_owner) = pose_pieces(
-        probe, obstacles, points, normals, axes)
+        probe, centres, ready, axes, lengths)
     swept = obstacles.swept_blocked(s_starts, s_ends, s_radii)
     blocked = np.bincount(s_owner, weights=swept, minlength=len(points)) > 0
     cylinders = obstacles.cylinders_blocked(c_starts, c_ends, c_radii)
-    return blocked | (np.bincount(c_owner, weights=cylinders, minlength=len(points)) > 0) | _leave_below(
-        probe, obstacles, points, normals, axes)
-
-
-def _leave_below(probe, obstacles, points, normals, axes):
-    """(M,) bool: poses whose way out along the axis leaves the part's box through its bottom
-    (the clearance plane above could not be reached from there)."""
-    grow = probe.radius + probe.clearance
-    ready = points + (probe.radius + probe.approach) * normals
-    exits = ready + obstacles.exit_distance(ready, axes, grow)[:, None] * axes
-    return exits[:, 2] <= obstacles.box[0, 2] - grow + 1e-9
+    below = exits[:, 2] <= obstacles.box[0, 2] - grow + 1e-9
+    return blocked | (np.bincount(c_owner, weights=cylinders, minlength=len(points)) > 0) | below
 
 
 def reach(probe, obstacles, points, normals):

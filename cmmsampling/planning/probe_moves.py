@@ -68,11 +68,9 @@ def moves_through(probe, obstacles, points, normals, axes, motion=None):
     (default Motion()). Returns ProbeMoves."""
     points, normals, axes = (np.asarray(v, dtype=float).reshape(-1, 3) for v in (points, normals, axes))
     motion = motion or Motion()
-    r = probe.radius
-    centres = points + r * normals
-    ready = centres + probe.approach * normals
-    exits = ready + obstacles.exit_distance(ready, axes, r + probe.clearance)[:, None] * axes
-    plane = obstacles.box[1, 2] + r + probe.clearance
+    centres, ready = probe.stations(points, normals)
+    exits = obstacles.exits(ready, axes, probe.radius + probe.clearance)[1]
+    plane = obstacles.box[1, 2] + probe.radius + probe.clearance
     above = np.column_stack([exits[:, :2], np.maximum(exits[:, 2], plane)])
     direct = _direct_moves(probe, obstacles, ready, axes)
     lengths = _travel_lengths(ready, exits, above, direct)
@@ -152,9 +150,8 @@ def _poses_blockedalong_segments(probe, obstacles, starts, ends, axes):
     """(M,) bool: moves from starts to ends (M, 3) of a probe on axes (M, 3) whose stylus or body,
     grown by the clearance, meets the part at a pose along the move (POSE_STEP mm apart)."""
     positions, owner, _ = along_segments(starts, ends, np.full(len(starts), POSE_STEP))
-    inside = np.sqrt(max(probe.radius ** 2 - (0.5 * probe.stylus_diameter) ** 2, 0.0))
     along = axes[owner]
-    pieces = [(positions + inside * along, positions + probe.stylus_length * along,
+    pieces = [(positions + probe.stylus_start * along, positions + probe.stylus_length * along,
                0.5 * probe.stylus_diameter + probe.clearance),
               (positions + probe.stylus_length * along, positions + probe.reach * along,
                0.5 * probe.body_diameter + probe.clearance)]

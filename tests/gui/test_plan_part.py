@@ -83,6 +83,25 @@ def hold_plan_at(monkeypatch, faces_done):
     return hold
 
 
+def plan_with_probe(monkeypatch, obj, faces, timeout_s, **values):
+    """Select obj's faces, plan them with uniform parametric sampling, the panel's ``values`` and
+    the 2 mm x 20 mm probe, wait until the panel closes; returns the plan made."""
+    hold = hold_plan_at(monkeypatch, 99)
+    FreeCADGui.Selection.clearSelection()
+    for name in faces:
+        FreeCADGui.Selection.addSelection(obj, name)
+    FreeCADGui.runCommand(plan_part.PlanPart.NAME)
+    assert wait_until(lambda: plan_form() is not None, 5), plan_part.PlanPart().reason()
+    form = plan_form()
+    fill(form, "uniform_parametric", **values)
+    probe = child(form, "probe")
+    probe.setCurrentIndex(probe.findData("2 mm ball, 20 mm stylus"))
+    task_button(OK).click()
+    assert wait_until(lambda: not FreeCADGui.Control.activeDialog(), timeout_s), form.status.text()
+    [made] = hold.plans
+    return made
+
+
 def test_the_command_takes_faces_of_one_part_or_a_whole_part(part_doc, artifacts):
     form = open_plan(part_doc)
     assert form.partLabel.text() == "Part: all 4 faces"
@@ -198,19 +217,7 @@ def test_a_plan_with_a_probe_draws_its_path(part_doc, monkeypatch, artifacts):
     part_doc.recompute()
     upward = [f"Face{k}" for k, face in enumerate(walled.Shape.Faces, start=1)
               if face.normalAt(*face.Surface.parameter(face.CenterOfMass)).z > 0.5]
-    hold = hold_plan_at(monkeypatch, 99)
-    FreeCADGui.Selection.clearSelection()
-    for name in upward:
-        FreeCADGui.Selection.addSelection(walled, name)
-    FreeCADGui.runCommand(plan_part.PlanPart.NAME)
-    assert wait_until(lambda: plan_form() is not None, 5), plan_part.PlanPart().reason()
-    form = plan_form()
-    fill(form, "uniform_parametric", tolerance=0.5, grid=20, n_max=60, processes=1)
-    probe = child(form, "probe")
-    probe.setCurrentIndex(probe.findData("2 mm ball, 20 mm stylus"))
-    task_button(OK).click()
-    assert wait_until(lambda: not FreeCADGui.Control.activeDialog(), 240), form.status.text()
-    [made] = hold.plans
+    made = plan_with_probe(monkeypatch, walled, upward, 240, tolerance=0.5, grid=20, n_max=60, processes=1)
     assert made.probe is PROBES["2 mm ball, 20 mm stylus"] and sum(face.tilted for face in made.placed) > 0
     assert "probe=cmmsampling.PROBES['2 mm ball, 20 mm stylus'])  # ran in the task panel" in dock_text(
         "Python console")
@@ -238,18 +245,8 @@ def test_a_ventilator_plan_with_a_probe(workbench, monkeypatch, artifacts):
     documents = document_with("VentilatorPlan", {"Ventilator": Part.read(path)})
     doc = next(documents)
     try:
-        hold = hold_plan_at(monkeypatch, 99)
-        for name in ("Face251", "Face11"):
-            FreeCADGui.Selection.addSelection(doc.Ventilator, name)
-        FreeCADGui.runCommand(plan_part.PlanPart.NAME)
-        assert wait_until(lambda: plan_form() is not None, 5), plan_part.PlanPart().reason()
-        form = plan_form()
-        fill(form, "uniform_parametric", tolerance=0.2, grid=20, n_max=46, processes=2)
-        probe = child(form, "probe")
-        probe.setCurrentIndex(probe.findData("2 mm ball, 20 mm stylus"))
-        task_button(OK).click()
-        assert wait_until(lambda: not FreeCADGui.Control.activeDialog(), 300), form.status.text()
-        [made] = hold.plans
+        made = plan_with_probe(monkeypatch, doc.Ventilator, ["Face251", "Face11"], 300, tolerance=0.2, grid=20,
+                               n_max=46, processes=2)
         faces = {face.name: face for face in made.faces}
         assert not faces["Face11"].placed and "the probe reaches no point of this face" in faces["Face11"].reason
         assert faces["Face251"].placed
