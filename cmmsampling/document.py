@@ -18,11 +18,13 @@ from xml.etree import ElementTree
 
 import numpy as np
 
+from .access.obstacles import Obstacles
+from .access.probe import Probe
 from .formats.pointset import PointSet
 from .geometry.freecad_env import import_part
 from .geometry.surface import SurfaceModel
 from .object_types import PROBE_POINTS, SUBSTITUTE_SURFACE, is_probe_points, source_face
-from .planning.probe_moves import probe_moves
+from .planning.probe_moves import moves_through, probe_moves
 from .strategies.sampling import evaluate
 
 Part = import_part()
@@ -78,9 +80,10 @@ def add_to_document(result, doc, source=None, hide_source=False, hide_others=Tru
     return group
 
 
-def _fill_result_group(group, result, source):
+def _fill_result_group(group, result, source, with_path=True):
     """Add a result's probe points, substitute surface and deviation report to ``group`` (inside a
-    transaction); returns the three objects."""
+    transaction), and its probe path when it was run with the part and ``with_path`` (a plan
+    draws one path through all its faces instead); returns the objects."""
     doc = group.Document
     surface = make_substitute_surface(doc)
     report = doc.addObject("Spreadsheet::Sheet", "DeviationReport")
@@ -89,7 +92,7 @@ def _fill_result_group(group, result, source):
     group.addObjects([points, surface, report])
     write_result(points, result, dict(result.settings), result.timings.get("total_s", 0.0))
     paths = []
-    if result.access is not None and result.access.reachable.all():
+    if with_path and result.access is not None and result.access.reachable.all():
         paths = make_probe_path(doc, probe_moves(result))
         group.addObjects(paths)
     return [points, surface, report] + paths
@@ -142,7 +145,7 @@ def add_plan_to_document(plan, doc, part, hide_others=True):
             face_group = doc.addObject("App::DocumentObjectGroup", "Sampling")
             face_group.Label = _group_label(result, source)
             group.addObject(face_group)
-            objects += _fill_result_group(face_group, result, source)
+            objects += _fill_result_group(face_group, result, source, with_path=False)
         sheet = doc.addObject("Spreadsheet::Sheet", "PlanReport")
         sheet.Label = "Plan report"
         group.addObject(sheet)
@@ -263,16 +266,30 @@ def write_result(points, result, settings, run_time_s):
     points.Parameters = json.dumps(settings, default=_json_value)
     points.RunTime = float(run_time_s)
     points.Cancelled = bool(result.cancelled)
-    if not hasattr(points, "Notes"):  # made before notes were kept
-        points.addProperty("App::PropertyStringList", "Notes", "Sampling", NOTES_DOC)
-        points.setEditorMode("Notes", 1)
+    ProbePoints.add_properties(points)
     points.Notes = list(result.notes)
+    write_access(points, result.access, result.settings.get("probe"))
     for prop, attribute, _ in SUMMARY_FIGURES:
         setattr(points, prop, float(getattr(result.deviation, attribute)))
     if points.Substitute is not None:
         write_substitute(points.Substitute, result)
     if points.Report is not None:
         write_report(points.Report, points)
+
+
+def write_access(points, access, probe):
+    """The probe's reach of a run made with the part (access: cmmsampling.access.reach.Access,
+    probe: the Probe's settings as a dict) into the probe points: the axis used at each point,
+    the probe (JSON) and the regions of the face it cannot reach; emptied for a run without."""
+    if access is None:
+        points.Axes, points.Tilted, points.Probe, points.Unreached, points.UnreachedArea = [], [], "", [], 0.0
+        return
+    points.Axes = [FreeCAD.Vector(*a) for a in np.asarray(access.axes, dtype=float)]
+    points.Tilted = [bool(t) for t in access.tilted]
+    points.Probe = json.dumps(probe or {}, default=_json_value)
+    rectangles = np.zeros((0, 4)) if access.unreached is None else np.asarray(access.unreached, dtype=float)
+    points.Unreached = [float(x) for x in rectangles.ravel()]
+    points.UnreachedArea = float(access.unreached_area)
 
 
 def make_probe_points(doc, source=None, surface=None, report=None):
@@ -365,14 +382,36 @@ def summary_rows(points):
         ("OCC max deviation (mm)", points.OccMaxDeviation.Value, "occ_max_mm"),
         ("Sampling time (s)", points.RunTime, "time_s"),
         ("Cancelled", "yes" if points.Cancelled else "no"),
+    ] + reach_rows(points)
+
+
+def reach_rows(points):
+    """The report's rows on the probe's reach, for points sampled with the part: the points
+    reached with the stylus tilted, those it cannot reach, and the face's area out of reach."""
+    if not getattr(points, "Probe", ""):
+        return []
+    reached = np.isfinite(np.array([tuple(a) for a in points.Axes], dtype=float)).all(axis=1)
+    return [
+        ("Probe", probe_text(json.loads(points.Probe))),
+        ("Points reached tilted", int(sum(points.Tilted)), "tilted"),
+        ("Points the probe cannot reach", int(np.count_nonzero(~reached)), "unreached"),
+        ("Area out of reach (mm^2)", points.UnreachedArea.Value, "unreached_mm2"),
     ]
 
 
+def probe_text(probe):
+    """A probe's settings (dict of cmmsampling.Probe's fields) in words: 'ball 2 mm, stylus 20 x
+    1.5 mm, ...'."""
+    return (f"ball {probe.get('ball_diameter', 0):g} mm, stylus {probe.get('stylus_length', 0):g} x "
+            f"{probe.get('stylus_diameter', 0):g} mm, tilt up to {probe.get('max_tilt', 0):g} deg")
+
+
 def parameter_rows(points):
-    """The run's parameters other than strategy and N: rows (name with its unit, value)."""
+    """The run's parameters other than strategy, N and the probe (:func:`reach_rows` says it):
+    rows (name with its unit, value)."""
     settings = json.loads(points.Parameters)
     return [(PARAMETER_NAMES.get(key, key.replace("_", " ").capitalize()), _parameter_text(value))
-            for key, value in settings.items() if key not in ("strategy", "n")]
+            for key, value in settings.items() if key not in ("strategy", "n", "probe")]
 
 
 def note_rows(points):
@@ -439,7 +478,8 @@ class ProbePoints(TypedProxy):
 
     @staticmethod
     def add_properties(obj):
-        """Create the properties (read-only where they come from a run)."""
+        """Create the properties it lacks (read-only where they come from a run): all of them for
+        a new object, those added since for one made by an earlier version."""
         points = [
             ("App::PropertyStringList", "Labels", "Point labels P1..PN"),
             ("App::PropertyVectorList", "Points", "Probe points on the face (mm)"),
@@ -457,6 +497,17 @@ class ProbePoints(TypedProxy):
             ("App::PropertyBool", "Cancelled", "The run was stopped early (best points so far)"),
             ("App::PropertyStringList", "Notes", NOTES_DOC),
         ]
+        reach = [
+            ("App::PropertyVectorList", "Axes",
+             "The probe's axis at each point, ball towards head (NaN where it cannot reach); empty when "
+             "the run did not know the part"),
+            ("App::PropertyBoolList", "Tilted",
+             "Points reached only with the stylus tilted (the head's orientation nearest the normal is blocked)"),
+            ("App::PropertyString", "Probe", "The probe whose reach was judged (JSON), empty when none"),
+            ("App::PropertyFloatList", "Unreached",
+             "Regions of the face the probe cannot reach, as parameter rectangles u0, u1, v0, v1 in turn"),
+            ("App::PropertyArea", "UnreachedArea", "Area of the face the probe cannot reach (mm^2)"),
+        ]
         status = [
             ("App::PropertyString", "SourceName", "The sampled face when the points were made"),
             ("App::PropertyBool", "Orphaned", "The source face was deleted"),
@@ -464,16 +515,19 @@ class ProbePoints(TypedProxy):
              "The source face no longer passes through the points; run Re-evaluate"),
             ("App::PropertyString", "Status", "Whether the points still match their face"),
         ]
-        for group, props in (("Probe points", points), ("Sampling", sampling), ("Source", status)):
+        figures = [("App::PropertyLength", prop, doc + " (mm)") for prop, _, doc in SUMMARY_FIGURES]
+        for group, props in (("Probe points", points), ("Sampling", sampling), ("Probe reach", reach),
+                             ("Source", status), ("Deviation", figures)):
             for kind, name, doc in props:
+                if name not in obj.PropertiesList:
+                    obj.addProperty(kind, name, group, doc)
+                    obj.setEditorMode(name, 1)
+        for name, kind, group, doc in (
+                ("Source", "App::PropertyLinkSubGlobal", "Source", "The sampled face"),
+                ("Substitute", "App::PropertyLink", "Results", "The substitute surface"),
+                ("Report", "App::PropertyLink", "Results", "The deviation report sheet")):
+            if name not in obj.PropertiesList:
                 obj.addProperty(kind, name, group, doc)
-                obj.setEditorMode(name, 1)
-        for prop, _, doc in SUMMARY_FIGURES:
-            obj.addProperty("App::PropertyLength", prop, "Deviation", doc + " (mm)")
-            obj.setEditorMode(prop, 1)
-        obj.addProperty("App::PropertyLinkSubGlobal", "Source", "Source", "The sampled face")
-        obj.addProperty("App::PropertyLink", "Substitute", "Results", "The substitute surface")
-        obj.addProperty("App::PropertyLink", "Report", "Results", "The deviation report sheet")
 
     def execute(self, obj):
         """Shape: a compound of the points as vertices; Status: whether the face still fits."""
@@ -503,6 +557,7 @@ class ProbePoints(TypedProxy):
                 ("MaxDeviation", "max_mm"), ("MeanDeviation", "mean_mm"), ("RmsDeviation", "rms_mm"),
                 ("StdDeviation", "std_mm"), ("OccMaxDeviation", "occ_max_mm"))},
         }
+        axes = [tuple(a) for a in getattr(obj, "Axes", [])]
         return PointSet(
             labels=list(obj.Labels),
             points=np.array([tuple(p) for p in obj.Points], dtype=float).reshape(-1, 3),
@@ -510,7 +565,26 @@ class ProbePoints(TypedProxy):
             uv=np.column_stack([obj.U, obj.V]).reshape(-1, 2),
             deviation=np.array(obj.Deviation, dtype=float),
             metadata=metadata,
+            axes=np.array(axes, dtype=float) if len(axes) == len(obj.Labels) and axes else None,
         )
+
+
+    def probe_moves(self, obj, motion=None):
+        """The collision-free probe path through the points (cmmsampling.planning.probe_moves.
+        ProbeMoves) on their source object's shape, with the probe and axes of their run; motion:
+        the CMM's speeds (cmmsampling.access.probe.Motion). ValueError naming what is missing:
+        points sampled without the part, points the probe cannot reach, a deleted source."""
+        if not getattr(obj, "Probe", "") or len(obj.Axes) != len(obj.Labels):
+            raise ValueError(f"{obj.Label} were sampled without the part, so they have no probe axes: sample "
+                             "the face again with the part (and a probe), or export with order='short_path'")
+        point_set = self.point_set(obj)
+        if not np.isfinite(point_set.axes).all():
+            raise ValueError(f"the probe cannot reach some of {obj.Label}: export with order='short_path'")
+        if obj.Source is None:
+            raise ValueError(f"the part of {obj.Label} was deleted; a probe path needs it to keep clear of")
+        probe = Probe(**json.loads(obj.Probe))
+        return moves_through(probe, Obstacles(obj.Source[0].Shape), point_set.points, point_set.normals,
+                             point_set.axes, motion)
 
 
 class SubstituteSurface(TypedProxy):

@@ -3,6 +3,8 @@ here with Part: a deep narrow slot, a floor under an overhang, a floor beside a 
 
 The checks use OCC directly (the probe built here as solids from its dimensions, distToShape),
 not the code under test."""
+import json
+
 import numpy as np
 import pytest
 from geometry import FreeCAD, Part
@@ -168,8 +170,22 @@ def test_every_travel_move_keeps_the_clearance_and_the_path_is_short(name, reque
 def test_sampling_with_the_part_keeps_to_what_the_probe_reaches(slot):
     floor = floor_of(slot, 15.0)
     result = cmmsampling.sample(floor, 16, "halton", part=slot, grid=20)
-    assert result.access.reachable.all() and not result.notes
+    assert result.access.reachable.all()
     assert np.abs(result.points[:, 1] - 20.0).max() < 2.0
+    rectangles = result.access.unreached
+    area = float(np.prod(rectangles[:, 1::2] - rectangles[:, 0::2], axis=1).sum())
+    assert result.access.unreached_area == pytest.approx(area) and 0.5 * floor.Area < area < floor.Area
+    assert result.notes == [f"the probe cannot reach {area:.4g} mm^2 of the face ({100 * area / floor.Area:.3g} %) "
+                            "without touching the part elsewhere: no point was placed there"]
+
+    def inside(uv):
+        return ((rectangles[:, 0] <= uv[0]) & (uv[0] <= rectangles[:, 1])
+                & (rectangles[:, 2] <= uv[1]) & (uv[1] <= rectangles[:, 3])).any()
+
+    assert not any(inside(floor.Surface.parameter(vector(p))) for p in result.points)
+    for x, y in ((10.0, 17.5), (30.0, 22.5), (50.0, 17.6)):
+        assert inside(floor.Surface.parameter(vector((x, y, 15.0))))
+        assert occ_gaps(slot, (x, y, 15.0), UP, UP)[0] < 0.0
     for point, normal, axis in zip(result.points, result.normals, result.access.axes):
         ball, rest = occ_gaps(slot, point, normal, axis)
         assert ball > -1e-6 and rest > 0.0
@@ -225,11 +241,25 @@ def test_a_plan_with_a_probe_keeps_to_its_reach_and_writes_one_path(beside_wall,
     report = cmmsampling.export(plan, tmp_path / "part.dmi", order="probe_path")
     text = (tmp_path / "part.dmi").read_text()
     assert dmis_syntax.check(text) == [] and "GOTO/" in text and report.count == plan.n_total
+    from geometry import closed
+
+    doc = FreeCAD.newDocument("PlanReach")
+    try:
+        part = doc.addObject("Part::Feature", "Part")
+        part.Shape = beside_wall
+        doc.recompute()
+        group = cmmsampling.add_plan_to_document(plan, doc, part)
+        kept = cmmsampling.document.probe_points_in(group.Group)
+        for face, points in zip(plan.placed, kept):
+            np.testing.assert_allclose([tuple(a) for a in points.Axes], face.axes)
+            assert sum(points.Tilted) == face.tilted and points.Report.get("tilted") == face.tilted
+    finally:
+        closed("PlanReach")
     with pytest.raises(ValueError, match="give probe="):
         cmmsampling.plan(beside_wall, tolerance=0.5, part=beside_wall)
 
 
-def test_the_document_draws_the_path_in_two_objects(beside_wall):
+def test_the_document_keeps_the_reach_and_draws_the_path_in_two_objects(beside_wall, tmp_path):
     from geometry import closed
 
     index = next(k for k, face in enumerate(beside_wall.Faces, start=1)
@@ -248,7 +278,29 @@ def test_the_document_draws_the_path_in_two_objects(beside_wall):
         touches = doc.getObject("ProbeTouches").Shape.Edges
         assert len(touches) == 2 * result.n
         assert doc.getObject("ProbeMoves").Shape.Length == pytest.approx(moves.travel, rel=1e-9)
+        points, report = group.Group[0], group.Group[2]
+        np.testing.assert_allclose([tuple(a) for a in points.Axes], result.access.axes)
+        assert list(points.Tilted) == list(result.access.tilted) and any(points.Tilted)
+        assert json.loads(points.Probe) == result.settings["probe"]
+        np.testing.assert_allclose(np.reshape(points.Unreached, (-1, 4)), result.access.unreached)
+        assert points.UnreachedArea.Value == pytest.approx(result.access.unreached_area)
+        assert report.get("tilted") == int(result.access.tilted.sum()) and report.get("unreached") == 0
+        assert report.get("unreached_mm2") == pytest.approx(result.access.unreached_area)
+        for source, name in ((result, "result.dmi"), (points, "document.dmi")):
+            cmmsampling.export(source, tmp_path / name, order="probe_path")
+        assert (tmp_path / "document.dmi").read_text().count("GOTO/") > result.n
+        assert gotos(tmp_path / "document.dmi") == gotos(tmp_path / "result.dmi")
         doc.undo()
         assert doc.getObject("ProbeMoves") is None and [o.Name for o in doc.Objects] == ["Body"]
+        plain = cmmsampling.add_to_document(cmmsampling.sample(beside_wall.Faces[index - 1], 9, "halton", grid=20),
+                                            doc, source=(body, f"Face{index}")).Group[0]
+        assert not plain.Probe and not plain.Axes and not plain.Unreached
+        with pytest.raises(ValueError, match="sampled without the part"):
+            cmmsampling.export(plain, tmp_path / "plain.dmi", order="probe_path")
     finally:
         closed("ProbePathDocument")
+
+
+def gotos(path):
+    """The GOTO lines of a DMIS file."""
+    return [line for line in path.read_text().splitlines() if line.startswith("GOTO/")]

@@ -36,13 +36,17 @@ class Access:
     each reachable point (NaN where none); tilts (N,) degrees between axis and normal; angles
     (N, 2) head angles A, B in degrees (see :func:`cmmsampling.access.probe.head_angles`); ranks
     (N,) int, which of the head's orientations nearest the normal reached it (0: the nearest,
-    -1: none)."""
+    -1: none); unreached: (K, 4) parameter rectangles (u0, u1, v0, v1) of the face where the
+    probe reaches no point, so none was placed there (cmmsampling.geometry.domain), None when
+    not judged; unreached_area: their area, mm^2."""
 
     reachable: np.ndarray
     axes: np.ndarray
     tilts: np.ndarray
     angles: np.ndarray
     ranks: np.ndarray
+    unreached: np.ndarray = None
+    unreached_area: float = 0.0
 
     @property
     def tilted(self):

@@ -44,16 +44,20 @@ class FaceDomain:
     upper: (2,) corners of the box holding every feasible point; feasible_area: mm^2 of the
     feasible cells (the face's area when exact); reach: mm, the largest edge offset that some
     cell keeps by the conservative measure; margin: mm, how much farther from the edges a point
-    of the face may lie than that measure says (0 when exact).
+    of the face may lie than that measure says (0 when exact); unreached: (R_u, R_v) bool, the
+    cells that keep the edge offset but a probe cannot reach (None when no probe was asked);
+    unreached_area: mm^2 of those cells.
     """
 
     def __init__(self, bounds, trimmed=False, edge_offset=0.0, on_face=None, feasible=None, area=None,
-                 loops=None, reach=np.inf, margin=0.0):
+                 loops=None, reach=np.inf, margin=0.0, unreached=None, unreached_area=0.0):
         self.bounds = tuple(float(b) for b in bounds)
         self.trimmed = trimmed
         self.edge_offset = float(edge_offset)
         self.reach = float(reach)
         self.margin = float(margin)
+        self.unreached = unreached
+        self.unreached_area = float(unreached_area)
         self.shape = np.array(feasible.shape if feasible is not None else (1, 1))
         self._on_face = on_face
         self._loops = loops if trimmed else None
@@ -144,6 +148,13 @@ class FaceDomain:
         centres = low + (target + 0.5) * (high - low) / self.shape
         return np.where(ok[..., None], clipped, centres)
 
+    def unreached_rectangles(self):
+        """(K, 4) rectangles (u0, u1, v0, v1) covering the unreached cells (see
+        :func:`cell_rectangles`); (0, 4) without any or without a probe."""
+        if self.unreached is None:
+            return np.zeros((0, 4))
+        return cell_rectangles(self.bounds, self.unreached)
+
     def from_unit(self, unit):
         """Map points of the unit square, (..., 2) in [0, 1]^2, onto the feasible box."""
         return self.lower + np.asarray(unit, dtype=float) * (self.upper - self.lower)
@@ -171,13 +182,37 @@ def face_domain(model, edge_offset=0.0, reachable=None):
     gap = max(float(np.linalg.norm(np.diff(loop, axis=0), axis=1).max(initial=0.0)) for loop in samples)
     clearance = distance - 0.5 * gap - half_diagonals
     feasible = on_face & (clearance >= edge_offset)
-    if reachable is not None:
-        feasible &= reachable_cells(model, feasible, reachable)
     cell_areas = _cell_areas(points)
+    unreached = None
+    if reachable is not None:
+        unreached = feasible & ~reachable_cells(model, feasible, reachable)
+        feasible &= ~unreached
     reach = float(clearance[on_face].max(initial=0.0))
     margin = 0.5 * gap + 2.0 * float(half_diagonals[on_face].max(initial=0.0))
     return FaceDomain(model.bounds, trimmed, edge_offset, on_face, feasible,
-                      float(cell_areas[feasible].sum()), loops, reach, margin)
+                      float(cell_areas[feasible].sum()), loops, reach, margin, unreached,
+                      0.0 if unreached is None else float(cell_areas[unreached].sum()))
+
+
+def cell_rectangles(bounds, cells):
+    """Parameter rectangles covering the True cells of a raster: (K, 4) rows (u0, u1, v0, v1).
+
+    bounds: (u0, u1, v0, v1) of the raster; cells: (R_u, R_v) bool. Each row's runs of True
+    cells along v make rectangles, and a run repeated in the next rows joins them, so that a
+    region takes few rectangles (a drawing's, a file's).
+    """
+    cells = np.asarray(cells, dtype=bool)
+    padded = np.pad(cells, ((0, 0), (1, 1))).astype(np.int8)
+    rows, edges = np.nonzero(np.diff(padded, axis=1))
+    runs = np.column_stack([rows[0::2], edges[0::2], edges[1::2]])
+    runs = runs[np.lexsort((runs[:, 0], runs[:, 2], runs[:, 1]))]
+    joins = ((np.diff(runs[:, 0]) == 1) & (np.diff(runs[:, 1]) == 0) & (np.diff(runs[:, 2]) == 0))
+    firsts = np.flatnonzero(np.concatenate([[True], ~joins])) if len(runs) else np.zeros(0, int)
+    lasts = np.concatenate([firsts[1:] - 1, [len(runs) - 1]]) if len(runs) else np.zeros(0, int)
+    u0, u1, v0, v1 = bounds
+    du, dv = (u1 - u0) / cells.shape[0], (v1 - v0) / cells.shape[1]
+    return np.column_stack([u0 + runs[firsts, 0] * du, u0 + (runs[lasts, 0] + 1) * du,
+                            v0 + runs[firsts, 1] * dv, v0 + runs[firsts, 2] * dv])
 
 
 def reachable_cells(model, feasible, reachable):

@@ -17,10 +17,11 @@ from .qt_compat import run_modal
 GLOBAL = "Global (document)"
 # Document objects that are coordinate systems; types unknown to this FreeCAD are never matched.
 FRAME_TYPES = ("PartDesign::CoordinateSystem", "Part::LocalCoordinateSystem", "App::Placement")
-# The orders offered for probe points in the document (export()'s "probe_path" needs the run's
-# reach on the part, which the document's probe points do not keep).
+# The orders offered for probe points in the document; "probe_path" only for points sampled with
+# the part, whose probe reaches every one.
 ORDER_TEXTS = {"as_optimised": "As optimised",
-               "short_path": "Short probe path (nearest neighbour + 2-opt)"}
+               "short_path": "Short probe path (nearest neighbour + 2-opt)",
+               "probe_path": "Collision-free probe path (moves around the part)"}
 DEFAULTS = {"ExportFrame": "", "ExportProbeRadius": 0.0, "ExportOrder": "short_path"}
 MAX_RADIUS_MM = 100.0
 RADIUS_DECIMALS = 3
@@ -72,9 +73,10 @@ def show_export_report(report):
 
 class ExportOptionsDialog(QtGui.QDialog):
     """The export options for probe points of a document, starting from the stored values.
-    title: what is exported, for the window title."""
+    title: what is exported, for the window title; probe_path: offer the collision-free probe
+    path (the points were sampled with the part and the probe reaches them all)."""
 
-    def __init__(self, doc, title, parent=None):
+    def __init__(self, doc, title, parent=None, probe_path=False):
         super().__init__(parent)
         self.setObjectName("ExportOptions")
         self.setWindowTitle(f"Export options: {title}")
@@ -112,12 +114,17 @@ class ExportOptionsDialog(QtGui.QDialog):
         self.order = QtGui.QComboBox(self)
         self.order.setObjectName("order")
         for name, text in ORDER_TEXTS.items():
-            self.order.addItem(text, name)
-        self.order.setCurrentIndex(max(self.order.findData(stored["ExportOrder"]), 0))
+            if name != "probe_path" or probe_path:
+                self.order.addItem(text, name)
+        found = self.order.findData(stored["ExportOrder"])
+        self.order.setCurrentIndex(found if found >= 0 else self.order.findData("short_path"))
         self.order.setToolTip(
             "As optimised: the order of the sampling result (P1, P2, ...). Short probe path: the "
             "points reordered along a short open path in 3D (nearest neighbour, then 2-opt), never "
-            "longer than the original; the saving is reported after the export.")
+            "longer than the original; the saving is reported after the export. Collision-free "
+            "probe path (points sampled with the part): each point approached along the probe "
+            "axis its run chose, and moves that would hit the part go over a clearance plane; a "
+            "DMIS file gets the sensors and the GOTO moves.")
         layout.addRow("Point order", self.order)
         buttons = QtGui.QDialogButtonBox(QtGui.QDialogButtonBox.Ok | QtGui.QDialogButtonBox.Cancel,
                                          parent=self)
@@ -127,7 +134,7 @@ class ExportOptionsDialog(QtGui.QDialog):
 
     def options(self):
         """{"frame": the frame's document object or None (global), "probe_radius": mm,
-        "order": "as_optimised" or "short_path"}: keyword arguments of cmmsampling.export."""
+        "order": one of ORDER_TEXTS}: keyword arguments of cmmsampling.export."""
         name = self.frame.currentData()
         return {"frame": None if name is None else self.doc.getObject(name),
                 "probe_radius": self.probe_radius.value(), "order": self.order.currentData()}
@@ -142,10 +149,12 @@ def ask_export_options(points):
     """Ask the export options for a probe-points object; None when the user cancels.
 
     Returns {"frame": a coordinate system's document object or None, "probe_radius": mm, "order":
-    "as_optimised" or "short_path"}, keyword arguments of cmmsampling.export; see
-    :func:`export_keywords` for their console text."""
+    one of ORDER_TEXTS ("probe_path" offered only for points with a probe path, see
+    :func:`has_probe_path`)}, keyword arguments of cmmsampling.export; see :func:`export_keywords`
+    for their console text."""
     groups = [o.Label for o in points.InList if o.isDerivedFrom("App::DocumentObjectGroup")]
-    dialog = ExportOptionsDialog(points.Document, (groups or [points.Label])[0], FreeCADGui.getMainWindow())
+    dialog = ExportOptionsDialog(points.Document, (groups or [points.Label])[0], FreeCADGui.getMainWindow(),
+                                 probe_path=has_probe_path(points))
     try:
         if run_modal(dialog) != QtGui.QDialog.Accepted:
             return None
@@ -153,3 +162,11 @@ def ask_export_options(points):
         return dialog.options()
     finally:
         dialog.deleteLater()
+
+
+def has_probe_path(points):
+    """True when a probe-points object was sampled with the part, its probe reaches every point
+    and the part is still there: its export may follow the collision-free probe path."""
+    axes = [tuple(a) for a in getattr(points, "Axes", [])]
+    return (bool(getattr(points, "Probe", "")) and points.Source is not None and len(axes) == len(points.Labels) > 0
+            and all(value == value for axis in axes for value in axis))

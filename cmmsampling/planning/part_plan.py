@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..access.reach import Reachability
+from ..access.reach import Access, Reachability
 from ..fitting.substitute import DEFAULT_DEGREE
 from ..geometry.freecad_env import import_part
 from ..geometry.surface import as_face
@@ -62,9 +62,8 @@ class FacePlan:
     met: the tolerance is met (None without a tolerance); edge_offset: mm; settings: the run's
     parameters; tried: the N a tolerance search ran (cmmsampling.planning.points_needed.Tried);
     reason: why the face holds no points, or why no N met the tolerance; seconds: time taken;
-    axes: (n, 3) the probe's axis at each point when the plan judged the probe's reach (NaN where
-    OCC found it blocked), else None; tilted: points reached with the stylus off their normal;
-    unreached: points OCC found the probe cannot reach.
+    access: how the probe reaches each point and where on the face it reaches none
+    (cmmsampling.access.reach.Access) when the plan judged the probe's reach, else None.
     """
 
     name: str
@@ -82,9 +81,28 @@ class FacePlan:
     tried: list = field(default_factory=list)
     reason: str = ""
     seconds: float = 0.0
-    axes: np.ndarray = None
-    tilted: int = 0
-    unreached: int = 0
+    access: Access = None
+
+    @property
+    def axes(self):
+        """(n, 3) the probe's axis at each point (NaN where OCC found it blocked), or None when the
+        plan did not judge the probe's reach."""
+        return None if self.access is None else self.access.axes
+
+    @property
+    def tilted(self):
+        """Points reached with the stylus off their normal."""
+        return 0 if self.access is None else int(self.access.tilted.sum())
+
+    @property
+    def unreached(self):
+        """Points OCC found the probe cannot reach."""
+        return 0 if self.access is None else int((~self.access.reachable).sum())
+
+    @property
+    def unreached_area(self):
+        """mm^2 of the face the probe cannot reach (no point was placed there)."""
+        return 0.0 if self.access is None else self.access.unreached_area
 
     @property
     def placed(self):
@@ -103,6 +121,7 @@ class FacePlan:
         parts = [self.reason] if self.reason else []
         parts += [f"{self.tilted} points tilted"] if self.tilted else []
         parts += [f"{self.unreached} points the probe cannot reach"] if self.unreached else []
+        parts += [f"{self.unreached_area:.4g} mm^2 out of the probe's reach"] if self.unreached_area else []
         return "; ".join(parts)
 
     @property
@@ -165,7 +184,11 @@ class PartPlan:
         the deviation and OCC's check), for the document."""
         face = self.faces[[f.name for f in self.faces].index(name)]
         fit = {key: face.settings[key] for key in FIT_KEYS if key in face.settings}
-        return evaluate(self.shapes[name], face.uv, strategy=face.strategy, **fit)
+        result = evaluate(self.shapes[name], face.uv, strategy=face.strategy, **fit)
+        result.access = face.access
+        if "probe" in face.settings:
+            result.settings["probe"] = face.settings["probe"]
+        return result
 
     def table(self):
         """The per-part table as text: face, area, N, deviation, bound, tolerance met, notes."""
@@ -316,10 +339,7 @@ def _take(planned, result):
     planned.maximum = result.deviation.maximum
     planned.bound = result.bounds()["grid"].lower
     planned.settings = dict(result.settings)
-    if result.access is not None:
-        planned.axes = result.access.axes
-        planned.tilted = int(result.access.tilted.sum())
-        planned.unreached = int((~result.access.reachable).sum())
+    planned.access = result.access
 
 
 def _run(jobs, processes, scheduler, progress):

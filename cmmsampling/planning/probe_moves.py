@@ -95,12 +95,15 @@ def _end_lengths(ready, exits, above):
 
 
 def probe_moves(source, motion=None):
-    """The ProbeMoves of a SamplingResult run with the part (``sample(face, ..., part=)``) or of a
-    PartPlan made with a probe, through its points in their order (a plan's: face after face;
-    Motion: the time estimate). ValueError for a run without the part, or with points the probe
-    cannot reach."""
+    """The ProbeMoves of a SamplingResult run with the part (``sample(face, ..., part=)``), of a
+    PartPlan made with a probe, or of a document object whose Proxy has ``probe_moves(obj,
+    motion)`` (the document's probe points), through its points (motion: the time estimate).
+    ValueError for a run without the part, or with points the probe cannot reach."""
     if isinstance(source, PartPlan):
         return _plan_moves(source, motion)
+    own = getattr(getattr(source, "Proxy", None), "probe_moves", None)
+    if callable(own):
+        return own(source, motion)
     access = getattr(source, "access", None)
     if access is None:
         raise ValueError("a probe path needs the part the points must keep clear of: sample the face with "
@@ -139,14 +142,14 @@ def _direct_moves(probe, obstacles, ready, axes):
     clear = ~obstacles.swept_blocked(ready[i], ready[j], probe.radius + probe.clearance)
     i, j = i[clear], j[clear]
     if i.size:
-        clear = ~_poses_blockedalong_segments(probe, obstacles, ready[i], ready[j], axes[i])
+        clear = ~_poses_blocked_along(probe, obstacles, ready[i], ready[j], axes[i])
         i, j = i[clear], j[clear]
     direct = np.zeros((count, count), dtype=bool)
     direct[i, j] = direct[j, i] = True
     return direct
 
 
-def _poses_blockedalong_segments(probe, obstacles, starts, ends, axes):
+def _poses_blocked_along(probe, obstacles, starts, ends, axes):
     """(M,) bool: moves from starts to ends (M, 3) of a probe on axes (M, 3) whose stylus or body,
     grown by the clearance, meets the part at a pose along the move (POSE_STEP mm apart)."""
     positions, owner, _ = along_segments(starts, ends, np.full(len(starts), POSE_STEP))

@@ -678,7 +678,13 @@ def _check_reach(problem, result):
     and notes on the points tilted or refused."""
     started = time.perf_counter()
     result.access, refused = problem.reachability.final(result.points, result.normals)
+    result.access.unreached = problem.domain.unreached_rectangles()
+    result.access.unreached_area = problem.domain.unreached_area
     result.settings["probe"] = asdict(problem.reachability.probe)
+    if problem.domain.unreached_area > 0:
+        share = problem.domain.unreached_area / problem.model.area
+        result.notes.append(f"the probe cannot reach {problem.domain.unreached_area:.4g} mm^2 of the face "
+                            f"({100 * share:.3g} %) without touching the part elsewhere: no point was placed there")
     tilted = result.access.tilted
     if tilted.any():
         result.notes.append(f"{tilted.sum()} of {result.n} points are reached only with the stylus tilted: the head's "
