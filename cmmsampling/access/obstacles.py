@@ -50,8 +50,8 @@ class Obstacles:
 
         Balls around pieces of each axis find the part points near it: a piece with no point in
         its ball is clear, one at least a radius from both ends with a point within the radius is
-        blocked (that ball lies inside the cylinder); only the others test their points against
-        the cylinder itself."""
+        blocked (that ball lies inside the cylinder); only the others, of cylinders not blocked so,
+        test their points against the cylinder itself."""
         starts, ends = np.asarray(starts, float), np.asarray(ends, float)
         radii = np.broadcast_to(np.asarray(radii, float), (len(starts),)) + self.margin
         centres, owner, steps = along_segments(starts, ends, np.maximum(SPHERE_STEP * radii, self.spacing))
@@ -64,7 +64,8 @@ class Obstacles:
         along = np.linalg.norm(centres - starts[owner], axis=1)
         interior = (along >= radii[owner]) & (lengths[owner] - along >= radii[owner])
         hit = interior & (distances <= radii[owner])
-        unsure = np.isfinite(distances) & ~hit
+        settled = np.bincount(owner, weights=hit, minlength=len(starts)) > 0
+        unsure = np.isfinite(distances) & ~hit & ~settled[owner]
         if unsure.any():
             hit[unsure] = self._pieces_hold_points(centres[unsure], bounding[unsure], owner[unsure], starts, ends,
                                                    radii)

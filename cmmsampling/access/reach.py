@@ -98,11 +98,12 @@ def poses_blocked(probe, obstacles, points, normals, axes):
     lengths, exits = obstacles.exits(ready, axes, grow)
     (s_starts, s_ends, s_radii, s_owner), (c_starts, c_ends, c_radii, c_owner) = pose_pieces(
         probe, centres, ready, axes, lengths)
+    blocked = exits[:, 2] <= obstacles.box[0, 2] - grow + 1e-9
     swept = obstacles.swept_blocked(s_starts, s_ends, s_radii)
-    blocked = np.bincount(s_owner, weights=swept, minlength=len(points)) > 0
-    cylinders = obstacles.cylinders_blocked(c_starts, c_ends, c_radii)
-    below = exits[:, 2] <= obstacles.box[0, 2] - grow + 1e-9
-    return blocked | (np.bincount(c_owner, weights=cylinders, minlength=len(points)) > 0) | below
+    blocked |= np.bincount(s_owner, weights=swept, minlength=len(points)) > 0
+    open_ = ~blocked[c_owner]
+    cylinders = obstacles.cylinders_blocked(c_starts[open_], c_ends[open_], c_radii[open_])
+    return blocked | (np.bincount(c_owner[open_], weights=cylinders, minlength=len(points)) > 0)
 
 
 def reach(probe, obstacles, points, normals):
