@@ -23,7 +23,7 @@ from ..strategies.sampling import BEST_STRATEGY, STRATEGIES
 from . import settings
 from .commands import PanelCommand
 from .selection import selected_part_faces
-from .task_panel import AUTO, ERROR_STYLE, BackgroundRunPanel, add_choice, snap_to_auto
+from .task_panel import AUTO, ERROR_STYLE, BackgroundRunPanel, add_choice, argument_text, snap_to_auto
 from .worker import BackgroundTask
 
 SETTINGS_PREFIX = "Plan_"
@@ -356,12 +356,6 @@ def add_plan(part, run, result):
     FreeCADGui.doCommand(f"plan = cmmsampling.plan({call})  # {note}")
     FreeCADGui.doCommand(f"group = cmmsampling.add_plan_to_document(plan, {doc}, {part_expr})")
 
-
-def argument_text(value):
-    """A plan() argument as console text: a preset probe as cmmsampling.PROBES['...'], anything
-    else as its repr."""
-    name = next((name for name, probe in PROBES.items() if probe is value), None)
-    return f"cmmsampling.PROBES[{name!r}]" if name is not None else repr(value)
 
 
 class PlanPart(PanelCommand):

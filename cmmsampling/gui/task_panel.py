@@ -7,12 +7,14 @@ thread through the console API (``cmmsampling.add_to_document``), echoed in the 
 console.
 """
 import json
+from dataclasses import asdict
 
 import FreeCAD
 import FreeCADGui
 import Part
 from PySide import QtCore, QtGui
 
+from ..access.probe import PROBES
 from ..fitting.deviation import DEFAULT_GRID
 from ..fitting.substitute import DEFAULT_DEGREE, default_pole_count
 from ..object_types import source_face
@@ -29,7 +31,7 @@ TIME_DELAY_MS = 400
 CANCEL_WAIT_S = 1.0
 ERROR_STYLE = "color: #b00000;"
 EXPERT_GROUPS = ("psoGroup", "optimalGroup", "fitGroup", "gridGroup")
-COMMON = ("n", "seed", "edge_offset", "min_spacing", "fit_degree", "auto_poles", "fit_poles_u",
+COMMON = ("n", "seed", "edge_offset", "min_spacing", "probe", "fit_degree", "auto_poles", "fit_poles_u",
           "fit_poles_v", "grid")
 OPTION_GROUPS = ("psoGroup", "optimalGroup")
 # Panel stand-ins for options whose default None means automatic or unlimited.
@@ -57,10 +59,11 @@ def option_defaults():
 
 def panel_defaults():
     """Every value of the panel with its default: strategy, N, seed, probe constraints (both
-    automatic: the face's probe edge offset and the default spacing), options, fit, grid."""
+    automatic: the face's probe edge offset and the default spacing; no probe reach judged, or
+    a preset of cmmsampling.PROBES by name), options, fit, grid."""
     return {
         "strategy": sampling.DEFAULT_STRATEGY, "n": 81, "seed": 0, "edge_offset": AUTO,
-        "min_spacing": AUTO, **option_defaults(),
+        "min_spacing": AUTO, "probe": "", **option_defaults(),
         "fit_degree": DEFAULT_DEGREE, "auto_poles": True,
         "fit_poles_u": default_pole_count(81), "fit_poles_v": default_pole_count(81),
         "grid": DEFAULT_GRID,
@@ -278,8 +281,10 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
         self.step = ""
         self.picker = None
         self.run_face = None
+        self.run_arguments = None
         self._fill_strategies()
         self._set_up_automatic_values()
+        self._add_probe_choice()
         self._collapse_expert_settings()
         self.set_values(settings.load(panel_defaults()))
         self.form.strategy.currentIndexChanged.connect(self.update_enabled)
@@ -327,6 +332,20 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
         layout = self.form.constraintsGroup.layout()
         layout.insertRow(layout.getWidgetPosition(self.form.edge_offset)[0] + 1, self.edgeOffsetInfo)
         self.form.edge_offset.valueChanged.connect(self.show_edge_offset)
+
+    def _add_probe_choice(self):
+        """The probe whose reach on the face's part is judged (``form.probe``): none, or a preset
+        of cmmsampling.PROBES."""
+        choice = QtGui.QComboBox(self.form)
+        choice.setObjectName("probe")
+        add_choice(choice, "", "not judged", "The points are placed without regard to the probe")
+        for name, probe in PROBES.items():
+            add_choice(choice, name, name, f"Keep to what this probe reaches on the face's whole part, stylus "
+                       f"tilted up to {probe.max_tilt:g} deg in {probe.index_step:g} deg steps; the regions it "
+                       "cannot reach are shaded and the collision-free path is drawn")
+        choice.setToolTip("The probe whose reach on the whole part (the selected face's object) the points keep to")
+        self.form.probe = choice
+        self.form.constraintsGroup.layout().addRow(QtGui.QLabel("Probe", self.form), choice)
 
     def _collapse_expert_settings(self):
         """Put the strategies' options, the fit and the grid in an "Expert settings" section
@@ -391,7 +410,8 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
                     widget.setCurrentIndex(index)
 
     def sample_arguments(self):
-        """The keyword arguments of ``cmmsampling.sample(face, ...)`` for the panel's values."""
+        """The keyword arguments of ``cmmsampling.sample(face, ...)`` for the panel's values; with
+        a probe, part= is the shape of the face's object."""
         values = self.values()
         strategy = sampling.STRATEGIES[values["strategy"]]
         arguments = {"n": values["n"], "strategy": strategy.name, "seed": values["seed"],
@@ -401,6 +421,9 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
         arguments["edge_offset"] = edge_offset_argument(values["edge_offset"], self.face_edge_offset())
         arguments["min_spacing"] = spacing_argument(values["min_spacing"])
         arguments.update({name: option_argument(name, values) for name in strategy.options if name in values})
+        if values["probe"] in PROBES and self.source_face() is not None:
+            arguments["part"] = self.source[0].Shape
+            arguments["probe"] = PROBES[values["probe"]]
         return arguments
 
     def modifyStandardButtons(self, box):
@@ -432,6 +455,7 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
                      "edge_offset", "min_spacing", "time_limit", "max_evaluations"):
             self.widget(name).valueChanged.connect(self.estimate_timer.start)
         self.form.strategy.currentIndexChanged.connect(self.estimate_timer.start)
+        self.form.probe.currentIndexChanged.connect(self.estimate_timer.start)
         self.form.auto_poles.toggled.connect(self.estimate_timer.start)
         self.estimate_timer.start()
 
@@ -471,6 +495,8 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
         if face is None:
             return None
         arguments = {k: v for k, v in self.sample_arguments().items() if k != "seed"}
+        if "part" in arguments:
+            arguments["part"] = arguments["part"].copy()
         return sampling.time_needed, {"face": face.copy(), **arguments}
 
     def estimate_text(self, seconds):
@@ -567,7 +593,9 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
         arguments = self.sample_arguments()
         self.run_face = face
         self.step, total = progress_total(arguments)
-        self.begin(BackgroundSampling(face.copy(), arguments), total,
+        self.run_arguments = arguments
+        copied = {**arguments, **({"part": arguments["part"].copy()} if "part" in arguments else {})}
+        self.begin(BackgroundSampling(face.copy(), copied), total,
                    f"Running {sampling.STRATEGIES[arguments['strategy']].label} with N = {arguments['n']}...")
 
     def poll(self):
@@ -602,7 +630,7 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
             self.source_gone()
             return
         try:
-            group = add_result(self.source, self.run_face, run.arguments, run.result)
+            group = add_result(self.source, self.run_face, self.run_arguments, run.result)
         except Exception as exc:  # shown in the panel; the console has the traceback
             self.show_status(f"The result could not be added: {exc}", error=True)
             return
@@ -679,7 +707,7 @@ def add_result(source, face, arguments, result):
     obj, name = source
     doc = f"App.getDocument({obj.Document.Name!r})"
     source_expr = f"{doc}.getObject({obj.Name!r})"
-    call = call_text(arguments)
+    call = call_text(arguments, {"part": f"{source_expr}.Shape"})
     before = set(o.Name for o in obj.Document.Objects)
     FreeCADGui.doCommand("import cmmsampling")
     FreeCADGui.doCommand(f"face = {source_expr}.getSubObject({name!r})")
@@ -691,15 +719,27 @@ def add_result(source, face, arguments, result):
                 if o.Name not in before and o.TypeId == "App::DocumentObjectGroup")
 
 
-def call_text(arguments):
-    """The arguments of an echoed call on ``face``: "face, n=49, strategy='pso', ..."."""
-    return ", ".join(["face"] + [f"{key}={value!r}" for key, value in arguments.items()])
+def call_text(arguments, expressions=None):
+    """The arguments of an echoed call on ``face``: "face, n=49, strategy='pso', ..."; the
+    arguments named in ``expressions`` as the console text given there (e.g. part= as its
+    object's shape), the others by :func:`argument_text`."""
+    expressions = expressions or {}
+    return ", ".join(["face"] + [f"{key}={expressions.get(key) or argument_text(value)}"
+                                 for key, value in arguments.items()])
+
+
+def argument_text(value):
+    """An argument as console text: a preset probe as cmmsampling.PROBES['...'], anything else
+    as its repr."""
+    name = next((name for name, probe in PROBES.items() if probe is value), None)
+    return f"cmmsampling.PROBES[{name!r}]" if name is not None else repr(value)
 
 
 def run_values(parameters):
     """The panel's values that repeat a finished run, from its probe points' Parameters (a dict
     from their JSON): strategy, N, seed, the strategy's options, the edge offset and spacing the
-    run used (mm), the fit and the grid (pairs with equal halves as one number)."""
+    run used (mm), the probe (a preset's name, '' for none or another probe), the fit and the
+    grid (pairs with equal halves as one number)."""
     values = {}
     for name in panel_defaults():
         value = parameters.get(name)
@@ -709,6 +749,8 @@ def run_values(parameters):
             values[name] = value[0]
         elif value is not None and not isinstance(value, list):
             values[name] = value
+    probe = parameters.get("probe")
+    values["probe"] = next((name for name, preset in PROBES.items() if asdict(preset) == probe), "")
     poles = parameters.get("fit_poles")
     if isinstance(poles, list) and len(poles) == 2 and "n" in parameters:
         degree = tuple(parameters.get("fit_degree", (DEFAULT_DEGREE, DEFAULT_DEGREE)))

@@ -10,6 +10,8 @@ from scipy.interpolate import RegularGridInterpolator
 from scipy.ndimage import distance_transform_edt
 from PySide import QtCore, QtGui
 
+from ..geometry.domain import inside_loops
+from ..geometry.surface import SurfaceModel
 from ..object_types import is_probe_points, is_substitute_surface, source_face
 from ..strategies.blind import spaced
 from . import colormap, icon
@@ -24,6 +26,11 @@ TESSELLATION_FRACTION = 2e-3
 # Labels closer than this fraction of the face's diagonal to a shown one are left out.
 LABEL_SPACING_FRACTION = 0.04
 POINT_VIEW_PROPERTIES = ("ShowLabels", "ShowApproach", "ApproachLength", "LabelSize")
+# The shade over the regions a probe cannot reach: colour, transparency, and the quads across the
+# face's parameter range that follow its curvature.
+UNREACHED_COLOUR = (0.6, 0.6, 0.6)
+UNREACHED_TRANSPARENCY = 0.2
+UNREACHED_QUADS = 64
 
 
 class Stateless:
@@ -47,7 +54,8 @@ class ViewProviderProbePoints(Stateless):
     along the outward normal, ``ApproachLength`` mm long) and labels P1..PN. Labels are drawn
     over the surface (never hidden behind it) and thinned so that they do not collide: a label
     closer than ``LabelSpacing`` mm to a shown one is left out (0 shows all); hovering a point
-    names it in the status bar."""
+    names it in the status bar. Points sampled with the part shade the regions of the face the
+    probe cannot reach in grey (``ShowUnreached``)."""
 
     def __init__(self, vobj):
         vobj.addProperty("App::PropertyBool", "ShowLabels", "Probe points", "Show the labels P1..PN")
@@ -58,6 +66,9 @@ class ViewProviderProbePoints(Stateless):
         vobj.addProperty("App::PropertyInteger", "LabelSize", "Probe points", "Label font size (pixels)")
         vobj.addProperty("App::PropertyLength", "LabelSpacing", "Probe points",
                          "Labels closer than this (mm) to a shown label are left out; 0 shows all")
+        vobj.addProperty("App::PropertyBool", "ShowUnreached", "Probe points",
+                         "Shade the regions of the face the probe cannot reach (points sampled with the part)")
+        vobj.ShowUnreached = True
         vobj.ShowLabels = True
         vobj.ShowApproach = True
         vobj.ApproachLength = approach_length(vobj.Object)
@@ -78,13 +89,13 @@ class ViewProviderProbePoints(Stateless):
         self.redraw(vobj)
 
     def updateData(self, obj, prop):
-        if prop in ("Points", "Normals", "Labels") and obj.ViewObject is not None:
+        if prop in ("Points", "Normals", "Labels", "Unreached") and obj.ViewObject is not None:
             self.redraw(obj.ViewObject)
 
     def onChanged(self, vobj, prop):
         if prop == "Visibility" and hasattr(self, "switch"):
             self.switch.whichChild = 0 if vobj.Visibility else -1
-        elif prop in POINT_VIEW_PROPERTIES + ("LabelSpacing",):
+        elif prop in POINT_VIEW_PROPERTIES + ("LabelSpacing", "ShowUnreached"):
             self.redraw(vobj)
 
     def redraw(self, vobj):
@@ -108,6 +119,10 @@ class ViewProviderProbePoints(Stateless):
             self.shown_labels = shown
             labels = [obj.Labels[i] for i in shown]
             self.annotation.addChild(point_labels(labels, tips[shown], vobj.LabelSize))
+        rectangles = np.reshape(getattr(obj, "Unreached", []), (-1, 4))
+        face = source_face(obj)[0]
+        if getattr(vobj, "ShowUnreached", True) and len(rectangles) and face is not None:
+            self.annotation.addChild(unreached_shade(face, rectangles))
 
     def doubleClicked(self, vobj):
         """Open Sample face again on the points' face with the values of their run."""
@@ -200,6 +215,50 @@ def in_front():
     offset.factor = -2.0
     offset.units = -2.0
     return offset
+
+
+def unreached_shade(face, rectangles):
+    """A nearly opaque grey shade over the regions of ``face`` (Part.Face) a probe cannot reach,
+    drawn over the face and its substitute.
+
+    rectangles: (K, 4) parameter rectangles (u0, u1, v0, v1) of the face's NURBS (the probe
+    points' Unreached). Each is cut into quads, about UNREACHED_QUADS across the face's parameter
+    range, evaluated on the surface; on a trimmed face the quads whose centre is off the face are
+    left out.
+    """
+    model = SurfaceModel.from_face(face)
+    u0, u1, v0, v1 = model.bounds
+    nodes, quads = [], []
+    for a, b, c, d in rectangles:
+        count_u = max(1, int(np.ceil(UNREACHED_QUADS * (b - a) / (u1 - u0))))
+        count_v = max(1, int(np.ceil(UNREACHED_QUADS * (d - c) / (v1 - v0))))
+        grid = np.stack(np.meshgrid(np.linspace(a, b, count_u + 1), np.linspace(c, d, count_v + 1),
+                                    indexing="ij"), -1).reshape(-1, 2)
+        corner = (np.arange(count_u)[:, None] * (count_v + 1) + np.arange(count_v)[None, :]).ravel()
+        quads.append(np.stack([corner, corner + count_v + 1, corner + count_v + 2, corner + 1], 1)
+                     + sum(len(n) for n in nodes))
+        nodes.append(grid)
+    uv, quads = np.concatenate(nodes), np.concatenate(quads)
+    if model.trimmed:
+        step = model.diagonal / (4 * UNREACHED_QUADS)
+        quads = quads[inside_loops(model.trim_loops(step), uv[quads].mean(axis=1))]
+    node = coin.SoSeparator()
+    offset = in_front()
+    offset.factor = offset.units = -4.0
+    material = coin.SoMaterial()
+    material.diffuseColor = UNREACHED_COLOUR
+    material.transparency = UNREACHED_TRANSPARENCY
+    coords = coin.SoCoordinate3()
+    points = model.points(uv)
+    coords.point.setValues(0, len(points), [tuple(map(float, p)) for p in points])
+    faces = coin.SoIndexedFaceSet()
+    index = np.hstack([quads, -np.ones((len(quads), 1), dtype=int)]).ravel().tolist()
+    faces.coordIndex.setValues(0, len(index), index)
+    hints = coin.SoShapeHints()
+    hints.vertexOrdering = coin.SoShapeHints.UNKNOWN_ORDERING
+    for child in (offset, hints, material, coords, faces):
+        node.addChild(child)
+    return node
 
 
 def probe_points_of(surface):

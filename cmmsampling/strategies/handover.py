@@ -3,7 +3,8 @@
 The task panels run sample() and compare() in a worker thread (progress, cancel) and then echo
 the call in FreeCAD's Python console, where it must not run a second time; replayed as a macro
 in another session, the same line runs it. The echoed call takes what was handed over when its
-face and its arguments are exactly those of the run, and only once.
+face and its arguments are exactly those of the run (the face and any shape, such as the part,
+the same shape), and only once.
 """
 import inspect
 
@@ -26,8 +27,17 @@ def take(function, face, arguments):
     if handed is None:
         return None
     handed_face, handed_call, value = handed
-    same_face = isinstance(face, type(handed_face)) and face.isSame(handed_face)
-    return value if same_face and repr(handed_call) == repr(full_call(function, arguments)) else None
+    return value if same_value(face, handed_face) and same_value(full_call(function, arguments), handed_call) else None
+
+
+def same_value(a, b):
+    """True when two arguments are the same: shapes (anything with ``isSame``, e.g. the part a
+    face belongs to) when they are the same shape, dicts key by key, other values by repr."""
+    if hasattr(a, "isSame"):
+        return isinstance(b, type(a)) and a.isSame(b)
+    if isinstance(a, dict):
+        return isinstance(b, dict) and a.keys() == b.keys() and all(same_value(a[k], b[k]) for k in a)
+    return repr(a) == repr(b)
 
 
 def full_call(function, arguments):

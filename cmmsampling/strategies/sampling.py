@@ -399,10 +399,12 @@ def memory_needed(n, strategy=DEFAULT_STRATEGY, *, fit_degree=DEFAULT_DEGREE, fi
 
 
 def time_needed(face, n=81, strategy=DEFAULT_STRATEGY, *, fit_degree=DEFAULT_DEGREE, fit_poles=None,
-                grid=DEFAULT_GRID, edge_offset=0.0, min_spacing=None, workers=None, **options):
+                grid=DEFAULT_GRID, edge_offset=0.0, min_spacing=None, workers=None, part=None, probe=None,
+                **options):
     """Estimated seconds of :func:`sample` with these arguments on this face, before the run.
 
-    The problem is built (as sample() builds it: that time counts) and the objective the
+    The problem is built (as sample() builds it, the probe's reach on ``part`` included: that
+    time counts) and the objective the
     strategy iterates is timed on a few random swarms; its cost times the strategy's progress
     steps (PSO: iterations over its workers) is added. None when the number of steps is not
     known in advance (the optimal strategy without max_evaluations or time_limit: until it
@@ -414,7 +416,7 @@ def time_needed(face, n=81, strategy=DEFAULT_STRATEGY, *, fit_degree=DEFAULT_DEG
     start = time.perf_counter()
     problem = make_problem(face, n, fit_degree, fit_poles, grid=grid, workers=workers,
                            edge_offset=edge_offset, min_spacing=min_spacing, strategy=strategy,
-                           options=options)
+                           options=options, part=part, probe=probe)
     built_s = time.perf_counter() - start
     if not entry.optimiser:
         return built_s
