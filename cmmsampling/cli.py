@@ -5,9 +5,13 @@ import sys
 import time
 import traceback
 
+from .access.probe import PROBES
 from .geometry.surface import reference_face
 from .strategies.sampling import (BEST_STRATEGY, PROBE_EDGE_OFFSET_MM, STRATEGIES, baseline, probe_edge_offset,
                                   sample)
+
+# --probe's choices: the presets of cmmsampling.PROBES by their ball diameter (mm).
+PROBE_CHOICES = {f"{probe.ball_diameter:g}": name for name, probe in PROBES.items()}
 
 DESCRIPTION = """Where should a CMM's contact probe touch a free-form face?
 
@@ -22,6 +26,7 @@ examples:
   python -m cmmsampling sample part.igs --face 1 --strategy pso --edge-offset 2 --fcstd out.FCStd
   python -m cmmsampling plan part.step --faces 1,3,5 --tolerance 0.05 --out plan.dmi --out plan.csv
   python -m cmmsampling plan part.step --points 300 --out plan.dmi --scheduler tcp://host:8786
+  python -m cmmsampling sample part.step --face 3 -n 25 --probe 2 --out face3.dmi
   python -m cmmsampling demo"""
 
 
@@ -74,8 +79,25 @@ def _plan_arguments(parser):
                              ".csv (with a face column); repeat for several files")
     parser.add_argument("--probe-radius", type=float, default=0.0, metavar="MM",
                         help="write ball centres instead of contact points (default 0)")
+    _probe_argument(parser)
     parser.add_argument("--fcstd", metavar="FILE",
                         help="also save a FreeCAD document: the part, one group per face, the plan's table")
+
+
+def _probe_argument(parser):
+    """--probe: a preset of cmmsampling.PROBES by its ball diameter."""
+    presets = "; ".join(f"{ball}: {name}" for ball, name in PROBE_CHOICES.items())
+    parser.add_argument("--probe", choices=list(PROBE_CHOICES), default=None, metavar="BALL_MM",
+                        help="keep the points to where this probe reaches on the whole part in the file (its "
+                             "stylus tilted where the normal is blocked), and write the collision-free path: "
+                             f"{presets} (default: the reach is not judged)")
+
+
+def probe_arguments(args, shape):
+    """sample()'s and plan()'s part= and probe= for --probe (none without it)."""
+    if args.probe is None:
+        return {}
+    return {"part": shape, "probe": PROBES[PROBE_CHOICES[args.probe]]}
 
 
 def _face_numbers(text):
@@ -114,8 +136,11 @@ def _sample_arguments(parser):
     parser.add_argument("--probe-radius", type=float, default=0.0, metavar="MM",
                         help="write ball centres (point + radius * normal) instead of contact points "
                              "(default 0: contact points)")
-    parser.add_argument("--order", default="short_path", choices=["as_optimised", "short_path"],
-                        help="point order in the files: a short probe path (default) or as optimised")
+    _probe_argument(parser)
+    parser.add_argument("--order", default=None, choices=["as_optimised", "short_path", "probe_path"],
+                        help="point order in the files: a short probe path, as optimised, or (with --probe) the "
+                             "collision-free probe path with its moves (the default with --probe; short_path "
+                             "without)")
     parser.add_argument("--fcstd", metavar="FILE", help="also save a FreeCAD document with the results")
 
 
@@ -310,6 +335,8 @@ def run_faces(args):
 def run_sample(args):
     """Sample one face of a CAD file and write what was asked for."""
     _check_outputs(args)
+    if args.order == "probe_path" and args.probe is None:
+        raise ValueError("--order probe_path needs --probe (the probe whose path keeps clear of the part)")
     shape = read_shape(args.file)
     if not 1 <= args.face <= len(shape.Faces):
         raise ValueError(f"--face must be between 1 and {len(shape.Faces)} for {args.file}, got {args.face}")
@@ -317,7 +344,7 @@ def run_sample(args):
     face = shape.Faces[args.face - 1]
     edge_offset = probe_edge_offset(face) if args.edge_offset is None else args.edge_offset
     result = sample(face, args.points, args.strategy, seed=args.seed,
-                    edge_offset=edge_offset, min_spacing=args.min_spacing, **options)
+                    edge_offset=edge_offset, min_spacing=args.min_spacing, **probe_arguments(args, shape), **options)
     finish_progress(options)
     print(f"{os.path.basename(args.file)} Face{args.face}: {args.strategy}, N = {result.n}, "
           f"edge offset {edge_offset:g} mm{' (default for this face)' if args.edge_offset is None else ''}, "
@@ -341,14 +368,15 @@ def run_plan(args):
     progress = FaceProgress()
     result = plan(shape, tolerance=args.tolerance, n_total=args.points, strategy=args.strategy, faces=args.faces,
                   n_max=args.max_points, processes=args.processes, scheduler=args.scheduler, progress=progress,
-                  **options)
+                  probe=probe_arguments(args, shape).get("probe"), **options)
     progress.finish()
     goal = f"tolerance {args.tolerance:g} mm" if args.tolerance is not None else f"{args.points} points"
     print(f"{os.path.basename(args.file)}: {len(result.faces)} faces, {goal}, {args.strategy}: "
           f"{result.n_total} points on {len(result.placed)} faces in {result.seconds:.1f} s")
     print(result.table())
+    order = "probe_path" if args.probe and result.placed and not any(f.unreached for f in result.placed) else "short_path"
     for path in args.out:
-        print(export(result, path, probe_radius=args.probe_radius, order="short_path"))
+        print(export(result, path, probe_radius=args.probe_radius, order=order))
     if args.fcstd:
         _save_document(args, lambda document, part: add_plan_to_document(result, document, part))
     return 0
@@ -390,9 +418,11 @@ def _write_outputs(result, args):
     from .formats.exporting import export
     from .formats.pointset import PointSet
 
-    points = PointSet.from_result(result, f"{os.path.basename(args.file)}:Face{args.face}")
+    label = f"{os.path.basename(args.file)}:Face{args.face}"
+    order = args.order or ("probe_path" if args.probe else "short_path")
+    source = result if order == "probe_path" else PointSet.from_result(result, label)
     for path in args.out:
-        print(export(points, path, probe_radius=args.probe_radius, order=args.order))
+        print(export(source, path, probe_radius=args.probe_radius, order=order, label=label))
     if args.fcstd:
         from .document import add_to_document
 

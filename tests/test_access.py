@@ -304,3 +304,30 @@ def test_the_document_keeps_the_reach_and_draws_the_path_in_two_objects(beside_w
 def gotos(path):
     """The GOTO lines of a DMIS file."""
     return [line for line in path.read_text().splitlines() if line.startswith("GOTO/")]
+
+
+def test_the_command_line_keeps_to_the_probe_and_writes_its_path(beside_wall, tmp_path, capsys):
+    import dmis_syntax
+    from cmmsampling import cli
+
+    brep = tmp_path / "walled.brep"
+    beside_wall.exportBrep(str(brep))
+    index = next(k for k, face in enumerate(beside_wall.Faces, start=1)
+                 if abs(face.BoundBox.ZMax - 10.0) < 1e-9 and face.Area > 1000)
+    out = tmp_path / "floor.dmi"
+    assert cli.main(["sample", str(brep), "--face", str(index), "-n", "16", "--strategy", "halton",
+                     "--probe", "2", "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "reached only with the stylus tilted" in printed and "Collision-free probe path" in printed
+    text = out.read_text()
+    assert dmis_syntax.check(text) == [] and "GOTO/" in text and "SNSLCT/S(" in text
+    assert f"walled.brep:Face{index}" in text
+    assert cli.main(["sample", str(brep), "--face", str(index), "-n", "16", "--order", "probe_path",
+                     "--out", str(tmp_path / "plain.dmi")]) == 2
+    assert "--order probe_path needs --probe" in capsys.readouterr().err
+    upward = ",".join(str(k) for k, face in enumerate(beside_wall.Faces, start=1)
+                      if face.normalAt(*face.Surface.parameter(face.CenterOfMass)).z > 0.5)
+    assert cli.main(["plan", str(brep), "--faces", upward, "--tolerance", "0.5", "--strategy", "uniform_parametric",
+                     "--max-points", "40", "--processes", "1", "--probe", "2",
+                     "--out", str(tmp_path / "plan.dmi")]) == 0
+    assert "tilted" in capsys.readouterr().out and "GOTO/" in (tmp_path / "plan.dmi").read_text()

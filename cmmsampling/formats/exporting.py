@@ -88,7 +88,7 @@ class ExportReport:
 
 
 def export(source, path, format=None, *, frame=None, probe_radius=0.0, order="as_optimised", name=None,
-           approach=2.0, retract=2.0, search=5.0, comments=True, motion=None):
+           approach=2.0, retract=2.0, search=5.0, comments=True, motion=None, label=None):
     """Write probe points to a file for a CMM.
 
     source: a PointSet, a SamplingResult, or a document object whose Proxy has ``point_set(obj)``;
@@ -110,7 +110,8 @@ def export(source, path, format=None, *, frame=None, probe_radius=0.0, order="as
     name: DMIS program name (default: the file name without extension); approach, retract,
     search: DMIS SNSET distances, mm; comments: write the source's metadata (source face,
     strategy, parameters, deviation figures) as comments; the frame, probe radius and order are
-    stated in DMIS and CSV files either way.
+    stated in DMIS and CSV files either way; label: the source's name in those comments (e.g.
+    'part.step:Face3'), by default the source's own.
     The file is written to a temporary file in the same folder and then moved over the target, so
     an existing file survives any failure. Returns an ExportReport; ValueError or TypeError for bad
     input, ExportError (an OSError) naming the path and the reason when it cannot be written.
@@ -127,6 +128,8 @@ def export(source, path, format=None, *, frame=None, probe_radius=0.0, order="as
     )
     placement, frame_name = resolve_frame(frame)
     point_set, moves = as_point_set(source), None
+    if label is not None:
+        point_set = replace(point_set, metadata={**point_set.metadata, "source": str(label)})
     if order == "probe_path":
         moves = probe_moves(source, motion)
         point_set = along_moves(point_set, moves)
