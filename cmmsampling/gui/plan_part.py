@@ -23,7 +23,9 @@ from ..strategies.sampling import BEST_STRATEGY, STRATEGIES
 from . import settings
 from .commands import PanelCommand
 from .selection import selected_part_faces
-from .task_panel import AUTO, ERROR_STYLE, BackgroundRunPanel, add_choice, argument_text, snap_to_auto
+from .task_panel import (
+    AUTO, ERROR_STYLE, BackgroundRunPanel, add_choice, argument_text, probe_choice, snap_to_auto,
+)
 from .worker import BackgroundTask
 
 SETTINGS_PREFIX = "Plan_"
@@ -197,14 +199,9 @@ class PlanPartTaskPanel(BackgroundRunPanel):
 
     def _add_probe_choice(self):
         """The probe whose reach is judged: none, or a preset (cmmsampling.PROBES)."""
-        choice = QtGui.QComboBox(self.form)
-        choice.setObjectName("probe")
-        add_choice(choice, "", "not judged", "Every face's points are placed without regard to the probe")
-        for name, probe in PROBES.items():
-            add_choice(choice, name, name, f"Keep to what this probe reaches on the part, stylus tilted up to "
-                       f"{probe.max_tilt:g} deg in {probe.index_step:g} deg steps; the plan gets a collision-free "
-                       "path (moves and touches drawn in the document)")
-        choice.setToolTip("The probe whose reach on the whole part each face keeps to")
+        choice = probe_choice(self.form, "Every face's points are placed without regard to the probe",
+                              "the plan gets a collision-free path (moves and touches drawn in the document)",
+                              "The probe whose reach on the whole part each face keeps to")
         self.form.settingsGroup.layout().addRow(QtGui.QLabel("Probe", self.form), choice)
         return choice
 

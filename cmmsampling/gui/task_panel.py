@@ -336,14 +336,9 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
     def _add_probe_choice(self):
         """The probe whose reach on the face's part is judged (``form.probe``): none, or a preset
         of cmmsampling.PROBES."""
-        choice = QtGui.QComboBox(self.form)
-        choice.setObjectName("probe")
-        add_choice(choice, "", "not judged", "The points are placed without regard to the probe")
-        for name, probe in PROBES.items():
-            add_choice(choice, name, name, f"Keep to what this probe reaches on the face's whole part, stylus "
-                       f"tilted up to {probe.max_tilt:g} deg in {probe.index_step:g} deg steps; the regions it "
-                       "cannot reach are shaded and the collision-free path is drawn")
-        choice.setToolTip("The probe whose reach on the whole part (the selected face's object) the points keep to")
+        choice = probe_choice(self.form, "The points are placed without regard to the probe",
+                              "the regions it cannot reach are shaded and the collision-free path is drawn",
+                              "The probe whose reach on the whole part (the selected face's object) the points keep to")
         self.form.probe = choice
         self.form.constraintsGroup.layout().addRow(QtGui.QLabel("Probe", self.form), choice)
 
@@ -660,6 +655,20 @@ def add_choice(choice, name, label, tip):
     """Add an entry showing ``label`` that holds ``name``, with the tooltip ``tip``."""
     choice.addItem(label, name)
     choice.setItemData(choice.count() - 1, tip, QtCore.Qt.ToolTipRole)
+
+
+def probe_choice(parent, none_tip, outcome, tip):
+    """A choice of the probe whose reach is judged (object name "probe"): "not judged" (tooltip
+    ``none_tip``) or a preset of cmmsampling.PROBES, each entry holding its name (tooltip: what it
+    reaches, then ``outcome``); ``tip``: the choice's own tooltip."""
+    choice = QtGui.QComboBox(parent)
+    choice.setObjectName("probe")
+    add_choice(choice, "", "not judged", none_tip)
+    for name, probe in PROBES.items():
+        add_choice(choice, name, name, f"Keep to what this probe reaches on the part, stylus tilted up to "
+                   f"{probe.max_tilt:g} deg in {probe.index_step:g} deg steps; {outcome}")
+    choice.setToolTip(tip)
+    return choice
 
 
 def snap_to_auto(widget, value):
