@@ -19,9 +19,8 @@ margin below, is as small as CELLS allows:
   margin from its edges.
 
 Given where a probe reaches the part (``reachable``), the cells it cannot reach are infeasible too:
-asked once per face on a coarser raster of about REACH_CELLS cells over the face (the edge
-offset's band included), and a cell counts only when its coarse cell and their eight neighbours
-on the face are reached (so a corner far from a centre is judged).
+asked once per face on a coarser raster of about REACH_CELLS cells, and a cell counts only when
+its coarse cell and their eight neighbours are reached (so a corner far from a centre is judged).
 
 Points outside the feasible cells are moved to the nearest feasible cell centre.
 """
@@ -186,7 +185,7 @@ def face_domain(model, edge_offset=0.0, reachable=None):
     cell_areas = _cell_areas(points)
     unreached = None
     if reachable is not None:
-        unreached = feasible & ~reachable_cells(model, on_face, reachable)
+        unreached = feasible & ~reachable_cells(model, feasible, reachable)
         feasible &= ~unreached
     reach = float(clearance[on_face].max(initial=0.0))
     margin = 0.5 * gap + 2.0 * float(half_diagonals[on_face].max(initial=0.0))
@@ -216,24 +215,22 @@ def cell_rectangles(bounds, cells):
                             v0 + runs[firsts, 1] * dv, v0 + runs[firsts, 2] * dv])
 
 
-def reachable_cells(model, on_face, reachable):
-    """(R_u, R_v) bool: the cells of the raster ``on_face`` (the cells on the face) whose coarse
-    cell (about REACH_CELLS in all, each covering whole cells of it) and its eight neighbours a
-    probe reaches at their centres (so that a cell's far corner is judged too). Only coarse cells
-    over cells on the face are asked; the others, off the face, hold no point and judge none
-    (reachable: see :func:`face_domain`)."""
-    shape = np.array(on_face.shape)
-    factor = max(1, int(np.ceil(np.sqrt(on_face.size / REACH_CELLS))))
+def reachable_cells(model, feasible, reachable):
+    """(R_u, R_v) bool: the cells of the raster ``feasible`` whose coarse cell (about
+    REACH_CELLS in all, each covering whole cells of it) and its eight neighbours a probe reaches
+    at their centres (so that a cell's far corner is judged too); only coarse cells over
+    feasible cells are asked (reachable: see :func:`face_domain`)."""
+    shape = np.array(feasible.shape)
+    factor = max(1, int(np.ceil(np.sqrt(feasible.size / REACH_CELLS))))
     coarse = tuple(-(-shape // factor))
-    asked = np.zeros(coarse, dtype=bool)
-    rows, cols = np.nonzero(on_face)
-    asked[rows // factor, cols // factor] = True
+    cells = np.zeros(coarse, dtype=bool)
+    rows, cols = np.nonzero(feasible)
+    cells[rows // factor, cols // factor] = True
     u0, u1, v0, v1 = model.bounds
     span = np.array([u1 - u0, v1 - v0]) / shape * factor
-    wanted = np.argwhere(asked)
+    wanted = np.argwhere(cells)
     centres = np.array([u0, v0]) + (wanted + 0.5) * span
     centres = np.minimum(centres, [u1, v1])
-    cells = ~asked
     cells[tuple(wanted.T)] = reachable(model.points(centres), model.normals(centres))
     cells = minimum_filter(cells, size=3, mode="nearest")
     return cells[np.arange(shape[0])[:, None] // factor, np.arange(shape[1])[None, :] // factor]
