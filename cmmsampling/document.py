@@ -568,7 +568,6 @@ class ProbePoints(TypedProxy):
             axes=np.array(axes, dtype=float) if len(axes) == len(obj.Labels) and axes else None,
         )
 
-
     def probe_moves(self, obj, motion=None):
         """The collision-free probe path through the points (cmmsampling.planning.probe_moves.
         ProbeMoves) on their source object's shape, with the probe and axes of their run; motion:

@@ -354,7 +354,6 @@ def add_plan(part, run, result):
     FreeCADGui.doCommand(f"group = cmmsampling.add_plan_to_document(plan, {doc}, {part_expr})")
 
 
-
 class PlanPart(PanelCommand):
     """*Plan part...*: open the plan panel for the selected faces, or every face of a selected part."""
 

@@ -490,9 +490,7 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
         if face is None:
             return None
         arguments = {k: v for k, v in self.sample_arguments().items() if k != "seed"}
-        if "part" in arguments:
-            arguments["part"] = arguments["part"].copy()
-        return sampling.time_needed, {"face": face.copy(), **arguments}
+        return sampling.time_needed, {"face": face.copy(), **detached(arguments)}
 
     def estimate_text(self, seconds):
         """'Time: about 12 s', 'Time: under a second', or that the descent has no known end."""
@@ -589,8 +587,7 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
         self.run_face = face
         self.step, total = progress_total(arguments)
         self.run_arguments = arguments
-        copied = {**arguments, **({"part": arguments["part"].copy()} if "part" in arguments else {})}
-        self.begin(BackgroundSampling(face.copy(), copied), total,
+        self.begin(BackgroundSampling(face.copy(), detached(arguments)), total,
                    f"Running {sampling.STRATEGIES[arguments['strategy']].label} with N = {arguments['n']}...")
 
     def poll(self):
@@ -638,6 +635,12 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
     def show_status(self, text, error=False):
         self.form.status.setText(text)
         self.form.status.setStyleSheet(ERROR_STYLE if error else "")
+
+
+def detached(arguments):
+    """sample()'s arguments for a worker thread: the part (part=) copied, so that the thread never
+    shares the document's shape (OCC meshes it while testing the probe's reach)."""
+    return {**arguments, **({"part": arguments["part"].copy()} if "part" in arguments else {})}
 
 
 def duration_text(seconds):

@@ -120,9 +120,10 @@ class ViewProviderProbePoints(Stateless):
             labels = [obj.Labels[i] for i in shown]
             self.annotation.addChild(point_labels(labels, tips[shown], vobj.LabelSize))
         rectangles = np.reshape(getattr(obj, "Unreached", []), (-1, 4))
-        face = source_face(obj)[0]
-        if getattr(vobj, "ShowUnreached", True) and len(rectangles) and face is not None:
-            self.annotation.addChild(unreached_shade(face, rectangles))
+        if getattr(vobj, "ShowUnreached", True) and len(rectangles):
+            face = source_face(obj)[0]
+            if face is not None:
+                self.annotation.addChild(unreached_shade(face, rectangles))
 
     def doubleClicked(self, vobj):
         """Open Sample face again on the points' face with the values of their run."""
@@ -228,16 +229,14 @@ def unreached_shade(face, rectangles):
     """
     model = SurfaceModel.from_face(face)
     u0, u1, v0, v1 = model.bounds
-    nodes, quads = [], []
+    nodes, quads, count = [], [], 0
     for a, b, c, d in rectangles:
-        count_u = max(1, int(np.ceil(UNREACHED_QUADS * (b - a) / (u1 - u0))))
-        count_v = max(1, int(np.ceil(UNREACHED_QUADS * (d - c) / (v1 - v0))))
-        grid = np.stack(np.meshgrid(np.linspace(a, b, count_u + 1), np.linspace(c, d, count_v + 1),
-                                    indexing="ij"), -1).reshape(-1, 2)
-        corner = (np.arange(count_u)[:, None] * (count_v + 1) + np.arange(count_v)[None, :]).ravel()
-        quads.append(np.stack([corner, corner + count_v + 1, corner + count_v + 2, corner + 1], 1)
-                     + sum(len(n) for n in nodes))
-        nodes.append(grid)
+        count_u = max(1, int(np.ceil(UNREACHED_QUADS * (b - a) / (u1 - u0)))) + 1
+        count_v = max(1, int(np.ceil(UNREACHED_QUADS * (d - c) / (v1 - v0)))) + 1
+        nodes.append(np.stack(np.meshgrid(np.linspace(a, b, count_u), np.linspace(c, d, count_v),
+                                          indexing="ij"), -1).reshape(-1, 2))
+        quads.append(grid_quads(count_u, count_v) + count)
+        count += count_u * count_v
     uv, quads = np.concatenate(nodes), np.concatenate(quads)
     if model.trimmed:
         step = model.diagonal / (4 * UNREACHED_QUADS)
@@ -252,7 +251,7 @@ def unreached_shade(face, rectangles):
     points = model.points(uv)
     coords.point.setValues(0, len(points), [tuple(map(float, p)) for p in points])
     faces = coin.SoIndexedFaceSet()
-    index = np.hstack([quads, -np.ones((len(quads), 1), dtype=int)]).ravel().tolist()
+    index = polygon_index(quads)
     faces.coordIndex.setValues(0, len(index), index)
     hints = coin.SoShapeHints()
     hints.vertexOrdering = coin.SoShapeHints.UNKNOWN_ORDERING
@@ -286,7 +285,7 @@ def face_mesh(face, u, v, field, maximum):
     filled = field[tuple(nearest)]
     uv = np.array([face.Surface.parameter(p) for p in points], dtype=float)
     values = RegularGridInterpolator((u, v), filled, bounds_error=False, fill_value=None)(uv)
-    index = np.hstack([np.array(triangles), -np.ones((len(triangles), 1), dtype=int)]).ravel().tolist()
+    index = polygon_index(np.array(triangles))
     return indexed_mesh(np.array([tuple(p) for p in points]), index, colormap.colours(values, maximum))
 
 
@@ -386,13 +385,22 @@ def coloured_mesh(nodes, field, maximum):
     nodes: (g_u * g_v, 3) mm, u-major; field: (g_u, g_v) deviations in mm (NaN off the face,
     whose quads are left out); maximum: the deviation shown red (mm).
     """
-    g_u, g_v = field.shape
-    corner = (np.arange(g_u - 1)[:, None] * g_v + np.arange(g_v - 1)[None, :]).ravel()
-    quads = np.stack([corner, corner + g_v, corner + g_v + 1, corner + 1], axis=1)
     flat = field.ravel()
+    quads = grid_quads(*field.shape)
     quads = quads[~np.isnan(flat[quads]).any(axis=1)]
-    index = np.hstack([quads, -np.ones((len(quads), 1), dtype=int)]).ravel().tolist()
-    return indexed_mesh(nodes, index, colormap.colours(flat, maximum))
+    return indexed_mesh(nodes, polygon_index(quads), colormap.colours(flat, maximum))
+
+
+def grid_quads(g_u, g_v):
+    """(Q, 4) node indices of the quads of a g_u x g_v grid of nodes numbered u-major, each
+    counter-clockwise in (u, v)."""
+    corner = (np.arange(g_u - 1)[:, None] * g_v + np.arange(g_v - 1)[None, :]).ravel()
+    return np.stack([corner, corner + g_v, corner + g_v + 1, corner + 1], axis=1)
+
+
+def polygon_index(polygons):
+    """A coin coordIndex list of polygons (P, K) node indices: each polygon's indices ended by -1."""
+    return np.hstack([polygons, -np.ones((len(polygons), 1), dtype=int)]).ravel().tolist()
 
 
 def indexed_mesh(nodes, index, rgb):
