@@ -2,7 +2,8 @@
 # Run the GUI tests (tests/gui) inside the real FreeCAD GUI under a virtual X server.
 # The addon is installed into a temporary HOME (a symlink to this checkout) in the Mod folder
 # FreeCAD names for a new user (~/.local/share/FreeCAD/Mod; FreeCAD 1.1: .../FreeCAD/v1-1/Mod),
-# so the user's own FreeCAD configuration is never touched. Extra arguments go to pytest, e.g.
+# so the user's own FreeCAD configuration is never touched, and FreeCAD starts in that HOME, as a
+# user's does, never in the checkout. Extra arguments go to pytest, e.g.
 # -k cancel. Screenshots: artifacts/gui/. Exit code: pytest's.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
@@ -17,6 +18,7 @@ pytest_args=""
 if [ "$#" -gt 0 ]; then pytest_args="$(printf "%q " "$@")"; fi
 export CMMSAMPLING_ROOT="$root" CMMSAMPLING_PYTEST_ARGS="$pytest_args"
 export CMMSAMPLING_ARTIFACTS="${CMMSAMPLING_ARTIFACTS:-$root/artifacts/gui}"
+cd "$home"
 set +e
 timeout --kill-after=10 "${CMMSAMPLING_GUI_TIMEOUT:-900}" \
   xvfb-run -a -s "-screen 0 1280x1024x24" freecad "$root/tests/gui/run_gui_tests.py" 2>"$home/freecad.stderr"

@@ -45,7 +45,7 @@ def test_a_dead_worker_falls_back_to_one_process(problem):
     assert np.array_equal(objective(uv), expected)
     assert not objective.parallel
     assert np.array_equal(objective(uv), expected)
-    assert parallel.shared_worker().process.poll() is None
+    assert parallel.shared_worker()[0].alive()
 
 
 def test_small_swarms_stay_in_this_process(problem):
@@ -61,17 +61,84 @@ def test_workers_option_is_checked(reference):
         cmmsampling.sample(reference, 25, "pso", iterations=1, workers=0)
 
 
-def test_waiting_polls_then_gives_way_to_a_blocking_receive():
-    """wait_for returns once data is there, and after its polling time when none comes."""
-    from multiprocessing import Pipe
+def test_the_channel_carries_messages_and_reports_a_closed_end_without_a_signal():
+    """A send to a closed end raises BrokenPipeError (SIGPIPE left at its default would end the
+    process, as it would end FreeCAD 1.0); a receive from it raises ChannelClosed."""
+    import signal
+    import socket
 
-    from cmmsampling.strategies.worker import wait_for
+    from cmmsampling.strategies.channel import Channel, ChannelClosed
 
-    here, there = Pipe()
-    wait_for(here, seconds=0.01)
-    assert not here.poll(0)
-    there.send("reply")
+    here, there = (Channel(s) for s in socket.socketpair())
+    assert not here.ready(0.05)
+    there.send(("reply", np.arange(3.0)))
     start = time.perf_counter()
-    wait_for(here, seconds=60)
-    assert time.perf_counter() - start < 30, "it polled on although the reply was there"
-    assert here.recv() == "reply"
+    assert here.receive(5)[0] == "reply"
+    assert time.perf_counter() - start < 5
+    with pytest.raises(TimeoutError):
+        here.receive(0.01)
+    there.close()
+    with pytest.raises(ChannelClosed):
+        here.receive(5)
+    default = signal.signal(signal.SIGPIPE, signal.SIG_DFL)
+    try:
+        with pytest.raises(BrokenPipeError):
+            here.send(np.zeros(100_000))
+    finally:
+        signal.signal(signal.SIGPIPE, default)
+
+
+def test_the_worker_starts_from_any_folder(problem, tmp_path, monkeypatch):
+    """The worker finds the package through its folder, not the current one."""
+    monkeypatch.chdir(tmp_path)
+    parallel.shared_worker()[0].close()
+    objective = TwoProcessObjective(problem.objective)
+    assert objective.parallel and objective.fallback is None
+    uv = np.random.default_rng(3).random((8, 25, 2))
+    with blas_threads(1):
+        assert np.array_equal(objective(uv), problem.objective(uv))
+    assert objective.remote == 4
+
+
+@pytest.fixture
+def one_process_run(reference):
+    return cmmsampling.sample(reference, 25, "pso", iterations=30, grid=30, workers=1, occ_check=False)
+
+
+def test_a_worker_that_cannot_import_the_package_leaves_the_run_to_this_process(reference, one_process_run,
+                                                                                 tmp_path, monkeypatch):
+    parallel.shared_worker()[0].close()
+    monkeypatch.setattr(parallel, "package_parent", lambda: str(tmp_path))
+    run = cmmsampling.sample(reference, 25, "pso", iterations=30, grid=30, workers=2, occ_check=False)
+    assert np.array_equal(run.uv, one_process_run.uv)
+    assert run.settings["processes"] == 1
+    [note] = [note for note in run.notes if "this process alone" in note]
+    assert "ModuleNotFoundError: No module named 'cmmsampling'" in note
+    monkeypatch.undo()
+    assert parallel.shared_worker()[0].alive(), "a later run starts a worker again"
+
+
+def test_a_worker_killed_mid_run_leaves_its_share_to_this_process(reference, one_process_run):
+    import os
+    import signal
+
+    def kill_at(iteration, best):
+        if iteration == 10:
+            os.kill(parallel.shared_worker()[0].pid, signal.SIGKILL)
+        return False
+
+    run = cmmsampling.sample(reference, 25, "pso", iterations=30, grid=30, workers=2, occ_check=False,
+                             progress=kill_at)
+    assert np.array_equal(run.uv, one_process_run.uv)
+    assert np.array_equal(run.history, one_process_run.history)
+    assert run.settings["processes"] == 2
+    assert any("the second process was killed by signal 9" in note for note in run.notes)
+
+
+def test_a_silent_worker_is_ended_after_its_start_time(monkeypatch):
+    """A worker that never answers is not waited for beyond its start time."""
+    monkeypatch.setattr(parallel, "BOOT", "import time; time.sleep(60)")
+    start = time.perf_counter()
+    with pytest.raises(parallel.WorkerUnavailable, match="did not answer within 0.5 s"):
+        parallel.Worker(parallel.python_executable(), start_seconds=0.5)
+    assert time.perf_counter() - start < 30

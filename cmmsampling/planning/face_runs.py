@@ -14,44 +14,82 @@ import concurrent.futures
 import ctypes
 import multiprocessing
 import os
+import tempfile
+import threading
+import time
+import zipfile
+from concurrent.futures.process import BrokenProcessPool
 
 from ..geometry.validation import check_int
-from ..strategies.parallel import python_executable
+from ..strategies.memory import free_bytes, gib
+from ..strategies.parallel import package_parent, python_executable
+
+# Memory one local process takes for a face (FreeCAD, numpy, scipy and a face's arrays), bytes:
+# a Ventilator face's process peaked at about 180 MB; this leaves room for larger grids.
+PROCESS_BYTES = 400 * 2**20
+PARENT_CHECK_SECONDS = 1.0
+
+
+class WorkersFailed(RuntimeError):
+    """The processes or Dask workers could not run the jobs (they died, or cannot import the
+    package); the message says why."""
 
 
 def run_all(function, jobs, processes=None, scheduler=None, progress=None, describe=None):
-    """``function(job)`` for every job; returns the outcomes in the jobs' order.
+    """``function(job)`` for every job; returns (outcomes in the jobs' order, notes).
 
     function: a module-level function (picklable); jobs: a list of picklable jobs;
-    processes: local processes (None: all cores; 1 runs here, one job after another);
+    processes: local processes (None: all cores; never more than the cores, the jobs and the
+    memory free for them allow; 1 runs here, one job after another);
     scheduler: a Dask scheduler address ("tcp://host:8786") or a distributed.Client, which then
-    runs the jobs instead of local processes; progress: callable(done, total, message) after
-    each job ends, returning True to cancel: jobs not started are dropped, running ones are
-    stopped, and their outcomes are None; describe: callable(job, outcome) -> the progress
-    message of a finished job (default: "<job.name> done").
+    runs the jobs instead of local processes (the package is uploaded to its workers); progress:
+    callable(done, total, message) after each job ends, returning True to cancel: jobs not
+    started are dropped, running ones are stopped, and their outcomes are None; describe:
+    callable(job, outcome) -> the progress message of a finished job (default: "<job.name> done").
+    notes: sentences on how the jobs ran where that differs from what was asked (fewer processes,
+    processes that failed, after which the jobs left ran here).
     """
     total = len(jobs)
-    outcomes = [None] * total
+    outcomes, notes = [None] * total, []
     if scheduler is not None:
         runs = _dask_runs(function, jobs, scheduler)
     else:
-        count = _process_count(processes, total)
+        count = process_count(processes, total, notes)
         runs = _here(function, jobs) if count == 1 else _local_processes(function, jobs, count)
     describe = describe or _message
+    done = 0
+
+    def record(index, outcome):
+        """Keep an outcome and report it; True when the caller cancels."""
+        nonlocal done
+        done += 1
+        outcomes[index] = outcome
+        return progress is not None and bool(progress(done, total, describe(jobs[index], outcome)))
+
     try:
-        for done, (index, outcome) in enumerate(runs, start=1):
-            outcomes[index] = outcome
-            if progress is not None and progress(done, total, describe(jobs[index], outcome)):
-                break
+        cancelled = any(record(index, outcome) for index, outcome in runs)
+    except WorkersFailed as exc:
+        left = [k for k in range(total) if outcomes[k] is None]
+        notes.append(f"{exc}; the {len(left)} job(s) left ran in this process")
+        any(record(index, function(jobs[index])) for index in left)
     finally:
         runs.close()
-    return outcomes
+    return outcomes, notes
 
 
-def _process_count(processes, jobs):
-    """Processes to start: the given count (>= 1) or all cores, never more than jobs."""
-    count = (os.cpu_count() or 1) if processes is None else check_int("processes", processes, 1)
-    return max(1, min(count, jobs))
+def process_count(processes, jobs, notes=None):
+    """Local processes to start: the given count (>= 1) or all cores, never more than the
+    cores, the jobs, or the processes the free memory holds (PROCESS_BYTES each); a note in
+    ``notes`` when fewer than asked are started for the cores or the memory."""
+    cores = os.cpu_count() or 1
+    asked = cores if processes is None else check_int("processes", processes, 1)
+    free = free_bytes()
+    room = cores if free is None else max(1, int(free // PROCESS_BYTES))
+    count = max(1, min(asked, cores, room, jobs))
+    if notes is not None and count < min(asked, jobs):
+        why = f"{cores} core(s)" if cores <= room else f"{gib(free)} of free memory, about {gib(PROCESS_BYTES)} each"
+        notes.append(f"{count} local process(es) ran the faces, not {asked}: the machine has {why}")
+    return count
 
 
 def _here(function, jobs):
@@ -62,18 +100,36 @@ def _here(function, jobs):
 
 def _local_processes(function, jobs, count):
     """The jobs on ``count`` local processes as they end: (index, outcome); closing the
-    generator early stops the processes."""
+    generator early stops the processes. WorkersFailed when a process dies (or cannot import
+    the package). Each process ends itself when this one dies (:func:`follow_parent`)."""
     context = multiprocessing.get_context("spawn")
     executable = python_executable()
     if executable is not None:
         context.set_executable(executable)
-    pool = concurrent.futures.ProcessPoolExecutor(count, mp_context=context)
+    pool = concurrent.futures.ProcessPoolExecutor(count, mp_context=context, initializer=follow_parent,
+                                                  initargs=(os.getpid(),))
     futures = {pool.submit(function, job): index for index, job in enumerate(jobs)}
     try:
         for future in concurrent.futures.as_completed(futures):
-            yield futures[future], future.result()
+            try:
+                outcome = future.result()
+            except BrokenProcessPool as exc:
+                raise WorkersFailed(f"a local process ended abruptly ({exc})") from exc
+            yield futures[future], outcome
     finally:
         _stop(pool)
+
+
+def follow_parent(parent):
+    """In a local process: end this process as soon as ``parent`` (pid) is no longer its parent
+    (it was killed), checked every PARENT_CHECK_SECONDS by a daemon thread."""
+
+    def watch():
+        while os.getppid() == parent:
+            time.sleep(PARENT_CHECK_SECONDS)
+        os._exit(1)
+
+    threading.Thread(target=watch, name="follow-parent", daemon=True).start()
 
 
 def _stop(pool):
@@ -88,20 +144,46 @@ def _stop(pool):
 
 
 def _dask_runs(function, jobs, scheduler):
-    """The jobs on a Dask cluster as they end: (index, outcome); closing the
-    generator early cancels the jobs still queued or running."""
+    """The jobs on a Dask cluster as they end: (index, outcome); closing the generator early (or
+    Ctrl-C) cancels the jobs still queued or running. The package is uploaded to the workers
+    first (:func:`upload_package`); WorkersFailed when they still cannot import it."""
     from distributed import Client, as_completed
 
     client = scheduler if isinstance(scheduler, Client) else Client(scheduler)
-    futures = [client.submit(run_with_heap_thresholds, function, job, pure=False) for job in jobs]
-    where = {future.key: index for index, future in enumerate(futures)}
+    futures = []
     try:
+        upload_package(client)
+        futures = [client.submit(run_with_heap_thresholds, function, job, pure=False) for job in jobs]
+        where = {future.key: index for index, future in enumerate(futures)}
         for future in as_completed(futures):
-            yield where[future.key], future.result()
+            try:
+                outcome = future.result()
+            except ImportError as exc:
+                raise WorkersFailed(f"the Dask workers cannot import what the jobs need ({exc})") from exc
+            yield where[future.key], outcome
     finally:
         client.cancel([future for future in futures if not future.done()])
         if client is not scheduler:
             client.close()
+
+
+def upload_package(client):
+    """Send this cmmsampling package to every worker of a Dask client as a zip, which the
+    workers put first on their sys.path: they run the same code as this process, and need only
+    FreeCAD, numpy and scipy installed."""
+    root = package_parent()
+    if os.path.isfile(root):   # imported from a zip already (e.g. on a Dask worker)
+        client.upload_file(root)
+        return
+    with tempfile.TemporaryDirectory() as folder:
+        archive = os.path.join(folder, "cmmsampling.zip")
+        with zipfile.ZipFile(archive, "w", zipfile.ZIP_DEFLATED) as package:
+            for directory, _, names in os.walk(os.path.join(root, "cmmsampling")):
+                for name in sorted(names):
+                    if name.endswith(".py"):
+                        path = os.path.join(directory, name)
+                        package.write(path, os.path.relpath(path, root))
+        client.upload_file(archive)
 
 
 # glibc's mallopt parameters and the sizes set for a Dask worker's jobs (bytes).

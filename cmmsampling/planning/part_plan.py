@@ -141,7 +141,8 @@ class PartPlan:
     """A plan of a part: faces (FacePlan, in the order given), the mode ('tolerance' or
     'points'), tolerance (mm) or budget (points), the strategy and the seconds it took;
     cancelled when stopped early (faces not run have no points and say so); part: the shape
-    planned and probe: the Probe whose reach was judged (None when not)."""
+    planned and probe: the Probe whose reach was judged (None when not); notes: sentences on how
+    the faces ran where that differs from what was asked (fewer processes, failed workers)."""
 
     faces: list
     mode: str
@@ -153,6 +154,7 @@ class PartPlan:
     shapes: dict = field(default_factory=dict, repr=False)
     part: object = field(default=None, repr=False)
     probe: object = None
+    notes: list = field(default_factory=list)
 
     @property
     def placed(self):
@@ -191,12 +193,14 @@ class PartPlan:
         return result
 
     def table(self):
-        """The per-part table as text: face, area, N, deviation, bound, tolerance met, notes."""
+        """The per-part table as text: face, area, N, deviation, bound, tolerance met, notes;
+        then the plan's own notes, a line each."""
         lines = [f"{'face':<10} {'area mm^2':>10} {'N':>5} {'max mm':>9} {'bound mm':>9} {'met':>4}  notes"]
         for face in self.faces:
             lines.append(f"{face.name:<10} {face.area:>10.1f} {face.n:>5} {face.maximum:>9.4f} {face.bound:>9.4f} "
                          f"{face.met_text:>4}  {face.notes}")
         lines.append(f"{'part':<10} {self.area:>10.1f} {self.n_total:>5} {self.worst:>9.4f}")
+        lines += [f"Note: {note}" for note in self.notes]
         return "\n".join(lines)
 
 
@@ -237,9 +241,9 @@ def plan(shape_or_faces, tolerance=None, n_total=None, strategy=BEST_STRATEGY, *
         n_max = check_int("n_max", n_max, 4)
         jobs = [FaceJob(name, face.exportBrepToString(), "tolerance", strategy, tolerance=tolerance, n_max=n_max,
                         arguments=arguments, part_brep=part_brep, probe=probe) for name, face in named]
-        outcomes, cancelled = _run(jobs, processes, scheduler, progress)
+        outcomes, cancelled, notes = _run(jobs, processes, scheduler, progress)
         result = PartPlan(_completed(outcomes, named), "tolerance", strategy, tolerance=tolerance,
-                          cancelled=cancelled)
+                          cancelled=cancelled, notes=notes)
     else:
         result = _plan_budget(named, check_int("n_total", n_total, 1), strategy, arguments, processes, scheduler,
                               progress, part_brep, probe)
@@ -343,7 +347,7 @@ def _take(planned, result):
 
 
 def _run(jobs, processes, scheduler, progress):
-    """(outcomes, cancelled) of the jobs through face_runs.run_all."""
+    """(outcomes, cancelled, notes) of the jobs through face_runs.run_all."""
     stopped = []
 
     def watched(done, total, message):
@@ -352,8 +356,8 @@ def _run(jobs, processes, scheduler, progress):
             return True
         return False
 
-    outcomes = face_runs.run_all(solve_face, jobs, processes, scheduler, watched, describe=_outcome_line)
-    return outcomes, bool(stopped)
+    outcomes, notes = face_runs.run_all(solve_face, jobs, processes, scheduler, watched, describe=_outcome_line)
+    return outcomes, bool(stopped), notes
 
 
 def _outcome_line(job, outcome):
@@ -378,7 +382,7 @@ def _plan_budget(named, budget, strategy, arguments, processes, scheduler, progr
     if budget < first * len(jobs):
         raise ValueError(f"{budget} points give fewer than {first} to each of the {len(jobs)} faces; give "
                          f"n_total of at least {first * len(jobs)}, or fewer faces")
-    outcomes, cancelled = _run(jobs, processes, scheduler, progress)
+    outcomes, cancelled, notes = _run(jobs, processes, scheduler, progress)
     faces = _completed(outcomes, named)
     spent = sum(face.n for face in faces)
     firsts = [s[1] for s in steps]
@@ -391,10 +395,11 @@ def _plan_budget(named, budget, strategy, arguments, processes, scheduler, progr
             break
         job = FaceJob(faces[worst].name, jobs[worst].brep, "points", strategy, n=later[0], arguments=arguments,
                       part_brep=part_brep, probe=probe)
-        [stepped], cancelled = _run([job], 1, scheduler, progress)
+        [stepped], cancelled, step_notes = _run([job], 1, scheduler, progress)
+        notes += [note for note in step_notes if note not in notes]
         if stepped is None or not stepped.placed or not stepped.maximum < faces[worst].maximum:
             faces[worst].reason = f"its next step ({later[0]} points) did not lower its deviation"
             break
         spent += stepped.n - faces[worst].n
         faces[worst] = stepped
-    return PartPlan(faces, "points", strategy, budget=budget, cancelled=cancelled)
+    return PartPlan(faces, "points", strategy, budget=budget, cancelled=cancelled, notes=notes)

@@ -1,30 +1,43 @@
 """Evaluate a swarm's batched objective on two cores: this process and one worker process.
 
 The swarm's many small numpy operations hold the GIL, so threads do not help; a second process
-does. The worker is a plain ``python -m cmmsampling.strategies.worker`` started once (with Debian's Python,
-also from inside FreeCAD, whose ``sys.executable`` is the FreeCAD binary) and kept for the
-session. Each particle's fitness is computed exactly as in one process, so results are identical.
-While a run goes on, both sides poll for the other's message instead of blocking (see
-:func:`cmmsampling.strategies.worker.wait_for`). If the worker cannot be started or fails, evaluation
-continues in this process alone.
+does. The worker is a plain Python of this process's version (Debian's, also from inside FreeCAD,
+whose ``sys.executable`` is the FreeCAD binary), started once and kept for the session.
+
+How it finds the package: the worker is started as ``python -c BOOT FOLDER FD`` in the temporary
+folder, where FOLDER is the folder that holds this very ``cmmsampling`` package (a checkout, the
+add-on's folder in FreeCAD's Mod folder, an Addon Manager copy, site-packages), put first on the
+worker's ``sys.path``. So it imports the same code from any current folder and any install.
+
+When it cannot: the worker answers ("ready", pid) before anything is sent to it; a worker that
+exits first (it cannot import the package, no Python of this version) or does not answer within
+START_SECONDS is ended, and the swarm runs in this process alone. A worker that dies during a run
+is noticed on its closed channel (never a signal: see :mod:`cmmsampling.strategies.channel`), and
+its share is computed here. Each particle's fitness is computed exactly as in one process, so the
+result is the same either way; :attr:`TwoProcessObjective.fallback` says why one process was used.
 """
 import atexit
 import itertools
 import os
+import socket
 import subprocess
 import sys
-from multiprocessing.connection import Connection
+import tempfile
 
 import numpy as np
 
-from .worker import wait_for
+from .channel import Channel
 
 MIN_PARTICLES = 4
+START_SECONDS = 60.0
+BOOT = ("import sys; sys.path.insert(0, sys.argv[1]); "
+        "from cmmsampling.strategies.worker import main; main(int(sys.argv[2]))")
 _tokens = itertools.count()
 
 
 def python_executable():
-    """A Python interpreter of this process's version, also when running inside FreeCAD."""
+    """A Python interpreter of this process's version, also when running inside FreeCAD; None
+    where there is none."""
     name = f"python{sys.version_info.major}.{sys.version_info.minor}"
     if os.path.basename(sys.executable).startswith("python"):
         return sys.executable
@@ -32,56 +45,116 @@ def python_executable():
     return candidate if os.path.exists(candidate) else None
 
 
-class Worker:
-    """One worker process with a pipe in each direction."""
+def package_parent():
+    """The folder (or zip file) that holds the imported ``cmmsampling`` package: what a worker
+    process puts first on its sys.path."""
+    package = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    return os.path.dirname(package)
 
-    def __init__(self, executable):
-        to_child_r, to_child_w = os.pipe()
-        from_child_r, from_child_w = os.pipe()
-        package_root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-        env = dict(os.environ, PYTHONPATH=package_root, OPENBLAS_NUM_THREADS="1",
-                   OMP_NUM_THREADS="1", MKL_NUM_THREADS="1")
-        self.process = subprocess.Popen(
-            [executable, "-m", "cmmsampling.strategies.worker", str(to_child_r), str(from_child_w)],
-            pass_fds=(to_child_r, from_child_w), env=env, stdin=subprocess.DEVNULL,
-            close_fds=True,
-        )
-        os.close(to_child_r)
-        os.close(from_child_w)
-        self.send = Connection(to_child_w, readable=False).send
-        self._incoming = Connection(from_child_r, writable=False)
-        self.loaded = None
+
+def single_threaded_environment():
+    """This process's environment with the numeric libraries limited to one thread each (a
+    worker process shares the machine's cores with this one)."""
+    return dict(os.environ, OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1", MKL_NUM_THREADS="1")
+
+
+class WorkerUnavailable(RuntimeError):
+    """The worker process could not be started or did not answer; the message says why."""
+
+
+class Worker:
+    """One worker process and the channel to it; WorkerUnavailable when it does not start."""
+
+    def __init__(self, executable, start_seconds=START_SECONDS):
+        ours, theirs = socket.socketpair()
+        self.errors = tempfile.TemporaryFile()
+        try:
+            self.process = subprocess.Popen(
+                [executable, "-c", BOOT, package_parent(), str(theirs.fileno())],
+                pass_fds=(theirs.fileno(),), cwd=tempfile.gettempdir(), env=single_threaded_environment(),
+                stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=self.errors)
+        except OSError as exc:
+            ours.close()
+            raise WorkerUnavailable(f"{executable} could not be started ({exc})") from exc
+        finally:
+            theirs.close()
+        self.channel = Channel(ours)
+        self.pid = self._handshake(start_seconds)
+
+    def _handshake(self, seconds):
+        """The worker's pid from its first message; WorkerUnavailable (the worker ended) when it
+        exits or stays silent for ``seconds``."""
+        try:
+            status, pid = self.channel.receive(seconds)
+        except (EOFError, OSError) as exc:
+            self.settle()
+            reason = self.why(f"did not answer within {seconds:g} s")
+            self.close()
+            raise WorkerUnavailable(reason) from exc
+        return pid
+
+    def settle(self, seconds=5.0):
+        """Give a worker whose channel closed ``seconds`` to exit, so that its exit code is known."""
+        try:
+            self.process.wait(seconds)
+        except subprocess.TimeoutExpired:
+            pass
+
+    def why(self, silent=None):
+        """Why the worker is gone, in words: its exit code and the last line it wrote on stderr
+        (e.g. a ModuleNotFoundError); ``silent`` when it is still running."""
+        code = self.process.poll()
+        if code is None:
+            return f"the second process {silent or 'stopped answering'}"
+        self.errors.seek(0)
+        lines = self.errors.read().decode(errors="replace").strip().splitlines()
+        ending = f"was killed by signal {-code}" if code < 0 else f"exited with code {code}"
+        return f"the second process {ending}" + (f": {lines[-1].strip()}" if lines else "")
+
+    def alive(self):
+        """True while the worker process runs."""
+        return self.process.poll() is None
+
+    def send(self, message):
+        """Send a request; OSError when the worker has gone."""
+        self.channel.send(message)
 
     def receive(self):
-        """The worker's reply payload; RuntimeError when it reports a failure."""
-        wait_for(self._incoming)
-        status, payload = self._incoming.recv()
+        """The worker's reply payload; EOFError when it has gone, RuntimeError when it reports a failure."""
+        status, payload = self.channel.receive()
         if status != "ok":
-            raise RuntimeError(f"worker process failed:\n{payload}")
+            raise RuntimeError(f"the second process failed:\n{payload}")
         return payload
 
     def close(self):
-        """End the worker (it exits when its pipe closes)."""
-        self.process.kill()
+        """End the worker and close the channel."""
+        if self.alive():
+            self.process.kill()
         self.process.wait()
+        self.channel.close()
+        self.errors.close()
 
 
 _worker = None
 
 
 def shared_worker():
-    """The session's worker process, started on first use; None where it cannot run."""
+    """The session's worker process, started on first use (or again after it died). Returns
+    (worker, None), or (None, the reason in words) where it cannot run."""
     global _worker
-    if _worker is not None and _worker.process.poll() is None:
-        return _worker
+    if _worker is not None and _worker.alive():
+        return _worker, None
+    if _worker is not None:
+        _worker.close()
+        _worker = None
     executable = python_executable()
     if executable is None:
-        return None
+        return None, f"no python{sys.version_info.major}.{sys.version_info.minor} was found to start it with"
     try:
         _worker = Worker(executable)
-    except OSError:
-        return None
-    return _worker
+    except WorkerUnavailable as exc:
+        return None, str(exc)
+    return _worker, None
 
 
 def _close_shared_worker():
@@ -97,14 +170,16 @@ class TwoProcessObjective:
 
     The objective must pickle (the engine's DeviationObjective does). Swarms smaller than
     MIN_PARTICLES, and every call after a worker failure, are evaluated here alone.
-    ``evaluations`` counts point sets scored; ``parallel`` says whether the worker is in use.
+    ``evaluations`` counts point sets scored, ``remote`` those the worker scored; ``fallback``
+    is None while the worker shares the work, else why it does not (a sentence).
     """
 
     def __init__(self, objective):
         self.objective = objective
         self.token = next(_tokens)
-        self.worker = shared_worker()
+        self.worker, self.fallback = shared_worker()
         self.evaluations = 0
+        self.remote = 0
         if self.worker is not None:
             self._guard(lambda: (self.worker.send(("load", self.token, objective)), self.worker.receive()))
 
@@ -114,11 +189,16 @@ class TwoProcessObjective:
         return self.worker is not None
 
     def _guard(self, action):
-        """Run a worker action; on any failure drop the worker and return None."""
+        """Run a worker action; on any failure drop the worker, say why, and return None."""
         try:
             return action()
-        except (OSError, EOFError, RuntimeError):
-            self.worker = None
+        except (OSError, EOFError, RuntimeError) as exc:
+            worker, self.worker = self.worker, None
+            if isinstance(exc, RuntimeError):
+                self.fallback = str(exc).splitlines()[0].rstrip(":") + f": {str(exc).strip().splitlines()[-1]}"
+            else:
+                worker.settle()
+                self.fallback = worker.why()
             return None
 
     def __call__(self, uv):
@@ -134,4 +214,5 @@ class TwoProcessObjective:
         remote = self._guard(self.worker.receive)
         if remote is None:
             return np.concatenate([local, self.objective(uv[half:])])
+        self.remote += uv.shape[0] - half
         return np.concatenate([local, remote])

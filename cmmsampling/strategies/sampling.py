@@ -123,10 +123,22 @@ def run_pso(problem, progress, population, iterations, w1, w2, c1, c2, velocity_
         raise ValueError(
             f"no particle kept its points {problem.min_spacing:g} mm apart ({problem.spacing_advice()}) or "
             "use start_from_uniform=True")
+    notes, details = _process_notes(problem, objective)
     if swarm.cancelled:
-        return StrategyOutcome(swarm.best, swarm.history, swarm.evaluations, True)
-    best, notes = _best_exact(problem, swarm.best, seeds)
-    return StrategyOutcome(best, swarm.history, swarm.evaluations, False, notes=notes)
+        return StrategyOutcome(swarm.best, swarm.history, swarm.evaluations, True, details=details, notes=notes)
+    best, exact_notes = _best_exact(problem, swarm.best, seeds)
+    return StrategyOutcome(best, swarm.history, swarm.evaluations, False, details=details, notes=notes + exact_notes)
+
+
+def _process_notes(problem, objective):
+    """(notes, details) on the processes that scored the swarm: details {"processes": 1 or 2},
+    2 when the second process took part; a note when it was asked for (workers=2) but could not
+    help, with the reason."""
+    used = 2 if getattr(objective, "remote", 0) > 0 else 1
+    fallback = getattr(objective, "fallback", None)
+    notes = [f"the swarm ran in this process alone, with the same result, only slower: {fallback}"] \
+        if problem.workers == 2 and fallback else []
+    return notes, {"processes": used}
 
 
 def _uniform_seeds(problem):

@@ -1,48 +1,50 @@
-"""The worker process of :mod:`cmmsampling.strategies.parallel`: ``python -m cmmsampling.strategies.worker READ_FD WRITE_FD``.
+"""The worker process of :mod:`cmmsampling.strategies.parallel`.
 
-It receives a batched objective once (pickled, pure numpy) and then evaluates the point sets it
-is sent, until the parent closes the pipe. Requests: ("load", token, objective),
-("eval", token, uv (P, N, 2)). Replies: ("ok", values (P,)) or ("error", message).
+Started as ``python -c BOOT PACKAGE_PARENT SOCKET_FD`` (see :data:`cmmsampling.strategies.parallel.BOOT`):
+it first answers ("ready", its pid), then receives a batched objective once (pickled, pure numpy)
+and evaluates the point sets it is sent, until the parent closes the channel or dies. Requests:
+("load", token, objective), ("eval", token, uv (P, N, 2)). Replies: ("ok", values (P,)) or
+("error", message).
 """
-import sys
-import time
+import os
+import socket
 import traceback
-from multiprocessing.connection import Connection
 
-SPIN_SECONDS = 0.05
-
-
-def wait_for(connection, seconds=SPIN_SECONDS):
-    """Wait until ``connection`` has data, polling without sleeping for up to ``seconds`` first.
-
-    A swarm's requests and replies follow each other about every millisecond. A process that
-    blocks on a pipe is woken slowly on a virtual machine, and runs slower for a while after it,
-    so both sides poll while a run is going on; after ``seconds`` of silence they block (recv).
-    """
-    end = time.perf_counter() + seconds
-    while not connection.poll(0) and time.perf_counter() < end:
-        pass
+from .channel import Channel
 
 
-def serve(incoming, outgoing):
-    """Answer requests until the parent goes away."""
+def main(fd):
+    """Serve the parent on the socket ``fd`` until it goes away."""
+    channel = Channel(socket.socket(fileno=fd))
+    try:
+        channel.send(("ready", os.getpid()))
+    except OSError:
+        return
+    serve(channel)
+
+
+def serve(channel):
+    """Answer requests until the parent closes the channel or has gone."""
     objectives = {}
     while True:
         try:
-            wait_for(incoming)
-            request = incoming.recv()
+            request = channel.receive()
         except (EOFError, OSError):
             return
         try:
-            if request[0] == "load":
-                objectives.clear()
-                objectives[request[1]] = request[2]
-                outgoing.send(("ok", None))
-            else:
-                outgoing.send(("ok", objectives[request[1]](request[2])))
-        except Exception:  # report every failure to the parent, which falls back to one process
-            outgoing.send(("error", traceback.format_exc()))
+            reply = _answer(request, objectives)
+        except Exception:  # every failure goes to the parent, which then goes on in one process
+            reply = ("error", traceback.format_exc())
+        try:
+            channel.send(reply)
+        except OSError:
+            return
 
 
-if __name__ == "__main__":
-    serve(Connection(int(sys.argv[1]), writable=False), Connection(int(sys.argv[2]), readable=False))
+def _answer(request, objectives):
+    """The reply to one request; objectives: {token: objective} (only the last one loaded)."""
+    if request[0] == "load":
+        objectives.clear()
+        objectives[request[1]] = request[2]
+        return ("ok", None)
+    return ("ok", objectives[request[1]](request[2]))

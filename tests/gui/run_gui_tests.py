@@ -16,7 +16,7 @@ def run():
     import pytest
 
     sys.stdout, sys.stderr = sys.__stdout__, sys.__stderr__
-    os.chdir(os.environ["CMMSAMPLING_ROOT"])
+    os.chdir(os.environ.get("CMMSAMPLING_START_FOLDER", os.path.expanduser("~")))
     arguments = shlex.split(os.environ.get("CMMSAMPLING_PYTEST_ARGS", ""))
     code = pytest.main(["-q", "-p", "no:cacheprovider", GUI_TESTS] + arguments)
     sys.stdout.flush()

@@ -56,6 +56,35 @@ def test_cancel_at_any_moment_leaves_the_document_as_it_was(doc, monkeypatch, at
     assert "add_to_document" not in dock_text("Python console")[echoed:]
 
 
+def test_a_worker_killed_mid_run_leaves_freecad_alive_and_says_so(doc, monkeypatch):
+    """SIGKILL to the swarm's second process at iteration 10 of a PSO run from the panel: the run
+    ends in FreeCAD's process with the same points as a one-process run, its note is in the
+    document and in the Report view."""
+    import os
+    import signal
+
+    from cmmsampling.strategies import parallel
+
+    interrupt_run(monkeypatch, lambda: os.kill(parallel.shared_worker()[0].pid, signal.SIGKILL), at=10)
+    form = open_panel(doc)
+    fill(form, "pso", **SHORT_RUN)
+    reported = len(dock_text("Report view"))
+    task_button(OK).click()
+    assert wait_until(lambda: not FreeCADGui.Control.activeDialog(), 120), form.status.text()
+    import __main__
+
+    import cmmsampling
+
+    points, run = groups(doc)[-1].Group[0], __main__.result
+    alone = cmmsampling.sample(doc.Body.Shape.Faces[0], 25, "pso", population=8, iterations=20, seed=1, grid=30,
+                               edge_offset=run.settings["edge_offset"], min_spacing=run.settings["min_spacing"],
+                               workers=1)
+    np.testing.assert_array_equal(run.uv, alone.uv)
+    np.testing.assert_allclose(np.array([tuple(p) for p in points.Points]), alone.points, atol=1e-9)
+    assert any("killed by signal 9" in note for note in points.Notes), points.Notes
+    assert wait_until(lambda: "the second process was killed by signal 9" in dock_text("Report view")[reported:], 2)
+
+
 def test_a_fault_inside_a_run_is_shown_and_changes_nothing(doc, monkeypatch):
     interrupt_run(monkeypatch, fault_in_the_run, at=5)
     form = open_panel(doc)
