@@ -70,7 +70,8 @@ def straightforward_fitness(problem, uv):
     The face's points one by one from OpenCASCADE, scipy's B-spline design matrices, the smoothed
     least-squares fit by np.linalg.lstsq, the fitted surface on the grid, and the expanded
     deviation n . e - e^T K e / 2 at each node with full 3 x 3 matrices K (the nodes, their
-    normals, K and the grid's design matrices computed once, as any implementation would).
+    normals, K and the grid's design matrices computed once, as any implementation would), and
+    the edge nodes' offsets along their normal and conormal.
     """
     from scipy.interpolate import BSpline
 
@@ -86,7 +87,11 @@ def straightforward_fitness(problem, uv):
     grid_u, grid_v, nodes, normals, curvature, counted = _straightforward_grid(problem)
     error = np.einsum("ia,abc,jb->ijc", grid_u, poles, grid_v) - nodes
     deviation = (error * normals).sum(-1) - 0.5 * np.einsum("ijc,ijcd,ijd->ij", error, curvature, error)
-    return np.abs(deviation[counted]).max()
+    edges = problem.objective.nodes
+    offset = space.evaluate(poles, edges.edge_uv) - edges.edge_points
+    across = np.concatenate([edges.edge_normals[:, None, :], edges.edge_across], axis=1)
+    at_edges = np.sqrt((np.einsum("ec,ekc->ek", offset, across) ** 2).sum(-1))
+    return max(np.abs(deviation[counted]).max(), at_edges.max(initial=0.0))
 
 
 def _straightforward_grid(problem, cache={}):
@@ -95,7 +100,7 @@ def _straightforward_grid(problem, cache={}):
     if id(problem) not in cache:
         from scipy.interpolate import BSpline
 
-        space, grid, feet = problem.space, problem.grid, problem.objective.feet
+        space, grid, feet = problem.space, problem.grid, problem.objective.nodes
         u, v = grid.uv[:, 0, 0], grid.uv[0, :, 1]
         curvature = curvature_matrices(problem.model, feet.uv.reshape(-1, 2), feet.normals.reshape(-1, 3))
         cache[id(problem)] = (BSpline.design_matrix(u, space.uknots, space.degrees[0]).toarray(),

@@ -324,7 +324,7 @@ def make_substitute_surface(doc):
 def write_substitute(surface, result):
     """The fitted surface as the object's shape, with the deviation field of the result."""
     stats = result.deviation
-    surface.Shape = result.substitute.toShape()
+    surface.Shape = result.substitute_shape()
     surface.GridU = [float(u) for u in stats.grid_uv[:, 0, 0]]
     surface.GridV = [float(v) for v in stats.grid_uv[0, :, 1]]
     surface.DeviationField = [float(d) for d in np.ravel(stats.field)]

@@ -321,10 +321,11 @@ def report_html(study, figures):
     parts += ["<h2>Table 1: maximum deviation (mm) per strategy and number of probe points</h2>",
               _matrix_html(study),
               "<p>± : standard deviation over the seeds. Bold: the smallest maximum at each N. "
-              "Deviation: the closest-point distance in space from the face to the substitute. Local "
-              "bound: the least maximum that reshaping the best substitute at that N along its normals "
-              "could reach; it certifies how far that substitute is from a local optimum, not that no "
-              "other point set does better.</p>",
+              "Deviation: the distance in space between the face and the delivered substitute, both "
+              "ways (face to substitute, substitute over the face's domain back to the face). Local "
+              "bound: the least first-order maximum that reshaping the best substitute at that N along "
+              "its normals could reach; a yardstick of how far that substitute is from a local optimum, "
+              "not a bound on what other point sets can reach.</p>",
               "<h2>All measures</h2>",
               "<p>Means over the seeds (± standard deviation). Ratios are to "
               f"{label(study.settings['baseline'])} sampling "
@@ -359,11 +360,12 @@ def _settings_html(study):
         f"smoothing {s['smoothing']:g}; evaluation grid {_pair(s['grid'])} nodes of (u, v), check grid 3x "
         "denser per direction",
         *(_options_html(name, values) for name, values in s["options"].items()),
-        "Deviation: the distance in space from nodes on the face (the feet of a reference fit's grid "
-        "points) to the substitute, signed by side, mm. Local bound: the least maximum deviation that "
-        "reshaping the best substitute at that N along its normals could reach, on the evaluation grid "
-        "(or the check grid); it certifies how near that substitute is to a local optimum of its own "
-        "shape, not what other point sets could reach.",
+        "Deviation: the distance in space between the face and the delivered substitute, both ways, "
+        "at nodes on the face (a raster of its domain and points along every edge), signed by side, "
+        "mm. Local bound: the least first-order maximum deviation that reshaping the best substitute "
+        "at that N along its normals could reach, on the evaluation grid (or the check grid); a "
+        "yardstick of how near that substitute is to a local optimum of its own shape, not a bound "
+        "on what other point sets could reach.",
         f"Wall time of the study: {study.elapsed_s:.1f} s",
     ]
     return "<ul>" + "".join(f"<li>{item}</li>" for item in items) + "</ul>"

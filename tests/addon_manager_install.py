@@ -12,8 +12,9 @@ downloads the zip archive (it uses git only for add-ons named in its ``force_git
 preference). The Addon Manager's fetch of its Python allow-list from GitHub is skipped (CI may
 have no internet). Exit code 0 when the add-on was installed into the user's Mod folder, its
 package.xml gives the Python dependencies numpy, scipy and matplotlib, none of them is missing,
-and a new ``freecadcmd``, started in the temporary folder, loads the installed copy (its Init.py
-registers the DMIS export) and runs a PSO whose second process takes part.
+a new ``freecadcmd``, started in the temporary folder, loads the installed copy (its Init.py
+registers the DMIS export), and the copy's tests/installed_smoke.py passes there (a PSO whose
+second process takes part, a document, a killed worker, a 2-face plan).
 """
 import functools
 import http.server
@@ -32,8 +33,6 @@ BRANCH = "main"
 PYTHON_DEPENDENCIES = {"numpy", "scipy", "matplotlib"}
 LOAD_CHECK = """
 import os, FreeCAD, cmmsampling
-run = cmmsampling.sample(cmmsampling.reference_face(), 25, "pso", iterations=10, grid=20, workers=2)
-print(run.settings["processes"], run.notes)
 print(os.path.dirname(os.path.dirname(os.path.abspath(cmmsampling.__file__))))
 print("cmmsampling.document" in FreeCAD.getExportType("dmi"))
 """
@@ -74,14 +73,24 @@ def missing_python_packages(addon):
 
 
 def loaded_copy():
-    """(folder of the cmmsampling that a new freecadcmd imports, whether Init.py ran, what a PSO
-    run on 2 processes says of them: "2 []" when the second process took part)."""
+    """(folder of the cmmsampling that a new freecadcmd imports, whether Init.py ran)."""
     run = subprocess.run(["freecadcmd", "-c", LOAD_CHECK], capture_output=True, text=True,
                          cwd=tempfile.gettempdir(), timeout=120)
     lines = run.stdout.strip().splitlines()
-    if run.returncode != 0 or len(lines) < 3:
-        return None, f"freecadcmd failed ({run.returncode}): {run.stdout} {run.stderr}", ""
-    return lines[-2], lines[-1] == "True", lines[-3]
+    if run.returncode != 0 or len(lines) < 2:
+        return None, f"freecadcmd failed ({run.returncode}): {run.stdout} {run.stderr}"
+    return lines[-2], lines[-1] == "True"
+
+
+def smoke_run(target):
+    """The installed copy's own tests/installed_smoke.py in a new freecadcmd, started in the
+    temporary folder: PSO on 2 processes, a document, a killed worker, a 2-face plan. A problem
+    in words, or None."""
+    run = subprocess.run(["freecadcmd", os.path.join(target, "tests", "installed_smoke.py")], capture_output=True,
+                         text=True, cwd=tempfile.gettempdir(), timeout=600)
+    if run.returncode != 0 or "smoke run passed" not in run.stdout:
+        return f"the installed copy's smoke run failed ({run.returncode}): {(run.stdout + run.stderr)[-2000:]}"
+    return None
 
 
 def check():
@@ -96,11 +105,12 @@ def check():
         problems.append(f"package.xml's Python dependencies read as {sorted(addon.python_requires)}")
     if missing_python_packages(addon):
         problems.append(f"the Addon Manager finds {missing_python_packages(addon)} missing")
-    folder, init_ran, processes = loaded_copy()
+    folder, init_ran = loaded_copy()
     if folder != target or init_ran is not True:
         problems.append(f"a new freecadcmd loads {folder} (expected {target}), Init.py ran: {init_ran}")
-    if processes != "2 []":
-        problems.append(f"the installed copy's PSO on 2 processes says: {processes}")
+    smoke = smoke_run(target)
+    if smoke:
+        problems.append(smoke)
     how = "git clone" if os.path.isdir(os.path.join(target, ".git")) else "zip archive"
     print(f"FreeCAD {'.'.join(FreeCAD.Version()[:3])}: installed {url} (branch {BRANCH}) by "
           f"{how} into {target}")

@@ -8,7 +8,7 @@ from cmmsampling.geometry.freecad_env import import_part
 
 Part = import_part()
 import FreeCAD  # noqa: E402,F401  (importable once import_part() has set the path)
-from cmmsampling.geometry.surface import make_bspline_surface  # noqa: E402
+from cmmsampling.geometry.surface import make_bspline_surface, reference_poles  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 TESTDATA = os.path.join(os.path.dirname(ROOT), "shared", "testdata")
@@ -55,6 +55,13 @@ def strip_face():
     x, y = np.meshgrid(np.linspace(0, 60, 7), np.linspace(0, 2, 4), indexing="ij")
     z = 6 * np.sin(x / 12) + 0.8 * y * np.cos(x / 9)
     return make_bspline_surface(np.stack([x, y, z], -1), (3, 3)).toShape()
+
+
+def collapsed_face():
+    """The reference surface with its first pole row collapsed to one point (a degenerate edge)."""
+    poles = reference_poles().copy()
+    poles[0, :, :] = poles[0, 4, :]
+    return make_bspline_surface(poles, (5, 5)).toShape()
 
 
 def holed_face():

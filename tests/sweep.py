@@ -89,7 +89,7 @@ def _check_points(face, result, offset):
     """("points", "") when the result's points are on the face, off its edges and spaced (OCC)."""
     vertices = [Part.Vertex(*p) for p in result.points]
     off = max(face.distToShape(v)[0] for v in vertices)
-    if off > ON_FACE_MM:
+    if off > result.model.tolerance:
         return "failure", f"a point {off:.3g} mm off the face"
     outside = sum(not result.model.face.isPartOfDomain(u, v) for u, v in result.uv)
     if outside:

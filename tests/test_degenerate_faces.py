@@ -2,23 +2,16 @@
 a plane, a tiny face; each gets usable points or a message saying what to change."""
 import numpy as np
 import pytest
-from geometry import Part, cartesian_refuses
+from geometry import Part, cartesian_refuses, collapsed_face
 
 import cmmsampling
-from cmmsampling.geometry.surface import SurfaceModel, make_bspline_surface, reference_poles
+from cmmsampling.geometry.surface import SurfaceModel
 
 QUICK = {"pso": {"iterations": 10, "population": 6}, "optimal": {"max_evaluations": 40}}
 
 
-def _collapsed_face():
-    """The reference surface with its first pole row collapsed to one point (a degenerate edge)."""
-    poles = reference_poles().copy()
-    poles[0, :, :] = poles[0, 4, :]
-    return make_bspline_surface(poles, (5, 5)).toShape()
-
-
 def test_normals_on_degenerate_edges_are_the_limit_normals():
-    collapsed = _collapsed_face()
+    collapsed = collapsed_face()
     model = SurfaceModel.from_face(collapsed)
     uv = np.array([[0.0, 0.2], [0.0, 0.5], [0.0, 1.0]])
     occ = np.array([tuple(collapsed.normalAt(u, v)) for u, v in uv])
@@ -30,7 +23,7 @@ def test_normals_on_degenerate_edges_are_the_limit_normals():
 
 
 @pytest.mark.parametrize("strategy", sorted(cmmsampling.STRATEGIES))
-@pytest.mark.parametrize("make", [_collapsed_face, lambda: Part.makeSphere(5).Faces[0],
+@pytest.mark.parametrize("make", [collapsed_face, lambda: Part.makeSphere(5).Faces[0],
                                   lambda: Part.makeCylinder(10, 20).Faces[0]],
                          ids=["collapsed_edge", "sphere", "full_cylinder"])
 def test_degenerate_and_periodic_faces_give_usable_points(make, strategy):

@@ -3,7 +3,8 @@ import numpy as np
 import pytest
 from geometry import Part
 
-from cmmsampling.fitting.deviation import EvaluationGrid, deviation_objective, substitute_distances
+from cmmsampling.fitting.deviation import EvaluationGrid, deviation_objective
+from cmmsampling.fitting.exact import exact_deviation
 from cmmsampling.fitting.substitute import FittedSurface
 from cmmsampling.fitting.substitute import DEFAULT_SMOOTHING, SubstituteSpace, default_pole_count
 from cmmsampling.fitting.occ_surface import substitute_surface
@@ -71,8 +72,9 @@ def test_fitted_part_surface_matches_our_evaluation(reference):
 
 
 def test_exact_distances_agree_with_occ_and_the_expansion_is_close(reference):
-    """The exact deviations are OCC's closest-point distances from the nodes to the substitute;
-    the swarm's second-order expansion is within 2% of them at the maximum."""
+    """Both sides of the exact deviation are OCC's closest-point distances: from the nodes to the
+    delivered substitute, and from its points at the nodes' parameters back to the face; the
+    swarm's expansion is within 2% of them at the maximum."""
     model = SurfaceModel.from_face(reference)
     space = SubstituteSpace((3, 3), (6, 6), model.bounds)
     objective = deviation_objective(model, space, EvaluationGrid(model, (30, 25)))
@@ -80,13 +82,17 @@ def test_exact_distances_agree_with_occ_and_the_expansion_is_close(reference):
     uv = np.clip(grid + 0.03 * np.random.default_rng(4).standard_normal((3, 81, 2)), 0, 1)
     maxima = objective(uv)
     poles = objective.fit(uv)[1]
-    exact = np.abs(substitute_distances(FittedSurface(space, poles), objective.feet, objective.grid.uv)[0])
-    assert maxima[1] == pytest.approx(np.nanmax(exact), rel=0.02)
-    part = substitute_surface(space, poles, extended=True).toShape()
-    nodes = objective.feet.points[np.isfinite(exact)]
-    worst = np.argsort(exact[np.isfinite(exact)])[-20:]
-    occ = np.array([part.distToShape(Part.Vertex(*map(float, p)))[0] for p in nodes[worst]])
-    assert np.abs(occ - exact[np.isfinite(exact)][worst]).max() < 1e-6 * occ.max()
+    exact = exact_deviation(space, poles, objective.nodes, objective.model)
+    assert maxima[1] == pytest.approx(exact.maximum, rel=0.02)
+    part = substitute_surface(space, poles)
+    forward = np.argsort(np.abs(exact.forward.values))[-20:]
+    nodes = objective.nodes.all_points()[forward]
+    occ = np.array([part.toShape().distToShape(Part.Vertex(*map(float, p)))[0] for p in nodes])
+    assert np.abs(occ - np.abs(exact.forward.values[forward])).max() < 1e-6 * occ.max()
+    reverse = np.argsort(np.abs(exact.reverse.values))[-20:]
+    points = [part.value(*map(float, uv)) for uv in exact.reverse.at[reverse]]
+    occ = np.array([reference.distToShape(Part.Vertex(p))[0] for p in points])
+    assert np.abs(occ - np.abs(exact.reverse.values[reverse])).max() < 1e-6 * occ.max()
 
 
 @pytest.mark.parametrize("n, expected", [(25, 4), (49, 5), (81, 6), (144, 8), (400, 13), (4, 4)])

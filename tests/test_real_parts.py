@@ -82,7 +82,7 @@ def test_deviation_is_measured_only_on_the_face(step_faces):
     """Nodes whose foot on the surface falls in the hole do not count; the others are on the face."""
     face = step_faces["holed_bspline"]
     result = cmmsampling.sample(face, 36, "uniform_parametric", grid=40)
-    feet = result.problem.objective.feet
+    feet = result.problem.objective.nodes
     in_hole = np.linalg.norm(feet.uv - 0.5, axis=-1) < 0.1
     assert in_hole.any() and not feet.counted[in_hole].any() and feet.counted.mean() > 0.8
     assert np.isnan(result.deviation.field[in_hole]).all()

@@ -1,24 +1,32 @@
-"""Independent check of a result with OpenCASCADE: its closest-point distance from the face's
-nodes to the substitute surface, at the nodes of largest deviation."""
+"""Independent check of a result with OpenCASCADE: its distances, both ways, at the nodes of largest
+deviation (cmmsampling.fitting.exact): from the face's nodes to the substitute surface, and from
+the substitute's points at the nodes' parameters back to the face."""
 import numpy as np
 
 from ..geometry.freecad_env import import_part
 
 Part = import_part()
 
-OCC_DISTANCE_NODES = 50
+OCC_DISTANCE_NODES = 25
 
 
-def occ_cross_check(stats, substitute):
-    """Fill stats.occ_maximum using OpenCASCADE only: the largest of its closest-point distances
-    from the nodes to the substitute, over the OCC_DISTANCE_NODES nodes of largest |d|.
+def occ_cross_check(stats, exact, substitute, face):
+    """Fill stats.occ_maximum using OpenCASCADE only: the largest of its closest-point distances,
+    from the OCC_DISTANCE_NODES nodes of largest forward deviation to the substitute and from the
+    substitute's points at the OCC_DISTANCE_NODES nodes of largest reverse deviation to the face.
 
-    stats: DeviationStats; substitute: the fitted Part.BSplineSurface over the range the
-    deviation is measured on (cmmsampling.geometry.surface.substitute_surface with ``extended``).
+    stats: DeviationStats; exact: the ExactDeviation it summarises; substitute: the delivered
+    Part.BSplineSurface (cmmsampling.fitting.occ_surface.substitute_surface); face: the Part.Face.
     """
-    counted = ~np.isnan(stats.field)
-    nodes = stats.nodes[counted]
-    worst = nodes[np.argsort(stats.field[counted])[-OCC_DISTANCE_NODES:]]
+    forward = np.argsort(np.abs(exact.forward.values))[-OCC_DISTANCE_NODES:]
+    reverse = np.argsort(np.abs(exact.reverse.values))[-OCC_DISTANCE_NODES:]
+    node_points = exact.nodes.all_points()[forward]
+    substitute_points = np.array([substitute.value(*map(float, uv)) for uv in exact.reverse.at[reverse]])
     shape = substitute.toShape()
-    stats.occ_maximum = float(max(shape.distToShape(Part.Vertex(*map(float, p)))[0] for p in worst))
+    stats.occ_maximum = max(_largest_distance(shape, node_points), _largest_distance(face, substitute_points))
     return stats
+
+
+def _largest_distance(shape, points):
+    """The largest OCC distance (mm) from the points (M, 3) to a shape."""
+    return float(max((shape.distToShape(Part.Vertex(*map(float, p)))[0] for p in points), default=0.0))

@@ -1,186 +1,58 @@
-"""Deviation of the substitute geometry from the CAD face: a distance in space, in mm.
+"""The optimisers' deviation of a substitute from the CAD face, and the statistics reported.
 
-The CAD face is represented by nodes F_g on it: the closest points on the face (the feet) of the
-grid points S_ref(h) of a reference substitute, the fit to the face's points at every node h of a
-regular raster of the parameter rectangle (what a fit to very many probe points tends to). They
-cover the face about as evenly as the raster, up to its edges (the foot of a point beyond an
-edge is on the edge), and their normals n_g point out of the material.
-The deviation of a substitute S at a node is the signed closest-point distance from F_g to S:
+The deviation a result reports is exact and two-sided (cmmsampling.fitting.exact), measured at
+nodes on the face itself (cmmsampling.fitting.nodes): a raster F(h) of the face's domain and
+points along its edges. For a swarm, whose every particle needs a fit and a deviation, this module
+expands it about the raster: with e = S(h) - F(h) the substitute's offset from the face at the
+same parameters,
 
-    d(g) = sign(n_g . (S(p) - F_g)) |S(p) - F_g|,    p = argmin |S(p) - F_g|  (p in the range),
+    d2(h) = n(h) . e - e^T K(h) e / 2,
 
-so |d| is OpenCASCADE's closest-point distance from the node to the substitute surface, and the
-sign says on which side of the face the substitute runs. Nodes whose foot is not on the face
-(outside its trimming loops) do not count. The substitute is taken with
-its natural extension a little beyond its parameter rectangle (cmmsampling.fitting.substitute.FittedSurface),
-so that where its parametrisation runs short of the face's edge the form is still measured.
+where K = P^T L P carries the face's second fundamental form L through the map P from an offset
+to its foot's parameter shift (:func:`curvature_matrices`); it has rank two, and is applied as its
+two principal terms. d2 is the distance from S(h) to the face to second order in the tangential
+part of e, and the distance from F(h) to S to first order. At the edge nodes the tangential part
+matters to first order: a substitute whose edge drifts inside the face leaves the face's edge
+uncovered, one that drifts beyond it reaches past the face. There the swarm measures
 
-The optimisers use an expansion of d about the raster: with e = S(h) - F_g,
+    d_edge = sign(n . e) sqrt((n . e)^2 + (a_1 . e)^2 + (a_2 . e)^2),
 
-    d2(g) = n_g . e - e^T K_g e / 2,
-
-where K_g = P^T L P carries the face's second fundamental form L through the map P from an offset
-to its foot's parameter shift (:func:`curvature_matrices`); it has rank two, and is applied as
-its two principal terms. It is exact to first order (the
-first term alone) and second order in the tangential drift of S(h) from F_g; evaluating it for a
-whole swarm costs a few array operations on the raster. Every figure reported is the exact d.
-Pure numpy: the objective can be shipped to a worker process.
+with a_1 the edge's outward conormal (a_2 = 0), or the whole offset at a collapsed edge. Every
+figure reported is the exact deviation. Pure numpy: the objective can be shipped to a worker
+process.
 """
 from dataclasses import dataclass
 
 import numpy as np
 from scipy.spatial import cKDTree
 
-from ..geometry.bspline import design_matrices
+from ..geometry.bspline import design_matrices, kron_rows
+from .nodes import DEFAULT_GRID, face_nodes, grid_size, length_raster
 
-DEFAULT_GRID = 60
 # closest_squared compares all pairs of each point set up to this many pairs in all (32 MB of
 # distances), and searches neighbours beyond.
 PAIRWISE_LIMIT = 4_000_000
-FOOT_ITERATIONS = 60
-FOOT_STEP_TOLERANCE = 1e-10
-SEARCH_SAMPLES = 48
 
 
 class EvaluationGrid:
-    """A regular (g_u x g_v) raster h of the parameter rectangle, where the substitute is expanded.
+    """The (g_u x g_v) raster h of the face's parameter rectangle the deviation is measured on,
+    at equal steps of the face's length along each direction (cmmsampling.fitting.nodes).
 
     uv: (g_u, g_v, 2) in the face's parameter range (the substitute spans the same range).
     """
 
     def __init__(self, model, size=DEFAULT_GRID):
-        self.size = _grid_size(size)
-        self.uv = model.raster(self.size)
+        self.size = grid_size(size)
+        self.uv = length_raster(model, self.size)
 
 
 def deviation_objective(model, space, grid, on_face=None):
-    """The DeviationObjective on ``grid`` whose nodes are the feet of the reference fit's grid points.
+    """The DeviationObjective on ``grid``'s nodes of the face.
 
-    model: SurfaceModel or NurbsPatch of the face; space: SubstituteSpace; grid: EvaluationGrid;
-    on_face: uv (..., 2) -> (...) bool, the face's trim test (None: the whole parameter range).
+    model: SurfaceModel of the face; space: SubstituteSpace; grid: EvaluationGrid; on_face: uv
+    (..., 2) -> (...) bool, the face's trim test (None: the whole parameter range).
     """
-    objective = DeviationObjective(model, space, grid, None)
-    targets = np.moveaxis(objective.surface(objective.reference_poles()), 0, -1)
-    inside = on_face if on_face is not None else (lambda uv: np.ones(uv.shape[:-1], dtype=bool))
-    objective.expand(closest_feet(objective.model, inside, targets, grid.uv))
-    return objective
-
-
-def _grid_size(size):
-    """(n_u, n_v) from an int or a pair."""
-    pair = (size, size) if np.ndim(size) == 0 else tuple(size)
-    return tuple(int(s) for s in pair)
-
-
-@dataclass
-class Feet:
-    """Closest points on the CAD face of target points, all (g_u, g_v, ...): the deviation's nodes.
-
-    uv: (..., 2) the feet's parameters on the face; points: (..., 3) F(uv) mm; normals: (..., 3)
-    unit, out of the material; counted: (...) bool, the foot lies on the face.
-    """
-
-    uv: np.ndarray
-    points: np.ndarray
-    normals: np.ndarray
-    counted: np.ndarray
-
-
-def closest_feet(model, on_face, targets, start):
-    """Feet on the face of target points: the closest point of the surface to each, in the range.
-
-    model: NurbsPatch of the face; on_face: uv (..., 2) -> (...) bool, the face's trim test;
-    targets: (..., 3) mm; start: (..., 2) first guesses of the feet's parameters.
-    Returns Feet, counted where the foot is on the face (a target beyond the parameter range has
-    its foot on the range's edge: a point of the face's boundary, counted too). Damped
-    Gauss-Newton on |F(u, v) - target|^2 inside the parameter box, every node at once; a step is
-    kept only where it brings the foot closer.
-    """
-    shape = targets.shape[:-1]
-    targets = targets.reshape(-1, 3)
-    uv = _closest_parameters(model, targets, np.asarray(start, dtype=float).reshape(-1, 2))
-    points = model.points(uv)
-    normals = model.normals(uv)
-    counted = on_face(uv) & np.isfinite(points).all(1) & np.isfinite(normals).all(1)
-    return Feet(uv.reshape(shape + (2,)), points.reshape(shape + (3,)), normals.reshape(shape + (3,)),
-                counted.reshape(shape))
-
-
-def substitute_distances(surface, nodes, start):
-    """Exact signed distances d (see the module docstring) from the nodes to a substitute.
-
-    surface: FittedSurface; nodes: Feet (the face's nodes, (g_u, g_v, ...)); start: (g_u, g_v, 2)
-    first guesses of the closest points' parameters on the substitute (where the search ends
-    farther than the nearest of SEARCH_SAMPLES^2 points of the surface, stuck in a local minimum
-    as on a closed face that comes back near itself, it starts again there). Returns (d (g_u, g_v) mm,
-    NaN where the node does not count, p (g_u, g_v, 2) the closest points' parameters). The
-    substitute is taken with its natural extension (``surface.bounds``); a node it does not reach
-    even so is measured to the extension's boundary.
-    """
-    targets = nodes.points.reshape(-1, 3)
-    uv = _closest_parameters(surface, targets, np.asarray(start, dtype=float).reshape(-1, 2))
-    sample_uv, sample_distance = _nearest_samples(surface, targets)
-    stuck = np.flatnonzero(np.linalg.norm(surface.points(uv) - targets, axis=1) > sample_distance)
-    if len(stuck):
-        again = _closest_parameters(surface, targets[stuck], sample_uv[stuck])
-        better = (np.linalg.norm(surface.points(again) - targets[stuck], axis=1)
-                  < np.linalg.norm(surface.points(uv[stuck]) - targets[stuck], axis=1))
-        uv[stuck[better]] = again[better]
-    offset = surface.points(uv) - targets
-    side = np.where((offset * nodes.normals.reshape(-1, 3)).sum(1) < 0, -1.0, 1.0)
-    signed = np.where(nodes.counted.ravel(), side * np.linalg.norm(offset, axis=1), np.nan)
-    return signed.reshape(nodes.counted.shape), uv.reshape(start.shape)
-
-
-def _nearest_samples(surface, targets):
-    """The nearest of a SEARCH_SAMPLES^2 raster of the surface's range to each target (K, 3):
-    (parameters (K, 2), distance (K,) mm)."""
-    u0, u1, v0, v1 = surface.bounds
-    grid = np.stack(np.meshgrid(np.linspace(u0, u1, SEARCH_SAMPLES), np.linspace(v0, v1, SEARCH_SAMPLES),
-                                indexing="ij"), -1).reshape(-1, 2)
-    distance, index = cKDTree(surface.points(grid)).query(targets)
-    return grid[index], distance
-
-
-def _closest_parameters(model, targets, uv):
-    """Parameters (K, 2) of the closest points to targets (K, 3), from uv (K, 2), in the box.
-
-    model: anything with ``bounds``, ``points(uv)`` and ``derivatives(uv, 1)`` (a NurbsPatch or a
-    FittedSurface).
-    """
-    u0, u1, v0, v1 = model.bounds
-    low, high = np.array([u0, v0]), np.array([u1, v1])
-    uv = np.clip(uv, low, high)
-    squared = ((model.points(uv) - targets) ** 2).sum(1)
-    damping = np.full(len(uv), 1e-9)
-    active = np.ones(len(uv), dtype=bool)
-    for _ in range(FOOT_ITERATIONS):
-        if not active.any():
-            break
-        index = np.flatnonzero(active)
-        trial = np.clip(uv[index] + _gauss_newton_step(model, targets[index], uv[index], damping[index]),
-                        low, high)
-        trial_squared = ((model.points(trial) - targets[index]) ** 2).sum(1)
-        better = trial_squared <= squared[index]
-        moved = np.abs(trial - uv[index]).max(1) > FOOT_STEP_TOLERANCE * (high - low).max()
-        uv[index[better]] = trial[better]
-        squared[index[better]] = trial_squared[better]
-        damping[index] = np.where(better, damping[index] * 0.1, damping[index] * 100.0)
-        active[index] = (better & moved) | (~better & (damping[index] < 1e12))
-    return uv
-
-
-def _gauss_newton_step(model, targets, uv, damping):
-    """Levenberg-Marquardt step (K, 2) towards the closest points, damping (K,) relative."""
-    d = model.derivatives(uv, 1)
-    residual = d[(0, 0)] - targets
-    su, sv = d[(1, 0)], d[(0, 1)]
-    a, b, c = (su * su).sum(1), (su * sv).sum(1), (sv * sv).sum(1)
-    shift = damping * (a + c) + 1e-300
-    a, c = a + shift, c + shift
-    gu, gv = (residual * su).sum(1), (residual * sv).sum(1)
-    det = a * c - b * b
-    return -np.column_stack([c * gu - b * gv, a * gv - b * gu]) / det[:, None]
+    return DeviationObjective(model, space, grid, face_nodes(model, grid.size, on_face))
 
 
 class DeviationObjective:
@@ -188,46 +60,38 @@ class DeviationObjective:
 
     model: the CAD truth (a SurfaceModel or NurbsPatch; only its NurbsPatch is kept, so the
     objective pickles without FreeCAD objects); space: SubstituteSpace; grid: EvaluationGrid;
-    feet: Feet of a reference substitute (see :meth:`expand`), or None to expand later. Calling it
-    with uv: (P, N, 2) returns (P,) maximum expanded deviations in mm.
+    nodes: FaceNodes on that grid. Calling it with uv: (P, N, 2) returns (P,) maximum expanded
+    deviations in mm over the raster and the edge nodes (see the module docstring).
     """
 
-    def __init__(self, model, space, grid, feet):
+    def __init__(self, model, space, grid, nodes):
         self.model = model.patch()
         self.space = space
         self.grid = grid
+        self.nodes = nodes
         u = grid.uv[:, 0, 0]
         v = grid.uv[0, :, 1]
         self.grid_u = design_matrices(space.uknots, space.degrees[0], u)[0]
         self.grid_v_t = design_matrices(space.vknots, space.degrees[1], v)[0].T.copy()
         self.evaluations = 0
-        self.feet = None
         self._scratch = None
         self._last = (None, None)
-        if feet is not None:
-            self.expand(feet)
-
-    def expand(self, feet):
-        """Take the feet of a reference substitute's grid points as the nodes, and expand there.
-
-        feet: Feet on this grid. Nodes it does not count leave the objective. Holds F_g, n_g and
-        K_g, the latter as its two principal terms lambda_k t_k t_k^T (:func:`principal_terms`).
-        """
-        self.feet = feet
         halves, directions = principal_terms(curvature_matrices(
-            self.model, feet.uv.reshape(-1, 2), feet.normals.reshape(-1, 3)))
-        shape = feet.uv.shape[:2]
-        arrays = (self.grid_u, self.grid_v_t, feet.points.transpose(2, 0, 1),
-                  feet.normals.transpose(2, 0, 1), 0.5 * halves.T.reshape((2,) + shape),
-                  directions.transpose(1, 2, 0).reshape((2, 3) + shape))
-        self._exact = Expansion(arrays, np.float64)
-        self._single = Expansion(arrays[:2] + tuple(np.where(feet.counted, array, 0.0) for array in arrays[2:]),
-                                 np.float32)
+            self.model, nodes.uv.reshape(-1, 2), np.nan_to_num(nodes.normals.reshape(-1, 3))))
+        shape = nodes.uv.shape[:2]
+        arrays = (nodes.points.transpose(2, 0, 1), nodes.normals.transpose(2, 0, 1),
+                  0.5 * halves.T.reshape((2,) + shape), directions.transpose(1, 2, 0).reshape((2, 3) + shape))
+        counted = tuple(np.where(nodes.counted, np.nan_to_num(array), 0.0) for array in arrays)
+        bu, bv = space.bases(nodes.edge_uv)
+        edges = (bu[0], bv[0], nodes.edge_points,
+                 np.concatenate([nodes.edge_normals[:, None, :], nodes.edge_across], axis=1))
+        self._exact = Expansion((self.grid_u, self.grid_v_t) + counted, edges, np.float64)
+        self._single = Expansion((self.grid_u, self.grid_v_t) + counted, edges, np.float32)
 
     @property
     def counted(self):
-        """(g_u, g_v) bool: the nodes the objective measures."""
-        return self.feet.counted
+        """(g_u, g_v) bool: the raster nodes the objective measures."""
+        return self.nodes.counted
 
     def fit(self, uv):
         """Substitute poles for point sets at uv: (..., N, 2) -> (..., n_u, n_v, 3).
@@ -250,13 +114,15 @@ class DeviationObjective:
         return np.matmul(np.matmul(self.grid_u, by_coord), self.grid_v_t)
 
     def expanded_field(self, poles):
-        """Signed deviation on the grid's nodes, expanded about the raster.
-
-        poles (..., n_u, n_v, 3) -> (..., g_u, g_v) mm: d2 = n . e - e^T K e / 2 with
-        e = S(h) - F_g (see the module docstring).
-        """
+        """Signed expanded deviation on the raster's nodes: poles (..., n_u, n_v, 3) ->
+        (..., g_u, g_v) mm, d2 = n . e - e^T K e / 2 with e = S(h) - F(h) (0 where a node does not
+        count; see the module docstring)."""
         poles = np.asarray(poles, dtype=float)
         return self._exact.field(poles, Scratch(poles.shape[:-3], poles.dtype, self.space.poles, self.grid.size))
+
+    def expanded_edges(self, poles):
+        """Signed expanded deviation at the edge nodes: poles (..., n_u, n_v, 3) -> (..., E) mm."""
+        return self._exact.edges(np.asarray(poles, dtype=float))
 
     def _swarm_field(self, poles):
         """:meth:`expanded_field` for a swarm, in single precision in work arrays kept between calls
@@ -276,34 +142,18 @@ class DeviationObjective:
         state["_last"] = (None, None)
         return state
 
-    def grid_error(self, poles):
-        """The expanded deviation of one substitute and its gradient, for the adjoint gradient.
-
-        poles (n_u * n_v, 3) or (n_u, n_v, 3). Returns (error (3, g_u, g_v) = d2 times its gradient
-        with respect to S(h), n - K e; distance (g_u, g_v) = |d2| mm; counted (g_u, g_v) bool).
-        """
-        poles = np.asarray(poles).reshape(self.space.poles + (3,))
-        exact = self._exact
-        error = self.surface(poles) - exact.foot_points
-        field = self.expanded_field(poles)
-        gradient = exact.normals.copy()
-        for half, direction in zip(exact.halves, exact.directions):
-            gradient -= 2.0 * half * (error * direction).sum(0) * direction
-        return field * gradient, np.abs(field), self.feet.counted
-
-    def grid_transpose(self, field):
-        """G^T applied to a grid field (3, g_u, g_v): the (n_u * n_v, 3) pole-space result."""
-        pulled = self.grid_u.T @ field @ self.grid_v_t.T
-        return pulled.transpose(1, 2, 0).reshape(-1, 3)
-
     def __call__(self, uv):
         """Maximum expanded deviation of each point set's substitute: uv (P, N, 2) -> (P,) mm."""
         given, uv = uv, np.asarray(uv, dtype=float)
         points = self.points(uv)
-        field = self._swarm_field(self._fit_points(uv, points)).reshape(uv.shape[0], -1)
+        poles = self._fit_points(uv, points)
+        field = self._swarm_field(poles).reshape(uv.shape[0], -1)
         self._last = (given, points)
         self.evaluations += uv.shape[0]
-        return np.abs(field, out=field).max(axis=1)
+        worst = np.abs(field, out=field).max(axis=1)
+        if self.nodes.edge_uv.size:
+            worst = np.maximum(worst, np.abs(self._single.edges(poles)).max(axis=1))
+        return worst
 
     def points(self, uv):
         """Face points of point sets, coordinate first: uv (..., N, 2) -> (..., 3, N) mm."""
@@ -322,9 +172,9 @@ class DeviationObjective:
         return closest_squared(points) >= min_spacing ** 2
 
     def reference_poles(self):
-        """The substitute fitted to the face's points at every grid node: (n_u, n_v, 3) mm.
+        """The substitute fitted to the face's points at every raster node: (n_u, n_v, 3) mm.
 
-        What a fit to very many probe points tends to; its feet start every exact evaluation.
+        What a fit to very many probe points tends to; the local bound is taken about it.
         """
         return self.space.fit(self.grid.uv.reshape(-1, 2), self.model.points(self.grid.uv.reshape(-1, 2)))
 
@@ -406,15 +256,22 @@ class Scratch:
 class Expansion:
     """The arrays of a DeviationObjective's expansion in one precision, and its evaluation.
 
-    arrays: the grid's bases along u (g_u, n_u) and v, transposed (n_v, g_v); the nodes F_g
-    (3, g_u, g_v) mm; their normals (3, g_u, g_v); the halved principal curvatures of K_g
-    (2, g_u, g_v) 1/mm and their directions (2, 3, g_u, g_v).
+    arrays: the grid's bases along u (g_u, n_u) and v, transposed (n_v, g_v); the nodes F(h)
+    (3, g_u, g_v) mm; their normals (3, g_u, g_v); the halved principal curvatures of K
+    (2, g_u, g_v) 1/mm and their directions (2, 3, g_u, g_v); edges: the bases at the edge nodes
+    along u (E, n_u) and v (E, n_v), the edge nodes (E, 3) mm and the directions their offsets are
+    measured along, the normal first (E, 3, 3); held coordinate first, so that every elementwise
+    step runs along the edge nodes.
     """
 
-    def __init__(self, arrays, dtype):
+    def __init__(self, arrays, edges, dtype):
         self.dtype = dtype
         (self.grid_u, self.grid_v_t, self.foot_points, self.normals, self.halves,
          self.directions) = (np.ascontiguousarray(array, dtype=dtype) for array in arrays)
+        along_u, along_v, points, directions = edges
+        self.edge_columns = np.ascontiguousarray(kron_rows(along_u, along_v).T, dtype=dtype)
+        self.edge_points = np.ascontiguousarray(np.asarray(points).T, dtype=dtype)
+        self.edge_directions = [np.ascontiguousarray(directions[:, k].T, dtype=dtype) for k in range(3)]
 
     def field(self, poles, scratch):
         """d2 of poles (..., n_u, n_v, 3) computed in ``scratch``: (..., g_u, g_v) mm."""
@@ -430,58 +287,31 @@ class Expansion:
             field -= along
         return field
 
-
-class Linearisation:
-    """The exact deviations linearised about one substitute S0, for a descent that moves it.
-
-    objective: the DeviationObjective whose nodes are measured; poles: (n_u, n_v, 3) mm of S0;
-    signed: (g_u, g_v) its exact deviations (NaN where not counted); closest: (g_u, g_v, 2) the
-    parameters p_g of its closest points (cmmsampling.fitting.deviation.substitute_distances). With
-    w_g = (S0(p_g) - F_g) / d_g, the direction each deviation is measured along (the face's normal
-    where d_g = 0), a substitute S deviates at node g, to first order in S - S0,
-
-        d_g + w_g . (S(p_g) - S0(p_g)),
-
-    exact at S0 in value and gradient (the closest point moves only to second order). It has the
-    interface the descent's surrogate uses: ``model``, ``space``, ``grid_error``, ``grid_transpose``.
-    """
-
-    def __init__(self, objective, poles, signed, closest):
-        self.model, self.space = objective.model, objective.space
-        counted = np.isfinite(signed).ravel()
-        self._signed = signed.ravel()[counted]
-        closest = closest.reshape(-1, 2)[counted]
-        bu, bv = self.space.bases(closest)
-        self._rows = (bu[0][:, :, None] * bv[0][:, None, :]).reshape(len(closest), -1)
-        self._start = self._rows @ np.asarray(poles).reshape(-1, 3)
-        offsets = self._start - objective.feet.points.reshape(-1, 3)[counted]
-        directions = objective.feet.normals.reshape(-1, 3)[counted].copy()
-        measured = np.abs(self._signed) > 1e-12 * max(1.0, float(np.abs(self._signed).max(initial=0.0)))
-        directions[measured] = offsets[measured] / self._signed[measured, None]
-        self._directions = directions
-
-    def grid_error(self, poles):
-        """As DeviationObjective.grid_error, over the counted nodes: poles (n_u n_v, 3) or
-        (n_u, n_v, 3) -> (error (3, K) = d w, distance (K,) = |d| mm, counted (K,) all True)."""
-        moved = self._rows @ np.asarray(poles).reshape(-1, 3) - self._start
-        field = self._signed + (moved * self._directions).sum(1)
-        return (field[:, None] * self._directions).T, np.abs(field), np.ones(len(field), dtype=bool)
-
-    def grid_transpose(self, field):
-        """B^T applied to a field (3, K) at the counted nodes: the (n_u * n_v, 3) pole-space result."""
-        return self._rows.T @ field.T
+    def edges(self, poles):
+        """d_edge of poles (..., n_u, n_v, 3) at the edge nodes: (..., E) mm."""
+        poles = np.asarray(poles, dtype=self.dtype)
+        by_coord = np.swapaxes(poles.reshape(poles.shape[:-3] + (-1, 3)), -1, -2)
+        error = np.matmul(by_coord, self.edge_columns)
+        error -= self.edge_points
+        normal = (error * self.edge_directions[0]).sum(-2)
+        size = normal * normal
+        for direction in self.edge_directions[1:]:
+            part = (error * direction).sum(-2)
+            size += part * part
+        size = np.sqrt(size)
+        return np.where(normal < 0, -size, size)
 
 
 @dataclass
 class DeviationStats:
-    """Deviation of a substitute surface from the CAD face, all in mm.
+    """Deviation of a delivered substitute from the CAD face, all in mm (cmmsampling.fitting.exact).
 
-    maximum, mean, rms, std: of |d| over the counted nodes (see the module docstring).
-    field: (g_u, g_v) |d| per node (NaN where a node does not count); signed: (g_u, g_v) d;
-    grid_uv: (g_u, g_v, 2) the raster h the nodes come from (where the substitute runs next to
-    them); nodes: (g_u, g_v, 3) the nodes on the face, mm;
-    occ_maximum: OpenCASCADE's closest-point distance from the nodes to the substitute, the largest
-    over the nodes of largest deviation (see cmmsampling.fitting.crosscheck).
+    maximum, mean, rms, std: of |d| over the counted raster nodes and the edge nodes, d the
+    two-sided exact deviation; field: (g_u, g_v) |d| per raster node (NaN where a node does not
+    count); signed: (g_u, g_v) d; grid_uv: (g_u, g_v, 2) the raster h; nodes: (g_u, g_v, 3) F(h)
+    mm; edge_signed: (E,) d at the edge nodes; edge_nodes: (E, 3) mm; spacing: mm, every point of
+    the face lies within it of a node; occ_maximum: OpenCASCADE's distances, both ways, at the
+    nodes of largest deviation (see cmmsampling.fitting.crosscheck).
     """
 
     maximum: float
@@ -492,6 +322,9 @@ class DeviationStats:
     signed: np.ndarray
     grid_uv: np.ndarray
     nodes: np.ndarray
+    edge_signed: np.ndarray = None
+    edge_nodes: np.ndarray = None
+    spacing: float = float("nan")
     occ_maximum: float = float("nan")
 
     def figures(self):
@@ -501,18 +334,21 @@ class DeviationStats:
                 "occ_max_mm": self.occ_maximum}
 
     @classmethod
-    def from_signed(cls, signed, objective):
-        """Statistics of signed deviations (g_u, g_v) mm, NaN where a node does not count, at the
-        nodes of ``objective`` (a DeviationObjective)."""
-        counted = signed[np.isfinite(signed)]
-        magnitude = np.abs(counted)
+    def from_exact(cls, exact):
+        """Statistics of an ExactDeviation (cmmsampling.fitting.exact) at its nodes."""
+        values = exact.signed
+        magnitude = np.abs(values)
+        nodes = exact.nodes
         return cls(
             maximum=float(magnitude.max()),
             mean=float(magnitude.mean()),
-            rms=float(np.sqrt(np.mean(counted ** 2))),
+            rms=float(np.sqrt(np.mean(values ** 2))),
             std=float(magnitude.std()),
-            field=np.abs(signed),
-            signed=signed,
-            grid_uv=objective.grid.uv,
-            nodes=objective.feet.points,
+            field=np.abs(exact.grid_signed()),
+            signed=exact.grid_signed(),
+            grid_uv=nodes.uv,
+            nodes=nodes.points,
+            edge_signed=exact.edge_signed(),
+            edge_nodes=nodes.edge_points,
+            spacing=nodes.spacing,
         )

@@ -1,33 +1,44 @@
-"""The substitute as an OCC surface: the fitted B-spline handed to FreeCAD (Part.BSplineSurface),
-over the face's parameter range or over the wider range the deviation is measured on."""
-import numpy as np
-
-from ..geometry.bspline import design_matrices
+"""The substitute as OCC geometry: the fitted B-spline handed to FreeCAD (Part.BSplineSurface) over
+the face's parameter range, the surface the deviation is measured on, and that surface trimmed like
+the face (the shape the document shows)."""
+from ..geometry.freecad_env import import_part
 from ..geometry.surface import make_bspline_surface
-from .substitute import FittedSurface
+
+Part = import_part()
 
 
-def substitute_surface(space, poles, extended=False):
-    """The substitute fitted in ``space`` (a SubstituteSpace) as a Part.BSplineSurface.
+def substitute_surface(space, poles):
+    """The substitute fitted in ``space`` (a SubstituteSpace) as a Part.BSplineSurface over the
+    face's parameter range. poles: (n_u, n_v, 3) mm."""
+    return make_bspline_surface(poles, space.degrees, uknots=space.uknots, vknots=space.vknots)
 
-    poles: (n_u, n_v, 3) mm. The surface spans the face's parameter range, or with ``extended``
-    the wider range of cmmsampling.fitting.substitute.FittedSurface, over which the deviation is measured:
-    the same polynomials, its end spans lengthened (exactly representable, so the poles follow
-    from a least-squares fit to the surface sampled over the wider range).
-    """
-    if not extended:
-        return make_bspline_surface(poles, space.degrees, uknots=space.uknots, vknots=space.vknots)
-    surface = FittedSurface(space, poles)
-    u0, u1, v0, v1 = surface.bounds
-    uknots = np.concatenate([[u0] * (space.degrees[0] + 1), space.uknots[space.degrees[0] + 1:-space.degrees[0] - 1],
-                             [u1] * (space.degrees[0] + 1)])
-    vknots = np.concatenate([[v0] * (space.degrees[1] + 1), space.vknots[space.degrees[1] + 1:-space.degrees[1] - 1],
-                             [v1] * (space.degrees[1] + 1)])
-    su = np.linspace(u0, u1, 4 * space.poles[0])
-    sv = np.linspace(v0, v1, 4 * space.poles[1])
-    grid = np.stack(np.meshgrid(su, sv, indexing="ij"), -1)
-    samples = surface.points(grid.reshape(-1, 2)).reshape(grid.shape[:2] + (3,))
-    bu = np.linalg.pinv(design_matrices(uknots, space.degrees[0], su)[0])
-    bv = np.linalg.pinv(design_matrices(vknots, space.degrees[1], sv)[0])
-    extended_poles = np.einsum("ai,ijc,bj->abc", bu, samples, bv)
-    return make_bspline_surface(extended_poles, space.degrees, uknots=uknots, vknots=vknots)
+
+def trimmed_like(face, surface):
+    """The substitute ``surface`` (Part.BSplineSurface over the face's parameter range) trimmed like
+    the Part.Face ``face`` in the parameter plane: a Part.Face bounded by the face's wires' curves on
+    its surface, laid on the substitute (holes cut). Where OCC cannot build a valid face from them,
+    the substitute's whole rectangle (``surface.toShape()``)."""
+    try:
+        outer = _wire_on(face, face.OuterWire, surface)
+        trimmed = Part.Face(surface, outer)
+        if trimmed.Area < 0:
+            outer.reverse()
+            trimmed = Part.Face(surface, outer)
+        holes = [_wire_on(face, wire, surface) for wire in face.Wires if not wire.isSame(face.OuterWire)]
+        if holes:
+            trimmed.cutHoles(holes)
+        if trimmed.isValid() and trimmed.Area > 0:
+            return trimmed
+    except Part.OCCError:
+        pass
+    return surface.toShape()
+
+
+def _wire_on(face, wire, surface):
+    """A wire of ``face`` laid on ``surface``: each edge's curve on the face's surface, as an edge of
+    the substitute over the same parameter interval."""
+    edges = []
+    for edge in wire.OrderedEdges or wire.Edges:
+        curve, first, last = face.curveOnSurface(edge)[:3]
+        edges.append(curve.toShape(surface, first, last))
+    return Part.Wire(edges)

@@ -153,23 +153,14 @@ def _gram_index(poles, degrees):
     return index.reshape(poles[0] * poles[1], poles[0] * poles[1])
 
 
-EXTENSION = 0.1
-
-
 class FittedSurface:
-    """A substitute surface: poles (n_u, n_v, 3) mm in a SubstituteSpace, evaluated at any uv.
-
-    bounds: the space's parameter rectangle widened by EXTENSION of its size on every side; beyond
-    the rectangle the surface continues its end spans' polynomials (its natural extension), so
-    that a substitute whose parametrisation runs a little short of the face's edge still reaches it.
-    """
+    """A substitute surface: poles (n_u, n_v, 3) mm in a SubstituteSpace, evaluated at any uv of
+    its parameter rectangle ``bounds`` (the space's: the substitute is never extended beyond it)."""
 
     def __init__(self, space, poles):
         self.space = space
         self.poles = np.asarray(poles, dtype=float)
-        u0, u1, v0, v1 = space.bounds
-        du, dv = EXTENSION * (u1 - u0), EXTENSION * (v1 - v0)
-        self.bounds = (u0 - du, u1 + du, v0 - dv, v1 + dv)
+        self.bounds = space.bounds
         self._flat = self.poles.reshape(-1, 3)
 
     def points(self, uv):

@@ -116,12 +116,19 @@ class SurfaceModel(NurbsPatch):
                 np.array([tuple(d[1][0][0]) for d in found]).reshape(-1, 3))
 
     def on_face(self, uv):
-        """(N,) True where the points at uv (N, 2) lie on the face by OCC: within ON_FACE_MM of it
-        and inside its boundary by OCC's face classifier (``isPartOfDomain``). Both are asked: on
-        a planar face with tolerant edges OCC's distance was seen to be 0 for a point outside its
-        boundary."""
+        """(N,) True where the points at uv (N, 2) lie on the face by OCC: inside its boundary by
+        OCC's face classifier (``isPartOfDomain``) and within :attr:`tolerance` of it. Both are
+        asked: on a planar face with tolerant edges OCC's distance was seen to be 0 for a point
+        outside its boundary."""
         off, _, inside = self._occ_placement(uv)
-        return (off <= ON_FACE_MM) & inside
+        return (off <= self.tolerance) & inside
+
+    @property
+    def tolerance(self):
+        """mm a point may lie from the face and count as on it: ON_FACE_MM, or the largest
+        tolerance of the face's edges and vertices where that is larger (a valid face whose edges'
+        3D curves and curves on the surface differ by up to it)."""
+        return max(ON_FACE_MM, float(self.face.getTolerance(1)))
 
     def _occ_placement(self, uv):
         """OCC's view of the points at uv (N, 2): (distance (N,) mm, nearest face points (N, 3)
@@ -141,7 +148,7 @@ class SurfaceModel(NurbsPatch):
         """
         uv = np.array(uv, dtype=float)
         off, feet, inside = self._occ_placement(uv)
-        moved = (off > ON_FACE_MM) | ~inside
+        moved = (off > self.tolerance) | ~inside
         for i in np.flatnonzero(moved):
             uv[i] = self._inward(uv[i], feet[i])
         return uv, moved, off

@@ -24,7 +24,7 @@ from scipy.optimize import minimize
 from scipy.spatial import cKDTree
 from scipy.special import logsumexp, softmax
 
-from ..fitting.deviation import Linearisation
+from ..fitting.exact import Linearisation
 from ..geometry.bspline import kron_rows
 
 KAPPAS = (10.0, 30.0, 100.0, 300.0, 1000.0, 3000.0, 10000.0)
@@ -66,7 +66,7 @@ class Surrogate:
 def surrogate(objective, uv, tau, min_spacing=0.0, penalty=0.0):
     """Log-sum-exp surrogate of the maximum deviation and its exact gradient.
 
-    objective: DeviationObjective or Linearisation (model, space, grid_error, grid_transpose);
+    objective: a Linearisation (model, space, grid_error, grid_transpose);
     uv: (N, 2); tau: 1/mm; min_spacing: mm; penalty: weight (mm per
     mm^2 of violation) of sum over pairs closer than min_spacing of (min_spacing - distance)^2.
     Returns a Surrogate with gradient (N, 2) in mm per parameter unit.
@@ -139,10 +139,9 @@ def descend(objective, start, lower, upper, judge, min_spacing=0.0, time_limit=N
             max_evaluations=None, progress=None, project=None):
     """Minimise the maximum deviation from the point set ``start`` (N, 2) inside the box.
 
-    objective: DeviationObjective (its nodes);
-    judge: uv (N, 2) -> (exact signed deviations (g_u, g_v) mm at the objective's nodes, NaN where
-    a node does not count; the substitute's poles (n_u, n_v, 3); its closest points' parameters
-    (g_u, g_v, 2));
+    objective: DeviationObjective (its face model and substitute space);
+    judge: uv (N, 2) -> the ExactDeviation (cmmsampling.fitting.exact) of its substitute at the
+    objective's nodes;
     lower, upper: (2,) parameter box; project: maps uv (N, 2) onto the feasible set (every
     iterate is evaluated there; default: the box itself); min_spacing: mm between points; time_limit: s;
     max_evaluations: surrogate evaluations; progress: callable (evaluation, best_max_mm) returning
@@ -219,15 +218,13 @@ def _accept(chunk, best, judge, objective):
     if chunk["uv"] is None:
         return
     judged = judge(chunk["uv"])
-    if np.nanmax(np.abs(judged[0])) < best["max"]:
+    if judged.maximum < best["max"]:
         _take(best, chunk["uv"], judged, objective, chunk["closest"])
 
 
 def _take(best, uv, judged, objective, closest=None):
-    """Make uv (N, 2) the best point set, judged = (exact deviations (g_u, g_v) mm, poles, closest
-    points' parameters) of its substitute, and linearise the deviations about it."""
-    signed, poles, closest_points = judged
-    best.update(uv=uv, max=float(np.nanmax(np.abs(signed))),
-                model=Linearisation(objective, poles, signed, closest_points))
+    """Make uv (N, 2) the best point set, judged: the ExactDeviation of its substitute, and
+    linearise the deviations about it."""
+    best.update(uv=uv, max=judged.maximum, model=Linearisation(objective.model, objective.space, judged))
     if closest is not None:
         best["closest"] = closest

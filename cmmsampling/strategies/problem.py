@@ -2,8 +2,9 @@
 import numpy as np
 
 from ..fitting.bound import minimax_bound
-from ..fitting.deviation import DeviationStats, EvaluationGrid, deviation_objective, substitute_distances
-from ..fitting.substitute import FittedSurface, SubstituteSpace, default_pole_count
+from ..fitting.deviation import DeviationStats, EvaluationGrid, deviation_objective
+from ..fitting.exact import exact_deviation
+from ..fitting.substitute import SubstituteSpace, default_pole_count
 from ..geometry.domain import face_domain
 from .parallel import TwoProcessObjective
 
@@ -65,50 +66,42 @@ class SamplingProblem:
         return self._check
 
     def _reference_objective(self, grid):
-        """A DeviationObjective on ``grid``, its nodes the feet of the reference fit's grid points."""
+        """A DeviationObjective on ``grid``'s nodes of the face."""
         return deviation_objective(self.model, self.space, grid, self.domain.on_face)
 
-    def distances(self, poles, check=False):
-        """Exact signed deviations (g_u, g_v) mm of a substitute at the nodes of the grid or check
-        grid (NaN where a node does not count), and the objective whose nodes they are."""
+    def judge(self, poles, check=False):
+        """The exact two-sided deviation (cmmsampling.fitting.exact.ExactDeviation) of the substitute
+        with ``poles`` (n_u, n_v, 3) mm at the nodes of the grid or the check grid."""
         objective = self.check_objective if check else self.objective
-        return self._closest(objective, poles)[0], objective
-
-    def _closest(self, objective, poles):
-        """(signed deviations (g_u, g_v) mm, closest points' parameters (g_u, g_v, 2)) of a substitute."""
-        return substitute_distances(FittedSurface(self.space, poles), objective.feet, objective.grid.uv)
+        return exact_deviation(self.space, poles, objective.nodes, objective.model, self.domain.on_face)
 
     def exact(self, uv):
-        """The substitute fitted at uv (N, 2), judged on the grid: (exact signed deviations
-        (g_u, g_v) mm, NaN where a node does not count; its poles (n_u, n_v, 3); its closest
-        points' parameters (g_u, g_v, 2))."""
-        poles = self.objective.fit(np.asarray(uv, dtype=float)[None])[0]
-        signed, closest = self._closest(self.objective, poles)
-        return signed, poles, closest
+        """The ExactDeviation, on the grid, of the substitute fitted at uv (N, 2)."""
+        return self.judge(self.objective.fit(np.asarray(uv, dtype=float)[None])[0])
 
     def exact_maximum(self, uv):
         """Exact maximum deviation (mm) of the substitute fitted at uv (N, 2), on the grid."""
-        return float(np.nanmax(np.abs(self.exact(uv)[0])))
+        return self.exact(uv).maximum
 
     def deviation(self, poles, check=False):
         """Exact deviation statistics (DeviationStats, mm) of a substitute on the grid or check grid."""
-        signed, objective = self.distances(poles, check)
-        return DeviationStats.from_signed(signed, objective)
+        return DeviationStats.from_exact(self.judge(poles, check))
 
     def bounds(self, poles=None):
-        """Local bounds (MinimaxBound, mm) about a substitute on the grid and on the check grid:
-        the least maximum deviation that moving its poles along its normals could reach (see
-        cmmsampling.fitting.bound). poles: (n_u, n_v, 3) mm, default the reference fit's (then computed
-        once). Returns {"grid": MinimaxBound, "check": MinimaxBound}.
+        """Local bounds (MinimaxBound, mm) about a substitute on the grid and on the check grid: the
+        least first-order maximum deviation that moving its poles along its normals could reach
+        (see cmmsampling.fitting.bound: a local figure, not a bound over every point set). poles:
+        (n_u, n_v, 3) mm, default the reference fit's (then computed once). Returns {"grid":
+        MinimaxBound, "check": MinimaxBound}.
         """
-        if poles is not None:
-            return {"grid": minimax_bound(self.objective, poles),
-                    "check": minimax_bound(self.check_objective, poles)}
-        if self._bounds is None:
-            reference = self.objective.reference_poles()
-            self._bounds = {"grid": minimax_bound(self.objective, reference),
-                            "check": minimax_bound(self.check_objective, reference)}
-        return self._bounds
+        if poles is None and self._bounds is not None:
+            return self._bounds
+        about = self.objective.reference_poles() if poles is None else poles
+        found = {"grid": minimax_bound(self.space, self.judge(about), self.grid.size),
+                 "check": minimax_bound(self.space, self.judge(about, check=True), self.check_objective.grid.size)}
+        if poles is None:
+            self._bounds = found
+        return found
 
     def swarm_objective(self):
         """The objective for whole swarms: split over two processes when workers == 2."""

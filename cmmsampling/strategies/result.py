@@ -3,10 +3,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..fitting.occ_surface import substitute_surface
+from ..fitting.occ_surface import substitute_surface, trimmed_like
 from .blind import projection_frame
 
-EXACT_FIT = 1e-10
+# A substitute within this share of the face's diagonal of it reproduces it: rounding, and the
+# smoothing's pull on the fit's edges along the face (a plane's substitute shrinks by ~1e-9 of its size).
+EXACT_FIT = 1e-6
 
 
 @dataclass
@@ -70,8 +72,14 @@ class SamplingResult:
 
     @property
     def substitute(self):
-        """The fitted substitute surface as a Part.BSplineSurface."""
+        """The fitted substitute surface as a Part.BSplineSurface over the face's parameter range
+        (the surface the deviation is measured on; never extended beyond it)."""
         return substitute_surface(self.space, self.poles)
+
+    def substitute_shape(self):
+        """The delivered substitute as a Part.Face: :attr:`substitute` trimmed like the face in the
+        parameter plane (the document's Substitute surface)."""
+        return trimmed_like(self.face, self.substitute)
 
     def bounds(self):
         """Local bounds about this result's substitute, mm: the least maximum deviation that

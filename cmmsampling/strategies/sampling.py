@@ -8,7 +8,7 @@ import numpy as np
 from ..access.probe import Probe
 from ..access.reach import Reachability
 from ..fitting.crosscheck import occ_cross_check
-from ..fitting.deviation import DEFAULT_GRID
+from ..fitting.deviation import DEFAULT_GRID, DeviationStats
 from ..fitting.occ_surface import substitute_surface
 from ..fitting.substitute import DEFAULT_DEGREE, DEFAULT_SMOOTHING
 from ..geometry.domain import face_domain
@@ -663,11 +663,14 @@ def _json_friendly(options):
 
 def lower_bound(face, n=81, *, fit_degree=DEFAULT_DEGREE, fit_poles=None, smoothing=DEFAULT_SMOOTHING,
                 grid=DEFAULT_GRID, check=False):
-    """Certified lower bound of the maximum deviation any n points can reach on this face.
+    """The local bound about the reference fit on this face (cmmsampling.fitting.bound): the least
+    first-order maximum deviation that reshaping the fit to very many points along its normals
+    reaches. A yardstick, not a lower bound of what n points can reach: point sets reach other
+    surfaces of the substitute space, and results may end below it.
 
     The substitute space (fit_degree, fit_poles from n) and grid as in :func:`sample`; check=True
-    uses the check grid (3x denser). Returns a MinimaxBound: ``lower`` (the certificate, mm),
-    ``upper`` (a surface of the space that reaches it within ``gap``), ``converged``.
+    uses the check grid (3x denser). Returns a MinimaxBound: ``lower`` (mm), ``upper`` (a reshaped
+    surface that reaches it within ``gap``), ``converged``.
     """
     problem = make_problem(face, n, fit_degree, fit_poles, smoothing, grid)
     with blas_threads(1):
@@ -732,7 +735,8 @@ def _judge(problem, outcome, strategy, settings, strategy_s, occ_check):
     uv = np.asarray(outcome.uv, dtype=float)
     with blas_threads(1):
         poles = problem.objective.fit(uv[None])[0]
-        stats = problem.deviation(poles)
+        exact = problem.judge(poles)
+        stats = DeviationStats.from_exact(exact)
     evaluation_s = time.perf_counter() - start
     result = SamplingResult(
         strategy=strategy, uv=uv, points=problem.model.points(uv), normals=problem.model.normals(uv),
@@ -743,7 +747,7 @@ def _judge(problem, outcome, strategy, settings, strategy_s, occ_check):
     occ_s = 0.0
     if occ_check:
         start = time.perf_counter()
-        occ_cross_check(stats, substitute_surface(problem.space, poles, extended=True))
+        occ_cross_check(stats, exact, substitute_surface(problem.space, poles), problem.model.source_face)
         occ_s = time.perf_counter() - start
     result.timings = {"strategy_s": strategy_s, "evaluation_s": evaluation_s, "occ_check_s": occ_s,
                       "total_s": strategy_s + evaluation_s + occ_s}
@@ -752,6 +756,6 @@ def _judge(problem, outcome, strategy, settings, strategy_s, occ_check):
     if result.exact:
         result.notes.append(
             f"the substitute reproduces this face exactly (maximum deviation {stats.maximum:.1e} mm, "
-            "rounding only): it lies in the fit's space, e.g. a plane, so any point set is as good "
-            "as another and optimising cannot improve it")
+            "a millionth of its size at most): it lies in the fit's space, e.g. a plane, so any point "
+            "set is as good as another and optimising cannot improve it")
     return result

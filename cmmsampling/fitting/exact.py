@@ -1,0 +1,284 @@
+"""The exact deviation of a delivered substitute from the CAD face: a two-sided distance in space.
+
+The substitute S is the fitted surface on its own parameter rectangle (no extension), trimmed like
+the face in the parameter plane. At every node of the face (cmmsampling.fitting.nodes: a raster of
+the face's domain and points along its edges), at parameters h with F(h) the node:
+
+* forward: the distance from F(h) to S, its closest point p searched over S's rectangle;
+* reverse: the distance from S(h) back to the face, its closest point on the face's surface, or
+  on the face's edges where that foot lies outside the face's trimming loops.
+
+Each is signed by the face's normal there (+ out of the material); a node's deviation is the one
+of larger magnitude, and the maximum over all nodes is the figure reported. OpenCASCADE's
+distances from the nodes to ``r.substitute.toShape()`` and from S(h) to the face agree with both
+sides (cmmsampling.fitting.crosscheck, and the tests).
+
+To first order in a change dS of the substitute, each side changes by w . dS(at) with w the unit
+direction it is measured along and ``at`` the parameters on S (p forward, h reverse): exact there
+in value and gradient, which :class:`Linearisation` hands to the descent and the local bound.
+"""
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from ..geometry.bspline import kron_rows
+from .substitute import FittedSurface
+
+FOOT_ITERATIONS = 400
+FOOT_STEP_TOLERANCE = 1e-10
+SEARCH_SAMPLES = 48
+
+
+@dataclass
+class Side:
+    """One side of the measure at K nodes: values (K,) signed mm; at (K, 2) the parameters on the
+    substitute it depends on; directions (K, 3) unit, the gradient of the signed value with respect
+    to the substitute's point there (the offset's direction times its sign)."""
+
+    values: np.ndarray
+    at: np.ndarray
+    directions: np.ndarray
+
+
+@dataclass
+class ExactDeviation:
+    """The two-sided deviation of one substitute at the nodes (see the module docstring).
+
+    poles: (n_u, n_v, 3) mm; nodes: FaceNodes; forward, reverse: Side over the K = counted
+    raster nodes (in raster order) then the edge nodes.
+    """
+
+    poles: np.ndarray
+    nodes: object
+    forward: Side
+    reverse: Side
+
+    @property
+    def signed(self):
+        """(K,) the larger side at each node, signed, mm."""
+        take_reverse = np.abs(self.reverse.values) > np.abs(self.forward.values)
+        return np.where(take_reverse, self.reverse.values, self.forward.values)
+
+    @property
+    def maximum(self):
+        """The largest |deviation| over the nodes, mm."""
+        return float(np.abs(self.signed).max(initial=0.0))
+
+    def grid_signed(self):
+        """(g_u, g_v) signed deviations at the raster, NaN where a node does not count."""
+        out = np.full(self.nodes.size, np.nan)
+        out[self.nodes.counted] = self.signed[:int(self.nodes.counted.sum())]
+        return out
+
+    def edge_signed(self):
+        """(E,) signed deviations at the edge nodes, mm."""
+        return self.signed[int(self.nodes.counted.sum()):]
+
+
+def node_parameters(nodes):
+    """(K, 2) the parameters of the counted raster nodes then the edge nodes."""
+    return np.concatenate([nodes.uv[nodes.counted], nodes.edge_uv])
+
+
+def node_normals(nodes):
+    """(K, 3) the face's unit normals at the counted raster nodes then the edge nodes."""
+    return np.concatenate([nodes.normals[nodes.counted], nodes.edge_normals])
+
+
+def exact_deviation(space, poles, nodes, face, on_face=None):
+    """The ExactDeviation of the substitute with ``poles`` (n_u, n_v, 3) mm in ``space``.
+
+    nodes: FaceNodes; face: the face's NurbsPatch (bounds, points, normals, derivatives); on_face:
+    uv (..., 2) -> (...) bool, the face's trim test (None: the whole rectangle).
+    """
+    surface = FittedSurface(space, poles)
+    return ExactDeviation(np.asarray(poles, dtype=float), nodes, forward_side(surface, nodes),
+                          reverse_side(surface, nodes, face, on_face))
+
+
+def forward_side(surface, nodes):
+    """Side: from each node F(h) to its closest point on the substitute's rectangle."""
+    targets, start = nodes.all_points(), node_parameters(nodes)
+    at = closest_parameters(surface, targets, start)
+    at = _restart_stuck(surface, targets, at, _nearest_samples(surface, targets))
+    return _side(surface.points(at) - targets, at, node_normals(nodes))
+
+
+def reverse_side(surface, nodes, face, on_face):
+    """Side: from the substitute's point S(h) at each node's parameters back to the face."""
+    at = node_parameters(nodes)
+    points = surface.points(at)
+    foot = closest_parameters(face, points, at)
+    index = cKDTree(nodes.all_points()[:len(at)]).query(points)[1]
+    foot = _better(face, points, foot, closest_parameters(face, points, at[index]))
+    nearest = face.points(foot)
+    normals = face.normals(foot)
+    off = np.zeros(len(at), dtype=bool) if on_face is None else ~on_face(foot)
+    if off.any():
+        nearest[off], normals[off] = _nearest_on_edges(nodes, points[off])
+    normals = np.where(np.isfinite(normals).all(1, keepdims=True), normals, node_normals(nodes))
+    return _side(points - nearest, at, normals)
+
+
+def _side(offsets, at, normals):
+    """A Side from offsets (K, 3) S - F, the parameters on S, and the face's normals (K, 3)."""
+    length = np.linalg.norm(offsets, axis=1)
+    side = np.where((offsets * normals).sum(1) < 0, -1.0, 1.0)
+    measured = length > 1e-12 * max(1.0, float(length.max(initial=0.0)))
+    directions = normals.copy()
+    directions[measured] = side[measured, None] * offsets[measured] / length[measured, None]
+    return Side(side * length, at, directions)
+
+
+def _nearest_on_edges(nodes, points):
+    """The nearest point (M, 3) on the face's edge polygons to each point (M, 3), and the face's
+    normal at the nearest edge node (M, 3)."""
+    starts, ends, owner = [], [], []
+    for start, stop in nodes.loops:
+        index = np.arange(start, stop)
+        starts.append(index)
+        ends.append(np.roll(index, -1))
+    first, second = np.concatenate(starts), np.concatenate(ends)
+    a, b = nodes.edge_points[first], nodes.edge_points[second]
+    middle = cKDTree(0.5 * (a + b))
+    count = min(8, len(first))
+    _, candidates = middle.query(points, k=count)
+    candidates = candidates.reshape(len(points), count)
+    ab = (b - a)[candidates]
+    t = np.clip(((points[:, None, :] - a[candidates]) * ab).sum(-1) / np.maximum((ab * ab).sum(-1), 1e-300), 0, 1)
+    on_segment = a[candidates] + t[..., None] * ab
+    best = np.argmin(((on_segment - points[:, None, :]) ** 2).sum(-1), axis=1)
+    rows = np.arange(len(points))
+    node = np.where(t[rows, best] < 0.5, first[candidates[rows, best]], second[candidates[rows, best]])
+    return on_segment[rows, best], nodes.edge_normals[node]
+
+
+def _better(model, targets, first, second):
+    """Per target, the parameters (K, 2) of ``first`` or ``second`` whose point is closer to it
+    (searches from two starts: a search from a node's own parameters can stop at a collapsed edge,
+    where the surface's derivative along the edge vanishes)."""
+    closer = (np.linalg.norm(model.points(second) - targets, axis=1)
+              < np.linalg.norm(model.points(first) - targets, axis=1))
+    return np.where(closer[:, None], second, first)
+
+
+def _restart_stuck(model, targets, uv, samples):
+    """Search again from the nearest sample (parameters (K, 2), distance (K,)) where the search from
+    uv ended farther than that sample (a local minimum, e.g. on a closed surface); keep the better."""
+    sample_uv, sample_distance = samples
+    current = np.linalg.norm(model.points(uv) - targets, axis=1)
+    stuck = np.flatnonzero(current > sample_distance)
+    if len(stuck):
+        again = closest_parameters(model, targets[stuck], sample_uv[stuck])
+        better = np.linalg.norm(model.points(again) - targets[stuck], axis=1) < current[stuck]
+        uv = uv.copy()
+        uv[stuck[better]] = again[better]
+    return uv
+
+
+def _nearest_samples(surface, targets):
+    """The nearest of a SEARCH_SAMPLES^2 raster of the surface's rectangle to each target (K, 3):
+    (parameters (K, 2), distance (K,) mm)."""
+    u0, u1, v0, v1 = surface.bounds
+    grid = np.stack(np.meshgrid(np.linspace(u0, u1, SEARCH_SAMPLES), np.linspace(v0, v1, SEARCH_SAMPLES),
+                                indexing="ij"), -1).reshape(-1, 2)
+    distance, index = cKDTree(surface.points(grid)).query(targets)
+    return grid[index], distance
+
+
+def closest_parameters(model, targets, uv):
+    """Parameters (K, 2) of the closest points to targets (K, 3), from uv (K, 2), in the model's box.
+
+    model: anything with ``bounds``, ``points(uv)`` and ``derivatives(uv, 1)`` (a NurbsPatch or a
+    FittedSurface). Damped Gauss-Newton on |F(u, v) - target|^2, every target at once; a step is
+    kept only where it brings the point closer.
+    """
+    u0, u1, v0, v1 = model.bounds
+    low, high = np.array([u0, v0]), np.array([u1, v1])
+    uv = np.clip(np.asarray(uv, dtype=float), low, high)
+    squared = ((model.points(uv) - targets) ** 2).sum(1)
+    damping = np.full(len(uv), 1e-9)
+    active = np.ones(len(uv), dtype=bool)
+    for _ in range(FOOT_ITERATIONS):
+        if not active.any():
+            break
+        index = np.flatnonzero(active)
+        step = _gauss_newton_step(model, targets[index], uv[index], damping[index], low, high)
+        trial = np.clip(uv[index] + step, low, high)
+        trial_squared = ((model.points(trial) - targets[index]) ** 2).sum(1)
+        better = trial_squared <= squared[index]
+        moved = np.abs(trial - uv[index]).max(1) > FOOT_STEP_TOLERANCE * (high - low).max()
+        uv[index[better]] = trial[better]
+        squared[index[better]] = trial_squared[better]
+        damping[index] = np.where(better, damping[index] * 0.1, damping[index] * 100.0)
+        active[index] = (better & moved) | (~better & (damping[index] < 1e12))
+    return uv
+
+
+def _gauss_newton_step(model, targets, uv, damping, low, high):
+    """Levenberg-Marquardt step (K, 2) towards the closest points, damping (K,) relative. A
+    parameter on its bound that the step would push out stays there, and the step is taken along
+    the bound in the other parameter alone; at a corner, along the edge that leads inward and
+    gains more (so that a closest point on the rectangle's edge is found as exactly as one inside
+    it)."""
+    d = model.derivatives(uv, 1)
+    residual = d[(0, 0)] - targets
+    su, sv = d[(1, 0)], d[(0, 1)]
+    a, b, c = (su * su).sum(1), (su * sv).sum(1), (sv * sv).sum(1)
+    shift = damping * (a + c) + 1e-300
+    a, c = a + shift, c + shift
+    gu, gv = (residual * su).sum(1), (residual * sv).sum(1)
+    det = a * c - b * b
+    step = -np.column_stack([c * gu - b * gv, a * gv - b * gu]) / det[:, None]
+    pushed = ((uv <= low) & (step < 0)) | ((uv >= high) & (step > 0))
+    along = np.column_stack([-gu / a, -gv / c])
+    inward = ~(((uv <= low) & (along < 0)) | ((uv >= high) & (along > 0)))
+    gain = np.where(inward, np.column_stack([gu * gu / a, gv * gv / c]), -1.0)
+    corner = pushed[:, 0] & pushed[:, 1]
+    only_u = (pushed[:, 1] & ~pushed[:, 0]) | (corner & (gain[:, 0] >= gain[:, 1]) & (gain[:, 0] > 0))
+    only_v = (pushed[:, 0] & ~pushed[:, 1]) | (corner & (gain[:, 1] > gain[:, 0]) & (gain[:, 1] > 0))
+    step[pushed.any(1)] = 0.0
+    step[only_u, 0] = along[only_u, 0]
+    step[only_v, 1] = along[only_v, 1]
+    return step
+
+
+class Linearisation:
+    """The exact two-sided deviations linearised about one substitute S0, for a descent that moves it.
+
+    face: the face's NurbsPatch; space: SubstituteSpace; exact: the ExactDeviation of S0. Each side
+    of each node, d + w . (S(at) - S0(at)), is exact at S0 in value and gradient. It has the
+    interface the descent's surrogate uses: ``model``, ``space``, ``grid_error``, ``grid_transpose``.
+    """
+
+    def __init__(self, face, space, exact):
+        self.model, self.space = face, space
+        sides = (exact.forward, exact.reverse)
+        self._signed = np.concatenate([side.values for side in sides])
+        self._directions = np.concatenate([side.directions for side in sides])
+        at = np.concatenate([side.at for side in sides])
+        bu, bv = space.bases(at)
+        self._rows = kron_rows(bu[0], bv[0])
+        self._start = self._rows @ np.asarray(exact.poles).reshape(-1, 3)
+
+    @property
+    def rows(self):
+        """(2K, n_u n_v) the basis rows at each side's parameters."""
+        return self._rows
+
+    @property
+    def targets(self):
+        """(2K,) each side's deviation at S0, mm, and (2K, 3) the directions they are measured along."""
+        return self._signed, self._directions
+
+    def grid_error(self, poles):
+        """Over both sides of every node: poles (n_u n_v, 3) or (n_u, n_v, 3) -> (error (3, 2K) =
+        d w, distance (2K,) = |d| mm, counted (2K,) all True)."""
+        moved = self._rows @ np.asarray(poles).reshape(-1, 3) - self._start
+        field = self._signed + (moved * self._directions).sum(1)
+        return (field[:, None] * self._directions).T, np.abs(field), np.ones(len(field), dtype=bool)
+
+    def grid_transpose(self, field):
+        """B^T applied to a field (3, 2K) at the sides' parameters: the (n_u * n_v, 3) pole-space result."""
+        return self._rows.T @ field.T

@@ -1,0 +1,174 @@
+"""Where the deviation is measured: nodes on the CAD face itself, covering it.
+
+Two kinds of node, both points of the face F at known parameters:
+
+* a raster of the face's own parameter rectangle, (g_u, g_v) values per direction placed at equal
+  steps of the face's longest iso-parametric length (so a rational or unevenly parametrised face
+  gets nodes evenly spread in space, not in parameters), counted where the raster point lies on
+  the face (inside its trimming loops);
+* points along every edge of the face, trim loops and collapsed edges included, about half a
+  raster step apart, with the corners.
+
+``spacing`` (mm) is the largest 3D diagonal of a raster cell: every point of the face lies within
+it of a node. Each edge node also carries the in-surface directions its deviation is measured along
+besides the normal (``across``): the edge's outward conormal, so that a substitute whose edge drifts
+inside the face (leaving the face's edge uncovered) or beyond it (reaching past the face) is seen;
+at a collapsed edge, where the conormal is undefined, the whole offset counts.
+"""
+from dataclasses import dataclass
+
+import numpy as np
+
+DEFAULT_GRID = 60
+# Samples per raster step when the raster's parameter values are placed (their lengths are summed).
+LENGTH_SAMPLES = 4
+# Edge nodes per raster step (3D) along every edge.
+EDGE_NODES_PER_STEP = 2
+
+
+@dataclass
+class FaceNodes:
+    """Nodes on the face (see the module docstring).
+
+    uv: (g_u, g_v, 2) the raster; points: (g_u, g_v, 3) F(uv) mm; normals: (g_u, g_v, 3) unit, out
+    of the material; counted: (g_u, g_v) bool, on the face with a point and a normal;
+    edge_uv: (E, 2); edge_points: (E, 3) mm; edge_normals: (E, 3) unit; edge_across: (E, 2, 3) the
+    directions an edge node's offset is measured along besides the normal (rows of zeros where
+    unused); loops: list of (start, stop) index ranges of edge_uv, one closed polygon each;
+    spacing: mm, the largest raster cell diagonal.
+    """
+
+    uv: np.ndarray
+    points: np.ndarray
+    normals: np.ndarray
+    counted: np.ndarray
+    edge_uv: np.ndarray
+    edge_points: np.ndarray
+    edge_normals: np.ndarray
+    edge_across: np.ndarray
+    loops: list
+    spacing: float
+
+    @property
+    def size(self):
+        """(g_u, g_v) of the raster."""
+        return self.counted.shape
+
+    def all_points(self):
+        """The counted raster nodes then the edge nodes: (K, 3) mm."""
+        return np.concatenate([self.points[self.counted], self.edge_points])
+
+
+def face_nodes(model, size=DEFAULT_GRID, on_face=None):
+    """The FaceNodes of a face.
+
+    model: SurfaceModel (its ``trim_loops`` give the edges) or, for tests, anything with
+    ``bounds``, ``points``, ``normals`` and ``trim_loops``; size: int or (g_u, g_v); on_face:
+    uv (..., 2) -> (...) bool, the face's trim test (None: the whole parameter rectangle).
+    """
+    size = grid_size(size)
+    uv = length_raster(model, size)
+    points, normals = model.points(uv), model.normals(uv)
+    counted = np.isfinite(points).all(-1) & np.isfinite(normals).all(-1)
+    if on_face is not None:
+        counted &= on_face(uv)
+    spacing = _largest_cell_diagonal(points)
+    step = max(spacing / EDGE_NODES_PER_STEP, 1e-9 * max(spacing, 1.0))
+    loops = model.trim_loops(step)
+    edge_uv = np.concatenate(loops) if loops else np.zeros((0, 2))
+    bounds = np.cumsum([0] + [len(loop) for loop in loops])
+    edge_points, edge_normals = model.points(edge_uv), model.normals(edge_uv)
+    across = edge_directions(edge_points, edge_normals, list(zip(bounds[:-1], bounds[1:])))
+    keep = np.isfinite(edge_points).all(-1)
+    edge_normals = np.where(np.isfinite(edge_normals).all(-1, keepdims=True), edge_normals, [0.0, 0.0, 1.0])
+    return FaceNodes(uv, points, normals, counted, edge_uv[keep], edge_points[keep], edge_normals[keep],
+                     across[keep], _ranges(bounds, keep), spacing)
+
+
+def grid_size(size):
+    """(n_u, n_v) from an int or a pair."""
+    pair = (size, size) if np.ndim(size) == 0 else tuple(size)
+    return tuple(int(s) for s in pair)
+
+
+def length_raster(model, size):
+    """A (g_u, g_v, 2) raster of the parameter rectangle whose values along each direction are
+    at equal steps of the face's longest iso-parametric length in that direction."""
+    u0, u1, v0, v1 = model.bounds
+    fine = (LENGTH_SAMPLES * (size[0] - 1) + 1, LENGTH_SAMPLES * (size[1] - 1) + 1)
+    su, sv = np.linspace(u0, u1, fine[0]), np.linspace(v0, v1, fine[1])
+    points = model.points(np.stack(np.meshgrid(su, sv, indexing="ij"), -1))
+    steps_u = np.nan_to_num(np.linalg.norm(np.diff(points, axis=0), axis=-1)).max(axis=1)
+    steps_v = np.nan_to_num(np.linalg.norm(np.diff(points, axis=1), axis=-1)).max(axis=0)
+    u = _equal_length_values(su, steps_u, size[0])
+    v = _equal_length_values(sv, steps_v, size[1])
+    return np.stack(np.meshgrid(u, v, indexing="ij"), axis=-1)
+
+
+def _equal_length_values(samples, steps, count):
+    """``count`` parameter values from samples[0] to samples[-1] at equal steps of the cumulated
+    lengths ``steps`` (len(samples) - 1,) between the samples (equal parameter steps where the
+    face has no length)."""
+    length = np.concatenate([[0.0], np.cumsum(steps)])
+    if not length[-1] > 0:
+        return np.linspace(samples[0], samples[-1], count)
+    length = length + 1e-9 * length[-1] * np.linspace(0.0, 1.0, len(length))
+    values = np.interp(np.linspace(0.0, length[-1], count), length, samples)
+    values[0], values[-1] = samples[0], samples[-1]
+    return values
+
+
+def edge_directions(points, normals, loops):
+    """(E, 2, 3) for edge nodes (E, 3) with unit normals (E, 3) on closed polygons ``loops``
+    ((start, stop) ranges): the outward conormal and a zero row where the edge has a direction;
+    two tangent directions spanning the plane across the normal where it has none (a collapsed
+    edge); the x and y axes where a node has no normal either (:func:`face_nodes` then gives it
+    the z axis as its normal, so the offset's whole length is measured)."""
+    across = np.zeros((len(points), 2, 3))
+    for start, stop in loops:
+        if stop - start < 2:
+            continue
+        piece = points[start:stop]
+        tangent = np.roll(piece, -1, axis=0) - np.roll(piece, 1, axis=0)
+        across[start:stop] = _across(tangent, normals[start:stop], scale=np.ptp(points, axis=0).max())
+    return across
+
+
+def _across(tangent, normals, scale):
+    """The directions of :func:`edge_directions` for one loop."""
+    rows = np.zeros((len(tangent), 2, 3))
+    finite = np.isfinite(normals).all(1)
+    length = np.linalg.norm(tangent, axis=1)
+    regular = finite & (length > 1e-9 * max(scale, 1e-12))
+    conormal = np.cross(tangent[regular], normals[regular])
+    rows[regular, 0] = conormal / np.linalg.norm(conormal, axis=1, keepdims=True)
+    collapsed = np.flatnonzero(finite & ~regular)
+    if collapsed.size:
+        first, second = _plane_basis(normals[collapsed])
+        rows[collapsed, 0], rows[collapsed, 1] = first, second
+    lost = np.flatnonzero(~finite)
+    rows[lost, 0], rows[lost, 1] = [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]
+    return rows
+
+
+def _plane_basis(normals):
+    """Two unit vectors (M, 3) each, across the unit normals (M, 3) and each other."""
+    helper = np.where(np.abs(normals[:, :1]) < 0.9, [[1.0, 0.0, 0.0]], [[0.0, 1.0, 0.0]])
+    first = np.cross(normals, helper)
+    first /= np.linalg.norm(first, axis=1, keepdims=True)
+    return first, np.cross(normals, first)
+
+
+def _largest_cell_diagonal(points):
+    """The largest 3D diagonal (mm) of the raster's cells, points (g_u, g_v, 3)."""
+    a, b = points[:-1, :-1], points[1:, 1:]
+    c, d = points[1:, :-1], points[:-1, 1:]
+    diagonals = np.maximum(np.linalg.norm(a - b, axis=-1), np.linalg.norm(c - d, axis=-1))
+    return float(np.nanmax(diagonals)) if diagonals.size else 0.0
+
+
+def _ranges(bounds, keep):
+    """The (start, stop) ranges of the loops after dropping the nodes ``keep`` marks False."""
+    kept = np.concatenate([[0], np.cumsum(keep)])
+    return [(int(kept[start]), int(kept[stop])) for start, stop in zip(bounds[:-1], bounds[1:])
+            if kept[stop] > kept[start]]
