@@ -68,3 +68,15 @@ def test_the_nodes_cover_the_face_within_their_spacing():
     assert cKDTree(nodes).query(points)[0].max() <= stats.spacing
     corners = np.array([tuple(v.Point) for v in face.Vertexes])
     assert cKDTree(nodes).query(corners)[0].max() < 1e-9
+
+
+@pytest.mark.parametrize("name", ["rational", "trimmed", "strip", "collapsed"])
+def test_neither_optimiser_ends_worse_than_uniform(name):
+    """On the delivered figure, short runs of both optimisers end at or below uniform parametric
+    sampling (the PSO starts from the uniform layouts and is judged against them; the descent
+    accepts only steps the exact figure takes)."""
+    face = FACES[name]()
+    uniform = cmmsampling.sample(face, 36, "uniform_parametric", grid=40, occ_check=False).deviation.maximum
+    for strategy in ("pso", "optimal"):
+        result = cmmsampling.sample(face, 36, strategy, grid=40, occ_check=False, **SHORT[strategy])
+        assert result.deviation.maximum <= uniform * (1 + 1e-9), (strategy, result.notes)
