@@ -324,11 +324,11 @@ def make_substitute_surface(doc):
 def write_substitute(surface, result):
     """The fitted surface as the object's shape, with the deviation field of the result."""
     stats = result.deviation
+    surface.MaxDeviation = float(stats.maximum)
     surface.Shape = result.substitute_shape()
     surface.GridU = [float(u) for u in stats.grid_uv[:, 0, 0]]
     surface.GridV = [float(v) for v in stats.grid_uv[0, :, 1]]
     surface.DeviationField = [float(d) for d in np.ravel(stats.field)]
-    surface.MaxDeviation = float(stats.maximum)
 
 
 def write_report(sheet, points):
@@ -603,7 +603,7 @@ class SubstituteSurface(TypedProxy):
             ("App::PropertyFloatList", "GridV", "Parameters v of the evaluation grid"),
             ("App::PropertyFloatList", "DeviationField",
              "Deviation from the face at each grid node (mm), u-major, NaN off the face"),
-            ("App::PropertyLength", "MaxDeviation", "Largest deviation on the grid (mm)"),
+            ("App::PropertyLength", "MaxDeviation", "Largest deviation of the delivered substitute (mm)"),
         ):
             obj.addProperty(kind, name, "Deviation", doc)
             obj.setEditorMode(name, 1)

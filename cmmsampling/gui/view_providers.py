@@ -185,7 +185,9 @@ class ViewProviderSubstituteSurface(Stateless):
             self.redraw(vobj)
 
     def redraw(self, vobj):
-        """Rebuild the coloured grid mesh and the legend from the object's deviation field."""
+        """Rebuild the coloured grid mesh and the legend from the object's deviation field; the
+        legend reaches the reported maximum (the edge nodes' included, which the raster's field
+        may not hold)."""
         if not hasattr(self, "coloured"):
             return
         self.coloured.removeAllChildren()
@@ -193,7 +195,8 @@ class ViewProviderSubstituteSurface(Stateless):
         if not obj.Shape.Faces or not obj.DeviationField:
             return
         u, v, field = obj.Proxy.deviation_grid(obj)
-        maximum = colormap.shown_maximum(float(np.nanmax(field)))
+        largest = max(float(np.nanmax(field)), float(getattr(obj, "MaxDeviation", 0.0)))
+        maximum = colormap.shown_maximum(largest)
         self.coloured.addChild(in_front())
         face = source_of(obj)
         if face is not None:
