@@ -91,14 +91,19 @@ class SamplingProblem:
         """Local bounds (MinimaxBound, mm) about a substitute on the grid and on the check grid: the
         least first-order maximum deviation that moving its poles along its normals could reach
         (see cmmsampling.fitting.bound: a local figure, not a bound over every point set). poles:
-        (n_u, n_v, 3) mm, default the reference fit's (then computed once). Returns {"grid":
-        MinimaxBound, "check": MinimaxBound}.
+        (n_u, n_v, 3) mm, default the reference fit's (then computed once). Returns LocalBounds:
+        {"grid": MinimaxBound, "check": MinimaxBound}, each computed when first asked for (the
+        check grid's programme takes seconds).
         """
         if poles is None and self._bounds is not None:
             return self._bounds
         about = self.objective.reference_poles() if poles is None else poles
-        found = {"grid": minimax_bound(self.space, self.judge(about), self.grid.size),
-                 "check": minimax_bound(self.space, self.judge(about, check=True), self.check_objective.grid.size)}
+
+        def compute(check):
+            grid = (self.check_objective if check else self.objective).grid.size
+            return minimax_bound(self.space, self.judge(about, check), grid)
+
+        found = LocalBounds(compute)
         if poles is None:
             self._bounds = found
         return found
@@ -117,6 +122,21 @@ class SamplingProblem:
     def project(self, uv):
         """Map uv: (..., 2) onto the face's domain."""
         return self.domain.project(np.asarray(uv, dtype=float))
+
+
+class LocalBounds(dict):
+    """{"grid": MinimaxBound, "check": MinimaxBound}, each computed on first access by
+    compute(check: bool)."""
+
+    def __init__(self, compute):
+        super().__init__()
+        self._compute = compute
+
+    def __missing__(self, key):
+        if key not in ("grid", "check"):
+            raise KeyError(key)
+        self[key] = self._compute(key == "check")
+        return self[key]
 
 
 def resolve_fit_poles(fit_poles, n, fit_degree):
