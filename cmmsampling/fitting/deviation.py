@@ -339,13 +339,14 @@ class DeviationStats:
         values = exact.signed
         magnitude = np.abs(values)
         nodes = exact.nodes
+        grid = exact.grid_signed()
         return cls(
             maximum=float(magnitude.max()),
             mean=float(magnitude.mean()),
             rms=float(np.sqrt(np.mean(values ** 2))),
             std=float(magnitude.std()),
-            field=np.abs(exact.grid_signed()),
-            signed=exact.grid_signed(),
+            field=np.abs(grid),
+            signed=grid,
             grid_uv=nodes.uv,
             nodes=nodes.points,
             edge_signed=exact.edge_signed(),

@@ -134,7 +134,7 @@ def _side(offsets, at, normals):
 def _nearest_on_edges(nodes, points):
     """The nearest point (M, 3) on the face's edge polygons to each point (M, 3), and the face's
     normal at the nearest edge node (M, 3)."""
-    starts, ends, owner = [], [], []
+    starts, ends = [], []
     for start, stop in nodes.loops:
         index = np.arange(start, stop)
         starts.append(index)
