@@ -64,6 +64,26 @@ def collapsed_face():
     return make_bspline_surface(poles, (5, 5)).toShape()
 
 
+def tolerant_face():
+    """A degree-8 Bezier patch trimmed by a wobbly closed curve whose 3D curve and curve on the
+    surface differ by up to 0.012 mm, its tolerance raised to 0.02 mm: valid by OCC's
+    ``isValid()`` and ``check(True)``, yet points on its boundary by the face classifier lie up to
+    0.02 mm from it by OCC's distance."""
+    grid = np.arange(9) * 10.0
+    x, y = np.meshgrid(grid, grid, indexing="ij")
+    surface = make_bspline_surface(np.stack([x, y, 3 * np.sin(0.07 * x) * np.cos(0.05 * y)], -1), (8, 8))
+    angles = np.linspace(0, 2 * np.pi, 60, endpoint=False)
+    wobble = 0.012 * np.sin(3 * angles)
+    boundary = [surface.value(0.5 + 0.4 * np.cos(a), 0.5 + 0.4 * np.sin(a))
+                + FreeCAD.Vector(np.cos(a), np.sin(a), 0) * w for a, w in zip(angles, wobble)]
+    curve = Part.BSplineCurve()
+    curve.interpolate(boundary, PeriodicFlag=True)
+    face = Part.Face(surface, Part.Wire([curve.toShape()]))
+    face.fix(1e-7, 1e-7, 0.1)
+    face.fixTolerance(0.02)
+    return face
+
+
 def holed_face():
     """A wavy 100 x 100 mm B-spline plate with a 16 mm hole cut through it (trimmed)."""
     x, y = np.meshgrid(np.linspace(0, 100, 6), np.linspace(0, 100, 6), indexing="ij")

@@ -2,7 +2,7 @@
 a plane, a tiny face; each gets usable points or a message saying what to change."""
 import numpy as np
 import pytest
-from geometry import Part, cartesian_refuses, collapsed_face
+from geometry import Part, cartesian_refuses, collapsed_face, tolerant_face
 
 import cmmsampling
 from cmmsampling.geometry.surface import SurfaceModel
@@ -56,3 +56,23 @@ def test_nan_and_infinite_input_is_refused(reference):
         cmmsampling.evaluate(reference, np.full((16, 2), np.nan))
     with pytest.raises(ValueError, match="uv must be an \\(N, 2\\) array"):
         cmmsampling.evaluate(reference, np.zeros((16, 3)))
+
+
+@pytest.mark.parametrize("strategy", ["uniform_parametric", "halton", "pso", "optimal"])
+def test_a_valid_face_with_tolerant_edges_is_sampled_up_to_its_boundary(strategy):
+    face = tolerant_face()
+    assert face.isValid() and face.Surface.UDegree == 8
+    face.check(True)   # raises where OCC finds the face broken
+    assert face.getTolerance(1) > 0.01
+    model = SurfaceModel.from_face(face)
+    angles = np.linspace(0, 2 * np.pi, 40, endpoint=False)
+    rim = np.c_[0.5 + 0.4001 * np.cos(angles), 0.5 + 0.4001 * np.sin(angles)]
+    off, _, inside = model._occ_placement(rim)
+    within = inside & (off > 1e-3) & (off <= face.getTolerance(1))
+    assert within.any() and model.on_face(rim[within]).all()
+    result = cmmsampling.sample(face, 49, strategy, edge_offset=0.0, workers=1, occ_check=False,
+                                **QUICK.get(strategy, {}))
+    assert len(result.points) == 49
+    assert all(face.isPartOfDomain(u, v) for u, v in result.uv)
+    distances = [face.distToShape(Part.Vertex(*point))[0] for point in result.points]
+    assert max(distances) <= face.getTolerance(1)
