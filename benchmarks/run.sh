@@ -1,6 +1,9 @@
 #!/usr/bin/env bash
-# Speed benchmark: installs what is missing (Debian packages, and pyswarms from PyPI into a
-# separate virtual environment that sees Debian's numpy, scipy and FreeCAD), then runs it.
+# The benchmarks: installs what is missing (Debian packages, and pyswarms from PyPI into a
+# separate virtual environment that sees Debian's numpy, scipy and FreeCAD), then runs them and
+# writes each one's page in docs/benchmarks/ (benchmarks/page.py), never edited by hand.
+#   bash benchmarks/run.sh                 # all of them (about an hour on 2 cores)
+#   bash benchmarks/run.sh speed memory    # those named (the names below)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/install-deps.sh
@@ -13,4 +16,29 @@ VENV="$PWD/.venv-bench"
 [ -x "$VENV/bin/python" ] || /usr/bin/python3 -m venv --system-site-packages "$VENV"
 # importing pyswarms writes a report.log into the working folder: check it from a scratch one
 (cd "$(mktemp -d)" && "$VENV/bin/python" -c "import pyswarms" 2>/dev/null) || "$VENV/bin/pip" install -q pyswarms
-exec "$VENV/bin/python" benchmarks/speed.py "$@"
+PY="$VENV/bin/python"
+page() { "$PY" benchmarks/page.py "$@"; }
+run_one() {
+  case "$1" in
+    speed) page speed "Speed of the swarm's fitness and of the paper's PSO (quiet machine)" "$PY" benchmarks/speed.py ;;
+    speed-busy) page speed-busy "Speed of the swarm's fitness and of the paper's PSO beside a CPU-bound process" \
+                  "$PY" benchmarks/speed.py --beside-busy ;;
+    delivered-deviation) "$PY" benchmarks/delivered_deviation.py ;;
+    near-optimal) page near-optimal "How close each strategy comes to a local optimum" "$PY" benchmarks/near_optimal.py ;;
+    part-plan-speed) page part-plan-speed "A 20-face part plan on one and two processes and on Dask" \
+                       "$PY" benchmarks/part_plan.py speed ;;
+    part-plan-points) page part-plan-points "Points a tolerance needs: optimal against uniform parametric" \
+                        "$PY" benchmarks/part_plan.py points ;;
+    probe-path) page probe-path "A part plan with the probe's reach and path (Ventilator.stp)" "$PY" benchmarks/probe_path.py ;;
+    long-runs) page long-runs "Big and long runs: time and memory" "$PY" benchmarks/long_runs.py ;;
+    memory) page memory "Peak memory against sample()'s estimate" "$PY" benchmarks/memory.py --quick ;;
+    *) echo "unknown benchmark '$1'; choose from: $ALL" >&2; return 2 ;;
+  esac
+}
+ALL="speed speed-busy delivered-deviation near-optimal part-plan-speed part-plan-points probe-path long-runs memory"
+status=0
+for name in ${@:-$ALL}; do
+  echo "== $name"
+  run_one "$name" || status=$?
+done
+exit "$status"

@@ -9,9 +9,12 @@ Prints, in one run:
   * time per PSO iteration against N, grid size and substitute pole count;
   * one against two BLAS threads for the batched fitness;
   * peak memory (resident set) of this process and of the worker.
+With --beside-busy all of it runs beside a CPU-bound process (a desktop is never idle).
 Run with benchmarks/run.sh (which installs pyswarms in a separate virtual environment).
 """
 import argparse
+import contextlib
+import subprocess
 import logging
 import os
 import resource
@@ -219,19 +222,36 @@ def peak_memory():
     print(f"\nPeak memory: {own:.0f} MiB this process, {children:.0f} MiB worker process")
 
 
+@contextlib.contextmanager
+def busy_neighbour(wanted):
+    """While active and ``wanted``, one CPU-bound process runs beside this one."""
+    if not wanted:
+        yield
+        return
+    neighbour = subprocess.Popen([sys.executable, "-c", "while True: pass"])
+    try:
+        yield
+    finally:
+        neighbour.kill()
+        neighbour.wait()
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--iterations", type=int, default=200, help="iterations for the comparisons")
     parser.add_argument("--skip-full", action="store_true", help="skip the paper's full runs")
+    parser.add_argument("--beside-busy", action="store_true", help="run beside a CPU-bound process")
     args = parser.parse_args()
     face = cmmsampling.reference_face()
-    print(f"numpy {np.__version__}, {os.cpu_count()} cores")
-    if not args.skip_full:
-        full_runs(face)
-    three_ways(face, args.iterations)
-    scaling(face, max(20, args.iterations // 4))
-    blas_effect(face, args.iterations)
-    peak_memory()
+    print(f"numpy {np.__version__}, {os.cpu_count()} cores"
+          + (", one CPU-bound process running beside" if args.beside_busy else ""))
+    with busy_neighbour(args.beside_busy):
+        if not args.skip_full:
+            full_runs(face)
+        three_ways(face, args.iterations)
+        scaling(face, max(20, args.iterations // 4))
+        blas_effect(face, args.iterations)
+        peak_memory()
 
 
 if __name__ == "__main__":
