@@ -35,7 +35,7 @@ run_one() {
     *) echo "unknown benchmark '$1'; choose from: $ALL" >&2; return 2 ;;
   esac
 }
-ALL="speed speed-busy delivered-deviation near-optimal part-plan-speed part-plan-points probe-path long-runs memory"
+ALL="speed part-plan-speed speed-busy long-runs memory near-optimal probe-path part-plan-points delivered-deviation"
 status=0
 for name in ${@:-$ALL}; do
   echo "== $name"
