@@ -1,8 +1,10 @@
 """CMM Sampling, application side (run by FreeCAD at start-up, with or without the GUI).
 
-File > Export writes selected probe points for the CMM through cmmsampling.document.export.
+File > Export writes selected probe points for the CMM through cmmsampling.document.export, in
+every registered point-file format (cmmsampling.formats.registry).
 """
 import FreeCAD
 
-FreeCAD.addExportType("CMM probe points: DMIS, PC-DMIS XYZ, CSV (*.dmi *.dmis *.xyz *.csv)",
-                      "cmmsampling.document")
+from cmmsampling.formats.pointfiles import export_filter
+
+FreeCAD.addExportType(export_filter(), "cmmsampling.document")

@@ -6,6 +6,7 @@ import time
 import traceback
 
 from .access.probe import PROBES
+from .formats.pointfiles import FORMATS
 from .geometry.surface import reference_face
 from .strategies.sampling import (BEST_STRATEGY, PROBE_EDGE_OFFSET_MM, STRATEGIES, baseline, probe_edge_offset,
                                   sample)
@@ -18,7 +19,7 @@ DESCRIPTION = """Where should a CMM's contact probe touch a free-form face?
 Places N probe points on a face with a sampling strategy, fits a least-squares B-spline
 (the substitute geometry) to them and reports its deviation from the CAD face in mm.
 Probe points are written with their approach vectors (unit outward normals; the probe
-travels along -i,-j,-k) as DMIS (.dmi), PC-DMIS XYZIJK (.xyz) or CSV (.csv).
+travels along -i,-j,-k) as {formats}.
 
 examples:
   python -m cmmsampling faces part.step
@@ -30,9 +31,14 @@ examples:
   python -m cmmsampling demo"""
 
 
+def formats():
+    """The registered point-file formats in words, e.g. 'DMIS (.dmi, .dmis), CSV (.csv)'."""
+    return ", ".join(f"{record.title} ({', '.join(record.extensions)})" for record in FORMATS.values())
+
+
 def build_parser():
     """The argument parser with its sub-commands."""
-    parser = argparse.ArgumentParser(prog="python -m cmmsampling", description=DESCRIPTION,
+    parser = argparse.ArgumentParser(prog="python -m cmmsampling", description=DESCRIPTION.format(formats=formats()),
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--debug", action="store_true",
                         help="print the traceback of an error (for a bug report)")
@@ -75,8 +81,8 @@ def _plan_arguments(parser):
     parser.add_argument("--scheduler", default=None, metavar="tcp://HOST:PORT",
                         help="run the faces on this Dask cluster instead of local processes")
     parser.add_argument("--out", action="append", default=[], metavar="FILE",
-                        help="write all points as one program in one short probe path: .dmi, .xyz or "
-                             ".csv (with a face column); repeat for several files")
+                        help=f"write all points as one program in one short probe path: {formats()} (CSV "
+                             "with a face column); repeat for several files")
     parser.add_argument("--probe-radius", type=float, default=0.0, metavar="MM",
                         help="write ball centres instead of contact points (default 0)")
     _probe_argument(parser)
@@ -131,7 +137,7 @@ def _sample_arguments(parser):
     _strategy_settings(parser)
     parser.add_argument("--seed", type=int, default=0, help="seed of the random parts (default 0)")
     parser.add_argument("--out", action="append", default=[], metavar="FILE",
-                        help="write the probe points; format from the extension .dmi, .xyz or .csv "
+                        help=f"write the probe points; format from the extension: {formats()} "
                              "(repeat for several files)")
     parser.add_argument("--probe-radius", type=float, default=0.0, metavar="MM",
                         help="write ball centres (point + radius * normal) instead of contact points "
@@ -404,8 +410,8 @@ def _check_outputs(args):
         try:
             resolve_format(path)
         except ValueError:
-            raise ValueError(f"--out {path}: unknown point-file type; end the name in .dmi (DMIS), "
-                             ".xyz (PC-DMIS XYZIJK) or .csv") from None
+            raise ValueError(f"--out {path}: unknown point-file type; end the name in one of "
+                             f"{formats()}") from None
         check_writable(path)
     if args.fcstd:
         if not args.fcstd.lower().endswith(".fcstd"):

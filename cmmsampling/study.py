@@ -18,7 +18,8 @@ from .fitting.deviation import DEFAULT_GRID
 from .fitting.substitute import DEFAULT_DEGREE, DEFAULT_SMOOTHING
 from .geometry.validation import check_choice, check_int
 from .strategies import handover
-from .strategies.sampling import MIN_POINTS, STRATEGIES, make_problem, sample, strategy_options, time_needed
+from .strategies.estimates import time_needed
+from .strategies.sampling import MIN_POINTS, STRATEGIES, make_problem, sample, strategy_options
 from .strategies.sampling import baseline as baseline_strategy
 from .strategies.threads import blas_threads
 

@@ -5,7 +5,6 @@ from geometry import Part
 
 from cmmsampling.fitting.deviation import EvaluationGrid, deviation_objective
 from cmmsampling.fitting.exact import exact_deviation
-from cmmsampling.fitting.substitute import FittedSurface
 from cmmsampling.fitting.substitute import DEFAULT_SMOOTHING, SubstituteSpace, default_pole_count
 from cmmsampling.fitting.occ_surface import substitute_surface
 from cmmsampling.geometry.surface import SurfaceModel, make_bspline_surface

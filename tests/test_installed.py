@@ -3,7 +3,6 @@ FreeCAD started from a folder outside the checkout (tests/installed_smoke.py).""
 import os
 import subprocess
 
-import pytest
 
 TESTS = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(TESTS)

@@ -2,7 +2,7 @@
 
 tests/test_strategy_records.py and the GUI tests register it and see it offered everywhere."""
 import cmmsampling
-from cmmsampling.strategies.blind import StrategyOutcome, halton
+from cmmsampling.strategies.blind import halton
 
 
 def mirrored_halton(problem, progress, flips):
@@ -10,7 +10,7 @@ def mirrored_halton(problem, progress, flips):
     uv = halton(problem).uv.copy()
     if flips % 2:
         uv[:, 0] = problem.domain.lower[0] + problem.domain.upper[0] - uv[:, 0]
-    return StrategyOutcome(uv)
+    return cmmsampling.StrategyOutcome(uv)
 
 
 def _check_flips(options):

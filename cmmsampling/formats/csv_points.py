@@ -6,6 +6,7 @@ import io
 import numpy as np
 
 from .pointset import PointSet
+from .registry import FileFormat
 from .text import (COORDINATE_DECIMALS, PARAMETER_DECIMALS, VECTOR_DECIMALS, comment_entries, fixed,
                    metadata_comment_lines, number, parse_metadata_comments)
 
@@ -108,3 +109,6 @@ def _known(values, name, path):
     if missing.any():
         raise ValueError(f"{path}: {name} given for some points only")
     return values
+
+
+FORMAT = FileFormat("csv", NAME, DESCRIPTION, EXTENSIONS, ENCODING, write, read)

@@ -8,6 +8,7 @@ import numpy as np
 
 from ..access.probe import head_angles
 from .pointset import PointSet
+from .registry import FileFormat
 from .text import (COORDINATE_DECIMALS, VECTOR_DECIMALS, comment_entries, fixed, metadata_comment_lines, numbers,
                    parse_metadata_comments)
 
@@ -210,3 +211,6 @@ def dmis_statement(*groups):
             line = ""
         line += token
     return lines + [line]
+
+
+FORMAT = FileFormat("dmis", NAME, DESCRIPTION, EXTENSIONS, ENCODING, write, read)

@@ -19,7 +19,7 @@ from ..strategies.result import SamplingResult
 from .dmis import dmis_program_name
 from .files import write_atomically
 from .frames import FRAME_KEYS, frame_facts, resolve_frame, to_local
-from .pointfiles import MODULES, READER_KEYS, resolve_format
+from .pointfiles import FORMATS, READER_KEYS, resolve_format
 from .pointset import PointSet
 
 ORDERS = ("as_optimised", "short_path", "probe_path")
@@ -72,7 +72,7 @@ class ExportReport:
 
     def __str__(self):
         what = "contact points" if self.probe_radius == 0 else f"ball centres, probe radius {self.probe_radius:g} mm"
-        line = (f"Wrote {self.count} points to {self.path} ({MODULES[self.format].NAME}, "
+        line = (f"Wrote {self.count} points to {self.path} ({FORMATS[self.format].title}, "
                 f"{self.frame} frame, {what}). ")
         if self.order == "probe_path":
             return line + (f"Collision-free probe path: {self.length_after:.1f} mm of moves, {self.detours} over the "
@@ -141,8 +141,8 @@ def export(source, path, format=None, *, frame=None, probe_radius=0.0, order="as
         path_order = short_path(point_set.points) if order == "short_path" else unchanged(point_set.points)
         point_set = reordered(point_set, path_order.order)
     facts.update(order=order, path_length_mm=path_order.length_after)
-    text = MODULES[fmt].write(point_set, facts, options)
-    target = write_atomically(path, text, MODULES[fmt].ENCODING)
+    text = FORMATS[fmt].write(point_set, facts, options)
+    target = write_atomically(path, text, FORMATS[fmt].encoding)
     return ExportReport(target, fmt, len(point_set), order, path_order.length_before, path_order.length_after,
                         facts["frame"], facts["probe_radius_mm"], 0 if moves is None else moves.detours,
                         None if moves is None else moves.seconds)

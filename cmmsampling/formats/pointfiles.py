@@ -1,5 +1,6 @@
 """Point files: the formats probe points are written in and read from, one module each
-(:mod:`.dmis`, :mod:`.xyzijk`, :mod:`.csv_points`), found by name or by a file's extension.
+(:mod:`.dmis`, :mod:`.xyzijk`, :mod:`.csv_points`, each with its FileFormat record, registered
+here), found by name or by a file's extension.
 
 All three hold, per point, x, y, z in mm and the unit approach vector i, j, k (out of the
 material: the probe travels along -ijk). DMIS and CSV also hold labels and ``key: value``
@@ -10,26 +11,29 @@ import os
 
 from ..geometry.validation import check_choice
 from . import csv_points, dmis, xyzijk
+from .registry import FORMATS, FileFormat, export_filter, extensions, register_format, unregister_format
 
-MODULES = {"dmis": dmis, "xyz": xyzijk, "csv": csv_points}
-FORMATS = {name: module.DESCRIPTION for name, module in MODULES.items()}
-EXTENSIONS = {extension: name for name, module in MODULES.items() for extension in module.EXTENSIONS}
+__all__ = ["FORMATS", "FileFormat", "READER_KEYS", "export_filter", "read_points", "register_format",
+           "resolve_format", "unregister_format"]
+
+for _record in (dmis.FORMAT, xyzijk.FORMAT, csv_points.FORMAT):
+    register_format(_record)
 READER_KEYS = ("format", "path", "dmis_features", "xyz_units")
 
 
 def resolve_format(path, format=None):
-    """The format name for path: ``format`` if given, else from the extension (see EXTENSIONS).
+    """The format name for path: ``format`` if given, else from the extension (the registered
+    formats' extensions).
 
     ValueError listing the formats and their extensions when neither tells.
     """
     if format is not None:
         return check_choice("format", str(format).lower(), list(FORMATS))
     extension = os.path.splitext(os.fspath(path))[1].lower()
-    if extension in EXTENSIONS:
-        return EXTENSIONS[extension]
-    known = "; ".join(
-        f"{name!r} ({', '.join(e for e, f in EXTENSIONS.items() if f == name)})" for name in FORMATS
-    )
+    by_extension = extensions()
+    if extension in by_extension:
+        return by_extension[extension]
+    known = "; ".join(f"{name!r} ({', '.join(record.extensions)})" for name, record in FORMATS.items())
     raise ValueError(
         f"cannot tell the format of {os.fspath(path)!r} from its extension {extension!r}; "
         f"use one of these extensions or give format=: {known}"
@@ -49,6 +53,6 @@ def read_points(path, format=None):
     fmt = resolve_format(path, format)
     with open(path, encoding="utf-8", errors="replace", newline="") as stream:
         text = stream.read()
-    point_set = MODULES[fmt].read(text, os.fspath(path))
+    point_set = FORMATS[fmt].read(text, os.fspath(path))
     point_set.metadata.update({"format": fmt, "path": os.path.abspath(path)})
     return point_set

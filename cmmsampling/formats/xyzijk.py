@@ -4,6 +4,7 @@ import re
 import numpy as np
 
 from .pointset import PointSet
+from .registry import FileFormat
 from .text import COORDINATE_DECIMALS, VECTOR_DECIMALS, fixed, numbers
 
 NAME = "XYZIJK text"
@@ -40,3 +41,6 @@ def read(text, path="<text>"):
     data = np.array(rows)
     labels = [f"P{index + 1}" for index in range(len(data))]
     return PointSet(labels, data[:, :3] * XYZ_UNITS[units], data[:, 3:], metadata={"xyz_units": units})
+
+
+FORMAT = FileFormat("xyz", NAME, DESCRIPTION, EXTENSIONS, ENCODING, write, read)

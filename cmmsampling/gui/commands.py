@@ -196,13 +196,10 @@ class ExportProbePoints(GuardedCommand):
 
 def export_filters():
     """File dialog filters, one per export format: [(filter text, extensions)]."""
-    from ..formats.pointfiles import EXTENSIONS, FORMATS
+    from ..formats.pointfiles import FORMATS
 
-    filters = []
-    for name, description in FORMATS.items():
-        extensions = [e for e, fmt in EXTENSIONS.items() if fmt == name]
-        filters.append((f"{description} ({' '.join('*' + e for e in extensions)})", extensions))
-    return filters
+    return [(f"{record.description} ({' '.join('*' + e for e in record.extensions)})", list(record.extensions))
+            for record in FORMATS.values()]
 
 
 def default_export_name(points):

@@ -18,7 +18,7 @@ from ..access.probe import PROBES
 from ..fitting.deviation import DEFAULT_GRID
 from ..fitting.substitute import DEFAULT_DEGREE, default_pole_count
 from ..object_types import source_face
-from ..strategies import memory, sampling
+from ..strategies import estimates, memory, sampling
 from ..strategies.problem import resolve_fit_poles
 from . import icon, resource, settings
 from .qt_compat import flag_value, forget_when_destroyed
@@ -466,7 +466,7 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
         disabled until N (or the population, the poles, the grid) is lowered. Values the run
         would refuse anyway (e.g. w2 > w1) leave the line empty: Sample says what is wrong."""
         try:
-            needed = sampling.memory_needed(**self.memory_arguments())
+            needed = estimates.memory_needed(**self.memory_arguments())
         except (ValueError, TypeError):
             self.memory_fits = True
             self.memoryInfo.setText("")
@@ -490,7 +490,7 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
         if face is None:
             return None
         arguments = {k: v for k, v in self.sample_arguments().items() if k != "seed"}
-        return sampling.time_needed, {"face": face.copy(), **detached(arguments)}
+        return estimates.time_needed, {"face": face.copy(), **detached(arguments)}
 
     def estimate_text(self, seconds):
         """'Time: about 12 s', 'Time: under a second', or that the descent has no known end."""

@@ -67,7 +67,7 @@ def run_all(function, jobs, processes=None, scheduler=None, progress=None, descr
         return progress is not None and bool(progress(done, total, describe(jobs[index], outcome)))
 
     try:
-        cancelled = any(record(index, outcome) for index, outcome in runs)
+        any(record(index, outcome) for index, outcome in runs)
     except WorkersFailed as exc:
         left = [k for k in range(total) if outcomes[k] is None]
         notes.append(f"{exc}; the {len(left)} job(s) left ran in this process")

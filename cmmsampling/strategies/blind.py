@@ -3,14 +3,13 @@
 Every strategy has the signature ``strategy(problem, **options) -> StrategyOutcome`` where
 ``problem`` is a :class:`cmmsampling.strategies.problem.SamplingProblem` (face model, N, domain, seed) and
 the outcome holds exactly N parameter pairs ``uv: (N, 2)`` inside the face's domain. Points and
-normals follow from ``problem.model``.
+normals follow from ``problem.model``. :data:`RECORDS` describes them to the rest of the project.
 """
-from dataclasses import dataclass, field
-
 import numpy as np
 from scipy.spatial import cKDTree
 
 from ..geometry.bspline import radical_inverse
+from .registry import Strategy, StrategyOutcome
 
 CARTESIAN_RASTER = 121
 NEWTON_STEPS = 30
@@ -20,23 +19,6 @@ COVERAGE = 1.6
 # The largest layout a strategy grows before it gives up placing N points (a thin feasible strip
 # can keep almost none of a layout's points).
 MAX_LAYOUT = 250_000
-
-
-@dataclass
-class StrategyOutcome:
-    """What a strategy returns.
-
-    uv: (N, 2) parameters on the face; history: best maximum deviation (mm) per iteration for
-    the optimisers, else None; evaluations: fitness evaluations spent; cancelled: stopped early;
-    details: figures for the settings; notes: sentences for the user about what was done.
-    """
-
-    uv: np.ndarray
-    history: np.ndarray = None
-    evaluations: int = 0
-    cancelled: bool = False
-    details: dict = field(default_factory=dict)
-    notes: list = field(default_factory=list)
 
 
 def grid_shape(n, aspect=1.0):
@@ -401,3 +383,26 @@ def curvature_adaptive(problem, curvature="mean"):
 def curvature_gaussian(problem):
     """:func:`curvature_adaptive` weighted by Gaussian curvature."""
     return curvature_adaptive(problem, curvature="gaussian")
+
+
+def _blind(function):
+    """Adapter: a blind strategy ignores progress and takes no options."""
+    return lambda problem, progress: function(problem)
+
+
+RECORDS = (
+    Strategy("uniform_cartesian", _blind(uniform_cartesian),
+             "regular grid over the face's footprint in machine X/Y/Z (paper eq. 3-4)",
+             "uniform Cartesian", figures=True, reference=True),
+    Strategy("uniform_parametric", _blind(uniform_parametric),
+             "regular grid in the face's (u, v) (paper eq. 5-6)", "uniform parametric",
+             figures=True, reference=True, baseline=True),
+    Strategy("random", _blind(random_uniform), "uniform random (u, v), seeded", "random",
+             seeded=True),
+    Strategy("hammersley", _blind(hammersley), "Hammersley set in (u, v)", "Hammersley"),
+    Strategy("halton", _blind(halton), "Halton sequence in (u, v), bases 2 and 3", "Halton"),
+    Strategy("curvature_mean", _blind(curvature_adaptive),
+             "more points on patches of high mean curvature", "mean curvature"),
+    Strategy("curvature_gaussian", _blind(curvature_gaussian),
+             "more points on patches of high Gaussian curvature", "Gaussian curvature"),
+)

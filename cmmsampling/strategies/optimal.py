@@ -26,6 +26,9 @@ from scipy.special import logsumexp, softmax
 
 from ..fitting.exact import Linearisation
 from ..geometry.bspline import kron_rows
+from ..geometry.validation import check_choice, check_int, check_real, check_uv
+from . import blind
+from .registry import STRATEGIES, Setting, Strategy, StrategyOutcome, layouts
 
 KAPPAS = (10.0, 30.0, 100.0, 300.0, 1000.0, 3000.0, 10000.0)
 STAGE_ITERATIONS = 800
@@ -228,3 +231,76 @@ def _take(best, uv, judged, objective, closest=None):
     best.update(uv=uv, max=judged.maximum, model=Linearisation(objective.model, objective.space, judged))
     if closest is not None:
         best["closest"] = closest
+
+
+# The strategy: the descent on a sampling problem, from the best blind layout.
+OPTIMAL_DEFAULTS = {"start": "best", "time_limit": None, "max_evaluations": None}
+BEST_STARTS = ("uniform_parametric", "uniform_cartesian", "halton", "hammersley")
+OPTIMAL_SETTINGS = (Setting("time_limit", float, "seconds the optimal strategy may take (default: until it "
+                                                 "converges)"),)
+
+
+def run_optimal(problem, progress, start, time_limit, max_evaluations):
+    """Near-optimal points by gradient descent on a smoothed maximum (see cmmsampling.strategies.optimal).
+
+    start: "best" (the best of BEST_STARTS by the exact deviation), a strategy name or an (N, 2)
+    uv array; time_limit: s; max_evaluations: surrogate evaluations (None: no limit). Points keep
+    problem.min_spacing and the feasible domain: a start that does not is repaired first (its
+    crowded points moved to free places). The result is never worse than the start; ``notes`` say
+    what was done.
+    """
+    notes = []
+    if isinstance(start, str):
+        start_uv, name = _start_layout(problem, start)
+        notes.append(f"started from the {name} layout")
+    else:
+        start_uv = check_uv(start, problem.n)
+    start_uv, moved = blind.respace(problem, problem.project(start_uv))
+    objective = problem.objective
+    result = descend(objective, start_uv, problem.domain.lower, problem.domain.upper,
+                     problem.exact, problem.min_spacing, time_limit, max_evaluations,
+                     progress, problem.project)
+    if moved:
+        notes.append(f"the start had points closer than min_spacing {problem.min_spacing:.3g} mm: "
+                     f"{moved} of them were moved to free places before the descent")
+    if result.uv is start_uv and not result.cancelled:
+        notes.append("the descent found no point set better than its start; the start is returned")
+    return StrategyOutcome(result.uv, result.history, result.evaluations, result.cancelled,
+                           details={"closest": result.closest}, notes=notes)
+
+
+def _start_layout(problem, start):
+    """(uv (N, 2), name) of the start named ``start``; for "best", the BEST_STARTS layout of
+    smallest exact maximum deviation (layouts a strategy refuses for this face are skipped)."""
+    found = layouts(problem, optional=BEST_STARTS) if start == "best" else layouts(problem, required=(start,))
+    if len(found) == 1:
+        return next(iter(found.values())), next(iter(found))
+    name = min(found, key=lambda key: problem.exact_maximum(found[key]))
+    return found[name], name
+
+
+def _optimal_memory(n, poles, nodes, options, workers):
+    """The descent's linearisation: (N, K) rows with their two derivatives and (G, K) grid rows."""
+    count = poles[0] * poles[1]
+    return 8 * count * (3 * n + nodes)
+
+
+def _check_optimal_options(options):
+    """Validate the options of the 'optimal' strategy (merged with defaults)."""
+    clean = dict(options)
+    if options["time_limit"] is not None:
+        clean["time_limit"] = check_real("time_limit", options["time_limit"], above=0.0)
+    if options["max_evaluations"] is not None:
+        clean["max_evaluations"] = check_int("max_evaluations", options["max_evaluations"], 1)
+    if isinstance(options["start"], str):
+        starts = ["best"] + [name for name, entry in STRATEGIES.items() if not entry.optimiser]
+        check_choice("start", options["start"], starts)
+    return clean
+
+
+RECORD = Strategy(
+    "optimal", run_optimal,
+    "gradient descent on a smoothed maximum deviation, to a local optimum",
+    "optimal (this project)", OPTIMAL_DEFAULTS, _check_optimal_options, optimiser=True,
+    progress_unit="surrogate evaluation", progress_total="max_evaluations", figures=True,
+    settings=OPTIMAL_SETTINGS, memory=_optimal_memory)

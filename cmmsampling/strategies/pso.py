@@ -9,10 +9,17 @@ paper's eq. 7-9, per particle i and coordinate j:
 with r1, r2 uniform in [0, 1] drawn per coordinate, and an inertia decreasing linearly from w1 at
 the first iteration to w2 at the last. Velocities are limited to ``velocity_limit`` times the box
 size; a coordinate pushed out of the feasible set is projected back and its velocity zeroed.
+
+Below the algorithm, the strategy: :func:`run_pso` runs it on a sampling problem and :data:`RECORD`
+describes it to the rest of the project.
 """
 from dataclasses import dataclass
 
 import numpy as np
+
+from ..geometry.validation import check_int, check_real
+from . import memory
+from .registry import STRATEGIES, Setting, Strategy, StrategyOutcome, layouts
 
 
 @dataclass
@@ -133,3 +140,103 @@ def particle_swarm(objective, lower, upper, n_points, settings, seeds=(), projec
             break
     evaluations = settings.population * (done + 1)
     return SwarmResult(best, best_value, history[:done], evaluations, cancelled)
+
+
+# The strategy: the paper's swarm on a sampling problem, started from the uniform layouts.
+SIGNIFICANT_MM = 1e-9
+PSO_DEFAULTS = {
+    "population": 25, "iterations": 3000, "w1": 0.5, "w2": 0.0, "c1": 2.0, "c2": 2.0,
+    "velocity_limit": 0.1, "start_from_uniform": True,
+}
+PSO_SETTINGS = (Setting("iterations", int, "PSO iterations (default 3000, the paper's)"),
+                Setting("population", int, "PSO particles (default 25, the paper's)"))
+
+
+def run_pso(problem, progress, population, iterations, w1, w2, c1, c2, velocity_limit,
+            start_from_uniform):
+    """The paper's PSO (eq. 7-9) on the problem's maximum-deviation objective.
+
+    The swarm scores point sets by the expanded deviation (cmmsampling.fitting.deviation). With
+    start_from_uniform, particles 0 and 1 start at the uniform parametric and uniform Cartesian
+    layouts (the latter where it covers the face), and the swarm's best is judged against them by
+    the exact deviation, so the result is never worse than either.
+    """
+    settings = SwarmSettings(population, iterations, w1, w2, c1, c2, velocity_limit, problem.seed)
+    seeds = _uniform_seeds(problem) if start_from_uniform else {}
+    objective = problem.swarm_objective()
+    swarm = particle_swarm(
+        objective, problem.domain.lower, problem.domain.upper, problem.n, settings,
+        seeds=list(seeds.values()), project=problem.project, progress=progress,
+        admissible=problem.spaced if problem.min_spacing > 0 else None,
+    )
+    if not np.isfinite(swarm.best_value):
+        raise ValueError(
+            f"no particle kept its points {problem.min_spacing:g} mm apart ({problem.spacing_advice()}) or "
+            "use start_from_uniform=True")
+    notes, details = _process_notes(problem, objective)
+    if swarm.cancelled:
+        return StrategyOutcome(swarm.best, swarm.history, swarm.evaluations, True, details=details, notes=notes)
+    best, exact_notes = _best_exact(problem, swarm.best, seeds)
+    return StrategyOutcome(best, swarm.history, swarm.evaluations, False, details=details, notes=notes + exact_notes)
+
+
+def _process_notes(problem, objective):
+    """(notes, details) on the processes that scored the swarm: details {"processes": 1 or 2},
+    2 when the second process took part; a note when it was asked for (workers=2) but could not
+    help, with the reason."""
+    used = 2 if getattr(objective, "remote", 0) > 0 else 1
+    fallback = getattr(objective, "fallback", None)
+    notes = [f"the swarm ran in this process alone, with the same result, only slower: {fallback}"] \
+        if problem.workers == 2 and fallback else []
+    return notes, {"processes": used}
+
+
+def _uniform_seeds(problem):
+    """{label: uv (N, 2)} of the uniform layouts that fit the face (uniform Cartesian may refuse)."""
+    found = layouts(problem, required=("uniform_parametric",), optional=("uniform_cartesian",))
+    return {STRATEGIES[name].label: uv for name, uv in found.items()}
+
+
+def _best_exact(problem, found, seeds):
+    """The swarm's best point set, or a seed layout where that is better by the exact deviation.
+
+    found: (N, 2); seeds: {name: (N, 2)} the uniform layouts it started from (or none).
+    Returns (uv (N, 2), notes).
+    """
+    names = list(seeds)
+    maxima = [problem.exact_maximum(uv) for uv in [found, *seeds.values()]]
+    best = int(np.argmin(maxima))
+    if maxima[best] >= maxima[0] - SIGNIFICANT_MM:
+        return found, []
+    return seeds[names[best - 1]], [f"the swarm ended no better than its {names[best - 1]} start "
+                                    f"({maxima[best]:.4g} mm against {maxima[0]:.4g} mm); that layout is returned"]
+
+
+def _pso_memory(n, poles, nodes, options, workers):
+    """PSO fits its whole swarm at once: about 1.25 (P/W, K, K) float64 arrays in each of its W
+    processes, and each process beyond the first holds a copy of the problem (bytes)."""
+    count = poles[0] * poles[1]
+    share = -(-options["population"] // workers)
+    return workers * 10 * share * count ** 2 + (workers - 1) * (memory.FIXED_BYTES + 16 * count ** 2)
+
+
+def _check_pso_options(options):
+    """Validate PSO options (already merged with defaults); returns the cleaned dict."""
+    clean = dict(options)
+    clean["population"] = check_int("population", options["population"], 2)
+    clean["iterations"] = check_int("iterations", options["iterations"], 1)
+    clean["w1"] = check_real("w1", options["w1"], 0.0, 1.2)
+    clean["w2"] = check_real("w2", options["w2"], 0.0, 1.2)
+    if clean["w2"] > clean["w1"]:
+        raise ValueError(f"inertia must decrease: w1 ({clean['w1']}) must be >= w2 ({clean['w2']})")
+    clean["c1"] = check_real("c1", options["c1"], 0.0)
+    clean["c2"] = check_real("c2", options["c2"], 0.0)
+    clean["velocity_limit"] = check_real("velocity_limit", options["velocity_limit"], maximum=1.0, above=0.0)
+    clean["start_from_uniform"] = bool(options["start_from_uniform"])
+    return clean
+
+
+RECORD = Strategy(
+    "pso", run_pso, "the paper's particle swarm optimisation of the maximum deviation",
+    "PSO (paper)", PSO_DEFAULTS, _check_pso_options, optimiser=True, progress_unit="iteration",
+    progress_total="iterations", figures=True, settings=PSO_SETTINGS, memory=_pso_memory)

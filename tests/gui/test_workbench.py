@@ -15,8 +15,9 @@ from PySide import QtCore, QtGui
 
 import cmmsampling
 from cmmsampling import document
-from cmmsampling.gui import colormap, commands, export_options, qt_compat, settings, task_panel, view_providers
 from cmmsampling.geometry.surface import make_bspline_surface, reference_poles
+from cmmsampling.gui import colormap, commands, export_options, qt_compat, settings, task_panel, view_providers
+from toy_format import TOY_FORMAT
 
 from .helpers import (
     child, dock_text, drawn, fill, groups, main_window, modal_message, open_panel, process_events, running_workers,
@@ -471,6 +472,30 @@ def test_export_dialog_adds_the_extension_of_the_chosen_format(doc, monkeypatch,
     doc.saveAs(os.path.join(str(tmp_path), "bracket.FCStd"))
     commands.choose_export_path(points)
     assert asked[1][0] == os.path.join(str(tmp_path), "Body_Face1_pso.dmi")
+
+
+def test_a_registered_format_is_offered_by_the_export_command(doc, monkeypatch, tmp_path):
+    """File > Export lists every built-in format (Init.py builds its filter from the records);
+    the Export command's dialog offers a format registered later and writes it."""
+    assert all("cmmsampling.document" in FreeCAD.getExportType(extension) for extension in ("dmi", "xyz", "txt", "csv"))
+    cmmsampling.register_format(TOY_FORMAT)
+    try:
+        points = document.add_to_document(short_result(doc), doc, source=(doc.Body, "Face1")).Group[0]
+        toy = next(text for text, extensions in commands.export_filters() if extensions == [".toy"])
+        monkeypatch.setattr(QtGui.QFileDialog, "getSaveFileName",
+                            lambda parent, title, start, filters: (str(tmp_path / "points"), toy))
+        target = commands.choose_export_path(points)
+        assert target == str(tmp_path / "points.toy")
+        monkeypatch.setattr(commands, "choose_export_path", lambda chosen: target)
+        monkeypatch.setattr(commands, "ask_export_options",
+                            lambda chosen: {"frame": None, "probe_radius": 0.0, "order": "as_optimised"})
+        FreeCADGui.Selection.clearSelection()
+        FreeCADGui.Selection.addSelection(points)
+        FreeCADGui.runCommand(EXPORT)
+        process_events(0.2)
+        assert open(target).read().startswith("TOY 25\n")
+    finally:
+        cmmsampling.unregister_format(TOY_FORMAT.name)
 
 
 def test_the_export_report_says_in_words_what_was_written(doc, tmp_path):

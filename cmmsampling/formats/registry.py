@@ -1,0 +1,66 @@
+"""The point-file formats' records: each format said once, in the module that reads and writes
+it, and the table :data:`FORMATS` that export(), read_points(), the command line's ``--out``,
+the Export panel and File > Export read.
+
+The built-in formats are registered by :mod:`.pointfiles`; a user's module calls
+:func:`register_format` with its own :class:`FileFormat`.
+"""
+from dataclasses import dataclass
+
+EXPORT_TITLE = "CMM probe points"
+
+
+@dataclass(frozen=True)
+class FileFormat:
+    """One point-file format.
+
+    name: the identifier export() and read_points() take as ``format=`` (lower case); title: its
+    name in messages (e.g. "DMIS"); description: one line for file dialogs and ``--help``;
+    extensions: file extensions with the dot, lower case, the first the one a new file gets;
+    encoding: of the file's text; write: (PointSet, facts dict, ExportOptions) -> the file's
+    text; read: (text, path) -> PointSet, raising ValueError naming the path and line.
+    """
+
+    name: str
+    title: str
+    description: str
+    extensions: tuple
+    encoding: str
+    write: object
+    read: object
+
+    def __post_init__(self):
+        bad = [e for e in self.extensions if not (e.startswith(".") and e == e.lower() and len(e) > 1)]
+        if not self.extensions or bad:
+            raise ValueError(f"format {self.name!r}: extensions must be lower case and start with a dot, "
+                             f"e.g. ('.dmi',), got {self.extensions!r}")
+
+
+FORMATS = {}
+
+
+def register_format(record):
+    """Add a FileFormat (replacing one of the same name): export(), read_points(), the command
+    line and the Export panel offer it from then on. Returns the record."""
+    if not isinstance(record, FileFormat):
+        raise TypeError(f"register_format takes a cmmsampling FileFormat record, got {type(record).__name__}")
+    FORMATS[record.name] = record
+    return record
+
+
+def unregister_format(name):
+    """Remove the format named ``name`` (KeyError when there is none)."""
+    del FORMATS[name]
+
+
+def extensions():
+    """{extension: format name} of every registered format."""
+    return {extension: name for name, record in FORMATS.items() for extension in record.extensions}
+
+
+def export_filter():
+    """One file-dialog filter for every format, as FreeCAD's File > Export lists it, e.g.
+    'CMM probe points: DMIS, XYZIJK text, CSV (*.dmi *.dmis *.xyz *.txt *.csv)'."""
+    titles = ", ".join(record.title for record in FORMATS.values())
+    patterns = " ".join("*" + extension for extension in extensions())
+    return f"{EXPORT_TITLE}: {titles} ({patterns})"

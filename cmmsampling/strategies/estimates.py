@@ -1,0 +1,76 @@
+"""Estimates of a sample() run made before it starts: its peak memory and its time."""
+import time
+
+import numpy as np
+
+from ..fitting.deviation import DEFAULT_GRID
+from ..fitting.substitute import DEFAULT_DEGREE
+from ..geometry.validation import check_choice, check_int, check_pair
+from .registry import STRATEGIES, strategy_options
+from .sampling import DEFAULT_STRATEGY, MIN_POINTS, check_workers, make_problem, memory_bytes
+from .threads import blas_threads
+
+# Swarms timed by time_needed (the first one warms the caches and is not counted).
+TIMED_SWARMS = 4
+
+
+def memory_needed(n, strategy=DEFAULT_STRATEGY, *, fit_degree=DEFAULT_DEGREE, fit_poles=None,
+                  grid=DEFAULT_GRID, workers=None, **options):
+    """Estimated peak memory (bytes) of :func:`sample` with these arguments, before any run.
+
+    The arguments as in :func:`sample` (strategy None: what every run needs). sample() refuses
+    a run whose estimate exceeds 80 % of the memory the machine has free (cmmsampling.strategies.memory).
+    """
+    n = check_int("n", n, MIN_POINTS)
+    degree = check_pair("fit_degree", fit_degree, 1)
+    given_poles = None if fit_poles is None else check_pair("fit_poles", fit_poles, 2)
+    checked = strategy_options(strategy, options) if strategy is not None else {}
+    return memory_bytes(n, degree, given_poles, check_pair("grid", grid, 2), check_workers(workers),
+                         strategy, checked)
+
+
+def time_needed(face, n=81, strategy=DEFAULT_STRATEGY, *, fit_degree=DEFAULT_DEGREE, fit_poles=None,
+                grid=DEFAULT_GRID, edge_offset=0.0, min_spacing=None, workers=None, part=None, probe=None,
+                **options):
+    """Estimated seconds of :func:`sample` with these arguments on this face, before the run.
+
+    The problem is built (as sample() builds it, the probe's reach on ``part`` included: that
+    time counts) and the objective the
+    strategy iterates is timed on a few random swarms; its cost times the strategy's progress
+    steps (PSO: iterations over its workers) is added. None when the number of steps is not
+    known in advance (the optimal strategy without max_evaluations or time_limit: until it
+    converges). Raises what sample() would raise for these arguments.
+    """
+    check_choice("strategy", strategy, list(STRATEGIES))
+    entry = STRATEGIES[strategy]
+    options = strategy_options(strategy, options)
+    start = time.perf_counter()
+    problem = make_problem(face, n, fit_degree, fit_poles, grid=grid, workers=workers,
+                           edge_offset=edge_offset, min_spacing=min_spacing, strategy=strategy,
+                           options=options, part=part, probe=probe)
+    built_s = time.perf_counter() - start
+    if not entry.optimiser:
+        return built_s
+    if options.get("time_limit") is not None:
+        return built_s + options["time_limit"]
+    steps = entry.progress_steps(options)
+    if steps is None:
+        return None
+    population = options.get("population", 1)
+    swarm = problem.project(np.random.default_rng(0).uniform(
+        problem.domain.lower, problem.domain.upper, (TIMED_SWARMS, population, n, 2)))
+    with blas_threads(1):
+        _one_step(problem, swarm[0])
+        start = time.perf_counter()
+        for positions in swarm[1:]:
+            _one_step(problem, positions)
+    per_step = (time.perf_counter() - start) / (TIMED_SWARMS - 1) / problem.workers
+    return built_s + steps * per_step
+
+
+def _one_step(problem, positions):
+    """What an optimiser's step costs: the objective of point sets positions (P, N, 2) and,
+    with a spacing, their spacing check."""
+    problem.objective(positions)
+    if problem.min_spacing > 0:
+        problem.spaced(positions)

@@ -1,0 +1,68 @@
+"""A point-file format is one module with one record (tests/toy_format.py): registered, it is
+written and read by export() and read_points(), offered by the command line's --out and --help,
+by File > Export's filter and its hook; unregistered, it is gone."""
+import numpy as np
+import pytest
+from toy_format import TOY_FORMAT
+
+import cmmsampling
+from cmmsampling import cli, document
+from cmmsampling.formats.pointfiles import export_filter, resolve_format
+
+
+@pytest.fixture
+def toy():
+    """The toy format registered for one test, removed after it."""
+    cmmsampling.register_format(TOY_FORMAT)
+    yield TOY_FORMAT
+    cmmsampling.unregister_format(TOY_FORMAT.name)
+
+
+@pytest.fixture(scope="module")
+def result(reference):
+    return cmmsampling.sample(reference, 9, "halton", grid=16, occ_check=False)
+
+
+def test_a_registered_format_is_written_and_read_back(result, toy, tmp_path):
+    report = cmmsampling.export(result, tmp_path / "face.toy", order="as_optimised")
+    assert report.format == "toy" and "(toy points, global frame" in str(report)
+    assert (tmp_path / "face.toy").read_text().startswith("TOY 9\n")
+    back = cmmsampling.read_points(tmp_path / "face.toy")
+    assert list(back.labels) == [f"P{k}" for k in range(1, 10)]
+    assert np.abs(back.points - result.points).max() < 1e-6
+    assert back.metadata["format"] == "toy"
+
+
+def test_a_registered_format_is_offered_by_the_command_line(toy, tmp_path, capsys):
+    with pytest.raises(SystemExit):
+        cli.build_parser().parse_args(["sample", "--help"])
+    assert "toy points (.toy)" in " ".join(capsys.readouterr().out.split())
+    part = str(tmp_path / "part.step")
+    cmmsampling.reference_face().exportStep(part)
+    out = tmp_path / "face.toy"
+    assert cli.main(["sample", part, "--face", "1", "-n", "9", "--strategy", "halton",
+                     "--out", str(out)]) == 0
+    assert len(cmmsampling.read_points(out).points) == 9
+
+
+def test_a_registered_format_is_in_file_export(result, toy, tmp_path):
+    import FreeCAD
+
+    assert "*.toy" in export_filter() and export_filter().startswith("CMM probe points: DMIS, ")
+    doc = FreeCAD.newDocument("FormatRecords")
+    try:
+        group = cmmsampling.add_to_document(result, doc)
+        document.export([group], str(tmp_path / "hook.toy"))
+        assert (tmp_path / "hook.toy").read_text().startswith("TOY 9\n")
+    finally:
+        FreeCAD.closeDocument(doc.Name)
+
+
+def test_an_unregistered_format_is_gone_and_a_bad_record_is_refused():
+    with pytest.raises(ValueError, match="cannot tell the format of 'x.toy'"):
+        resolve_format("x.toy")
+    assert "*.toy" not in export_filter() and "*.txt" in export_filter()
+    with pytest.raises(TypeError, match="FileFormat record"):
+        cmmsampling.register_format({"name": "dict"})
+    with pytest.raises(ValueError, match="extensions must be lower case"):
+        cmmsampling.FileFormat("bad", "bad", "bad", ("TOY",), "ascii", None, None)
