@@ -26,6 +26,8 @@ _API = {
     "STRATEGIES": "strategies.sampling",
     "Strategy": "strategies.sampling",
     "Setting": "strategies.sampling",
+    "InputError": "geometry.validation",
+    "InputTypeError": "geometry.validation",
     "StrategyOutcome": "strategies.sampling",
     "register_strategy": "strategies.sampling",
     "FileFormat": "formats.pointfiles",

@@ -8,6 +8,7 @@ import traceback
 from .access.probe import PROBES
 from .formats.pointfiles import FORMATS
 from .geometry.surface import reference_face
+from .geometry.validation import InputError
 from .strategies.sampling import (BEST_STRATEGY, PROBE_EDGE_OFFSET_MM, STRATEGIES, baseline, probe_edge_offset,
                                   sample)
 
@@ -280,21 +281,21 @@ def read_shape(path):
 
     extension = os.path.splitext(path)[1].lower()
     if extension not in CAD_TYPES:
-        raise ValueError(f"{path}: unknown file type {extension!r}; use a STEP, IGES or BREP file")
+        raise InputError(f"{path}: unknown file type {extension!r}; use a STEP, IGES or BREP file")
     if os.path.isdir(path):
-        raise ValueError(f"{path}: is a folder, not a CAD file; give the file's path")
+        raise InputError(f"{path}: is a folder, not a CAD file; give the file's path")
     if not os.path.isfile(path):
-        raise ValueError(f"{path}: no such file")
+        raise InputError(f"{path}: no such file")
     if not os.access(path, os.R_OK):
-        raise ValueError(f"{path}: no permission to read it")
+        raise InputError(f"{path}: no permission to read it")
     kind = CAD_TYPES[extension]
     try:
         shape = Part.read(path)
     except Exception as exc:   # OCC's reader raises a bare RuntimeError for any broken file
-        raise ValueError(f"{path}: cannot be read as {kind} ({_freecad_reason(exc)}); check that the "
+        raise InputError(f"{path}: cannot be read as {kind} ({_freecad_reason(exc)}); check that the "
                          f"file is complete (not empty or cut short) and was exported as {kind}") from exc
     if not shape.Faces:
-        raise ValueError(f"{path}: the file holds no faces")
+        raise InputError(f"{path}: the file holds no faces")
     return shape
 
 
@@ -342,10 +343,10 @@ def run_sample(args):
     """Sample one face of a CAD file and write what was asked for."""
     _check_outputs(args)
     if args.order == "probe_path" and args.probe is None:
-        raise ValueError("--order probe_path needs --probe (the probe whose path keeps clear of the part)")
+        raise InputError("--order probe_path needs --probe (the probe whose path keeps clear of the part)")
     shape = read_shape(args.file)
     if not 1 <= args.face <= len(shape.Faces):
-        raise ValueError(f"--face must be between 1 and {len(shape.Faces)} for {args.file}, got {args.face}")
+        raise InputError(f"--face must be between 1 and {len(shape.Faces)} for {args.file}, got {args.face}")
     options = strategy_options(args.strategy, args)
     face = shape.Faces[args.face - 1]
     edge_offset = probe_edge_offset(face) if args.edge_offset is None else args.edge_offset
@@ -409,13 +410,13 @@ def _check_outputs(args):
     for path in args.out:
         try:
             resolve_format(path)
-        except ValueError:
-            raise ValueError(f"--out {path}: unknown point-file type; end the name in one of "
+        except InputError:
+            raise InputError(f"--out {path}: unknown point-file type; end the name in one of "
                              f"{formats()}") from None
         check_writable(path)
     if args.fcstd:
         if not args.fcstd.lower().endswith(".fcstd"):
-            raise ValueError(f"--fcstd {args.fcstd}: a FreeCAD document's name ends in .FCStd")
+            raise InputError(f"--fcstd {args.fcstd}: a FreeCAD document's name ends in .FCStd")
         check_writable(args.fcstd)
 
 
@@ -462,7 +463,7 @@ def main(argv=None):
     args = build_parser().parse_args(argv)
     try:
         return {"demo": run_demo, "faces": run_faces, "sample": run_sample, "plan": run_plan}[args.command](args)
-    except (ValueError, TypeError, OSError) as exc:
+    except (InputError, OSError) as exc:
         return _fail(args, f"error: {exc}", 2)
     except MemoryError:
         return _fail(args, "error: this run needs more memory than the machine has free; lower -n "

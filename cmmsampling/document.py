@@ -12,6 +12,8 @@ After the CAD face changed, :func:`reevaluate` projects the same (u, v) onto it 
 This module never imports the GUI: view providers are attached only when ``FreeCAD.GuiUp``.
 Lengths are in mm, times in s.
 """
+from __future__ import annotations
+
 import contextlib
 import json
 from xml.etree import ElementTree
@@ -23,8 +25,11 @@ from .access.probe import Probe
 from .formats.pointset import PointSet
 from .geometry.freecad_env import import_part
 from .geometry.surface import SurfaceModel
+from .geometry.validation import InputError, InputTypeError
 from .object_types import PROBE_POINTS, SUBSTITUTE_SURFACE, is_probe_points, source_face
+from .planning.part_plan import PartPlan
 from .planning.probe_moves import moves_through, probe_moves
+from .strategies.result import SamplingResult
 from .strategies.sampling import evaluate
 
 Part = import_part()
@@ -55,7 +60,8 @@ SUMMARY_FIGURES = (
 )
 
 
-def add_to_document(result, doc, source=None, hide_source=False, hide_others=True):
+def add_to_document(result: SamplingResult, doc: FreeCAD.Document, source: tuple | None = None, hide_source: bool = False,
+                    hide_others: bool = True) -> FreeCAD.DocumentObject:
     """Add a SamplingResult to ``doc`` in one transaction (one Undo removes it all).
 
     result: a :class:`cmmsampling.SamplingResult`; doc: a FreeCAD document;
@@ -123,7 +129,8 @@ def make_probe_path(doc, moves):
     return objects
 
 
-def add_plan_to_document(plan, doc, part, hide_others=True):
+def add_plan_to_document(plan: PartPlan, doc: FreeCAD.Document, part: FreeCAD.DocumentObject,
+                         hide_others: bool = True) -> FreeCAD.DocumentObject:
     """Add a PartPlan to ``doc`` in one transaction (one Undo removes it all).
 
     plan: a :class:`cmmsampling.planning.part_plan.PartPlan` of ``part``'s faces (a document
@@ -228,7 +235,7 @@ def recompute(doc, objects):
             raise RuntimeError(f"{obj.Label} could not be computed: {obj.getStatusString()}")
 
 
-def reevaluate(points, occ_check=True):
+def reevaluate(points: FreeCAD.DocumentObject, occ_check: bool = True) -> SamplingResult:
     """Measure the probe points again on their (possibly changed) source face.
 
     points: a probe-points object made by :func:`add_to_document`. Keeps each point's (u, v),
@@ -239,7 +246,7 @@ def reevaluate(points, occ_check=True):
     """
     face, problem = source_face(points)
     if face is None:
-        raise ValueError(f"cannot re-evaluate {points.Label}: {problem}")
+        raise InputError(f"cannot re-evaluate {points.Label}: {problem}")
     settings = json.loads(points.Parameters)
     uv = np.column_stack([points.U, points.V])
     fit = {key: settings[key] for key in FIT_SETTINGS if key in settings}
@@ -574,13 +581,13 @@ class ProbePoints(TypedProxy):
         the CMM's speeds (cmmsampling.access.probe.Motion). ValueError naming what is missing:
         points sampled without the part, points the probe cannot reach, a deleted source."""
         if not getattr(obj, "Probe", "") or len(obj.Axes) != len(obj.Labels):
-            raise ValueError(f"{obj.Label} were sampled without the part, so they have no probe axes: sample "
+            raise InputError(f"{obj.Label} were sampled without the part, so they have no probe axes: sample "
                              "the face again with the part (and a probe), or export with order='short_path'")
         point_set = self.point_set(obj)
         if not np.isfinite(point_set.axes).all():
-            raise ValueError(f"the probe cannot reach some of {obj.Label}: export with order='short_path'")
+            raise InputError(f"the probe cannot reach some of {obj.Label}: export with order='short_path'")
         if obj.Source is None:
-            raise ValueError(f"the part of {obj.Label} was deleted; a probe path needs it to keep clear of")
+            raise InputError(f"the part of {obj.Label} was deleted; a probe path needs it to keep clear of")
         probe = Probe(**json.loads(obj.Probe))
         return moves_through(probe, Obstacles(obj.Source[0].Shape), point_set.points, point_set.normals,
                              point_set.axes, motion)
@@ -632,7 +639,7 @@ def export(objects, filename):
 
     found = probe_points_in(objects)
     if len(found) != 1:
-        raise ValueError(f"select exactly one set of probe points (or its Sampling group) to export, "
+        raise InputError(f"select exactly one set of probe points (or its Sampling group) to export, "
                          f"found {len(found)}")
     return write_points(found[0], filename)
 
@@ -670,17 +677,17 @@ def _check_source(source, doc):
     if source is None:
         return None
     if not (isinstance(source, (tuple, list)) and len(source) == 2 and isinstance(source[1], str)):
-        raise TypeError(f"source must be (obj, 'FaceK') or None, got {source!r}")
+        raise InputTypeError(f"source must be (obj, 'FaceK') or None, got {source!r}")
     obj, name = source
     try:
         document_name = getattr(getattr(obj, "Document", None), "Name", None)
     except ReferenceError:
-        raise ValueError(f"the source object of {name} was deleted; "
+        raise InputError(f"the source object of {name} was deleted; "
                          "name a face of an object that is in the document") from None
     if document_name != doc.Name:
-        raise ValueError(f"source object {getattr(obj, 'Name', obj)!r} is not in document {doc.Name!r}")
+        raise InputError(f"source object {getattr(obj, 'Name', obj)!r} is not in document {doc.Name!r}")
     if not isinstance(obj.getSubObject(name), Part.Face):
-        raise ValueError(f"source {obj.Label}.{name} is not a face; name one like 'Face1'")
+        raise InputError(f"source {obj.Label}.{name} is not a face; name one like 'Face1'")
     return obj, name
 
 

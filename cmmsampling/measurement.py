@@ -1,5 +1,7 @@
 """Measured points against the CAD face: OCC closest-point distances, signed (the reverse flow of
 an export: points a CMM measured, read from its file, judged against the face they came from)."""
+from __future__ import annotations
+
 import os
 from dataclasses import dataclass
 
@@ -8,6 +10,7 @@ import numpy as np
 from .formats.exporting import as_point_set, checked
 from .formats.frames import placement_from_metadata, resolve_frame, to_global
 from .formats.pointfiles import read_points
+from .formats.pointset import PointSet
 from .geometry.freecad_env import import_part
 from .geometry.surface import as_face
 from .geometry.validation import check_real
@@ -51,7 +54,8 @@ class MeasuredDeviation:
                 "lowest_mm": float(self.distances.min()), "highest_mm": float(self.distances.max())}
 
 
-def measured_deviation(face, points, *, frame=None, probe_radius=None):
+def measured_deviation(face: Part.Face, points: PointSet | str | os.PathLike | np.ndarray, *, frame: object = None,
+                       probe_radius: float | None = None) -> MeasuredDeviation:
     """How far measured points lie from the CAD face: OCC closest-point distances, signed.
 
     face: a Part.Face (or a shape with one face); points: a path to a DMIS/XYZ/CSV file, a

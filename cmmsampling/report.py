@@ -7,6 +7,8 @@ histograms (Fig. 11, 12), maximum deviation against N with the local bound (Fig.
 the tables (Table 1). Figures are drawn on matplotlib's Agg canvas without pyplot, so a GUI's own
 matplotlib backend is left alone. All lengths in mm.
 """
+from __future__ import annotations
+
 import base64
 import html
 import io
@@ -20,6 +22,7 @@ from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 from .geometry.surface import SurfaceModel
 from .strategies.sampling import STRATEGIES
 from .strategies.sampling import strategy_label as label
+from .study import Study
 
 DPI = 110
 PANEL_INCHES = 4.2
@@ -276,7 +279,7 @@ def write_figures(study, folder):
     return written
 
 
-def write_report(study, folder):
+def write_report(study: Study, folder: str | os.PathLike) -> str:
     """Write the study's figures as PNG files and report.html (figures embedded) into folder.
 
     study: a Study from :func:`cmmsampling.compare`; folder: created if missing.

@@ -7,8 +7,11 @@ optimisation grid and on the 3x denser check grid, and collects the deviations (
 (s), the ratios to uniform parametric sampling and the multiples of the bound in a :class:`Study`.
 Pure computation; :mod:`cmmsampling.report` draws it.
 """
+from __future__ import annotations
+
 import time
 from collections import Counter
+from collections.abc import Callable
 from dataclasses import dataclass, field, fields, replace
 from typing import NamedTuple
 
@@ -16,9 +19,10 @@ import numpy as np
 
 from .fitting.deviation import DEFAULT_GRID
 from .fitting.substitute import DEFAULT_DEGREE, DEFAULT_SMOOTHING
-from .geometry.validation import check_choice, check_int
+from .geometry.validation import InputError, InputTypeError, check_choice, check_int
 from .strategies import handover
 from .strategies.estimates import time_needed
+from .strategies.sampling import Pair, Part
 from .strategies.sampling import MIN_POINTS, STRATEGIES, make_problem, sample, strategy_options
 from .strategies.sampling import baseline as baseline_strategy
 from .strategies.threads import blas_threads
@@ -213,9 +217,11 @@ class Relay:
             f"{step.describe()}: {unit} {count}, best max {best:.4f} mm")
 
 
-def compare(face, ns=DEFAULT_NS, strategies=None, *, seeds=DEFAULT_SEEDS, seeded=None, options=None,
-            fit_degree=DEFAULT_DEGREE, fit_poles=None, smoothing=DEFAULT_SMOOTHING, grid=DEFAULT_GRID,
-            edge_offset=0.0, min_spacing=None, figure_n=None, progress=None, workers=None):
+def compare(face: Part.Face, ns: tuple = DEFAULT_NS, strategies: tuple | None = None, *, seeds: tuple = DEFAULT_SEEDS,
+            seeded: tuple | None = None, options: dict | None = None, fit_degree: Pair = DEFAULT_DEGREE,
+            fit_poles: Pair | None = None, smoothing: float = DEFAULT_SMOOTHING, grid: Pair = DEFAULT_GRID,
+            edge_offset: float = 0.0, min_spacing: float | None = None, figure_n: int | None = None,
+            progress: Callable | None = None, workers: int | None = None) -> Study:
     """Run every strategy over a list of N on one face and collect the trade-off.
 
     face: a Part.Face (e.g. ``cmmsampling.reference_face()``); ns: point counts (each >= 4);
@@ -248,7 +254,7 @@ def compare(face, ns=DEFAULT_NS, strategies=None, *, seeds=DEFAULT_SEEDS, seeded
     options = _check_options(options, strategies)
     figure_n = _check_figure_n(figure_n, ns)
     if progress is not None and not callable(progress):
-        raise TypeError(f"progress must be callable(done, total, message) or None, got {progress!r}")
+        raise InputTypeError(f"progress must be callable(done, total, message) or None, got {progress!r}")
     fit = {"fit_degree": fit_degree, "fit_poles": fit_poles, "smoothing": smoothing, "grid": grid,
            "edge_offset": edge_offset, "min_spacing": min_spacing}
     make_problem(face, ns[0], **fit, workers=workers)
@@ -315,12 +321,12 @@ def _check_options(options, strategies):
     """{name: validated options, defaults filled in} for the studied strategies that take options;
     ValueError for a name that is no strategy, TypeError for options one does not take."""
     if not isinstance(options or {}, dict):
-        raise TypeError(f"options must be a dict {{strategy name: {{option: value}}}}, got {options!r}")
+        raise InputTypeError(f"options must be a dict {{strategy name: {{option: value}}}}, got {options!r}")
     given = {}
     for name, values in (options or {}).items():
         check_choice("strategy in options", name, list(STRATEGIES))
         if not isinstance(values, dict):
-            raise TypeError(f"options[{name!r}] must be a dict {{option: value}}, got {values!r}")
+            raise InputTypeError(f"options[{name!r}] must be a dict {{option: value}}, got {values!r}")
         given[name] = strategy_options(name, values)
     return {name: given.get(name) or strategy_options(name, {})
             for name in strategies if STRATEGIES[name].options}
@@ -344,7 +350,7 @@ def _execute(study, steps, options, fit, callback, workers):
                                 workers=workers,
                                 progress=relay.optimiser(step) if entry.optimiser else None,
                                 **fit, **options.get(step.strategy, {}))
-            except ValueError as refusal:
+            except InputError as refusal:
                 study.refused[(step.strategy, step.n)] = str(refusal)
                 relay.done += 1
                 continue
@@ -412,7 +418,7 @@ def _check_ns(ns):
     """Sorted distinct point counts, each at least MIN_POINTS; ValueError for none."""
     values = sorted({check_int("n", n, MIN_POINTS) for n in np.atleast_1d(ns).tolist()})
     if not values:
-        raise ValueError("ns must name at least one point count, e.g. (25, 49, 81)")
+        raise InputError("ns must name at least one point count, e.g. (25, 49, 81)")
     return tuple(values)
 
 
@@ -422,7 +428,7 @@ def _check_strategies(strategies):
         return tuple(STRATEGIES)
     names = _check_names("strategy", strategies)
     if not names:
-        raise ValueError(f"strategies must name at least one of {', '.join(STRATEGIES)}")
+        raise InputError(f"strategies must name at least one of {', '.join(STRATEGIES)}")
     return names
 
 
@@ -437,7 +443,7 @@ def _check_seeds(seeds):
     """Distinct non-negative whole seeds, at least one."""
     values = tuple(dict.fromkeys(check_int("seed", s, 0) for s in np.atleast_1d(seeds).tolist()))
     if not values:
-        raise ValueError("seeds must hold at least one seed, e.g. (0, 1, 2, 3, 4)")
+        raise InputError("seeds must hold at least one seed, e.g. (0, 1, 2, 3, 4)")
     return values
 
 

@@ -89,13 +89,25 @@ def test_out_of_memory_is_one_line_and_debug_shows_the_traceback(part, capsys, m
     assert "Traceback" in err and "MemoryError" in err
 
 
-def test_an_unexpected_fault_is_one_line_with_exit_code_1(part, capsys, monkeypatch):
-    def fault(*args, **kwargs):
-        raise KeyError("inner")
-    monkeypatch.setattr(cli, "sample", fault)
+@pytest.mark.parametrize("fault", [KeyError("inner"), ValueError("a bug's own ValueError"),
+                                   TypeError("a bug's own TypeError")], ids=["KeyError", "ValueError", "TypeError"])
+def test_an_unexpected_fault_is_one_line_with_exit_code_1(part, capsys, monkeypatch, fault):
+    """A ValueError or TypeError of a bug is no refused input (cmmsampling.InputError)."""
+    def failing(*args, **kwargs):
+        raise fault
+    monkeypatch.setattr(cli, "sample", failing)
     assert cli_main(["sample", part, "--face", "1"]) == 1
     line = one_error_line(capsys)
-    assert "unexpected KeyError" in line and "--debug" in line
+    assert f"unexpected {type(fault).__name__}" in line and "--debug" in line
+
+
+def test_refused_input_is_an_input_error_with_exit_code_2(part, capsys):
+    with pytest.raises(cmmsampling.InputError, match="n must be at least 4, got 3"):
+        cmmsampling.sample(cmmsampling.reference_face(), 3)
+    with pytest.raises(cmmsampling.InputTypeError, match="expected a Part.Face, got NoneType"):
+        cmmsampling.sample(None, 9)
+    assert cli_main(["sample", part, "--face", "1", "-n", "3"]) == 2
+    assert "n must be at least 4, got 3" in one_error_line(capsys)
 
 
 def test_a_cad_file_read_by_part_gives_its_faces(part, capsys):

@@ -12,7 +12,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..geometry.freecad_env import import_part
-from ..geometry.validation import check_real
+from ..geometry.validation import InputError, check_real
 
 Part = import_part()
 import FreeCAD  # noqa: E402  (importable once import_part() has set the path)
@@ -51,7 +51,7 @@ class Probe:
         if self.index_step is not None:
             check_real("index_step", self.index_step, above=0.0)
         if self.stylus_diameter > self.ball_diameter:
-            raise ValueError(f"a stylus of {self.stylus_diameter} mm is thicker than its {self.ball_diameter} mm "
+            raise InputError(f"a stylus of {self.stylus_diameter} mm is thicker than its {self.ball_diameter} mm "
                              "ball: the stylus would touch first; give stylus_diameter below ball_diameter")
 
     @property

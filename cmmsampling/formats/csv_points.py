@@ -5,6 +5,7 @@ import io
 
 import numpy as np
 
+from ..geometry.validation import InputError
 from .pointset import PointSet
 from .registry import FileFormat
 from .text import (COORDINATE_DECIMALS, PARAMETER_DECIMALS, VECTOR_DECIMALS, comment_entries, fixed,
@@ -57,12 +58,12 @@ def read(text, path="<text>"):
     comments = [(False, line[len(CSV_COMMENT):]) for _, line in lines[:head]]
     numbered = lines[head:]
     if len(numbered) < 2:
-        raise ValueError(f"{path}: expected a header line and at least one point")
+        raise InputError(f"{path}: expected a header line and at least one point")
     rows = list(csv.reader(line for _, line in numbered))
     header = [name.strip().lower() for name in rows[0]]
     missing = [name for name in CSV_COLUMNS[:7] if name not in header]
     if missing:
-        raise ValueError(
+        raise InputError(
             f"{path}, line {numbered[0][0]}: the header lacks the column(s) {', '.join(missing)}; "
             f"got {rows[0]}"
         )
@@ -88,7 +89,7 @@ def _complete(numbers, names, path):
     """(N, len(names)) array of the named columns; ValueError when a cell is empty."""
     for name in names:
         if np.isnan(numbers[name]).any():
-            raise ValueError(f"{path}: column {name} has empty cells")
+            raise InputError(f"{path}: column {name} has empty cells")
     return np.column_stack([numbers[name] for name in names])
 
 
@@ -107,7 +108,7 @@ def _known(values, name, path):
     if missing.all():
         return None
     if missing.any():
-        raise ValueError(f"{path}: {name} given for some points only")
+        raise InputError(f"{path}: {name} given for some points only")
     return values
 
 

@@ -2,11 +2,14 @@
 a probe path: the sensors as SNSDEF/PROBE,INDEX,POL and SNSLCT, and GOTO moves between the
 points) and reading the points (nominal ``F(...)`` or measured ``FA(...)``) and the ``$$ key: value`` comments
 back; the DMIS rules for labels, program names and line lengths."""
+from __future__ import annotations
+
 import re
 
 import numpy as np
 
 from ..access.probe import head_angles
+from ..geometry.validation import InputError
 from .pointset import PointSet
 from .registry import FileFormat
 from .text import (COORDINATE_DECIMALS, VECTOR_DECIMALS, comment_entries, fixed, metadata_comment_lines, numbers,
@@ -103,11 +106,11 @@ def read(text, path="<text>"):
             continue
         kind, label, system, fields = match.groups()
         if system.upper() != "CART":
-            raise ValueError(f"{path}, line {number}: only Cartesian points (CART) can be read, got {system}")
+            raise InputError(f"{path}, line {number}: only Cartesian points (CART) can be read, got {system}")
         found[kind.upper()][label] = numbers(fields.split(","), 6, path, number)
     points = found["FA"] or found["F"]
     if not points:
-        raise ValueError(f"{path}: no F(label)=FEAT/POINT,CART,x,y,z,i,j,k statement found")
+        raise InputError(f"{path}: no F(label)=FEAT/POINT,CART,x,y,z,i,j,k statement found")
     metadata = parse_metadata_comments(comments)
     metadata["dmis_features"] = "actual" if found["FA"] else "nominal"
     data = np.array(list(points.values()))
@@ -155,7 +158,7 @@ def _without_blanks(statement):
     return re.sub(r"\s+", "", statement)
 
 
-def sanitise_labels(labels):
+def sanitise_labels(labels: list[str]) -> list[str]:
     """Labels valid in DMIS: other characters become '_', at most 64 characters, an empty label
     becomes P<i>, repeated ones get _2, _3, ... Returns a list of str."""
     clean, seen = [], set()
@@ -176,14 +179,14 @@ def check_dmis_labels(labels):
     bad = [(index, label) for index, label in enumerate(labels) if not DMIS_LABEL.match(label)]
     if bad:
         shown = ", ".join(f"{label!r} (point {index + 1})" for index, label in bad[:5])
-        raise ValueError(
+        raise InputError(
             f"{len(bad)} label(s) cannot be used in DMIS, where a label is {DMIS_LABEL_RULE}: {shown}; "
             "cmmsampling.sanitise_labels(labels) makes valid ones"
         )
     first = {}
     for index, label in enumerate(labels):
         if label in first:
-            raise ValueError(f"label {label!r} is used by points {first[label] + 1} and {index + 1}; "
+            raise InputError(f"label {label!r} is used by points {first[label] + 1} and {index + 1}; "
                              "DMIS labels must be unique")
         first[label] = index
 

@@ -6,12 +6,15 @@ format, :mod:`cmmsampling.formats.pointfiles`), in the global frame or in a loca
 system, optionally as probe-ball centres and in a short probing order. Files are replaced
 atomically (:mod:`cmmsampling.formats.files`): a failed export leaves an existing file as it was.
 """
+from __future__ import annotations
+
 import os
 from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 
-from ..geometry.validation import check_choice, check_real
+from ..access.probe import Motion
+from ..geometry.validation import InputError, InputTypeError, check_choice, check_real
 from ..planning.part_plan import PartPlan
 from ..planning.probe_moves import probe_moves
 from ..planning.probe_path import PathOrder, short_path, unchanged
@@ -87,8 +90,10 @@ class ExportReport:
         return line + f"Probe path {self.length_before:.1f} mm in the optimised order."
 
 
-def export(source, path, format=None, *, frame=None, probe_radius=0.0, order="as_optimised", name=None,
-           approach=2.0, retract=2.0, search=5.0, comments=True, motion=None, label=None):
+def export(source: SamplingResult | PartPlan | PointSet | object, path: str | os.PathLike, format: str | None = None,
+           *, frame: object = None, probe_radius: float = 0.0, order: str = "as_optimised", name: str | None = None,
+           approach: float = 2.0, retract: float = 2.0, search: float = 5.0, comments: bool = True,
+           motion: Motion | None = None, label: str | None = None) -> ExportReport:
     """Write probe points to a file for a CMM.
 
     source: a PointSet, a SamplingResult, or a document object whose Proxy has ``point_set(obj)``;
@@ -174,10 +179,10 @@ def as_point_set(source):
         point_set = method(source)
         if isinstance(point_set, PointSet):
             return point_set
-        raise TypeError(
+        raise InputTypeError(
             f"{source.Name}.Proxy.point_set() returned {type(point_set).__name__}, not a PointSet"
         )
-    raise TypeError(
+    raise InputTypeError(
         f"cannot export a {type(source).__name__}; give a PointSet, a SamplingResult or a document "
         "object whose Proxy has point_set(obj)"
     )
@@ -189,7 +194,7 @@ def plan_point_set(plan):
     deviation, the faces without points and why)."""
     placed = plan.placed
     if not placed:
-        raise ValueError("the plan has no points: " + "; ".join(f"{f.name}: {f.reason}" for f in plan.faces))
+        raise InputError("the plan has no points: " + "; ".join(f"{f.name}: {f.reason}" for f in plan.faces))
     labels = [f"{face.name}_P{i}" for face in placed for i in range(1, face.n + 1)]
     metadata = {"source": "part plan", "strategy": plan.strategy, "mode": plan.mode, "faces": len(plan.faces),
                 "points_per_face": {face.name: face.n for face in placed}, "worst_max_mm": plan.worst}
@@ -219,11 +224,11 @@ def prepared(point_set, placement, radius, frame_name=""):
     point_set = checked(point_set)
     stated = point_set.metadata
     if placement is not None and stated.get("frame", "global") != "global":
-        raise ValueError("these points are already in a local frame; export them with frame=None, "
+        raise InputError("these points are already in a local frame; export them with frame=None, "
                          "or export the global points")
     stated_radius = float(stated.get("probe_radius_mm", 0.0))
     if radius > 0 and stated_radius > 0:
-        raise ValueError(f"these points are already probe-ball centres (radius {stated_radius} mm); "
+        raise InputError(f"these points are already probe-ball centres (radius {stated_radius} mm); "
                          "export them with probe_radius=0, or export the contact points")
     points = point_set.points + radius * point_set.normals
     normals, axes, travel = point_set.normals, point_set.axes, point_set.travel
@@ -257,29 +262,29 @@ def checked(point_set):
     points = np.asarray(point_set.points, dtype=float)
     count = len(points)
     if count == 0:
-        raise ValueError("the point set has no points")
+        raise InputError("the point set has no points")
     if points.shape != (count, 3):
-        raise ValueError(f"points must be an (N, 3) array in mm, got shape {points.shape}")
+        raise InputError(f"points must be an (N, 3) array in mm, got shape {points.shape}")
     normals = np.asarray(point_set.normals, dtype=float)
     if normals.shape != (count, 3):
-        raise ValueError(
+        raise InputError(
             f"normals must be an (N, 3) array like the points {points.shape}, got {normals.shape}"
         )
     if len(point_set.labels) != count:
-        raise ValueError(f"{len(point_set.labels)} labels for {count} points")
+        raise InputError(f"{len(point_set.labels)} labels for {count} points")
     labels = [str(label) for label in point_set.labels]
     _check_finite("points", points, labels)
     _check_finite("normals", normals, labels)
     lengths = np.linalg.norm(normals, axis=1)
     bad = np.flatnonzero(np.abs(lengths - 1.0) > UNIT_TOLERANCE)
     if bad.size:
-        raise ValueError(f"the normal of point {labels[bad[0]]} has length {lengths[bad[0]]:.6g}; "
+        raise InputError(f"the normal of point {labels[bad[0]]} has length {lengths[bad[0]]:.6g}; "
                          "approach vectors must be unit vectors")
     uv = _optional(point_set.uv, (count, 2), "uv", labels)
     deviation = _optional(point_set.deviation, (count,), "deviation", labels)
     faces = None if point_set.faces is None else [str(face) for face in point_set.faces]
     if faces is not None and len(faces) != count:
-        raise ValueError(f"{len(faces)} face names for {count} points")
+        raise InputError(f"{len(faces)} face names for {count} points")
     axes = None if point_set.axes is None else np.asarray(point_set.axes, dtype=float)
     if axes is not None and (axes.shape != (count, 3) or not np.isfinite(axes).all()):
         axes = None
@@ -291,7 +296,7 @@ def _check_finite(name, values, labels):
     """ValueError naming the first point whose row of values (N, k) is not finite."""
     bad = np.flatnonzero(~np.all(np.isfinite(values.reshape(len(labels), -1)), axis=1))
     if bad.size:
-        raise ValueError(
+        raise InputError(
             f"{name} of point {labels[bad[0]]} contain NaN or infinite values ({bad.size} points)"
         )
 
@@ -302,7 +307,7 @@ def _optional(values, shape, name, labels):
         return None
     array = np.asarray(values, dtype=float)
     if array.shape != shape:
-        raise ValueError(f"{name} must have shape {shape}, got {array.shape}")
+        raise InputError(f"{name} must have shape {shape}, got {array.shape}")
     _check_finite(name, array, labels)
     return array
 

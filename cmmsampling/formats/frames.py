@@ -3,6 +3,7 @@ placement), the metadata that states a local frame, and points moved between fra
 import numpy as np
 
 from ..geometry.freecad_env import import_freecad
+from ..geometry.validation import InputError, InputTypeError
 
 FreeCAD = import_freecad()
 
@@ -19,7 +20,7 @@ def resolve_frame(frame):
     getter = getattr(frame, "getGlobalPlacement", None)
     placement = getter() if callable(getter) else getattr(frame, "Placement", None)
     if not isinstance(placement, FreeCAD.Placement):
-        raise TypeError(
+        raise InputTypeError(
             "frame must be None, a FreeCAD.Placement or an object with a Placement, "
             f"got {type(frame).__name__}"
         )
@@ -61,7 +62,7 @@ def placement_from_metadata(metadata):
         return None
     missing = [key for key in FRAME_KEYS[2:] if key not in metadata]
     if missing:
-        raise ValueError(
+        raise InputError(
             f"the points are in a local frame but {', '.join(missing)} is not stated; pass frame="
         )
     matrix = np.eye(4)

@@ -7,10 +7,13 @@ material: the probe travels along -ijk). DMIS and CSV also hold labels and ``key
 comments with the facts of the points (source face, strategy, frame, probe radius, deviation
 figures); CSV adds the face parameters u, v and each point's deviation where known.
 """
+from __future__ import annotations
+
 import os
 
-from ..geometry.validation import check_choice
+from ..geometry.validation import InputError, check_choice
 from . import csv_points, dmis, xyzijk
+from .pointset import PointSet
 from .registry import FORMATS, FileFormat, export_filter, extensions, register_format, unregister_format
 
 __all__ = ["FORMATS", "FileFormat", "READER_KEYS", "export_filter", "read_points", "register_format",
@@ -34,13 +37,13 @@ def resolve_format(path, format=None):
     if extension in by_extension:
         return by_extension[extension]
     known = "; ".join(f"{name!r} ({', '.join(record.extensions)})" for name, record in FORMATS.items())
-    raise ValueError(
+    raise InputError(
         f"cannot tell the format of {os.fspath(path)!r} from its extension {extension!r}; "
         f"use one of these extensions or give format=: {known}"
     )
 
 
-def read_points(path, format=None):
+def read_points(path: str | os.PathLike, format: str | None = None) -> PointSet:
     """Read probe points from a DMIS, PC-DMIS XYZ or CSV file (format from the extension unless given).
 
     DMIS: the FEAT/POINT,CART statements (the actual ``FA(...)`` ones of a DMIS output file when

@@ -7,6 +7,8 @@ The built-in formats are registered by :mod:`.pointfiles`; a user's module calls
 """
 from dataclasses import dataclass
 
+from ..geometry.validation import InputError, InputTypeError
+
 EXPORT_TITLE = "CMM probe points"
 
 
@@ -32,7 +34,7 @@ class FileFormat:
     def __post_init__(self):
         bad = [e for e in self.extensions if not (e.startswith(".") and e == e.lower() and len(e) > 1)]
         if not self.extensions or bad:
-            raise ValueError(f"format {self.name!r}: extensions must be lower case and start with a dot, "
+            raise InputError(f"format {self.name!r}: extensions must be lower case and start with a dot, "
                              f"e.g. ('.dmi',), got {self.extensions!r}")
 
 
@@ -43,7 +45,7 @@ def register_format(record):
     """Add a FileFormat (replacing one of the same name): export(), read_points(), the command
     line and the Export panel offer it from then on. Returns the record."""
     if not isinstance(record, FileFormat):
-        raise TypeError(f"register_format takes a cmmsampling FileFormat record, got {type(record).__name__}")
+        raise InputTypeError(f"register_format takes a cmmsampling FileFormat record, got {type(record).__name__}")
     FORMATS[record.name] = record
     return record
 

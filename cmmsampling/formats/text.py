@@ -6,6 +6,8 @@ import re
 
 import numpy as np
 
+from ..geometry.validation import InputError
+
 COORDINATE_DECIMALS = 7
 VECTOR_DECIMALS = 9
 PARAMETER_DECIMALS = 10
@@ -20,7 +22,7 @@ def fixed(values, decimals):
 def numbers(fields, count, path, line):
     """count floats from text fields; ValueError naming the line otherwise."""
     if len(fields) != count:
-        raise ValueError(f"{path}, line {line}: expected {count} numbers (x,y,z,i,j,k), got {len(fields)}")
+        raise InputError(f"{path}, line {line}: expected {count} numbers (x,y,z,i,j,k), got {len(fields)}")
     return [number(field, path, line) for field in fields]
 
 
@@ -29,9 +31,9 @@ def number(text, path, line, name="value"):
     try:
         value = float(text)
     except ValueError:
-        raise ValueError(f"{path}, line {line}: {name} {text.strip()!r} is not a number") from None
+        raise InputError(f"{path}, line {line}: {name} {text.strip()!r} is not a number") from None
     if not np.isfinite(value):
-        raise ValueError(f"{path}, line {line}: {name} {text.strip()!r} is not a finite number")
+        raise InputError(f"{path}, line {line}: {name} {text.strip()!r} is not a finite number")
     return value
 
 

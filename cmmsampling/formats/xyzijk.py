@@ -3,6 +3,7 @@ import re
 
 import numpy as np
 
+from ..geometry.validation import InputError
 from .pointset import PointSet
 from .registry import FileFormat
 from .text import COORDINATE_DECIMALS, VECTOR_DECIMALS, fixed, numbers
@@ -28,16 +29,16 @@ def read(text, path="<text>"):
     lines = text.splitlines()
     header = lines[0].split() if lines else []
     if len(header) not in (1, 2) or header[0].upper() != "XYZIJK":
-        raise ValueError(f"{path}, line 1: expected the header 'XYZIJK    METRIC' (or INCH), got {lines[:1]}")
+        raise InputError(f"{path}, line 1: expected the header 'XYZIJK    METRIC' (or INCH), got {lines[:1]}")
     units = header[1].upper() if len(header) == 2 else "METRIC"
     if units not in XYZ_UNITS:
-        raise ValueError(f"{path}, line 1: units must be METRIC or INCH, got {header[1]!r}")
+        raise InputError(f"{path}, line 1: units must be METRIC or INCH, got {header[1]!r}")
     rows = [
         numbers(re.split(r"[,\s]+", line.strip()), 6, path, number)
         for number, line in enumerate(lines[1:], start=2) if line.strip()
     ]
     if not rows:
-        raise ValueError(f"{path}: no points after the header")
+        raise InputError(f"{path}: no points after the header")
     data = np.array(rows)
     labels = [f"P{index + 1}" for index in range(len(data))]
     return PointSet(labels, data[:, :3] * XYZ_UNITS[units], data[:, 3:], metadata={"xyz_units": units})

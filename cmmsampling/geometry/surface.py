@@ -5,6 +5,8 @@ range, i.e. what ``face.valueAt(u, v)`` takes on :attr:`SurfaceModel.face` (for 
 to be converted with ``toNurbs()`` this is the converted face, whose parametrisation differs
 from the original analytic one).
 """
+from __future__ import annotations
+
 from functools import cached_property
 
 import numpy as np
@@ -12,6 +14,7 @@ import numpy as np
 from .bspline import clamped_uniform_knots, full_knots
 from .freecad_env import import_part
 from .nurbs import NurbsPatch
+from .validation import InputError, InputTypeError
 
 Part = import_part()
 import FreeCAD  # noqa: E402  (importable once import_part() has set the path)
@@ -167,7 +170,7 @@ class SurfaceModel(NurbsPatch):
             candidate = np.clip(start + step * direction, low, high)
             if self.on_face(candidate[None])[0]:
                 return candidate
-        raise ValueError("a point off the face could not be moved onto it; the face's boundary "
+        raise InputError("a point off the face could not be moved onto it; the face's boundary "
                          "may be broken: check it with Part's Check geometry")
 
 
@@ -183,15 +186,15 @@ def as_face(shape):
         if len(faces) == 1:
             return faces[0]
         if not faces:
-            raise TypeError(
+            raise InputTypeError(
                 f"expected a face, got a{'n' if shape.ShapeType[0] in 'AEIOU' else ''} "
                 f"{shape.ShapeType} with no faces; select a face of a solid, shell or surface"
             )
-        raise TypeError(
+        raise InputTypeError(
             f"expected one face, got a {shape.ShapeType} with {len(faces)} faces; "
             "pick a single face, e.g. shape.Faces[0]"
         )
-    raise TypeError(
+    raise InputTypeError(
         f"expected a Part.Face, got {type(shape).__name__}; "
         "pass a face, e.g. obj.Shape.Faces[0] or cmmsampling.reference_face()"
     )
@@ -233,7 +236,7 @@ def make_bspline_surface(poles, degrees, weights=None, uknots=None, vknots=None)
     return surface
 
 
-def reference_face():
+def reference_face() -> Part.Face:
     """The built-in reference face: degree (5, 5), 9 x 9 poles over a 100 x 100 mm square.
 
     Clamped uniform knots, all weights 1; see :func:`reference_poles` for the pole heights.

@@ -1,7 +1,20 @@
-"""Checks of user input that fail early with a message naming the problem and the fix."""
+"""Checks of user input that fail early with a message naming the problem and the fix.
+
+Refused input raises :class:`InputError` (a ValueError) or, for a value of the wrong kind,
+:class:`InputTypeError` (also a TypeError): the panels and the command line show its message in
+one line, and treat any other exception as a fault with its traceback.
+"""
 import numbers
 
 import numpy as np
+
+
+class InputError(ValueError):
+    """Input the project refuses: a value, face, file or path; the message names it and what to do."""
+
+
+class InputTypeError(InputError, TypeError):
+    """Input of the wrong kind (e.g. a solid where a face is expected); the message says what to give."""
 
 
 def check_int(name, value, minimum):
@@ -10,9 +23,9 @@ def check_int(name, value, minimum):
         if isinstance(value, numbers.Real) and float(value).is_integer():
             value = int(value)
         else:
-            raise TypeError(f"{name} must be a whole number, got {value!r} ({type(value).__name__})")
+            raise InputTypeError(f"{name} must be a whole number, got {value!r} ({type(value).__name__})")
     if value < minimum:
-        raise ValueError(f"{name} must be at least {minimum}, got {value}")
+        raise InputError(f"{name} must be at least {minimum}, got {value}")
     return int(value)
 
 
@@ -22,16 +35,16 @@ def check_real(name, value, minimum=None, maximum=None, above=None):
     minimum/maximum are inclusive limits, above an exclusive lower limit.
     """
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
-        raise TypeError(f"{name} must be a number, got {value!r} ({type(value).__name__})")
+        raise InputTypeError(f"{name} must be a number, got {value!r} ({type(value).__name__})")
     value = float(value)
     if not np.isfinite(value):
-        raise ValueError(f"{name} must be a finite number, got {value}")
+        raise InputError(f"{name} must be a finite number, got {value}")
     if minimum is not None and value < minimum:
-        raise ValueError(f"{name} must be at least {minimum}, got {value}")
+        raise InputError(f"{name} must be at least {minimum}, got {value}")
     if maximum is not None and value > maximum:
-        raise ValueError(f"{name} must be at most {maximum}, got {value}")
+        raise InputError(f"{name} must be at most {maximum}, got {value}")
     if above is not None and value <= above:
-        raise ValueError(f"{name} must be greater than {above}, got {value}")
+        raise InputError(f"{name} must be greater than {above}, got {value}")
     return value
 
 
@@ -42,7 +55,7 @@ def check_pair(name, value, minimum):
         return (value, value)
     pair = tuple(value)
     if len(pair) != 2:
-        raise ValueError(f"{name} must be one whole number or a pair (along u, along v), got {value!r}")
+        raise InputError(f"{name} must be one whole number or a pair (along u, along v), got {value!r}")
     return tuple(check_int(f"{name}[{i}]", v, minimum) for i, v in enumerate(pair))
 
 
@@ -50,7 +63,7 @@ def check_choice(name, value, choices):
     """value must be one of choices; ValueError listing them otherwise."""
     if value not in choices:
         known = ", ".join(repr(c) for c in choices)
-        raise ValueError(f"unknown {name} {value!r}; choose one of {known}")
+        raise InputError(f"unknown {name} {value!r}; choose one of {known}")
     return value
 
 
@@ -58,9 +71,9 @@ def check_uv(uv, n=None):
     """(N, 2) finite float array; ValueError naming the bad shape or values."""
     array = np.asarray(uv, dtype=float)
     if array.ndim != 2 or array.shape[1] != 2:
-        raise ValueError(f"uv must be an (N, 2) array of (u, v) pairs, got shape {array.shape}")
+        raise InputError(f"uv must be an (N, 2) array of (u, v) pairs, got shape {array.shape}")
     if n is not None and len(array) != n:
-        raise ValueError(f"expected {n} (u, v) pairs, got {len(array)}")
+        raise InputError(f"expected {n} (u, v) pairs, got {len(array)}")
     if not np.all(np.isfinite(array)):
-        raise ValueError("uv contains NaN or infinite values")
+        raise InputError("uv contains NaN or infinite values")
     return array

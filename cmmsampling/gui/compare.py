@@ -16,6 +16,7 @@ from FreeCAD import Qt
 from PySide import QtCore, QtGui
 
 from ..fitting.deviation import DEFAULT_GRID
+from ..geometry.validation import InputError
 from ..report import write_report
 from ..strategies.sampling import STRATEGIES
 from ..study import DEFAULT_NS, DEFAULT_SEEDS, compare, hand_over, study_time
@@ -84,7 +85,7 @@ def parse_ns(text):
     try:
         return tuple(int(word) for word in words)
     except ValueError:
-        raise ValueError(f"The point counts N must be whole numbers separated by commas, e.g. "
+        raise InputError(f"The point counts N must be whole numbers separated by commas, e.g. "
                          f"25, 49, 81 (not {text.strip()!r}).") from None
 
 
@@ -356,7 +357,7 @@ class CompareTaskPanel(BackgroundRunPanel):
             return
         try:
             arguments = self.study_arguments(values)
-        except ValueError as exc:
+        except InputError as exc:
             self.show_status(str(exc), error=True)
             return
         folder = self.folder()

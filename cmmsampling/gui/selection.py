@@ -1,11 +1,13 @@
 """Which face the user selected, or a sentence saying what to select instead."""
 import Part
 
+from ..geometry.validation import InputError
+
 NOTHING = "Nothing is selected: select one face of a part in the 3D view (or a one-face object in the tree)."
 ELEMENT_KINDS = {"Edge": "an edge", "Vertex": "a vertex", "Facet": "a mesh facet"}
 
 
-class SelectionError(ValueError):
+class SelectionError(InputError):
     """The selection is not exactly one face; the message says what to select."""
 
 

@@ -17,6 +17,7 @@ from PySide import QtCore, QtGui
 from ..access.probe import PROBES
 from ..fitting.deviation import DEFAULT_GRID
 from ..fitting.substitute import DEFAULT_DEGREE, default_pole_count
+from ..geometry.validation import InputError
 from ..object_types import source_face
 from ..strategies import estimates, memory, sampling
 from ..strategies.problem import resolve_fit_poles
@@ -223,11 +224,11 @@ class BackgroundRunPanel:
     def report_failure(run):
         """Put a failed run in the Report view and return 'Type: message' for the panel.
 
-        A refused input (ValueError, TypeError: the engine's message names what to change) is
-        one line; anything else comes with its traceback. The traceback always goes to the log.
+        A refused input (InputError: the engine's message names what to change) is one line;
+        anything else comes with its traceback. The traceback always goes to the log.
         """
         message = f"{type(run.error).__name__}: {run.error}"
-        if isinstance(run.error, (ValueError, TypeError)):
+        if isinstance(run.error, InputError):
             FreeCAD.Console.PrintError(f"cmmsampling: {message}\n")
             FreeCAD.Console.PrintLog(run.details)
         else:

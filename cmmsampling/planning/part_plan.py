@@ -13,16 +13,20 @@ area), never silently dropped.
   allocation for the worst face: any allocation with a lower maximum must give that face its next
   step too. Points the worst face cannot use (its next step does not fit) are left unspent.
 """
+from __future__ import annotations
+
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..access.probe import Probe
 from ..access.reach import Access, Reachability
 from ..fitting.substitute import DEFAULT_DEGREE
 from ..geometry.freecad_env import import_part
 from ..geometry.surface import as_face
-from ..geometry.validation import check_int, check_real
+from ..geometry.validation import InputError, check_int, check_real
 from ..strategies import handover
 from ..strategies.sampling import BEST_STRATEGY, evaluate, probe_edge_offset, sample
 from ..strategies.threads import blas_threads
@@ -204,8 +208,11 @@ class PartPlan:
         return "\n".join(lines)
 
 
-def plan(shape_or_faces, tolerance=None, n_total=None, strategy=BEST_STRATEGY, *, faces=None, n_max=DEFAULT_MAX_POINTS,
-         edge_offset=None, processes=None, scheduler=None, progress=None, probe=None, part=None, **arguments):
+def plan(shape_or_faces: Part.Shape | list, tolerance: float | None = None, n_total: int | None = None,
+         strategy: str = BEST_STRATEGY, *, faces: list | None = None, n_max: int = DEFAULT_MAX_POINTS,
+         edge_offset: float | None = None, processes: int | None = None, scheduler: object = None,
+         progress: Callable | None = None, probe: Probe | None = None, part: Part.Shape | None = None,
+         **arguments) -> PartPlan:
     """Probe points for a whole part: to a tolerance on every face, or a total of points.
 
     shape_or_faces: a Part.Shape (its faces, or those numbered from 1 in ``faces``, e.g.
@@ -228,7 +235,7 @@ def plan(shape_or_faces, tolerance=None, n_total=None, strategy=BEST_STRATEGY, *
     if handed is not None:
         return handed
     if (tolerance is None) == (n_total is None):
-        raise ValueError("give either tolerance= (mm, the deviation every face must meet) or n_total= "
+        raise InputError("give either tolerance= (mm, the deviation every face must meet) or n_total= "
                          "(the points of the whole part), not both or neither")
     named = named_faces(shape_or_faces, faces)
     part, part_brep = _part(shape_or_faces, part, probe)
@@ -258,11 +265,11 @@ def _part(shape_or_faces, part, probe):
     ValueError for a probe without a part to judge it on."""
     if probe is None:
         if part is not None:
-            raise ValueError("part= is what a probe must keep clear of: give probe= (a cmmsampling.Probe) too")
+            raise InputError("part= is what a probe must keep clear of: give probe= (a cmmsampling.Probe) too")
         return None, ""
     part = shape_or_faces if part is None and isinstance(shape_or_faces, Part.Shape) else part
     if not isinstance(part, Part.Shape):
-        raise ValueError("a probe's reach is judged on the whole part: give part= (the solid) with a list of faces")
+        raise InputError("a probe's reach is judged on the whole part: give part= (the solid) with a list of faces")
     return part, part.exportBrepToString()
 
 
@@ -282,19 +289,19 @@ def named_faces(shape_or_faces, numbers=None):
     if isinstance(shape_or_faces, Part.Shape):
         faces = shape_or_faces.Faces
         if not faces:
-            raise ValueError("the shape has no faces to plan")
+            raise InputError("the shape has no faces to plan")
         chosen = range(1, len(faces) + 1) if numbers is None else list(numbers)
         bad = [k for k in chosen if not isinstance(k, int) or not 1 <= k <= len(faces)]
         if bad:
-            raise ValueError(f"the shape has faces 1 to {len(faces)}; there is no face {bad[0]!r}")
+            raise InputError(f"the shape has faces 1 to {len(faces)}; there is no face {bad[0]!r}")
         return [(f"Face{k}", faces[k - 1]) for k in chosen]
     named = [item if isinstance(item, tuple) else (f"Face{k}", item)
              for k, item in enumerate(shape_or_faces, start=1)]
     if not named:
-        raise ValueError("no faces to plan")
+        raise InputError("no faces to plan")
     names = [name for name, _ in named]
     if len(set(names)) != len(names):
-        raise ValueError("the faces' names must be unique")
+        raise InputError("the faces' names must be unique")
     return [(name, as_face(face)) for name, face in named]
 
 
@@ -328,7 +335,7 @@ def _solve_face(job):
             result = answer.result
         else:
             result = sample(face, job.n, job.strategy, **arguments)
-    except ValueError as exc:
+    except InputError as exc:
         result, planned.reason = None, str(exc)
     if result is not None:
         _take(planned, result)
@@ -380,7 +387,7 @@ def _plan_budget(named, budget, strategy, arguments, processes, scheduler, progr
     jobs = [FaceJob(name, face.exportBrepToString(), "points", strategy, n=first, arguments=arguments,
                     part_brep=part_brep, probe=probe) for name, face in named]
     if budget < first * len(jobs):
-        raise ValueError(f"{budget} points give fewer than {first} to each of the {len(jobs)} faces; give "
+        raise InputError(f"{budget} points give fewer than {first} to each of the {len(jobs)} faces; give "
                          f"n_total of at least {first * len(jobs)}, or fewer faces")
     outcomes, cancelled, notes = _run(jobs, processes, scheduler, progress)
     faces = _completed(outcomes, named)

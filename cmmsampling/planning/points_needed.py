@@ -11,13 +11,16 @@ the tolerance while its local bound (the least maximum deviation reshaping that 
 reach, :meth:`SamplingResult.bounds`) is within it is tried once more at the most points of the
 step before the search moves on. The result of each N tried is kept in ``tried``.
 """
+from __future__ import annotations
+
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 from ..access.reach import Reachability
 from ..fitting.substitute import DEFAULT_DEGREE, default_pole_count
-from ..geometry.validation import check_int, check_real
-from ..strategies.sampling import BEST_STRATEGY, MIN_POINTS, probe_edge_offset, sample
+from ..geometry.validation import InputError, check_int, check_real
+from ..strategies.sampling import BEST_STRATEGY, MIN_POINTS, Part, probe_edge_offset, sample
 
 DEFAULT_MAX_POINTS = 400
 
@@ -80,8 +83,9 @@ class PointsNeeded:
         return self.result.bounds()["grid"].lower if self.result is not None else float("nan")
 
 
-def points_needed(face, tolerance, strategy=BEST_STRATEGY, *, n_max=DEFAULT_MAX_POINTS, edge_offset=None,
-                  fit_degree=DEFAULT_DEGREE, progress=None, **arguments):
+def points_needed(face: Part.Face, tolerance: float, strategy: str = BEST_STRATEGY, *, n_max: int = DEFAULT_MAX_POINTS,
+                  edge_offset: float | None = None, fit_degree: int | tuple[int, int] = DEFAULT_DEGREE,
+                  progress: Callable | None = None, **arguments) -> PointsNeeded:
     """The fewest probe points whose ``strategy`` result deviates at most ``tolerance`` mm.
 
     face: a Part.Face; tolerance: mm (> 0); n_max: the most points to try; edge_offset: mm, None
@@ -127,7 +131,7 @@ class _Search:
         start = time.perf_counter()
         try:
             result = sample(self.face, n, self.strategy, **self.arguments)
-        except ValueError as exc:
+        except InputError as exc:
             self.tried.append(Tried(n, seconds=time.perf_counter() - start, refused=str(exc)))
             self.results[n] = None
             return None

@@ -11,6 +11,8 @@ turns to the next axis on the clearance plane. The order is a nearest-neighbour 
 by 2-opt on these travel lengths, never longer than the straight nearest-neighbour order with
 the detours it needs. All coordinates are ball centres, mm.
 """
+from __future__ import annotations
+
 from dataclasses import dataclass
 
 import numpy as np
@@ -18,6 +20,8 @@ from scipy.spatial.distance import cdist
 
 from ..access.obstacles import Obstacles, along_segments
 from ..access.probe import Motion
+from ..geometry.validation import InputError
+from ..strategies.result import SamplingResult
 from .part_plan import PartPlan
 from .probe_path import nearest_neighbour, two_opt
 
@@ -94,7 +98,7 @@ def _end_lengths(ready, exits, above):
     return np.linalg.norm(exits - ready, axis=1) + np.linalg.norm(above - exits, axis=1)
 
 
-def probe_moves(source, motion=None):
+def probe_moves(source: SamplingResult | PartPlan, motion: Motion | None = None) -> ProbeMoves:
     """The ProbeMoves of a SamplingResult run with the part (``sample(face, ..., part=)``), of a
     PartPlan made with a probe, or of a document object whose Proxy has ``probe_moves(obj,
     motion)`` (the document's probe points), through its points (motion: the time estimate).
@@ -106,11 +110,11 @@ def probe_moves(source, motion=None):
         return own(source, motion)
     access = getattr(source, "access", None)
     if access is None:
-        raise ValueError("a probe path needs the part the points must keep clear of: sample the face with "
+        raise InputError("a probe path needs the part the points must keep clear of: sample the face with "
                          "part=<the solid> (and probe=), or export with order='short_path'")
     if not access.reachable.all():
         blocked = ", ".join(f"P{k + 1}" for k in np.flatnonzero(~access.reachable)[:10])
-        raise ValueError(f"the probe cannot reach {np.count_nonzero(~access.reachable)} of the points ({blocked}); "
+        raise InputError(f"the probe cannot reach {np.count_nonzero(~access.reachable)} of the points ({blocked}); "
                          "sample again with part= (the run keeps to what the probe reaches) or export with "
                          "order='short_path'")
     reachability = source.problem.reachability
@@ -121,12 +125,12 @@ def _plan_moves(plan, motion):
     """The ProbeMoves through every point of a plan made with a probe (see :func:`probe_moves`)."""
     placed = plan.placed
     if plan.probe is None or any(face.axes is None for face in placed):
-        raise ValueError("a probe path needs the probe's reach on the part: plan with probe=cmmsampling.Probe(...), "
+        raise InputError("a probe path needs the probe's reach on the part: plan with probe=cmmsampling.Probe(...), "
                          "or export with order='short_path'")
     axes = np.concatenate([face.axes for face in placed])
     unreached = [face.name for face in placed if face.unreached]
     if unreached:
-        raise ValueError(f"the probe cannot reach some points of {', '.join(unreached)}; export with "
+        raise InputError(f"the probe cannot reach some points of {', '.join(unreached)}; export with "
                          "order='short_path', or plan again")
     points = np.concatenate([face.points for face in placed])
     normals = np.concatenate([face.normals for face in placed])

@@ -3,10 +3,14 @@
 The path is the open polyline through the points in visiting order, measured in 3D (mm); the
 clearance moves a CMM makes between points are not part of it. Any point may come first.
 """
+from __future__ import annotations
+
 from dataclasses import dataclass
 
 import numpy as np
 from scipy.spatial.distance import cdist
+
+from ..geometry.validation import InputError
 
 RELATIVE_TOLERANCE = 1e-12
 
@@ -43,7 +47,7 @@ def unchanged(points):
     return PathOrder(np.arange(len(points)), length, length)
 
 
-def short_path(points):
+def short_path(points: np.ndarray) -> PathOrder:
     """A short open path through points (N, 3) mm: nearest neighbour from the first point, then 2-opt.
 
     Never longer than the order given: when the nearest-neighbour start ends longer, the given
@@ -116,7 +120,7 @@ def _checked_points(points):
     """(N, 3) finite float array; ValueError naming the bad shape or values."""
     array = np.asarray(points, dtype=float)
     if array.ndim != 2 or array.shape[1] != 3:
-        raise ValueError(f"points must be an (N, 3) array in mm, got shape {array.shape}")
+        raise InputError(f"points must be an (N, 3) array in mm, got shape {array.shape}")
     if not np.all(np.isfinite(array)):
-        raise ValueError("points contain NaN or infinite coordinates")
+        raise InputError("points contain NaN or infinite coordinates")
     return array

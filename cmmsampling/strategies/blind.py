@@ -9,6 +9,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ..geometry.bspline import radical_inverse
+from ..geometry.validation import InputError
 from .registry import Strategy, StrategyOutcome
 
 CARTESIAN_RASTER = 121
@@ -109,7 +110,7 @@ def respace(problem, uv):
     nearby = cKDTree(places)
     for i in np.setdiff1d(np.arange(len(uv)), kept):
         if not free.any():
-            raise ValueError(f"no room to keep {len(uv)} points {spacing:g} mm apart; "
+            raise InputError(f"no room to keep {len(uv)} points {spacing:g} mm apart; "
                              f"{problem.spacing_advice()}")
         choice = np.flatnonzero(free)[np.argmin(np.linalg.norm(places[free] - points[i], axis=1))]
         uv[i] = candidates[choice]
@@ -146,7 +147,7 @@ def _dense_enough(make_candidates, problem, start, keep_first=False, with_layout
             chosen = inside[:n] if keep_first else thin_evenly(inside, n)
             return (chosen, inside) if with_layout else chosen
         m = int(np.ceil(m * max(1.1, n / max(len(inside), 1))))
-    raise ValueError(
+    raise InputError(
         f"could not place {n} points on the face at least {problem.min_spacing:g} mm apart and "
         f"{problem.domain.edge_offset:g} mm from its edges; lower edge_offset, or "
         f"{problem.spacing_advice()}"
@@ -275,7 +276,7 @@ def _check_coverage(problem, face_points, points, axis, count):
     even = float(np.sqrt(problem.domain.feasible_area / count))
     gap = float(cKDTree(points).query(face_points)[0].max())
     if gap > COVERAGE * even:
-        raise ValueError(
+        raise InputError(
             f"uniform_cartesian leaves part of the face without points: a spot {gap:.3g} mm from the "
             f"nearest node of its grid, where {count} points spread evenly are {even:.3g} mm apart (the face is "
             f"steep as seen along the machine {axis.upper()} axis, so the footprint grid misses it, and "
@@ -367,7 +368,7 @@ def curvature_adaptive(problem, curvature="mean"):
     feasible domain are dropped and the allocation grown until N remain.
     """
     if curvature not in ("mean", "gaussian"):
-        raise ValueError(f"curvature must be 'mean' or 'gaussian', got {curvature!r}")
+        raise InputError(f"curvature must be 'mean' or 'gaussian', got {curvature!r}")
     model, n = problem.model, problem.n
     du, dv = model.span
     patches = grid_shape(max(1, n // 4), dv / du if du > 0 else 1.0)

@@ -1,21 +1,28 @@
 """Estimates of a sample() run made before it starts: its peak memory and its time."""
+from __future__ import annotations
+
 import time
 
 import numpy as np
 
+from ..access.probe import Probe
 from ..fitting.deviation import DEFAULT_GRID
 from ..fitting.substitute import DEFAULT_DEGREE
+from ..geometry.freecad_env import import_part
 from ..geometry.validation import check_choice, check_int, check_pair
 from .registry import STRATEGIES, strategy_options
-from .sampling import DEFAULT_STRATEGY, MIN_POINTS, check_workers, make_problem, memory_bytes
+from .sampling import DEFAULT_STRATEGY, MIN_POINTS, Pair, check_workers, make_problem, memory_bytes
 from .threads import blas_threads
+
+Part = import_part()
 
 # Swarms timed by time_needed (the first one warms the caches and is not counted).
 TIMED_SWARMS = 4
 
 
-def memory_needed(n, strategy=DEFAULT_STRATEGY, *, fit_degree=DEFAULT_DEGREE, fit_poles=None,
-                  grid=DEFAULT_GRID, workers=None, **options):
+def memory_needed(n: int, strategy: str | None = DEFAULT_STRATEGY, *, fit_degree: Pair = DEFAULT_DEGREE,
+                  fit_poles: Pair | None = None, grid: Pair = DEFAULT_GRID, workers: int | None = None,
+                  **options) -> int:
     """Estimated peak memory (bytes) of :func:`sample` with these arguments, before any run.
 
     The arguments as in :func:`sample` (strategy None: what every run needs). sample() refuses
@@ -29,9 +36,10 @@ def memory_needed(n, strategy=DEFAULT_STRATEGY, *, fit_degree=DEFAULT_DEGREE, fi
                          strategy, checked)
 
 
-def time_needed(face, n=81, strategy=DEFAULT_STRATEGY, *, fit_degree=DEFAULT_DEGREE, fit_poles=None,
-                grid=DEFAULT_GRID, edge_offset=0.0, min_spacing=None, workers=None, part=None, probe=None,
-                **options):
+def time_needed(face: Part.Face, n: int = 81, strategy: str = DEFAULT_STRATEGY, *, fit_degree: Pair = DEFAULT_DEGREE,
+                fit_poles: Pair | None = None, grid: Pair = DEFAULT_GRID, edge_offset: float = 0.0,
+                min_spacing: float | None = None, workers: int | None = None, part: Part.Shape | None = None,
+                probe: Probe | None = None, **options) -> float | None:
     """Estimated seconds of :func:`sample` with these arguments on this face, before the run.
 
     The problem is built (as sample() builds it, the probe's reach on ``part`` included: that

@@ -15,7 +15,7 @@ Pairs of points are found by neighbour searches, so nothing of size N^2 is left.
 """
 import os
 
-from ..geometry.validation import check_int
+from ..geometry.validation import InputError, check_int
 
 FIXED_BYTES = 80 * 2**20
 FIT_ARRAYS = 6
@@ -73,6 +73,6 @@ def check_fits(needed, n, largest_n, what):
         return
     largest = largest_n(SAFE_SHARE * free)
     advice = f"at most about n = {largest} fits" if largest else "no run fits"
-    raise ValueError(
+    raise InputError(
         f"n = {n} needs about {gib(needed)} of memory ({what}), more than the {gib(free)} this "
         f"machine has free; {advice}")

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..geometry.validation import check_int, check_real
+from ..geometry.validation import InputError, check_int, check_real
 from . import memory
 from .registry import STRATEGIES, Setting, Strategy, StrategyOutcome, layouts
 
@@ -170,7 +170,7 @@ def run_pso(problem, progress, population, iterations, w1, w2, c1, c2, velocity_
         admissible=problem.spaced if problem.min_spacing > 0 else None,
     )
     if not np.isfinite(swarm.best_value):
-        raise ValueError(
+        raise InputError(
             f"no particle kept its points {problem.min_spacing:g} mm apart ({problem.spacing_advice()}) or "
             "use start_from_uniform=True")
     notes, details = _process_notes(problem, objective)
@@ -228,7 +228,7 @@ def _check_pso_options(options):
     clean["w1"] = check_real("w1", options["w1"], 0.0, 1.2)
     clean["w2"] = check_real("w2", options["w2"], 0.0, 1.2)
     if clean["w2"] > clean["w1"]:
-        raise ValueError(f"inertia must decrease: w1 ({clean['w1']}) must be >= w2 ({clean['w2']})")
+        raise InputError(f"inertia must decrease: w1 ({clean['w1']}) must be >= w2 ({clean['w2']})")
     clean["c1"] = check_real("c1", options["c1"], 0.0)
     clean["c2"] = check_real("c2", options["c2"], 0.0)
     clean["velocity_limit"] = check_real("velocity_limit", options["velocity_limit"], maximum=1.0, above=0.0)

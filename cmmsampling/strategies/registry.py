@@ -8,6 +8,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..geometry.validation import InputError, InputTypeError
+
 
 @dataclass
 class StrategyOutcome:
@@ -79,7 +81,7 @@ class Strategy:
         unknown = sorted(set(options) - set(self.options))
         if unknown:
             takes = ", ".join(self.options) or "no options"
-            raise TypeError(f"strategy {self.name!r} does not take {', '.join(unknown)}; it takes {takes}")
+            raise InputTypeError(f"strategy {self.name!r} does not take {', '.join(unknown)}; it takes {takes}")
         merged = {**self.options, **options}
         return self.check(merged) if self.check else merged
 
@@ -98,7 +100,7 @@ def register_strategy(strategy):
     """Add a Strategy record (replacing one of the same name): sample(), compare(), the report, the
     command line and both panels offer it from then on. Returns the record."""
     if not isinstance(strategy, Strategy):
-        raise TypeError(f"register takes a cmmsampling Strategy record, got {type(strategy).__name__}")
+        raise InputTypeError(f"register takes a cmmsampling Strategy record, got {type(strategy).__name__}")
     STRATEGIES[strategy.name] = strategy
     return strategy
 
@@ -134,7 +136,7 @@ def layouts(problem, required=(), optional=()):
     for name in (*required, *optional):
         try:
             layouts[name] = STRATEGIES[name].run(problem, None, **STRATEGIES[name].options).uv
-        except ValueError:
+        except InputError:
             if name in required:
                 raise
     return layouts

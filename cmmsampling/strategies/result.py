@@ -1,10 +1,20 @@
 """SamplingResult: the probe points of one run and how well their substitute fits the face."""
+from __future__ import annotations
+
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..fitting.occ_surface import substitute_surface, trimmed_like
 from .blind import projection_frame
+
+if TYPE_CHECKING:   # for the annotations only: the modules import this one
+    from ..access.reach import Access
+    from ..fitting.deviation import DeviationStats
+    from ..fitting.substitute import SubstituteSpace
+    from ..geometry.surface import SurfaceModel
+    from .problem import SamplingProblem
 
 # A substitute within this share of the face's diagonal of it reproduces it: rounding, and the
 # smoothing's pull on the fit's edges along the face (a plane's substitute shrinks by ~1e-9 of its size).
@@ -33,19 +43,19 @@ class SamplingResult:
     points: np.ndarray
     normals: np.ndarray
     poles: np.ndarray
-    space: object
-    deviation: object
-    model: object
-    history: np.ndarray = None
+    space: SubstituteSpace
+    deviation: DeviationStats
+    model: SurfaceModel
+    history: np.ndarray | None = None
     evaluations: int = 0
-    timings: dict = field(default_factory=dict)
+    timings: dict[str, float] = field(default_factory=dict)
     settings: dict = field(default_factory=dict)
     cancelled: bool = False
-    problem: object = None
-    notes: list = field(default_factory=list)
-    access: object = None
-    _bounds: dict = field(default=None, repr=False)
-    _check: object = field(default=None, repr=False)
+    problem: SamplingProblem | None = None
+    notes: list[str] = field(default_factory=list)
+    access: Access | None = None
+    _bounds: dict | None = field(default=None, repr=False)
+    _check: DeviationStats | None = field(default=None, repr=False)
 
     @property
     def check(self):

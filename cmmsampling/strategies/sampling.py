@@ -2,8 +2,11 @@
 
 The built-in strategies' records (blind, pso, optimal) are registered here, in the order the
 tables and panels list them; the registry's names are the public ones (``__all__``)."""
+from __future__ import annotations
+
 import os
 import time
+from collections.abc import Callable
 from dataclasses import asdict
 
 import numpy as np
@@ -17,7 +20,7 @@ from ..fitting.substitute import DEFAULT_DEGREE, DEFAULT_SMOOTHING
 from ..geometry.domain import face_domain
 from ..geometry.freecad_env import import_part
 from ..geometry.surface import SurfaceModel
-from ..geometry.validation import check_choice, check_int, check_pair, check_real, check_uv
+from ..geometry.validation import InputError, InputTypeError, check_choice, check_int, check_pair, check_real, check_uv
 from . import blind, handover, memory, optimal, pso
 from .optimal import default_min_spacing
 from .problem import SamplingProblem, resolve_fit_poles
@@ -34,6 +37,10 @@ __all__ = ["STRATEGIES", "Setting", "Strategy", "StrategyOutcome", "register_str
            "MIN_POINTS"]
 
 MIN_POINTS = 4
+# An int for both parameter directions or a (u, v) pair of them.
+Pair = int | tuple[int, int]
+# progress(iteration, best maximum deviation mm) -> True to cancel.
+Progress = Callable[[int, float], bool | None]
 MIN_AREA_RATIO = 1e-12
 
 
@@ -63,7 +70,7 @@ def make_problem(face, n, fit_degree=DEFAULT_DEGREE, fit_poles=None, smoothing=D
     poles = resolve_fit_poles(given_poles, n, degree)
     for axis, (d, p) in enumerate(zip(degree, poles)):
         if p < d + 1:
-            raise ValueError(
+            raise InputError(
                 f"fit_poles along {'uv'[axis]} ({p}) must be at least fit_degree + 1 ({d + 1})"
             )
     smoothing = check_real("smoothing", smoothing, above=0.0)
@@ -90,17 +97,17 @@ def _reachability(part, probe):
     TypeError for a part that is no shape or a probe that is no Probe."""
     if part is None:
         if probe is not None:
-            raise ValueError("a probe is checked against the part its face belongs to: give part= (the "
+            raise InputError("a probe is checked against the part its face belongs to: give part= (the "
                              "solid or shape) with probe=")
         return None
     if isinstance(part, Reachability):
         if probe is not None and probe != part.probe:
-            raise ValueError("part= is a Reachability with its own probe; give no other probe=")
+            raise InputError("part= is a Reachability with its own probe; give no other probe=")
         return part
     if not isinstance(part, Part.Shape) or part.isNull() or not part.Faces:
-        raise TypeError(f"part must be the Part.Shape the face belongs to (a solid, a shell), got {part!r}")
+        raise InputTypeError(f"part must be the Part.Shape the face belongs to (a solid, a shell), got {part!r}")
     if probe is not None and not isinstance(probe, Probe):
-        raise TypeError(f"probe must be a cmmsampling.Probe, got {probe!r}")
+        raise InputTypeError(f"probe must be a cmmsampling.Probe, got {probe!r}")
     return Reachability(part, probe)
 
 
@@ -141,17 +148,17 @@ def _check_room(problem):
     domain = problem.domain
     if domain.empty and problem.reachability is not None and not face_domain(problem.model,
                                                                               domain.edge_offset).empty:
-        raise ValueError("the probe reaches no point of this face on the part: choose a smaller stylus or a "
+        raise InputError("the probe reaches no point of this face on the part: choose a smaller stylus or a "
                          "larger max_tilt, or leave part= out to sample without the probe's reach")
     if domain.empty:
-        raise ValueError(
+        raise InputError(
             f"the face is too narrow for edge_offset {domain.edge_offset:g} mm: none of its points "
             f"is farther than {domain.reach + domain.margin:.2g} mm from its edges; edge_offset "
             f"{_round_down(domain.reach):g} mm fits (measured to within {domain.margin:.2g} mm)")
     if problem.min_spacing > 0:
         room = int(domain.feasible_area / (np.sqrt(3) / 2 * problem.min_spacing ** 2)) + 1
         if problem.n > room:
-            raise ValueError(
+            raise InputError(
                 f"{problem.n} points {problem.min_spacing:g} mm apart do not fit on the "
                 f"{domain.feasible_area:.4g} mm^2 of the face that keeps edge_offset "
                 f"{domain.edge_offset:g} mm (at most about {room}); {problem.spacing_advice()}")
@@ -171,7 +178,7 @@ def check_workers(workers):
         return 2 if (os.cpu_count() or 1) >= 2 else 1
     workers = check_int("workers", workers, 1)
     if workers > 2:
-        raise ValueError(f"workers must be 1 or 2, got {workers}")
+        raise InputError(f"workers must be 1 or 2, got {workers}")
     return workers
 
 
@@ -179,15 +186,17 @@ def _check_area(model):
     """ValueError for a face (its SurfaceModel) without usable area."""
     diagonal = model.diagonal
     if not np.isfinite(model.area) or model.area <= MIN_AREA_RATIO * max(diagonal, 1e-300) ** 2:
-        raise ValueError(
+        raise InputError(
             f"the face has no usable area ({model.area:.3g} mm^2 for a {diagonal:.3g} mm bounding box); "
             "pick a face that is not degenerate"
         )
 
 
-def sample(face, n=81, strategy=DEFAULT_STRATEGY, *, fit_degree=DEFAULT_DEGREE, fit_poles=None,
-           smoothing=DEFAULT_SMOOTHING, grid=DEFAULT_GRID, seed=0, progress=None, occ_check=True,
-           workers=None, edge_offset=0.0, min_spacing=None, part=None, probe=None, **options):
+def sample(face: Part.Face, n: int = 81, strategy: str = DEFAULT_STRATEGY, *, fit_degree: Pair = DEFAULT_DEGREE,
+           fit_poles: Pair | None = None, smoothing: float = DEFAULT_SMOOTHING, grid: Pair = DEFAULT_GRID,
+           seed: int = 0, progress: Progress | None = None, occ_check: bool = True, workers: int | None = None,
+           edge_offset: float = 0.0, min_spacing: float | None = None, part: Part.Shape | None = None,
+           probe: Probe | None = None, **options) -> SamplingResult:
     """Place n probe points on a face with a strategy and judge them.
 
     face: a Part.Face (or a Shape holding one face), e.g. ``cmmsampling.reference_face()``;
@@ -257,7 +266,7 @@ def _exact_outcome(problem, strategy):
                                       "already fits this face exactly"])
 
 
-def probe_edge_offset(face, cap=None):
+def probe_edge_offset(face: Part.Face, cap: float | None = None) -> float:
     """The edge offset (mm) the panel and the command line start with on this face.
 
     cap (mm, default PROBE_EDGE_OFFSET_MM: a probe ball's radius plus a margin) where the face
@@ -308,8 +317,8 @@ def _json_friendly(options):
     return {k: (np.asarray(v).tolist() if isinstance(v, np.ndarray) else v) for k, v in options.items()}
 
 
-def lower_bound(face, n=81, *, fit_degree=DEFAULT_DEGREE, fit_poles=None, smoothing=DEFAULT_SMOOTHING,
-                grid=DEFAULT_GRID, check=False):
+def lower_bound(face: Part.Face, n: int = 81, *, fit_degree: Pair = DEFAULT_DEGREE, fit_poles: Pair | None = None,
+                smoothing: float = DEFAULT_SMOOTHING, grid: Pair = DEFAULT_GRID, check: bool = False) -> float:
     """The local bound about the reference fit on this face (cmmsampling.fitting.bound): the least
     first-order maximum deviation that reshaping the fit to very many points along its normals
     reaches. A yardstick, not a lower bound of what n points can reach: point sets reach other
@@ -324,8 +333,9 @@ def lower_bound(face, n=81, *, fit_degree=DEFAULT_DEGREE, fit_poles=None, smooth
         return problem.bounds()["check" if check else "grid"]
 
 
-def evaluate(face, uv, *, strategy="given", fit_degree=DEFAULT_DEGREE, fit_poles=None,
-             smoothing=DEFAULT_SMOOTHING, grid=DEFAULT_GRID, occ_check=True):
+def evaluate(face: Part.Face, uv: np.ndarray, *, strategy: str = "given", fit_degree: Pair = DEFAULT_DEGREE,
+             fit_poles: Pair | None = None, smoothing: float = DEFAULT_SMOOTHING, grid: Pair = DEFAULT_GRID,
+             occ_check: bool = True) -> SamplingResult:
     """Judge a given point set: fit the substitute to the face's points at uv and measure it.
 
     uv: (N, 2) parameters on the face (as in SamplingResult.uv); the other arguments as in
