@@ -62,7 +62,7 @@ _API = {
     "add_plan_to_document": "document",
     "reevaluate": "document",
     "compare": "study",
-    "write_report": "report",
+    "write_report": "study",
 }
 
 __all__ = sorted(_API)

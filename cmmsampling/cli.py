@@ -248,7 +248,7 @@ def run_demo(args):
 
 def _study_report(face, args):
     """Every strategy over the default N list (the paper's Table 1 and Fig. 9-13) as an HTML report."""
-    from .report import write_report
+    from .study import write_report
     from .study import compare
 
     progress = StudyProgress()

@@ -1,5 +1,6 @@
 """The document layer headless: objects, one transaction, save/reopen, re-evaluate, orphans."""
 import json
+import zipfile
 
 import numpy as np
 import pytest
@@ -7,7 +8,7 @@ from geometry import FreeCAD, Part, closed, reference_document
 
 import cmmsampling
 from cmmsampling import document
-from cmmsampling.object_types import is_probe_points
+from cmmsampling.document.object_types import is_probe_points
 from cmmsampling.formats.pointset import PointSet
 from cmmsampling.geometry.surface import make_bspline_surface, reference_poles
 
@@ -148,6 +149,28 @@ def test_save_and_reopen_keeps_everything(group, result, doc, tmp_path):
         points.touch()
         reopened.recompute()
         assert points.Status == "up to date" and "Invalid" not in points.State
+    finally:
+        FreeCAD.closeDocument(reopened.Name)
+
+
+def test_a_document_saved_before_the_document_room_had_modules_opens(group, result, doc, tmp_path):
+    """Files saved by the earlier layout name the proxies' module cmmsampling.document."""
+    new_path, old_path = str(tmp_path / "new.FCStd"), str(tmp_path / "old.FCStd")
+    doc.saveAs(new_path)
+    with zipfile.ZipFile(new_path) as new, zipfile.ZipFile(old_path, "w", zipfile.ZIP_DEFLATED) as old:
+        for item in new.infolist():
+            data = new.read(item.filename)
+            if item.filename == "Document.xml":
+                assert b'module="cmmsampling.document.objects"' in data
+                data = data.replace(b'module="cmmsampling.document.objects"', b'module="cmmsampling.document"')
+            old.writestr(item, data)
+    FreeCAD.closeDocument(doc.Name)
+    reopened = FreeCAD.openDocument(old_path)
+    try:
+        points, surface, _ = reopened.getObjectsByLabel("Sampling Body Face1 (pso)")[0].Group
+        assert isinstance(points.Proxy, document.ProbePoints) and isinstance(surface.Proxy, document.SubstituteSurface)
+        assert np.allclose(points.Proxy.point_set(points).uv, result.uv, atol=0)
+        assert document.reevaluate(points).deviation.maximum == pytest.approx(result.deviation.maximum, rel=1e-9)
     finally:
         FreeCAD.closeDocument(reopened.Name)
 

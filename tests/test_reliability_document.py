@@ -93,7 +93,7 @@ def changed_face():
 
 FAULTS = {
     "substitute surface": ("write_substitute", fail),
-    "report spreadsheet": ("write_report", fail),
+    "report spreadsheet": ("write_deviation_report", fail),
     "probe points": ("make_probe_points", fail),
 }
 
@@ -101,7 +101,7 @@ FAULTS = {
 @pytest.mark.parametrize("step", list(FAULTS))
 def test_a_fault_in_a_step_of_add_to_document_adds_nothing(doc, result, monkeypatch, step):
     before = state(doc)
-    monkeypatch.setattr(document, *FAULTS[step])
+    monkeypatch.setattr(document.results, *FAULTS[step])
     with pytest.raises(SimulatedFault, match="simulated fault"):
         document.add_to_document(result, doc, source=(doc.Body, "Face1"))
     assert state(doc) == before
@@ -124,7 +124,7 @@ def test_a_fault_while_reevaluating_keeps_the_old_result(doc, result, monkeypatc
     doc.Body.Shape = changed_face()
     doc.recompute()
     before, kept = state(doc), snapshot(group)
-    monkeypatch.setattr(document, "write_report", fail)
+    monkeypatch.setattr(document.results, "write_deviation_report", fail)
     with pytest.raises(SimulatedFault):
         document.reevaluate(group.Group[0])
     assert state(doc) == before and snapshot(group) == kept

@@ -8,7 +8,7 @@ import pytest
 
 import cmmsampling
 from cmmsampling import cli
-from cmmsampling.report import label
+from cmmsampling.study.figures import label
 from cmmsampling.study import compare
 from toy_strategy import TOY
 

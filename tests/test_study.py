@@ -7,7 +7,7 @@ import pytest
 from geometry import Part
 
 import cmmsampling
-from cmmsampling.report import FIGURES, write_report
+from cmmsampling.study import FIGURES, write_report
 from cmmsampling.strategies.result import footprint
 from cmmsampling.study import MEASURES, compare, hand_over, study_time
 from cmmsampling.geometry.surface import SurfaceModel

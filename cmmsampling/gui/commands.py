@@ -11,7 +11,7 @@ from PySide import QtGui
 
 from .. import document
 from ..formats.exporting import export
-from ..object_types import source_face
+from ..document.object_types import source_face
 from . import icon
 from .export_options import ask_export_options, export_keywords, show_export_report
 from .selection import SelectionError, selected_face

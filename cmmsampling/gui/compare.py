@@ -17,14 +17,13 @@ from PySide import QtCore, QtGui
 
 from ..fitting.deviation import DEFAULT_GRID
 from ..geometry.validation import InputError
-from ..report import write_report
 from ..strategies.sampling import STRATEGIES
-from ..study import DEFAULT_NS, DEFAULT_SEEDS, compare, hand_over, study_time
+from ..study import DEFAULT_NS, DEFAULT_SEEDS, compare, hand_over, study_time, write_report
 from . import settings
 from .commands import FaceCommand
 from .task_panel import (AUTO, ERROR_STYLE, BackgroundRunPanel, call_text, duration_text, edge_offset_argument,
                          snap_to_auto, source_text, spacing_argument)
-from .worker import BackgroundTask
+from .background import BackgroundTask
 
 # The panel's values are stored under these names with this prefix, apart from Sample face's.
 SETTINGS_PREFIX = "Compare_"

@@ -26,7 +26,7 @@ from .selection import selected_part_faces
 from .task_panel import (
     AUTO, ERROR_STYLE, BackgroundRunPanel, add_choice, argument_text, probe_choice, snap_to_auto,
 )
-from .worker import BackgroundTask
+from .background import BackgroundTask
 
 SETTINGS_PREFIX = "Plan_"
 # Points per face a budget starts with: the second of the pole steps (16, 46, ...).

@@ -18,13 +18,13 @@ from ..access.probe import PROBES
 from ..fitting.deviation import DEFAULT_GRID
 from ..fitting.substitute import DEFAULT_DEGREE, default_pole_count
 from ..geometry.validation import InputError
-from ..object_types import source_face
+from ..document.object_types import source_face
 from ..strategies import estimates, memory, sampling
 from ..strategies.problem import resolve_fit_poles
 from . import icon, resource, settings
 from .qt_compat import flag_value, forget_when_destroyed
 from .selection import SelectionError, selected_face
-from .worker import BackgroundCall, BackgroundSampling
+from .background import BackgroundCall, BackgroundSampling
 
 POLL_MS = 100
 # The time estimate is made this long after the last change of a value (it builds the problem).

@@ -12,7 +12,7 @@ from PySide import QtCore, QtGui
 
 from ..geometry.domain import inside_loops
 from ..geometry.surface import SurfaceModel
-from ..object_types import is_probe_points, is_substitute_surface, source_face
+from ..document.object_types import is_probe_points, is_substitute_surface, source_face
 from ..strategies.blind import spaced
 from . import colormap, icon
 

@@ -106,7 +106,7 @@ def test_a_fault_inside_a_run_is_shown_and_changes_nothing(doc, monkeypatch):
 
 
 def test_a_fault_while_adding_the_result_rolls_it_back_and_is_shown(doc, monkeypatch):
-    monkeypatch.setattr(document, "write_report", fault_in_the_report)
+    monkeypatch.setattr(document.results, "write_deviation_report", fault_in_the_report)
     form = open_panel(doc)
     fill(form, "pso", **SHORT_RUN)
     before = untouched(doc)

@@ -4,7 +4,7 @@ face that probe points were made on.
 Both the document layer (cmmsampling.document) and the view providers (cmmsampling.gui) read
 this module, so neither imports the other's classes: the view providers never import document.
 """
-from .geometry.freecad_env import import_part
+from ..geometry.freecad_env import import_part
 
 Part = import_part()
 
@@ -39,3 +39,13 @@ def source_face(points):
     if not isinstance(face, Part.Face):
         return None, f"{obj.Label} has no {name or 'face'} any more"
     return face, None
+
+
+def probe_points_in(objects):
+    """The probe-points objects among ``objects`` and inside those that are groups, once each."""
+    found = []
+    for obj in objects:
+        for candidate in [obj] + list(getattr(obj, "Group", [])):
+            if is_probe_points(candidate) and candidate not in found:
+                found.append(candidate)
+    return found

@@ -5,7 +5,7 @@ once per seed), computes once per N the local bound about the best substitute fo
 least maximum deviation that reshaping it along its normals could reach, cmmsampling.fitting.bound) on the
 optimisation grid and on the 3x denser check grid, and collects the deviations (mm), the run times
 (s), the ratios to uniform parametric sampling and the multiples of the bound in a :class:`Study`.
-Pure computation; :mod:`cmmsampling.report` draws it.
+Pure computation; :mod:`cmmsampling.study.figures` and :mod:`cmmsampling.study.html` draw it.
 """
 from __future__ import annotations
 
@@ -17,15 +17,14 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .fitting.deviation import DEFAULT_GRID
-from .fitting.substitute import DEFAULT_DEGREE, DEFAULT_SMOOTHING
-from .geometry.validation import InputError, InputTypeError, check_choice, check_int
-from .strategies import handover
-from .strategies.estimates import time_needed
-from .strategies.sampling import Pair, Part
-from .strategies.sampling import MIN_POINTS, STRATEGIES, make_problem, sample, strategy_options
-from .strategies.sampling import baseline as baseline_strategy
-from .strategies.threads import blas_threads
+from ..fitting.deviation import DEFAULT_GRID
+from ..fitting.substitute import DEFAULT_DEGREE, DEFAULT_SMOOTHING
+from ..geometry.validation import InputError, InputTypeError, check_choice, check_int
+from ..strategies import handover
+from ..strategies.estimates import time_needed
+from ..strategies.sampling import MIN_POINTS, STRATEGIES, Pair, Part, make_problem, sample, strategy_options
+from ..strategies.sampling import baseline as baseline_strategy
+from ..strategies.threads import blas_threads
 
 DEFAULT_NS = (25, 36, 49, 64, 81, 100, 121, 144)
 DEFAULT_SEEDS = (0, 1, 2, 3, 4)
@@ -185,7 +184,7 @@ class Step:
         return f"N = {self.n}: {self.strategy} (seed {self.seed})"
 
 
-def plan(ns, strategies, seeds, seeded):
+def study_steps(ns, strategies, seeds, seeded):
     """The study's steps in order: for each N every strategy (seeded ones once per seed, the
     others with the first seed), then the bound about the best of them."""
     steps = []
@@ -262,7 +261,7 @@ def compare(face: Part.Face, ns: tuple = DEFAULT_NS, strategies: tuple | None = 
         "ns": list(ns), "strategies": list(strategies), "seeds": list(seeds), "seeded": list(seeded),
         "options": options, **fit, "figure_n": figure_n, "baseline": baseline_strategy(), "workers": workers})
     began = time.perf_counter()
-    _execute(study, plan(ns, strategies, seeds, seeded), options, fit, progress, workers)
+    _execute(study, study_steps(ns, strategies, seeds, seeded), options, fit, progress, workers)
     study.rows = derive(study.rows, study.bounds)
     study.elapsed_s = time.perf_counter() - began
     return study
@@ -300,7 +299,7 @@ def study_time(face, ns=DEFAULT_NS, strategies=None, *, seeds=DEFAULT_SEEDS, opt
     strategies = _check_strategies(strategies)
     options = _check_options(options, strategies)
     seeded = [name for name in strategies if STRATEGIES[name].seeded]
-    runs = Counter((step.n, step.strategy) for step in plan(ns, strategies, _check_seeds(seeds), seeded)
+    runs = Counter((step.n, step.strategy) for step in study_steps(ns, strategies, _check_seeds(seeds), seeded)
                    if step.strategy is not None)
     seconds, open_ended, blind = 0.0, [], {}
     for (n, name), count in runs.items():

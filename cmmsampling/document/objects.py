@@ -1,0 +1,284 @@
+"""The workbench's document objects: the proxies of the probe points and the substitute surface,
+the functions that make them and the probe path's wires. Lengths in mm.
+
+This module never imports the GUI at its top: view providers are attached only when ``FreeCAD.GuiUp``.
+"""
+import json
+
+import numpy as np
+
+from ..access.obstacles import Obstacles
+from ..access.probe import Probe
+from ..formats.pointset import PointSet
+from ..geometry.freecad_env import import_part
+from ..geometry.surface import SurfaceModel
+from ..geometry.validation import InputError
+from ..planning.probe_moves import moves_through
+from .object_types import PROBE_POINTS, SUBSTITUTE_SURFACE, source_face
+
+Part = import_part()
+import FreeCAD  # noqa: E402  (importable once import_part() has set the path)
+
+POINT_TOLERANCE_MM = 1e-7
+NOTES_DOC = "What the run did that the user should know, in sentences (e.g. points moved onto the face)"
+SUMMARY_FIGURES = (
+    ("MaxDeviation", "maximum",
+     "Largest distance in space from the face to the substitute, over the grid's nodes on the face"),
+    ("MeanDeviation", "mean", "Mean distance from the face to the substitute at the nodes"),
+    ("RmsDeviation", "rms", "Root-mean-square distance at the nodes"),
+    ("StdDeviation", "std", "Standard deviation of the distance at the nodes"),
+    ("OccMaxDeviation", "occ_maximum",
+     "The maximum again: OpenCASCADE's closest-point distance at the nodes of largest deviation"),
+)
+
+
+def make_probe_points(doc, source=None, surface=None, report=None):
+    """A probe-points object (Part::FeaturePython), empty until :func:`write_result` fills it."""
+    obj = doc.addObject("Part::FeaturePython", "ProbePoints")
+    ProbePoints(obj)
+    obj.Label = "Probe points"
+    if source is not None:
+        obj.Source = (source[0], [source[1]])
+        obj.SourceName = f"{source[0].Label}:{source[1]}"
+    obj.Substitute = surface
+    obj.Report = report
+    if FreeCAD.GuiUp:
+        from ..gui import view_providers
+
+        view_providers.ViewProviderProbePoints(obj.ViewObject)
+    return obj
+
+
+def make_substitute_surface(doc):
+    """A substitute-surface object (Part::FeaturePython), empty until :func:`write_substitute`."""
+    obj = doc.addObject("Part::FeaturePython", "SubstituteSurface")
+    SubstituteSurface(obj)
+    obj.Label = "Substitute surface"
+    if FreeCAD.GuiUp:
+        from ..gui import view_providers
+
+        view_providers.ViewProviderSubstituteSurface(obj.ViewObject)
+    return obj
+
+
+# Colours of a probe path: the moves between points and the touches (approach and retract).
+PATH_COLOURS = {"moves": (0.15, 0.35, 0.85), "touches": (0.85, 0.15, 0.1)}
+
+
+def make_probe_path(doc, moves):
+    """Two wire objects of a probe path (cmmsampling.planning.probe_moves.ProbeMoves): "Probe
+    moves" (travel and axis moves, blue) and "Probe touches" (approach and retract, red), ball
+    centres in mm; returns them."""
+    objects = []
+    for name, label, chosen in (("ProbeMoves", "Probe moves", moves.kinds != "touch"),
+                                ("ProbeTouches", "Probe touches", moves.kinds == "touch")):
+        starts, ends = moves.waypoints[:-1][chosen], moves.waypoints[1:][chosen]
+        keep = np.linalg.norm(ends - starts, axis=1) > 1e-9
+        edges = [Part.LineSegment(FreeCAD.Vector(*a), FreeCAD.Vector(*b)).toShape()
+                 for a, b in zip(starts[keep], ends[keep])]
+        obj = doc.addObject("Part::Feature", name)
+        obj.Label = label
+        obj.Shape = Part.Compound(edges)
+        if FreeCAD.GuiUp:
+            obj.ViewObject.LineColor = PATH_COLOURS["moves" if name == "ProbeMoves" else "touches"]
+            obj.ViewObject.LineWidth = 2.0
+        objects.append(obj)
+    return objects
+
+
+class TypedProxy:
+    """A document-object proxy that saves only its Type with the document (FreeCAD 0.20 and
+    0.21+ names)."""
+
+    Type = ""
+
+    def __getstate__(self):
+        return {"Type": self.Type}
+
+    def __setstate__(self, state):
+        return None
+
+    def dumps(self):
+        return self.__getstate__()
+
+    def loads(self, state):
+        return self.__setstate__(state)
+
+
+class ProbePoints(TypedProxy):
+    """Proxy of the probe-points object: N labelled points with approach vectors on a face.
+
+    Properties: Labels; Points (mm) and Normals (unit, out of the material); U, V (face
+    parameters); Deviation (mm, substitute to face at each point); Source (the face) and
+    SourceName ('Label:FaceK', kept when the face is deleted);
+    Strategy, Parameters (JSON), RunTime (s), Cancelled; the deviation summary (mm);
+    Substitute and Report (the other two result objects); Orphaned, Outdated, Status.
+    """
+
+    Type = PROBE_POINTS
+
+    def __init__(self, obj):
+        obj.Proxy = self
+        self.add_properties(obj)
+
+    @staticmethod
+    def add_properties(obj):
+        """Create the properties it lacks (read-only where they come from a run): all of them for
+        a new object, those added since for one made by an earlier version."""
+        points = [
+            ("App::PropertyStringList", "Labels", "Point labels P1..PN"),
+            ("App::PropertyVectorList", "Points", "Probe points on the face (mm)"),
+            ("App::PropertyVectorList", "Normals",
+             "Approach vectors: unit normals out of the material (the probe travels along -normal)"),
+            ("App::PropertyFloatList", "U", "Face parameter u of each point"),
+            ("App::PropertyFloatList", "V", "Face parameter v of each point"),
+            ("App::PropertyFloatList", "Deviation",
+             "Distance from the substitute surface to the face at each point (mm)"),
+        ]
+        sampling = [
+            ("App::PropertyString", "Strategy", "Sampling strategy of the run"),
+            ("App::PropertyString", "Parameters", "Every parameter of the run (JSON)"),
+            ("App::PropertyFloat", "RunTime", "Duration of the sampling run (s)"),
+            ("App::PropertyBool", "Cancelled", "The run was stopped early (best points so far)"),
+            ("App::PropertyStringList", "Notes", NOTES_DOC),
+        ]
+        reach = [
+            ("App::PropertyVectorList", "Axes",
+             "The probe's axis at each point, ball towards head (NaN where it cannot reach); empty when "
+             "the run did not know the part"),
+            ("App::PropertyBoolList", "Tilted",
+             "Points reached only with the stylus tilted (the head's orientation nearest the normal is blocked)"),
+            ("App::PropertyString", "Probe", "The probe whose reach was judged (JSON), empty when none"),
+            ("App::PropertyFloatList", "Unreached",
+             "Regions of the face the probe cannot reach, as parameter rectangles u0, u1, v0, v1 in turn"),
+            ("App::PropertyArea", "UnreachedArea", "Area of the face the probe cannot reach (mm^2)"),
+        ]
+        status = [
+            ("App::PropertyString", "SourceName", "The sampled face when the points were made"),
+            ("App::PropertyBool", "Orphaned", "The source face was deleted"),
+            ("App::PropertyBool", "Outdated",
+             "The source face no longer passes through the points; run Re-evaluate"),
+            ("App::PropertyString", "Status", "Whether the points still match their face"),
+        ]
+        figures = [("App::PropertyLength", prop, doc + " (mm)") for prop, _, doc in SUMMARY_FIGURES]
+        for group, props in (("Probe points", points), ("Sampling", sampling), ("Probe reach", reach),
+                             ("Source", status), ("Deviation", figures)):
+            for kind, name, doc in props:
+                if name not in obj.PropertiesList:
+                    obj.addProperty(kind, name, group, doc)
+                    obj.setEditorMode(name, 1)
+        for name, kind, group, doc in (
+                ("Source", "App::PropertyLinkSubGlobal", "Source", "The sampled face"),
+                ("Substitute", "App::PropertyLink", "Results", "The substitute surface"),
+                ("Report", "App::PropertyLink", "Results", "The deviation report sheet")):
+            if name not in obj.PropertiesList:
+                obj.addProperty(kind, name, group, doc)
+
+    def execute(self, obj):
+        """Shape: a compound of the points as vertices; Status: whether the face still fits."""
+        obj.Shape = Part.makeCompound([Part.Vertex(p) for p in obj.Points])
+        face, problem = source_face(obj)
+        obj.Orphaned = face is None and bool(obj.SourceName)
+        obj.Outdated = face is not None and not _passes_through(face, obj)
+        if obj.Orphaned:
+            obj.Status = f"orphaned: {problem}"
+            FreeCAD.Console.PrintWarning(f"{obj.Label} is orphaned: {problem}\n")
+        elif face is None:
+            obj.Status = problem
+        elif obj.Outdated:
+            obj.Status = "outdated: the source face changed; run Re-evaluate"
+        else:
+            obj.Status = "up to date"
+
+    def onDocumentRestored(self, obj):
+        _view_provider_when_missing(obj)
+
+    def point_set(self, obj):
+        """The probe points as a :class:`cmmsampling.formats.pointset.PointSet`."""
+        settings = json.loads(obj.Parameters or "{}")
+        metadata = {
+            "source": obj.SourceName, **settings,
+            **{key: getattr(obj, prop).Value for prop, key in (
+                ("MaxDeviation", "max_mm"), ("MeanDeviation", "mean_mm"), ("RmsDeviation", "rms_mm"),
+                ("StdDeviation", "std_mm"), ("OccMaxDeviation", "occ_max_mm"))},
+        }
+        axes = [tuple(a) for a in getattr(obj, "Axes", [])]
+        return PointSet(
+            labels=list(obj.Labels),
+            points=np.array([tuple(p) for p in obj.Points], dtype=float).reshape(-1, 3),
+            normals=np.array([tuple(n) for n in obj.Normals], dtype=float).reshape(-1, 3),
+            uv=np.column_stack([obj.U, obj.V]).reshape(-1, 2),
+            deviation=np.array(obj.Deviation, dtype=float),
+            metadata=metadata,
+            axes=np.array(axes, dtype=float) if len(axes) == len(obj.Labels) and axes else None,
+        )
+
+    def probe_moves(self, obj, motion=None):
+        """The collision-free probe path through the points (cmmsampling.planning.probe_moves.
+        ProbeMoves) on their source object's shape, with the probe and axes of their run; motion:
+        the CMM's speeds (cmmsampling.access.probe.Motion). ValueError naming what is missing:
+        points sampled without the part, points the probe cannot reach, a deleted source."""
+        if not getattr(obj, "Probe", "") or len(obj.Axes) != len(obj.Labels):
+            raise InputError(f"{obj.Label} were sampled without the part, so they have no probe axes: sample "
+                             "the face again with the part (and a probe), or export with order='short_path'")
+        point_set = self.point_set(obj)
+        if not np.isfinite(point_set.axes).all():
+            raise InputError(f"the probe cannot reach some of {obj.Label}: export with order='short_path'")
+        if obj.Source is None:
+            raise InputError(f"the part of {obj.Label} was deleted; a probe path needs it to keep clear of")
+        probe = Probe(**json.loads(obj.Probe))
+        return moves_through(probe, Obstacles(obj.Source[0].Shape), point_set.points, point_set.normals,
+                             point_set.axes, motion)
+
+
+class SubstituteSurface(TypedProxy):
+    """Proxy of the substitute surface: the fitted B-spline face and its deviation field.
+
+    Properties: Shape (the fitted face); GridU (g_u), GridV (g_v): the evaluation grid's
+    parameters; DeviationField: g_u * g_v deviations in mm, row-major (u first), NaN off the face;
+    MaxDeviation (mm).
+    """
+
+    Type = SUBSTITUTE_SURFACE
+
+    def __init__(self, obj):
+        obj.Proxy = self
+        for kind, name, doc in (
+            ("App::PropertyFloatList", "GridU", "Parameters u of the evaluation grid"),
+            ("App::PropertyFloatList", "GridV", "Parameters v of the evaluation grid"),
+            ("App::PropertyFloatList", "DeviationField",
+             "Deviation from the face at each grid node (mm), u-major, NaN off the face"),
+            ("App::PropertyLength", "MaxDeviation", "Largest deviation of the delivered substitute (mm)"),
+        ):
+            obj.addProperty(kind, name, "Deviation", doc)
+            obj.setEditorMode(name, 1)
+
+    def execute(self, obj):
+        """Nothing to rebuild: the shape is written with the result."""
+
+    def onDocumentRestored(self, obj):
+        _view_provider_when_missing(obj)
+
+    def deviation_grid(self, obj):
+        """(GridU (g_u,), GridV (g_v,), field (g_u, g_v) mm) as numpy arrays."""
+        u = np.array(obj.GridU, dtype=float)
+        v = np.array(obj.GridV, dtype=float)
+        return u, v, np.array(obj.DeviationField, dtype=float).reshape(len(u), len(v))
+
+
+def _view_provider_when_missing(obj):
+    """In the GUI, give an object restored from a document saved headless its view provider."""
+    if FreeCAD.GuiUp:
+        from ..gui import view_providers
+
+        view_providers.attach_when_missing(obj)
+
+
+def _passes_through(face, points):
+    """True when the face at the stored (u, v) still gives the stored points."""
+    if not points.Points:
+        return True
+    uv = np.column_stack([points.U, points.V])
+    now = SurfaceModel.from_face(face).points(uv)
+    stored = np.array([tuple(p) for p in points.Points], dtype=float)
+    return bool(np.abs(now - stored).max() <= POINT_TOLERANCE_MM)
