@@ -1,7 +1,7 @@
 """The optimisers against uniform parametric sampling, judged on the delivered substitute.
 
 For the reference face at N = 25, 49, 81, 144 and for a rational saddle, a trimmed plate, a 2 mm
-strip and a face with a collapsed edge (tests/geometry.py) at N = 49: the maximum deviation of
+strip and a face with a collapsed edge (tests/support/faces.py) at N = 49: the maximum deviation of
 uniform parametric sampling, the paper's PSO (population 25, 3000 iterations) and the near-optimal
 descent, each the two-sided distance between the face and ``r.substitute`` (cmmsampling.fitting.exact),
 with OCC's distance at the worst nodes, and the ratios to uniform. The table is printed and
@@ -19,7 +19,7 @@ sys.path.insert(0, ROOT)
 sys.path.insert(0, os.path.join(ROOT, "tests"))
 
 import cmmsampling  # noqa: E402
-from geometry import collapsed_face, holed_face, rational_saddle, strip_face  # noqa: E402
+from support.faces import collapsed_face, holed_face, rational_saddle, strip_face  # noqa: E402
 
 STRATEGIES = ("uniform_parametric", "pso", "optimal")
 CASES = [("reference", cmmsampling.reference_face, n) for n in (25, 49, 81, 144)] + [

@@ -1,6 +1,6 @@
 """Test set-up: the checkout on sys.path, FreeCAD importable, shared fixtures.
 
-Shared helpers live in tests/geometry.py (a unique module name: tests/gui has a conftest too).
+Shared helpers live in tests/support/, data in tests/data/.
 """
 import os
 import sys

@@ -7,7 +7,7 @@ import json
 
 import numpy as np
 import pytest
-from geometry import FreeCAD, Part
+from support.faces import FreeCAD, Part
 
 import cmmsampling
 from cmmsampling.access.obstacles import Obstacles
@@ -198,7 +198,7 @@ def test_sampling_with_the_part_keeps_to_what_the_probe_reaches(slot):
 
 
 def test_a_probe_path_program_names_its_sensors_and_moves(beside_wall, tmp_path):
-    import dmis_syntax
+    from support import dmis_syntax
 
     floor = floor_of(beside_wall, 10.0)
     result = cmmsampling.sample(floor, 25, "uniform_parametric", part=beside_wall, grid=20, edge_offset=0.5)
@@ -230,7 +230,7 @@ def test_a_probe_path_program_names_its_sensors_and_moves(beside_wall, tmp_path)
 
 
 def test_a_plan_with_a_probe_keeps_to_its_reach_and_writes_one_path(beside_wall, tmp_path):
-    import dmis_syntax
+    from support import dmis_syntax
 
     upward = [k for k, face in enumerate(beside_wall.Faces, start=1)
               if face.normalAt(*face.Surface.parameter(face.CenterOfMass)).z > 0.5]
@@ -308,7 +308,7 @@ def gotos(path):
 
 
 def test_the_command_line_keeps_to_the_probe_and_writes_its_path(beside_wall, tmp_path, capsys):
-    import dmis_syntax
+    from support import dmis_syntax
     from cmmsampling import cli
 
     brep = tmp_path / "walled.brep"

@@ -3,7 +3,7 @@ import math
 
 import numpy as np
 import pytest
-from geometry import Part
+from support.faces import Part
 
 import cmmsampling
 

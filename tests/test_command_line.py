@@ -3,7 +3,7 @@ to do, no traceback (unless --debug), outputs checked before any computation."""
 import os
 
 import pytest
-from geometry import Part
+from support.faces import Part
 
 import cmmsampling
 from cmmsampling import cli

@@ -2,7 +2,7 @@
 a plane, a tiny face; each gets usable points or a message saying what to change."""
 import numpy as np
 import pytest
-from geometry import Part, cartesian_refuses, collapsed_face, tolerant_face
+from support.faces import Part, cartesian_refuses, collapsed_face, tolerant_face
 
 import cmmsampling
 from cmmsampling.geometry.surface import SurfaceModel

@@ -4,7 +4,7 @@ OCC's distances between the CAD face and ``r.substitute``, both ways, from a ras
 domain and points along every edge and trim loop, measured with OCC alone."""
 import numpy as np
 import pytest
-from geometry import Part, collapsed_face, holed_face, rational_saddle, strip_face
+from support.faces import Part, collapsed_face, holed_face, rational_saddle, strip_face
 
 import cmmsampling
 

@@ -4,7 +4,7 @@ import zipfile
 
 import numpy as np
 import pytest
-from geometry import FreeCAD, Part, closed, reference_document
+from support.faces import FreeCAD, Part, closed, reference_document
 
 import cmmsampling
 from cmmsampling import document

@@ -7,10 +7,10 @@ import subprocess
 import sys
 import time
 
-import dmis_syntax
+from support import dmis_syntax
 import numpy as np
 import pytest
-from geometry import FreeCAD, Part
+from support.faces import FreeCAD, Part
 
 import cmmsampling
 from cmmsampling.formats.dmis import sanitise_labels

@@ -10,7 +10,7 @@ import sys
 import time
 
 import pytest
-from geometry import Part
+from support.faces import Part
 
 import cmmsampling
 from cmmsampling.planning import face_runs

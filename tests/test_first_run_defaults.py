@@ -2,7 +2,7 @@
 (capped at a probe's), and optimisers that do not run where no point set can do better."""
 import numpy as np
 import pytest
-from geometry import Part, strip_face
+from support.faces import Part, strip_face
 
 import cmmsampling
 from cmmsampling.cli import main as cli_main

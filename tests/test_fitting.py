@@ -1,7 +1,7 @@
 """Substitute fit and deviation objective: exactness, batching, uniqueness, OCC agreement."""
 import numpy as np
 import pytest
-from geometry import Part
+from support.faces import Part
 
 from cmmsampling.fitting.deviation import EvaluationGrid, deviation_objective
 from cmmsampling.fitting.exact import exact_deviation

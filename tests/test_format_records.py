@@ -3,7 +3,7 @@ written and read by export() and read_points(), offered by the command line's --
 by File > Export's filter and its hook; unregistered, it is gone."""
 import numpy as np
 import pytest
-from toy_format import TOY_FORMAT
+from support.toy_format import TOY_FORMAT
 
 import cmmsampling
 from cmmsampling import cli, document

@@ -9,7 +9,7 @@ import os
 
 import numpy as np
 import pytest
-from geometry import TESTDATA, Part, holed_face, rational_saddle, strip_face
+from support.faces import TESTDATA, Part, holed_face, rational_saddle, strip_face
 
 import cmmsampling
 from cmmsampling.strategies.optimal import default_min_spacing

@@ -1,4 +1,4 @@
-"""The point files byte for byte: export() of a fixed point set against files in tests/golden that
+"""The point files byte for byte: export() of a fixed point set against files in tests/data/golden that
 were read by eye when they were made (DMIS, XYZIJK, CSV; global and a local frame with ball
 centres along a short path). A change in any writer shows here as a diff of the file.
 
@@ -10,12 +10,12 @@ import os
 
 import numpy as np
 import pytest
-from geometry import FreeCAD
+from support.faces import FreeCAD
 
 import cmmsampling
 from cmmsampling.formats.pointset import PointSet
 
-GOLDEN = os.path.join(os.path.dirname(os.path.abspath(__file__)), "golden")
+GOLDEN = os.path.join(os.path.dirname(os.path.abspath(__file__)), "data", "golden")
 CASES = {
     "global.dmi": {},
     "global.xyz": {},
@@ -51,7 +51,7 @@ def test_the_written_file_is_the_golden_one(name, tmp_path):
         with open(golden, "wb") as stream:
             stream.write(written.read_bytes())
     with open(golden, "rb") as stream:
-        assert written.read_bytes() == stream.read(), f"{name} differs from tests/golden/{name}"
+        assert written.read_bytes() == stream.read(), f"{name} differs from tests/data/golden/{name}"
 
 
 @pytest.mark.parametrize("name", sorted(CASES))

@@ -4,10 +4,10 @@ a document. The faces are built here (a rational saddle, a plate with a hole, a 
 rational patch); blind strategies and a coarse grid keep the runs short."""
 import os
 
-import dmis_syntax
+from support import dmis_syntax
 import numpy as np
 import pytest
-from geometry import FreeCAD, Part, closed, holed_face, rational_patch_face, rational_saddle, strip_face
+from support.faces import FreeCAD, Part, closed, holed_face, rational_patch_face, rational_saddle, strip_face
 
 import cmmsampling
 from cmmsampling import cli

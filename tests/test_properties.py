@@ -1,6 +1,6 @@
 """Property-based tests over random NURBS faces (hypothesis): every strategy's points are usable."""
 import numpy as np
-from geometry import FreeCAD, Part
+from support.faces import FreeCAD, Part
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 

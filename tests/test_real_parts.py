@@ -4,7 +4,7 @@ import re
 
 import numpy as np
 import pytest
-from geometry import TESTDATA, FreeCAD, Part, rational_patch_face
+from support.faces import TESTDATA, FreeCAD, Part, rational_patch_face
 
 import cmmsampling
 from cmmsampling.cli import main as cli_main

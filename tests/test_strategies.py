@@ -1,7 +1,7 @@
 """Every strategy: exactly N points, on the face (OCC distance), inside the domain, unit normals."""
 import numpy as np
 import pytest
-from geometry import Part, cartesian_refuses, rational_patch_face
+from support.faces import Part, cartesian_refuses, rational_patch_face
 
 import cmmsampling
 from cmmsampling.strategies.blind import allocate, grid_shape, thin_evenly

@@ -10,7 +10,7 @@ import cmmsampling
 from cmmsampling import cli
 from cmmsampling.study.figures import label
 from cmmsampling.study import compare
-from toy_strategy import TOY
+from support.toy_strategy import TOY
 
 PACKAGE = pathlib.Path(cmmsampling.__file__).parent
 # The modules that hold the records and the strategies' own code.

@@ -4,7 +4,7 @@ import re
 
 import numpy as np
 import pytest
-from geometry import Part
+from support.faces import Part
 
 import cmmsampling
 from cmmsampling.study import FIGURES, write_report

@@ -1,7 +1,7 @@
 """SurfaceModel against OpenCASCADE: points, normals, derivatives and curvature."""
 import numpy as np
 import pytest
-from geometry import FreeCAD, Part, holed_face, sample_faces, uv_samples
+from support.faces import FreeCAD, Part, holed_face, sample_faces, uv_samples
 
 from cmmsampling.geometry.surface import ON_FACE_MM, SurfaceModel, reference_poles
 

@@ -1,5 +1,5 @@
 """Every strategy at edge offsets 0 and 1 mm on faces of the shared CAD files, checked with OCC
-(tests/sweep.py): points on the face, off its edges and spaced, or a true, known refusal.
+(tests/support/sweep.py): points on the face, off its edges and spaced, or a true, known refusal.
 
 The default run takes a deterministic subset (the small files' faces and the Ventilator's faces
 that once put points off the face, were refused falsely or, Face296, ran out of memory);
@@ -7,7 +7,7 @@ that once put points off the face, were refused falsely or, Face296, ran out of 
 import os
 
 import pytest
-import sweep
+from support import sweep
 
 SUBSET = {
     "surf114.igs": (1, 3),

@@ -20,7 +20,7 @@ from cmmsampling.gui import compare as compare_panel
 from cmmsampling.gui import export_options, settings
 from cmmsampling.planning.probe_path import path_length
 
-from toy_strategy import TOY
+from support.toy_strategy import TOY
 
 from .helpers import (
     Hold, child, dock_text, main_window, open_panel, process_events, task_button, task_form, wait_until, widgets,
@@ -215,7 +215,7 @@ def test_panel_defaults_are_the_papers_study_and_options_follow_the_strategies(d
 
 @pytest.fixture
 def toy():
-    """The toy strategy (tests/toy_strategy.py, one module and one record) registered for one test."""
+    """The toy strategy (tests/support/toy_strategy.py, one module and one record) registered for one test."""
     cmmsampling.register_strategy(TOY)
     yield TOY
     cmmsampling.unregister_strategy(TOY.name)

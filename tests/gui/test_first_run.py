@@ -9,7 +9,7 @@ import FreeCADGui
 import numpy as np
 import Part
 import pytest
-from geometry import TESTDATA, strip_face
+from support.faces import TESTDATA, strip_face
 
 import cmmsampling
 

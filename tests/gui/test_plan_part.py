@@ -9,7 +9,7 @@ import FreeCAD
 import FreeCADGui
 import Part
 import pytest
-from geometry import holed_face, rational_patch_face, rational_saddle, strip_face
+from support.faces import holed_face, rational_patch_face, rational_saddle, strip_face
 from PySide import QtGui
 
 from cmmsampling.gui import plan_part

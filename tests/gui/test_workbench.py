@@ -17,7 +17,7 @@ import cmmsampling
 from cmmsampling import document
 from cmmsampling.geometry.surface import make_bspline_surface, reference_poles
 from cmmsampling.gui import colormap, commands, export_options, qt_compat, settings, task_panel, view_providers
-from toy_format import TOY_FORMAT
+from support.toy_format import TOY_FORMAT
 
 from .helpers import (
     child, dock_text, drawn, fill, groups, main_window, modal_message, open_panel, process_events, running_workers,

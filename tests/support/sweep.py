@@ -6,7 +6,7 @@ OCC's face classifier, at least the offset from its edges and the spacing from t
 OCC's distances), "refused" (a ValueError whose
 message is one of the known refusals; "too narrow" is checked to be true: no point of a raster
 over the face lies farther from the edges than the refusal says) or a failure, described.
-Used by tests/test_sweep.py and, for the README's table, ``/usr/bin/python3 tests/sweep.py [FILE ...]``.
+Used by tests/test_sweep.py and, for docs/reliability.md, ``/usr/bin/python3 tests/support/sweep.py [FILE ...]``.
 """
 import collections
 import os
@@ -15,7 +15,7 @@ import sys
 
 import numpy as np
 
-sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
 
 import cmmsampling  # noqa: E402
 from cmmsampling.geometry.surface import ON_FACE_MM  # noqa: E402
@@ -23,7 +23,7 @@ from cmmsampling.geometry.freecad_env import import_part  # noqa: E402
 
 Part = import_part()
 
-TESTDATA = os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))),
+TESTDATA = os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))),
                         "shared", "testdata")
 FILES = ("surf114.igs", "sunglasses_lens.igs", "hammer.iges", "Ventilator.stp")
 OFFSETS = (0.0, 1.0)

@@ -10,7 +10,7 @@ Part = import_part()
 import FreeCAD  # noqa: E402,F401  (importable once import_part() has set the path)
 from cmmsampling.geometry.surface import make_bspline_surface, reference_poles  # noqa: E402
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 TESTDATA = os.path.join(os.path.dirname(ROOT), "shared", "testdata")
 
 
