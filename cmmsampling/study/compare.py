@@ -7,7 +7,6 @@ optimisation grid and on the 3x denser check grid, and collects the deviations (
 (s), the ratios to uniform parametric sampling and the multiples of the bound in a :class:`Study`.
 Pure computation; :mod:`cmmsampling.study.figures` and :mod:`cmmsampling.study.html` draw it.
 """
-from __future__ import annotations
 
 import time
 from collections import Counter
