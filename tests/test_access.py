@@ -242,7 +242,7 @@ def test_a_plan_with_a_probe_keeps_to_its_reach_and_writes_one_path(beside_wall,
     report = cmmsampling.export(plan, tmp_path / "part.dmi", order="probe_path")
     text = (tmp_path / "part.dmi").read_text()
     assert dmis_syntax.check(text) == [] and "GOTO/" in text and report.count == plan.n_total
-    from geometry import closed
+    from support.faces import closed
 
     doc = FreeCAD.newDocument("PlanReach")
     try:
@@ -261,7 +261,7 @@ def test_a_plan_with_a_probe_keeps_to_its_reach_and_writes_one_path(beside_wall,
 
 
 def test_the_document_keeps_the_reach_and_draws_the_path_in_two_objects(beside_wall, tmp_path):
-    from geometry import closed
+    from support.faces import closed
 
     index = next(k for k, face in enumerate(beside_wall.Faces, start=1)
                  if abs(face.BoundBox.ZMax - 10.0) < 1e-9 and face.Area > 1000)

@@ -19,7 +19,7 @@ from ..fitting.deviation import DEFAULT_GRID
 from ..fitting.substitute import DEFAULT_DEGREE, default_pole_count
 from ..geometry.validation import InputError
 from ..document.object_types import source_face
-from ..strategies import estimates, memory, sampling
+from ..strategies import estimates, memory, optimal, sampling
 from ..strategies.problem import resolve_fit_poles
 from . import icon, resource, settings
 from .qt_compat import flag_value, forget_when_destroyed
@@ -312,7 +312,7 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
     def _fill_strategies(self):
         """The strategy list and the starts of a descent ("best" and the blind strategies): each
         entry shows the strategy's label and holds its name, with its description as tooltip."""
-        best = ", ".join(sampling.STRATEGIES[name].label for name in sampling.BEST_STARTS)
+        best = ", ".join(sampling.STRATEGIES[name].label for name in optimal.BEST_STARTS)
         add_choice(self.form.start, "best", "best start", f"the best of {best} for this face")
         for name, strategy in sampling.STRATEGIES.items():
             add_choice(self.form.strategy, name, strategy.label, strategy.description)

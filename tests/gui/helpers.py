@@ -7,7 +7,7 @@ import FreeCADGui
 from PySide import QtCore, QtGui
 
 import cmmsampling
-from cmmsampling.gui import commands, worker
+from cmmsampling.gui import background, commands
 
 SAMPLE = commands.SampleFace.NAME
 
@@ -199,7 +199,7 @@ def interrupt_run(monkeypatch, action, at=None):
     """Make the panel's next run call action() in its worker thread: before sample() starts
     (at=None) or in the progress callback of iteration ``at``, before the panel's own callback.
     action may block (hold the run there) or raise (a fault inside the run)."""
-    sample = worker.sample
+    sample = background.sample
 
     def interrupted(face, progress=None, **arguments):
         if at is None:
@@ -213,7 +213,7 @@ def interrupt_run(monkeypatch, action, at=None):
 
         return sample(face, progress=watched, **arguments)
 
-    monkeypatch.setattr(worker, "sample", interrupted)
+    monkeypatch.setattr(background, "sample", interrupted)
 
 
 class Hold:

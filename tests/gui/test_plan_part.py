@@ -238,7 +238,7 @@ def test_a_plan_with_a_probe_draws_its_path(part_doc, monkeypatch, artifacts):
 
 
 def test_a_ventilator_plan_with_a_probe(workbench, monkeypatch, artifacts):
-    from geometry import TESTDATA
+    from support.faces import TESTDATA
 
     path = os.path.join(TESTDATA, "Ventilator.stp")
     if not os.path.isfile(path):

@@ -327,14 +327,14 @@ def test_probe_constraints_keep_points_off_the_edges_and_apart(doc):
 BAD_SETTINGS = {
     "poles below degree + 1": (
         dict(n=16, fit_degree=3, auto_poles=False, fit_poles_u=3, fit_poles_v=6),
-        "ValueError: fit_poles along u (3) must be at least fit_degree + 1 (4)"),
+        "InputError: fit_poles along u (3) must be at least fit_degree + 1 (4)"),
     "face too small for the edge offset": (
         dict(n=16, edge_offset=60.0),
-        "ValueError: the face is too narrow for edge_offset 60 mm: none of its points is farther "
+        "InputError: the face is too narrow for edge_offset 60 mm: none of its points is farther "
         "than 52 mm from its edges; edge_offset 50 mm fits"),
     "too many points for the spacing": (
         dict(n=200, min_spacing=10.0),
-        "ValueError: 200 points 10 mm apart do not fit on the"),
+        "InputError: 200 points 10 mm apart do not fit on the"),
 }
 
 
