@@ -31,6 +31,11 @@ class FileFormat:
     write: object
     read: object
 
+    @property
+    def patterns(self):
+        """Its extensions as file-dialog patterns, e.g. '*.dmi *.dmis'."""
+        return " ".join("*" + extension for extension in self.extensions)
+
     def __post_init__(self):
         bad = [e for e in self.extensions if not (e.startswith(".") and e == e.lower() and len(e) > 1)]
         if not self.extensions or bad:
@@ -64,5 +69,5 @@ def export_filter():
     """One file-dialog filter for every format, as FreeCAD's File > Export lists it, e.g.
     'CMM probe points: DMIS, XYZIJK text, CSV (*.dmi *.dmis *.xyz *.txt *.csv)'."""
     titles = ", ".join(record.title for record in FORMATS.values())
-    patterns = " ".join("*" + extension for extension in extensions())
+    patterns = " ".join(record.patterns for record in FORMATS.values())
     return f"{EXPORT_TITLE}: {titles} ({patterns})"

@@ -198,8 +198,7 @@ def export_filters():
     """File dialog filters, one per export format: [(filter text, extensions)]."""
     from ..formats.pointfiles import FORMATS
 
-    return [(f"{record.description} ({' '.join('*' + e for e in record.extensions)})", list(record.extensions))
-            for record in FORMATS.values()]
+    return [(f"{record.description} ({record.patterns})", list(record.extensions)) for record in FORMATS.values()]
 
 
 def default_export_name(points):

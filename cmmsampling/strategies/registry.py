@@ -47,7 +47,7 @@ class Strategy:
     name: the identifier sample() takes; run: (problem, progress, **options) -> StrategyOutcome;
     description: one line (tooltips, --help); label: its name in tables, figures and reports;
     options: its own options with their defaults; check: options (merged with the defaults) ->
-    the cleaned options, raising ValueError or TypeError, or None when any value goes;
+    the cleaned options, raising InputError or InputTypeError, or None when any value goes;
     optimiser: it searches with the objective and reports progress (iteration, best max mm);
     progress_unit: what one of those progress steps is; progress_total: the option that says how
     many there will be (None: unknown in advance); seeded: its points depend on the seed, so a
@@ -131,12 +131,12 @@ def strategy_options(strategy, options):
 
 def layouts(problem, required=(), optional=()):
     """{name: uv (N, 2)} of the named strategies' layouts with their default options, in the order
-    given; a refusal (ValueError) of a required one is raised, an optional one is left out."""
-    layouts = {}
+    given; a refusal (InputError) of a required one is raised, an optional one is left out."""
+    found = {}
     for name in (*required, *optional):
         try:
-            layouts[name] = STRATEGIES[name].run(problem, None, **STRATEGIES[name].options).uv
+            found[name] = STRATEGIES[name].run(problem, None, **STRATEGIES[name].options).uv
         except InputError:
             if name in required:
                 raise
-    return layouts
+    return found
