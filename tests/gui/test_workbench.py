@@ -2,6 +2,7 @@
 import json
 from xml.etree import ElementTree
 import os
+import re
 import subprocess
 import time
 
@@ -132,7 +133,8 @@ def test_the_panel_estimates_the_runs_time_before_it_starts(doc):
     fill(form, "optimal", time_limit=0.0, max_evaluations=0)
     assert wait_until(lambda: "until the descent converges" in line.text(), 5), line.text()
     fill(form, "optimal", time_limit=30.0)
-    assert wait_until(lambda: line.text() == "Time: about 30 s", 5), line.text()
+    # the time limit plus the time to build the problem (under a second quiet, more on a busy machine)
+    assert wait_until(lambda: re.fullmatch(r"Time: about 3[0-5] s", line.text()), 5), line.text()
     fill(form, "halton")
     assert wait_until(lambda: line.text() == "Time: under a second", 5), line.text()
     task_button(CANCEL).click()
