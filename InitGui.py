@@ -22,9 +22,9 @@ class CMMSamplingWorkbench(FreeCADGui.Workbench):
         self.__class__.Icon = os.path.join(os.path.dirname(package), "icons", "Workbench.svg")
 
     def Initialize(self):
-        from cmmsampling.gui import commands, compare, plan_part, resource
+        from cmmsampling.gui import commands, resource
 
-        names = commands.register() + [compare.register(), plan_part.register()]
+        names = commands.register()
         FreeCADGui.addPreferencePage(resource("preferences.ui"), "CMM sampling")
         self.appendToolbar("CMM Sampling", names)
         self.appendMenu("CMM Sampling", names)

@@ -1,6 +1,7 @@
 """The workbench's commands. Each is active only when it can act; otherwise its status tip and
 tooltip say why. What they change in the document goes through the console API, echoed in the
 Python console (``Gui.doCommand``)."""
+import __main__
 import os
 import re
 
@@ -10,11 +11,10 @@ from FreeCAD import Qt
 from PySide import QtGui
 
 from .. import document
-from ..formats.exporting import export
 from ..document.object_types import source_face
 from . import icon
 from .export_options import ask_export_options, export_keywords, show_export_report
-from .selection import SelectionError, selected_face
+from .selection import SelectionError, selected_face, selected_part_faces
 
 
 def show_reason(name, reason, tip):
@@ -182,16 +182,70 @@ class ExportProbePoints(GuardedCommand):
         options = ask_export_options(points)
         if options is None:
             return
-        try:
-            report = export(points, path, **options)
-        except Exception as exc:
-            warn("Export probe points", str(exc))
-            return
-        FreeCADGui.doCommand("import cmmsampling")
+        report = run_echoed_export(points, path, options)
+        if report is not None:
+            show_export_report(report)
+
+
+class CompareStrategies(FaceCommand):
+    """*Compare strategies...*: open the comparison panel for the one selected face."""
+
+    NAME = "CMMSampling_Compare"
+    TITLE = Qt.QT_TRANSLATE_NOOP("CMMSampling_Compare", "Compare strategies")
+    MENU = Qt.QT_TRANSLATE_NOOP("CMMSampling_Compare", "Compare strategies...")
+    ICON = "Compare.svg"
+    TIP = Qt.QT_TRANSLATE_NOOP(
+        "CMMSampling_Compare",
+        "Run the sampling strategies over a list of point counts N on the selected face and "
+        "write an HTML report: maximum deviation (mm) against N with the local bound, "
+        "the paper's figures and tables")
+
+    def panel(self, source):
+        from .compare import CompareTaskPanel
+
+        return CompareTaskPanel(source)
+
+
+class PlanPart(PanelCommand):
+    """*Plan part...*: open the plan panel for the selected faces, or every face of a selected part."""
+
+    NAME = "CMMSampling_PlanPart"
+    TITLE = Qt.QT_TRANSLATE_NOOP("CMMSampling_PlanPart", "Plan part")
+    MENU = Qt.QT_TRANSLATE_NOOP("CMMSampling_PlanPart", "Plan part...")
+    ICON = "PlanPart.svg"
+    TIP = Qt.QT_TRANSLATE_NOOP(
+        "CMMSampling_PlanPart",
+        "Place probe points on several faces of a part (the selected faces, or all faces of a part "
+        "selected in the tree): the fewest points that meet a tolerance on each face, or a total of "
+        "points shared out; one group per face and a plan report")
+
+    def selected(self, selection):
+        return selected_part_faces(selection)
+
+    def panel(self, source):
+        from .plan_part import PlanPartTaskPanel
+
+        return PlanPartTaskPanel(source)
+
+
+def run_echoed_export(points, path, options):
+    """Write the file by running the echoed call ``report = cmmsampling.export(...)`` in the
+    Python console (so that a macro replays it); returns its ExportReport, or None when it
+    failed (the reason in a message box, and in the Report view where FreeCAD prints it)."""
+    before = getattr(__main__, "report", None)
+    FreeCADGui.doCommand("import cmmsampling")
+    try:
         FreeCADGui.doCommand(
-            f"# report = cmmsampling.export(App.getDocument({points.Document.Name!r})"
-            f".getObject({points.Name!r}), {path!r}{export_keywords(options)})  # written by the dialog")
-        show_export_report(report)
+            f"report = cmmsampling.export(App.getDocument({points.Document.Name!r})"
+            f".getObject({points.Name!r}), {path!r}{export_keywords(options)})")
+    except Exception as exc:
+        warn("Export probe points", str(exc))
+        return None
+    report = getattr(__main__, "report", None)
+    if report is before:
+        warn("Export probe points", "The file was not written: the Report view says why.")
+        return None
+    return report
 
 
 def export_filters():
@@ -238,11 +292,12 @@ def selected_probe_points():
     return document.probe_points_in(FreeCADGui.Selection.getSelection())
 
 
-COMMANDS = (SampleFace, ExportProbePoints, Reevaluate)
+COMMANDS = (SampleFace, ExportProbePoints, Reevaluate, CompareStrategies, PlanPart)
 
 
 def register():
-    """Add the commands to FreeCAD; returns their names in toolbar order."""
+    """Add the commands to FreeCAD (once); returns their names in toolbar order."""
     for command in COMMANDS:
-        FreeCADGui.addCommand(command.NAME, command())
+        if command.NAME not in FreeCADGui.listCommands():
+            FreeCADGui.addCommand(command.NAME, command())
     return [command.NAME for command in COMMANDS]

@@ -12,17 +12,16 @@ import os
 
 import FreeCAD
 import FreeCADGui
-from FreeCAD import Qt
 from PySide import QtCore, QtGui
 
 from ..fitting.deviation import DEFAULT_GRID
 from ..geometry.validation import InputError
 from ..strategies.sampling import STRATEGIES
-from ..study import DEFAULT_NS, DEFAULT_SEEDS, compare, hand_over, study_time, write_report
+from ..study import DEFAULT_NS, DEFAULT_SEEDS, compare, study_time, write_report
 from . import settings
-from .commands import FaceCommand
-from .task_panel import (AUTO, ERROR_STYLE, BackgroundRunPanel, call_text, duration_text, edge_offset_argument,
-                         snap_to_auto, source_text, spacing_argument)
+from .echo import echo_study, face_expression, source_text
+from .task_panel import (AUTO, ERROR_STYLE, BackgroundRunPanel, duration_text, edge_offset_argument, snap_to_auto,
+                         spacing_argument)
 from .background import BackgroundTask
 
 # The panel's values are stored under these names with this prefix, apart from Sample face's.
@@ -432,59 +431,3 @@ class CompareTaskPanel(BackgroundRunPanel):
         self.form.status.setText(text)
         self.form.status.setStyleSheet(ERROR_STYLE if error else "")
 
-
-def face_expression(source):
-    """The console expression of a face (obj, "FaceK"), e.g.
-    "App.getDocument('D').getObject('Body').getSubObject('Face1')"."""
-    obj, name = source
-    return f"App.getDocument({obj.Document.Name!r}).getObject({obj.Name!r}).getSubObject({name!r})"
-
-
-def echo_study(face, run, alive=True):
-    """Echo a study that ran in the panel in the Python console (the console holds it as
-    ``study`` when its face is alive).
-
-    face: the face's console expression (:func:`face_expression`), bound to ``face``; the study
-    (run: the finished BackgroundComparison) is handed over to the echoed compare() call, so the
-    line binds it without running again (replayed as a macro, it runs). A face deleted meanwhile
-    (alive False) cannot be named: both lines are echoed as comments. The write_report() call
-    ran in the worker thread and is echoed as a comment.
-    """
-    note = "ran in the task panel"
-    if run.study.cancelled:
-        note += f", cancelled after {len(run.study.rows)} runs (a replay runs it whole)"
-    call = call_text(run.arguments)
-    FreeCADGui.doCommand("import cmmsampling")
-    if alive:
-        FreeCADGui.doCommand(f"face = {face}")
-        hand_over(run.taken_face, run.arguments, run.study)
-        FreeCADGui.doCommand(f"study = cmmsampling.compare({call})  # {note}")
-    else:
-        FreeCADGui.doCommand(f"# face = {face}  # deleted since")
-        FreeCADGui.doCommand(f"# study = cmmsampling.compare({call})  # {note}")
-    if run.report is not None:
-        FreeCADGui.doCommand(f"# cmmsampling.write_report(study, {run.folder!r})  # ran in the task panel")
-
-
-class CompareStrategies(FaceCommand):
-    """*Compare strategies...*: open the comparison panel for the one selected face."""
-
-    NAME = "CMMSampling_Compare"
-    TITLE = Qt.QT_TRANSLATE_NOOP("CMMSampling_Compare", "Compare strategies")
-    MENU = Qt.QT_TRANSLATE_NOOP("CMMSampling_Compare", "Compare strategies...")
-    ICON = "Compare.svg"
-    TIP = Qt.QT_TRANSLATE_NOOP(
-        "CMMSampling_Compare",
-        "Run the sampling strategies over a list of point counts N on the selected face and "
-        "write an HTML report: maximum deviation (mm) against N with the local bound, "
-        "the paper's figures and tables")
-
-    def panel(self, source):
-        return CompareTaskPanel(source)
-
-
-def register():
-    """Add the command to FreeCAD (once); returns its name."""
-    if CompareStrategies.NAME not in FreeCADGui.listCommands():
-        FreeCADGui.addCommand(CompareStrategies.NAME, CompareStrategies())
-    return CompareStrategies.NAME

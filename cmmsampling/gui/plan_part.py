@@ -12,19 +12,17 @@ import os
 
 import FreeCAD
 import FreeCADGui
-from FreeCAD import Qt
 from PySide import QtGui
 
 from ..access.probe import PROBES
 from ..fitting.deviation import DEFAULT_GRID
-from ..planning.part_plan import hand_over, plan
+from ..planning.part_plan import plan
 from ..planning.points_needed import DEFAULT_MAX_POINTS
 from ..strategies.sampling import BEST_STRATEGY, STRATEGIES
 from . import settings
-from .commands import PanelCommand
-from .selection import selected_part_faces
+from .echo import add_plan
 from .task_panel import (
-    AUTO, ERROR_STYLE, BackgroundRunPanel, add_choice, argument_text, probe_choice, snap_to_auto,
+    AUTO, ERROR_STYLE, BackgroundRunPanel, add_choice, probe_choice, snap_to_auto,
 )
 from .background import BackgroundTask
 
@@ -337,45 +335,3 @@ def load_values():
 def save_values(values):
     settings.save({SETTINGS_PREFIX + name: value for name, value in values.items()})
 
-
-def add_plan(part, run, result):
-    """Write a finished plan into the part's document through the console API, echoed so that it
-    replays as a macro: ``plan = cmmsampling.plan(<part>.Shape, ...)`` (handed the plan made in
-    the worker thread, so it does not run again here) and ``add_plan_to_document``."""
-    doc = f"App.getDocument({part.Document.Name!r})"
-    part_expr = f"{doc}.getObject({part.Name!r})"
-    call = ", ".join([f"{part_expr}.Shape"] + [f"{key}={argument_text(value)}" for key, value in run.arguments.items()])
-    note = "ran in the task panel"
-    if result.cancelled:
-        note += f", cancelled after {len(result.placed)} faces (a replay runs it whole)"
-    FreeCADGui.doCommand("import cmmsampling")
-    hand_over(run.shape, run.arguments, result)
-    FreeCADGui.doCommand(f"plan = cmmsampling.plan({call})  # {note}")
-    FreeCADGui.doCommand(f"group = cmmsampling.add_plan_to_document(plan, {doc}, {part_expr})")
-
-
-class PlanPart(PanelCommand):
-    """*Plan part...*: open the plan panel for the selected faces, or every face of a selected part."""
-
-    NAME = "CMMSampling_PlanPart"
-    TITLE = Qt.QT_TRANSLATE_NOOP("CMMSampling_PlanPart", "Plan part")
-    MENU = Qt.QT_TRANSLATE_NOOP("CMMSampling_PlanPart", "Plan part...")
-    ICON = "PlanPart.svg"
-    TIP = Qt.QT_TRANSLATE_NOOP(
-        "CMMSampling_PlanPart",
-        "Place probe points on several faces of a part (the selected faces, or all faces of a part "
-        "selected in the tree): the fewest points that meet a tolerance on each face, or a total of "
-        "points shared out; one group per face and a plan report")
-
-    def selected(self, selection):
-        return selected_part_faces(selection)
-
-    def panel(self, source):
-        return PlanPartTaskPanel(source)
-
-
-def register():
-    """Add the command to FreeCAD (once); returns its name."""
-    if PlanPart.NAME not in FreeCADGui.listCommands():
-        FreeCADGui.addCommand(PlanPart.NAME, PlanPart())
-    return PlanPart.NAME

@@ -25,6 +25,7 @@ from . import icon, resource, settings
 from .qt_compat import flag_value, forget_when_destroyed
 from .selection import SelectionError, selected_face
 from .background import BackgroundCall, BackgroundSampling
+from . import echo
 
 POLL_MS = 100
 # The time estimate is made this long after the last change of a value (it builds the problem).
@@ -278,7 +279,7 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
 
     def __init__(self, source):
         self._set_up("sample_face.ui", "SampleFace.svg", source)
-        self.source_text = source_text(source)
+        self.source_text = echo.source_text(source)
         self.step = ""
         self.picker = None
         self.run_face = None
@@ -566,7 +567,7 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
             return
         try:
             self.source = selected_face(FreeCADGui.Selection.getSelectionEx())
-            self.source_text = source_text(self.source)
+            self.source_text = echo.source_text(self.source)
             self.automatic_offset = None
             self.estimate_timer.start()
         except SelectionError as exc:
@@ -623,12 +624,12 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
             self.source_gone()
             return
         try:
-            group = add_result(self.source, self.run_face, self.run_arguments, run.result)
+            group = echo.add_result(self.source, self.run_face, self.run_arguments, run.result)
         except Exception as exc:  # shown in the panel; the console has the traceback
             self.show_status(f"The result could not be added: {exc}", error=True)
             return
         settings.save(self.values())
-        report_run(self.source_text, run.result)
+        echo.report_run(self.source_text, run.result)
         self.stop_estimates()
         FreeCADGui.Control.closeDialog()
         fit_view_to(group)
@@ -681,16 +682,6 @@ def snap_to_auto(widget, value):
         widget.setValue(AUTO)
 
 
-def report_run(source, result):
-    """One line in the Report view for a finished run, and its notes below it."""
-    FreeCAD.Console.PrintMessage(
-        f"cmmsampling: {source}, {sampling.strategy_label(result.strategy)}, N = {result.n}: maximum deviation "
-        f"{result.deviation.maximum:.4g} mm, mean {result.deviation.mean:.4g} mm, "
-        f"{result.timings.get('total_s', 0.0):.1f} s\n")
-    for note in result.notes:
-        FreeCAD.Console.PrintMessage(f"cmmsampling: note: {note}\n")
-
-
 def fit_view_to(group):
     """Fit the active 3D view to a result's probe points (not the whole part, nor the
     substitute's shape, which spans the face's whole parameter range)."""
@@ -701,51 +692,6 @@ def fit_view_to(group):
     FreeCADGui.Selection.addSelection(group.Group[0])
     FreeCADGui.SendMsgToActiveView("ViewSelection")
     FreeCADGui.Selection.clearSelection()
-
-
-def source_text(source):
-    """'Label.FaceK' of a source (obj, "FaceK")."""
-    return f"{source[0].Label}.{source[1]}"
-
-
-def add_result(source, face, arguments, result):
-    """Write a finished run into the source's document through the console API; returns the
-    result's group.
-
-    The echo replays as a macro: ``face = ...``, ``result = cmmsampling.sample(face, ...)`` with
-    the run's arguments, then ``add_to_document``. Here the sample() line does not run again: the
-    run made in the worker thread is handed over to it (cmmsampling.strategies.sampling.hand_over).
-    face: the face the run was made on, as the panel took it from the source.
-    """
-    obj, name = source
-    doc = f"App.getDocument({obj.Document.Name!r})"
-    source_expr = f"{doc}.getObject({obj.Name!r})"
-    call = call_text(arguments, {"part": f"{source_expr}.Shape"})
-    before = set(o.Name for o in obj.Document.Objects)
-    FreeCADGui.doCommand("import cmmsampling")
-    FreeCADGui.doCommand(f"face = {source_expr}.getSubObject({name!r})")
-    sampling.hand_over(face, arguments, result)
-    FreeCADGui.doCommand(f"result = cmmsampling.sample({call})")
-    FreeCADGui.doCommand(
-        f"group = cmmsampling.add_to_document(result, {doc}, source=({source_expr}, {name!r}))")
-    return next(o for o in obj.Document.Objects
-                if o.Name not in before and o.TypeId == "App::DocumentObjectGroup")
-
-
-def call_text(arguments, expressions=None):
-    """The arguments of an echoed call on ``face``: "face, n=49, strategy='pso', ..."; the
-    arguments named in ``expressions`` as the console text given there (e.g. part= as its
-    object's shape), the others by :func:`argument_text`."""
-    expressions = expressions or {}
-    return ", ".join(["face"] + [f"{key}={expressions.get(key) or argument_text(value)}"
-                                 for key, value in arguments.items()])
-
-
-def argument_text(value):
-    """An argument as console text: a preset probe as cmmsampling.PROBES['...'], anything else
-    as its repr."""
-    name = next((name for name, probe in PROBES.items() if probe is value), None)
-    return f"cmmsampling.PROBES[{name!r}]" if name is not None else repr(value)
 
 
 def run_values(parameters):

@@ -17,7 +17,7 @@ from PySide import QtCore, QtGui
 import cmmsampling
 from cmmsampling import document
 from cmmsampling.gui import compare as compare_panel
-from cmmsampling.gui import export_options, settings
+from cmmsampling.gui import commands, export_options, settings
 from cmmsampling.planning.probe_path import path_length
 
 from support.toy_strategy import TOY
@@ -39,7 +39,8 @@ TINY_CALL = ("cmmsampling.compare(face, ns=(16, 25), strategies=('uniform_parame
 def command(workbench):
     """The Compare strategies command, with a toolbar button (whose status tip says why it is
     inactive): registered and put on a toolbar of its own here until the workbench does both."""
-    name = compare_panel.register()
+    commands.register()
+    name = commands.CompareStrategies.NAME
     if not FreeCADGui.Command.get(name).getAction():
         workbench.appendToolbar("CMM Sampling comparison", [name])
         workbench.reloadActive()
@@ -123,8 +124,8 @@ def open_compare(doc, face="Face1"):
     assert wait_until(lambda: compare_form() is None, 5), "the last panel's form is still there"
     FreeCADGui.Selection.clearSelection()
     FreeCADGui.Selection.addSelection(doc.Body, face)
-    FreeCADGui.runCommand(compare_panel.CompareStrategies.NAME)
-    assert wait_until(lambda: compare_form() is not None, 5), compare_panel.CompareStrategies().reason()
+    FreeCADGui.runCommand(commands.CompareStrategies.NAME)
+    assert wait_until(lambda: compare_form() is not None, 5), commands.CompareStrategies().reason()
     return compare_form()
 
 
@@ -163,7 +164,7 @@ def test_compare_is_active_for_one_face_and_says_why_otherwise(doc, command):
     FreeCADGui.Selection.clearSelection()
     FreeCADGui.Selection.addSelection(doc.Body, "Face1")
     assert action.isActive()
-    assert action.getAction()[0].statusTip() == compare_panel.CompareStrategies.TIP
+    assert action.getAction()[0].statusTip() == commands.CompareStrategies.TIP
     assert os.path.isfile(action.getInfo()["pixmap"])
 
 

@@ -12,7 +12,7 @@ import pytest
 from support.faces import holed_face, rational_patch_face, rational_saddle, strip_face
 from PySide import QtGui
 
-from cmmsampling.gui import plan_part
+from cmmsampling.gui import commands, plan_part
 
 from .helpers import (
     Hold, child, dock_text, document_with, main_window, process_events, task_button, wait_until, widgets,
@@ -48,8 +48,8 @@ def open_plan(doc, *faces):
             FreeCADGui.Selection.addSelection(doc.Part, face)
     else:
         FreeCADGui.Selection.addSelection(doc.Part)
-    FreeCADGui.runCommand(plan_part.PlanPart.NAME)
-    assert wait_until(lambda: plan_form() is not None, 5), plan_part.PlanPart().reason()
+    FreeCADGui.runCommand(commands.PlanPart.NAME)
+    assert wait_until(lambda: plan_form() is not None, 5), commands.PlanPart().reason()
     return plan_form()
 
 
@@ -90,8 +90,8 @@ def plan_with_probe(monkeypatch, obj, faces, timeout_s, **values):
     FreeCADGui.Selection.clearSelection()
     for name in faces:
         FreeCADGui.Selection.addSelection(obj, name)
-    FreeCADGui.runCommand(plan_part.PlanPart.NAME)
-    assert wait_until(lambda: plan_form() is not None, 5), plan_part.PlanPart().reason()
+    FreeCADGui.runCommand(commands.PlanPart.NAME)
+    assert wait_until(lambda: plan_form() is not None, 5), commands.PlanPart().reason()
     form = plan_form()
     fill(form, "uniform_parametric", **values)
     probe = child(form, "probe")
@@ -130,13 +130,13 @@ def test_the_command_takes_faces_of_one_part_or_a_whole_part(part_doc, artifacts
     FreeCADGui.Selection.clearSelection()
     FreeCADGui.Selection.addSelection(part_doc.Part, "Face1")
     FreeCADGui.Selection.addSelection(part_doc.Other, "Face1")
-    reason = plan_part.PlanPart().reason()
+    reason = commands.PlanPart().reason()
     assert reason.startswith("Faces of 2 objects are selected (Part, Other)")
     FreeCADGui.Selection.clearSelection()
     FreeCADGui.Selection.addSelection(part_doc.Part, "Edge1")
-    assert plan_part.PlanPart().reason() == "Part.Edge1 is an edge: select a face."
+    assert commands.PlanPart().reason() == "Part.Edge1 is an edge: select a face."
     FreeCADGui.Selection.clearSelection()
-    assert plan_part.PlanPart().reason().startswith("Nothing is selected")
+    assert commands.PlanPart().reason().startswith("Nothing is selected")
 
 
 def test_a_plan_runs_face_by_face_and_adds_a_group_per_face(part_doc, monkeypatch, artifacts):

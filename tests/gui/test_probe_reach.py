@@ -16,7 +16,7 @@ from PySide import QtGui
 
 import cmmsampling
 from cmmsampling.access.probe import PROBES
-from cmmsampling.gui import export_options, task_panel, view_providers
+from cmmsampling.gui import echo, export_options, view_providers
 
 from .helpers import dock_text, document_with, fill, open_panel, process_events, task_button, task_form, wait_until
 
@@ -62,13 +62,13 @@ def shade_points(points):
 def test_sample_face_with_a_probe_keeps_to_its_reach_and_shades_the_rest(slot_doc, monkeypatch, artifacts, tmp_path):
     name = floor_name(slot_doc.Body.Shape)
     added = []
-    add_result = task_panel.add_result
+    add_result = echo.add_result
 
     def kept(source, face, arguments, result):
         added.append(result)
         return add_result(source, face, arguments, result)
 
-    monkeypatch.setattr(task_panel, "add_result", kept)
+    monkeypatch.setattr(echo, "add_result", kept)
     form = open_panel(slot_doc, name)
     assert form.probe.currentData() == "" and form.probe.itemText(0) == "not judged"
     fill(form, "halton", n=16, grid=20)
@@ -80,9 +80,9 @@ def test_sample_face_with_a_probe_keeps_to_its_reach_and_shades_the_rest(slot_do
 
     [result] = added
     assert __main__.result is result
-    echo = dock_text("Python console")
+    console = dock_text("Python console")
     assert (f"edge_offset=1.5, min_spacing=None, part=App.getDocument('ProbeReach').getObject('Body').Shape, "
-            f"probe=cmmsampling.PROBES['{PRESET}'])") in echo
+            f"probe=cmmsampling.PROBES['{PRESET}'])") in console
     group = next(o for o in slot_doc.Objects if o.TypeId == "App::DocumentObjectGroup")
     points, surface, report = group.Group[:3]
     assert [o.Label for o in group.Group[3:]] == ["Probe moves", "Probe touches"]

@@ -1,4 +1,5 @@
 """The workbench in the real FreeCAD GUI: commands, task panel runs, undo, cancel, save/reopen."""
+import __main__
 import json
 from xml.etree import ElementTree
 import os
@@ -452,9 +453,31 @@ def test_export_command_writes_the_selected_points(doc, tmp_path, monkeypatch):
     with open(target) as f:
         text = f.read()
     assert text.startswith("DMISMN/") and text.count("FEAT/POINT") == 25
-    assert f"cmmsampling.export(App.getDocument('GuiTest').getObject('{group.Group[0].Name}'), " \
-        f"{target!r})" in dock_text("Python console")
+    call = f"report = cmmsampling.export(App.getDocument('GuiTest').getObject('{group.Group[0].Name}'), {target!r})"
+    assert f"{call}\n" in dock_text("Python console") + "\n"
+    assert __main__.report.path == target and __main__.report.count == 25
+    os.remove(target)
+    exec(call, vars(__main__))
+    with open(target) as f:
+        assert f.read() == text
     assert [text for text, _ in commands.export_filters()][0].endswith("(*.dmi *.dmis)")
+
+
+def test_a_failed_export_says_why_and_leaves_the_last_report(doc, tmp_path, monkeypatch):
+    group = document.add_to_document(short_result(doc), doc, source=(doc.Body, "Face1"))
+    FreeCADGui.Selection.addSelection(group)
+    target = str(tmp_path / "no such folder" / "points.dmi")
+    warned = []
+    monkeypatch.setattr(commands, "choose_export_path", lambda points: target)
+    monkeypatch.setattr(commands, "ask_export_options",
+                        lambda points: {"frame": None, "probe_radius": 0.0, "order": "as_optimised"})
+    monkeypatch.setattr(commands, "warn", lambda title, text: warned.append(text))
+    monkeypatch.setattr(commands, "show_export_report", lambda report: pytest.fail(f"shown: {report}"))
+    before = getattr(__main__, "report", None)
+    FreeCADGui.runCommand(EXPORT)
+    process_events(0.2)
+    assert len(warned) == 1 and ("no such folder" in warned[0] or "Report view" in warned[0]), warned
+    assert getattr(__main__, "report", None) is before and not os.path.exists(target)
 
 
 def test_export_dialog_adds_the_extension_of_the_chosen_format(doc, monkeypatch, tmp_path):
