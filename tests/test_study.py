@@ -9,7 +9,7 @@ from support.faces import Part
 import cmmsampling
 from cmmsampling.study import FIGURES, write_report
 from cmmsampling.strategies.result import footprint
-from cmmsampling.study import MEASURES, compare, hand_over, study_time
+from cmmsampling.study import MEASURES, compare, hand_over, hand_over_report, study_time
 from cmmsampling.geometry.surface import SurfaceModel
 
 SAMPLE_OPTIONS = {"pso": {"iterations": 20, "population": 10}, "optimal": {"max_evaluations": 150}}
@@ -138,6 +138,16 @@ def test_cancel_inside_the_swarm_drops_the_interrupted_run(reference):
                    progress=lambda done, total, message: "iteration 5," in message, **SMALL)
     assert stop.cancelled and [r.strategy for r in stop.rows] == ["uniform_parametric"]
     assert set(stop.results) == {"uniform_parametric"}
+
+
+def test_a_report_handed_over_is_taken_once_by_the_same_study_and_folder(study, tmp_path):
+    folder = str(tmp_path / "report")
+    hand_over_report(study, folder, "written/elsewhere.html")
+    assert write_report(study, folder) == "written/elsewhere.html" and not (tmp_path / "report").exists()
+    assert write_report(study, folder) == str(tmp_path / "report" / "report.html")
+    hand_over_report(study, folder, "written/elsewhere.html")
+    assert write_report(study, str(tmp_path / "other")) == str(tmp_path / "other" / "report.html")
+    assert write_report(study, folder) == str(tmp_path / "report" / "report.html")
 
 
 def test_report_writes_every_figure_and_embeds_them(study, tmp_path):

@@ -1,14 +1,13 @@
 """What the panels echo in the Python console: each action as the console API calls that
 replay it as a macro (``Gui.doCommand``). A run made in a worker thread is handed over to its
 echoed call (the engines' ``hand_over``), so the echoed line binds its result without running
-again here."""
+again here. The comparison's and the plan's engines are imported by the functions that echo
+them, so that Sample face does not load matplotlib."""
 import FreeCAD
 import FreeCADGui
 
 from ..access.probe import PROBES
-from ..planning import part_plan
 from ..strategies import sampling
-from .. import study
 
 
 def source_text(source):
@@ -80,9 +79,12 @@ def echo_study(face, run, alive=True):
     face: the face's console expression (:func:`face_expression`), bound to ``face``; the study
     (run: the finished BackgroundComparison) is handed over to the echoed compare() call, so the
     line binds it without running again (replayed as a macro, it runs). A face deleted meanwhile
-    (alive False) cannot be named: both lines are echoed as comments. The write_report() call
-    ran in the worker thread and is echoed as a comment.
+    (alive False) cannot be named: both lines are echoed as comments. The report written in the
+    worker thread is handed over to the echoed ``report = cmmsampling.write_report(study, folder)``
+    the same way (a comment too when the face is gone).
     """
+    from .. import study
+
     note = "ran in the task panel"
     if run.study.cancelled:
         note += f", cancelled after {len(run.study.rows)} runs (a replay runs it whole)"
@@ -95,14 +97,19 @@ def echo_study(face, run, alive=True):
     else:
         FreeCADGui.doCommand(f"# face = {face}  # deleted since")
         FreeCADGui.doCommand(f"# study = cmmsampling.compare({call})  # {note}")
-    if run.report is not None:
-        FreeCADGui.doCommand(f"# cmmsampling.write_report(study, {run.folder!r})  # ran in the task panel")
+    if run.report is not None and alive:
+        study.hand_over_report(run.study, run.folder, run.report)
+        FreeCADGui.doCommand(f"report = cmmsampling.write_report(study, {run.folder!r})")
+    elif run.report is not None:
+        FreeCADGui.doCommand(f"# report = cmmsampling.write_report(study, {run.folder!r})  # ran in the task panel")
 
 
 def add_plan(part, run, result):
     """Write a finished plan into the part's document through the console API, echoed so that it
     replays as a macro: ``plan = cmmsampling.plan(<part>.Shape, ...)`` (handed the plan made in
     the worker thread, so it does not run again here) and ``add_plan_to_document``."""
+    from ..planning import part_plan
+
     doc = f"App.getDocument({part.Document.Name!r})"
     part_expr = f"{doc}.getObject({part.Name!r})"
     call = ", ".join([f"{part_expr}.Shape"] + [f"{key}={argument_text(value)}" for key, value in run.arguments.items()])

@@ -1,8 +1,8 @@
 """A run made elsewhere in this process, handed over to the one call that would make it again.
 
 The task panels run sample() and compare() in a worker thread (progress, cancel) and then echo
-the call in FreeCAD's Python console, where it must not run a second time; replayed as a macro
-in another session, the same line runs it. The echoed call takes what was handed over when its
+the call in FreeCAD's Python console, where it must not run a second time (nor the comparison's
+write_report()); replayed as a macro in another session, the same line runs it. The echoed call takes what was handed over when its
 face and its arguments are exactly those of the run (the face and any shape, such as the part,
 the same shape), and only once.
 """
@@ -32,7 +32,10 @@ def take(function, face, arguments):
 
 def same_value(a, b):
     """True when two arguments are the same: shapes (anything with ``isSame``, e.g. the part a
-    face belongs to) when they are the same shape, dicts key by key, other values by repr."""
+    face belongs to) when they are the same shape, dicts key by key, other values (a study) when
+    they are the same object or by repr."""
+    if a is b:
+        return True
     if hasattr(a, "isSame"):
         return isinstance(b, type(a)) and a.isSame(b)
     if isinstance(a, dict):

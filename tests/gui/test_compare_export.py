@@ -19,6 +19,7 @@ from cmmsampling import document
 from cmmsampling.gui import compare as compare_panel
 from cmmsampling.gui import commands, export_options, settings
 from cmmsampling.planning.probe_path import path_length
+from cmmsampling.study import html as report_html
 
 from support.toy_strategy import TOY
 
@@ -241,6 +242,9 @@ def test_tiny_comparison_runs_in_the_background_and_opens_its_report(doc, comman
                                                                      artifacts, monkeypatch):
     folder = str(tmp_path / "comparison")
     names, undo = [o.Name for o in doc.Objects], doc.UndoCount
+    written, write_figures = [], report_html.write_figures
+    monkeypatch.setattr(report_html, "write_figures",
+                        lambda study, where: written.append(where) or write_figures(study, where))
     hold, form = start_held_study(doc, monkeypatch, folder)
     assert wait_until(lambda: form.progress.value() == 3, 2), form.status.text()
     assert form.progress.maximum() == 6 and form.progress.text() == "3 / 6 steps"
@@ -260,7 +264,8 @@ def test_tiny_comparison_runs_in_the_background_and_opens_its_report(doc, comman
     assert not study.cancelled and len(study.rows) == 4 and sorted(study.bounds) == [16, 25]
     console = dock_text("Python console")
     assert f"study = {TINY_CALL}  # ran in the task panel" in console
-    assert f"# cmmsampling.write_report(study, {folder!r})  # ran in the task panel" in console
+    assert f"report = cmmsampling.write_report(study, {folder!r})\n" in console + "\n"
+    assert __main__.report == report and written == [folder], "the echoed write_report() wrote it again"
     assert f"face = App.getDocument({doc.Name!r}).getObject('Body').getSubObject('Face1')" in console
     assert [o.Name for o in doc.Objects] == names and doc.UndoCount == undo
     assert compare_panel.load_values() == TINY
