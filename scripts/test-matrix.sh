@@ -134,7 +134,7 @@ in_root() {
   rmdir "$dir/work/shared/testdata" "$dir/work/shared" 2>/dev/null || true   # an earlier mount point
   mkdir -p "$dir/work/cmmsampling"
   mount --bind "$repo" "$dir/work/cmmsampling" && mounted+=("$dir/work/cmmsampling")
-  if [ -d "$repo/../shared/testdata" ]; then   # the CAD files tests/test_real_parts.py reads
+  if [ -d "$repo/../shared/testdata" ]; then   # the CAD files tests/package/test_real_parts.py reads
     mkdir -p "$dir/work/shared/testdata"
     mount --bind "$repo/../shared/testdata" "$dir/work/shared/testdata" && mounted+=("$dir/work/shared/testdata")
   fi

@@ -1,6 +1,7 @@
 """Test set-up: the checkout on sys.path, FreeCAD importable, shared fixtures.
 
-Shared helpers live in tests/support/, data in tests/data/.
+The tests sit in one folder per room of the package (package/: the public API, the command
+line, the install, the house); shared helpers live in tests/support/, data in tests/data/.
 """
 import os
 import sys

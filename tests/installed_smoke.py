@@ -1,4 +1,4 @@
-"""A user's headless session with the workbench as installed: run by tests/test_installed.py as
+"""A user's headless session with the workbench as installed: run by tests/package/test_installed.py as
 ``freecadcmd installed_smoke.py`` from a folder outside the checkout, with the add-on linked into a
 temporary HOME's Mod folder.
 

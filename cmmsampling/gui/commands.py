@@ -2,6 +2,7 @@
 tooltip say why. What they change in the document goes through the console API, echoed in the
 Python console (``Gui.doCommand``)."""
 import __main__
+import importlib
 import os
 import re
 
@@ -65,15 +66,18 @@ class GuardedCommand:
 class PanelCommand(GuardedCommand):
     """A command that opens a task panel for what is selected in an open document: subclasses
     give :meth:`selected` (the selection -> the panel's source, or SelectionError saying what to
-    select) and :meth:`panel`."""
+    select) and PANEL, (module of cmmsampling.gui, class) of the panel."""
+
+    PANEL = ("", "")
 
     def selected(self, selection):
         """The panel's source for a selection (Gui.Selection.getSelectionEx())."""
         raise NotImplementedError
 
     def panel(self, source):
-        """The task panel for a source."""
-        raise NotImplementedError
+        """The task panel for a source: PANEL's class, imported when first opened."""
+        module, name = self.PANEL
+        return getattr(importlib.import_module(f".{module}", __package__), name)(source)
 
     def reason(self):
         """Why the command cannot act now, or None."""
@@ -105,15 +109,11 @@ class SampleFace(FaceCommand):
     TITLE = Qt.QT_TRANSLATE_NOOP("CMMSampling_SampleFace", "Sample face")
     MENU = Qt.QT_TRANSLATE_NOOP("CMMSampling_SampleFace", "Sample face...")
     ICON = "SampleFace.svg"
+    PANEL = ("task_panel", "SampleFaceTaskPanel")
     TIP = Qt.QT_TRANSLATE_NOOP(
         "CMMSampling_SampleFace",
         "Place CMM probe points on the selected face with a sampling strategy, fit the "
         "substitute surface and report its deviation (mm)")
-
-    def panel(self, source):
-        from .task_panel import SampleFaceTaskPanel
-
-        return SampleFaceTaskPanel(source)
 
 
 class Reevaluate(GuardedCommand):
@@ -194,16 +194,12 @@ class CompareStrategies(FaceCommand):
     TITLE = Qt.QT_TRANSLATE_NOOP("CMMSampling_Compare", "Compare strategies")
     MENU = Qt.QT_TRANSLATE_NOOP("CMMSampling_Compare", "Compare strategies...")
     ICON = "Compare.svg"
+    PANEL = ("compare", "CompareTaskPanel")
     TIP = Qt.QT_TRANSLATE_NOOP(
         "CMMSampling_Compare",
         "Run the sampling strategies over a list of point counts N on the selected face and "
         "write an HTML report: maximum deviation (mm) against N with the local bound, "
         "the paper's figures and tables")
-
-    def panel(self, source):
-        from .compare import CompareTaskPanel
-
-        return CompareTaskPanel(source)
 
 
 class PlanPart(PanelCommand):
@@ -213,6 +209,7 @@ class PlanPart(PanelCommand):
     TITLE = Qt.QT_TRANSLATE_NOOP("CMMSampling_PlanPart", "Plan part")
     MENU = Qt.QT_TRANSLATE_NOOP("CMMSampling_PlanPart", "Plan part...")
     ICON = "PlanPart.svg"
+    PANEL = ("plan_part", "PlanPartTaskPanel")
     TIP = Qt.QT_TRANSLATE_NOOP(
         "CMMSampling_PlanPart",
         "Place probe points on several faces of a part (the selected faces, or all faces of a part "
@@ -221,11 +218,6 @@ class PlanPart(PanelCommand):
 
     def selected(self, selection):
         return selected_part_faces(selection)
-
-    def panel(self, source):
-        from .plan_part import PlanPartTaskPanel
-
-        return PlanPartTaskPanel(source)
 
 
 def run_echoed_export(points, path, options):

@@ -6,7 +6,7 @@ OCC's face classifier, at least the offset from its edges and the spacing from t
 OCC's distances), "refused" (a ValueError whose
 message is one of the known refusals; "too narrow" is checked to be true: no point of a raster
 over the face lies farther from the edges than the refusal says) or a failure, described.
-Used by tests/test_sweep.py and, for docs/reliability.md, ``/usr/bin/python3 tests/support/sweep.py [FILE ...]``.
+Used by tests/package/test_sweep.py and, for docs/reliability.md, ``/usr/bin/python3 tests/support/sweep.py [FILE ...]``.
 """
 import collections
 import os

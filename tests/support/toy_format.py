@@ -1,5 +1,5 @@
 """A toy point-file format, added the way a new format is: one module with its reader, its
-writer and one record. tests/test_format_records.py and the GUI tests register it and see it
+writer and one record. tests/formats/test_format_records.py and the GUI tests register it and see it
 offered everywhere."""
 import numpy as np
 

@@ -1,6 +1,6 @@
 """A toy strategy, added the way a new strategy is: one module with its runner and one record.
 
-tests/test_strategy_records.py and the GUI tests register it and see it offered everywhere."""
+tests/strategies/test_strategy_records.py and the GUI tests register it and see it offered everywhere."""
 import cmmsampling
 from cmmsampling.strategies.blind import halton
 

@@ -9,8 +9,9 @@ import ast
 import os
 
 import pytest
+from support.paths import ROOT
 
-PACKAGE = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "cmmsampling")
+PACKAGE = os.path.join(ROOT, "cmmsampling")
 ROOMS = ("geometry", "access", "fitting", "strategies", "planning", "formats", "hall", "gui")
 HALL = ("__init__", "measurement", "study", "document", "cli", "__main__")
 ALLOWED_UP = {("document.objects", "gui.view_providers")}

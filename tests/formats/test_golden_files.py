@@ -3,7 +3,7 @@ were read by eye when they were made (DMIS, XYZIJK, CSV; global and a local fram
 centres along a short path). A change in any writer shows here as a diff of the file.
 
 After a deliberate change of a format, write the files again with
-``CMMSAMPLING_WRITE_GOLDEN=1 /usr/bin/python3 -m pytest tests/test_golden_files.py``, read the
+``CMMSAMPLING_WRITE_GOLDEN=1 /usr/bin/python3 -m pytest tests/formats/test_golden_files.py``, read the
 diff and commit it with the change.
 """
 import os
@@ -11,11 +11,12 @@ import os
 import numpy as np
 import pytest
 from support.faces import FreeCAD
+from support.paths import DATA
 
 import cmmsampling
 from cmmsampling.formats.pointset import PointSet
 
-GOLDEN = os.path.join(os.path.dirname(os.path.abspath(__file__)), "data", "golden")
+GOLDEN = os.path.join(DATA, "golden")
 CASES = {
     "global.dmi": {},
     "global.xyz": {},

@@ -1,9 +1,8 @@
 """FreeCAD imported from a plain Python (the README's ``/usr/bin/python3`` route)."""
-import os
 import subprocess
 import sys
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+from support.paths import ROOT
 
 COMPOUND = """
 import sys

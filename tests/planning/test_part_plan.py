@@ -8,6 +8,7 @@ from support import dmis_syntax
 import numpy as np
 import pytest
 from support.faces import FreeCAD, Part, closed, holed_face, rational_patch_face, rational_saddle, strip_face
+from support.paths import ROOT
 
 import cmmsampling
 from cmmsampling import cli
@@ -113,7 +114,7 @@ def test_dask_workers_heap_thresholds_keep_temporary_arrays_in_the_heap():
     import subprocess
     import sys
 
-    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    root = ROOT
     environment = {**os.environ, "MALLOC_TRIM_THRESHOLD_": "65536"}
     faults = {tuned: int(subprocess.run([sys.executable, "-c", PAGE_FAULTS.format(root=root, tuned=tuned)],
                                         env=environment, capture_output=True, text=True, check=True).stdout)

@@ -3,9 +3,7 @@ FreeCAD started from a folder outside the checkout (tests/installed_smoke.py).""
 import os
 import subprocess
 
-
-TESTS = os.path.dirname(os.path.abspath(__file__))
-ROOT = os.path.dirname(TESTS)
+from support.paths import ROOT, TESTS
 
 
 def installed_home(home):

@@ -11,12 +11,11 @@ import time
 
 import pytest
 from support.faces import Part
+from support.paths import ROOT
 
 import cmmsampling
 from cmmsampling.planning import face_runs
 
-TESTS = os.path.dirname(os.path.abspath(__file__))
-ROOT = os.path.dirname(TESTS)
 PYTHON = "/usr/bin/python3" if os.path.exists("/usr/bin/python3") else sys.executable
 
 
