@@ -66,7 +66,7 @@ class GuardedCommand:
 class PanelCommand(GuardedCommand):
     """A command that opens a task panel for what is selected in an open document: subclasses
     give :meth:`selected` (the selection -> the panel's source, or SelectionError saying what to
-    select) and PANEL, (module of cmmsampling.gui, class) of the panel."""
+    select) and PANEL, (module of cmmsampling.gui.panels, class) of the panel."""
 
     PANEL = ("", "")
 
@@ -77,7 +77,7 @@ class PanelCommand(GuardedCommand):
     def panel(self, source):
         """The task panel for a source: PANEL's class, imported when first opened."""
         module, name = self.PANEL
-        return getattr(importlib.import_module(f".{module}", __package__), name)(source)
+        return getattr(importlib.import_module(f".panels.{module}", __package__), name)(source)
 
     def reason(self):
         """Why the command cannot act now, or None."""
@@ -109,7 +109,7 @@ class SampleFace(FaceCommand):
     TITLE = Qt.QT_TRANSLATE_NOOP("CMMSampling_SampleFace", "Sample face")
     MENU = Qt.QT_TRANSLATE_NOOP("CMMSampling_SampleFace", "Sample face...")
     ICON = "SampleFace.svg"
-    PANEL = ("task_panel", "SampleFaceTaskPanel")
+    PANEL = ("sample_face", "SampleFaceTaskPanel")
     TIP = Qt.QT_TRANSLATE_NOOP(
         "CMMSampling_SampleFace",
         "Place CMM probe points on the selected face with a sampling strategy, fit the "

@@ -127,7 +127,7 @@ class ViewProviderProbePoints(Stateless):
 
     def doubleClicked(self, vobj):
         """Open Sample face again on the points' face with the values of their run."""
-        from .task_panel import reopen
+        from .panels.sample_face import reopen
 
         return reopen(vobj.Object) is not None
 

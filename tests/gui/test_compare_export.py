@@ -16,7 +16,7 @@ from PySide import QtCore, QtGui
 
 import cmmsampling
 from cmmsampling import document
-from cmmsampling.gui import compare as compare_panel
+from cmmsampling.gui.panels import compare as compare_panel
 from cmmsampling.gui import commands, export_options, settings
 from cmmsampling.planning.probe_path import path_length
 from cmmsampling.study import html as report_html

@@ -219,7 +219,7 @@ def test_a_double_click_on_probe_points_reopens_their_run(workbench, artifacts):
 
 
 def test_a_runs_default_poles_reopen_as_auto_for_its_own_degree(workbench):
-    from cmmsampling.gui.task_panel import run_values
+    from cmmsampling.gui.panels.sample_face import run_values
 
     assert run_values({"n": 81, "fit_degree": [7, 7], "fit_poles": [8, 8]})["auto_poles"]
     assert not run_values({"n": 81, "fit_degree": [7, 7], "fit_poles": [9, 9]})["auto_poles"]

@@ -12,7 +12,8 @@ import pytest
 from support.faces import holed_face, rational_patch_face, rational_saddle, strip_face
 from PySide import QtGui
 
-from cmmsampling.gui import commands, plan_part
+from cmmsampling.gui import commands
+from cmmsampling.gui.panels import plan_part
 
 from .helpers import (
     Hold, child, dock_text, document_with, main_window, process_events, task_button, wait_until, widgets,

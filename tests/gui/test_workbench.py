@@ -18,7 +18,9 @@ from PySide import QtCore, QtGui
 import cmmsampling
 from cmmsampling import document
 from cmmsampling.geometry.surface import make_bspline_surface, reference_poles
-from cmmsampling.gui import colormap, commands, export_options, qt_compat, settings, task_panel, view_providers
+from cmmsampling.gui import colormap, commands, export_options, qt_compat, settings, view_providers
+from cmmsampling.gui.panels import fields
+from cmmsampling.gui.panels import sample_face
 from support.toy_format import TOY_FORMAT
 
 from .helpers import (
@@ -322,8 +324,8 @@ def test_probe_constraints_keep_points_off_the_edges_and_apart(doc):
     assert form.min_spacing.text() == "auto"
     form.min_spacing.setValue(-0.2)
     assert form.min_spacing.text() == "auto"
-    assert form.min_spacing.value() == task_panel.AUTO
-    assert task_panel.spacing_argument(form.min_spacing.value()) is None
+    assert form.min_spacing.value() == fields.AUTO
+    assert fields.spacing_argument(form.min_spacing.value()) is None
     task_button(CANCEL).click()
 
 
@@ -663,7 +665,7 @@ def test_the_preferences_page_sets_what_the_panel_starts_with(doc, artifacts):
                                           "preferences.ui"))
     shown = {w.get("name"): float(w.find("property[@name='value']")[0].text)
              for w in page.iter("widget") if w.get("class", "").startswith("Gui::Pref")}
-    defaults = {**task_panel.panel_defaults(), "ExportProbeRadius": export_options.DEFAULTS["ExportProbeRadius"]}
+    defaults = {**sample_face.panel_defaults(), "ExportProbeRadius": export_options.DEFAULTS["ExportProbeRadius"]}
     assert shown == {name: defaults[name] for name in shown}
     seen = []
 

@@ -14,17 +14,16 @@ import FreeCAD
 import FreeCADGui
 from PySide import QtGui
 
-from ..access.probe import PROBES
-from ..fitting.deviation import DEFAULT_GRID
-from ..planning.part_plan import plan
-from ..planning.points_needed import DEFAULT_MAX_POINTS
-from ..strategies.sampling import BEST_STRATEGY, STRATEGIES
-from . import settings
-from .echo import add_plan
-from .task_panel import (
-    AUTO, ERROR_STYLE, BackgroundRunPanel, add_choice, probe_choice, snap_to_auto,
-)
-from .background import BackgroundTask
+from ...access.probe import PROBES
+from ...fitting.deviation import DEFAULT_GRID
+from ...planning.part_plan import plan
+from ...planning.points_needed import DEFAULT_MAX_POINTS
+from ...strategies.sampling import BEST_STRATEGY, STRATEGIES
+from .. import settings
+from ..background import BackgroundTask
+from ..echo import add_plan
+from .base import BackgroundRunPanel
+from .fields import AUTO, Fields, add_choice, probe_choice, snap_to_auto
 
 SETTINGS_PREFIX = "Plan_"
 # Points per face a budget starts with: the second of the pole steps (16, 46, ...).
@@ -135,6 +134,10 @@ class PlanPartTaskPanel(BackgroundRunPanel):
         self._add_setting_boxes()
         self.edge_offset = self._add_edge_offset()
         self.probe = self._add_probe_choice()
+        self.fields = Fields({"by_tolerance": (self.form.byTolerance, self.form.byPoints),
+                              "strategy": self.form.strategy,
+                              **{name: getattr(self.form, name) for name in SPIN_BOXES},
+                              "edge_offset": self.edge_offset, "probe": self.probe, **self.setting_boxes})
         values = load_values()
         values["points"] = values["points"] or POINTS_PER_FACE * len(numbers)
         self.set_values(values)
@@ -205,26 +208,11 @@ class PlanPartTaskPanel(BackgroundRunPanel):
 
     def values(self):
         """The panel's values by name (see :func:`panel_defaults`)."""
-        out = {"by_tolerance": self.form.byTolerance.isChecked(),
-               "strategy": self.form.strategy.itemData(self.form.strategy.currentIndex())}
-        out.update({name: getattr(self.form, name).value() for name in SPIN_BOXES})
-        out["edge_offset"] = self.edge_offset.value()
-        out["probe"] = self.probe.itemData(self.probe.currentIndex())
-        out.update({option: box.value() for option, box in self.setting_boxes.items()})
-        return out
+        return self.fields.values()
 
     def set_values(self, values):
-        """Show values by name; an unknown strategy leaves the choice as it is."""
-        (self.form.byTolerance if values["by_tolerance"] else self.form.byPoints).setChecked(True)
-        index = self.form.strategy.findData(values["strategy"])
-        if index >= 0:
-            self.form.strategy.setCurrentIndex(index)
-        for name in SPIN_BOXES:
-            getattr(self.form, name).setValue(values[name])
-        self.edge_offset.setValue(values["edge_offset"])
-        self.probe.setCurrentIndex(max(self.probe.findData(values["probe"]), 0))
-        for option, box in self.setting_boxes.items():
-            box.setValue(values[option])
+        """Show values by name; an unknown strategy or probe leaves the choice as it is."""
+        self.fields.show(values)
 
     def update_enabled(self):
         """The goal's field by the chosen goal, each strategy setting when the chosen strategy
@@ -269,25 +257,12 @@ class PlanPartTaskPanel(BackgroundRunPanel):
         self.begin(BackgroundPlan(shape, plan_arguments(values, self.source[1])), faces,
                    f"Planning {faces} faces on {values['processes']} processes...")
 
-    def poll(self):
-        """Show the faces done; when the plan has ended, add it to the document or show the error."""
-        run = self.run
-        if run is None:
-            self.timer.stop()
-            return
+    def show_progress(self, run):
+        """A line per face done and the count of faces done."""
         self.show_lines(run.lines)
         if run.total:
             self.form.progress.setRange(0, run.total)
             self.form.progress.setValue(run.done)
-        if run.running:
-            return
-        self.timer.stop()
-        self.run = None
-        self.update_enabled()
-        if run.error is not None:
-            self.show_status(self.report_failure(run), error=True)
-            return
-        self.finish(run)
 
     def show_lines(self, lines):
         """Add the face lines not shown yet to the list, the newest in view."""
@@ -320,11 +295,6 @@ class PlanPartTaskPanel(BackgroundRunPanel):
             return
         self.show_status(f"Cancelled: the {len(result.placed)} faces done were added ({result.n_total} points); "
                          "the plan's report names the faces not run.")
-
-    def show_status(self, text, error=False):
-        self.form.status.setText(text)
-        self.form.status.setStyleSheet(ERROR_STYLE if error else "")
-
 
 def load_values():
     """The values stored by the last plan, else the defaults."""

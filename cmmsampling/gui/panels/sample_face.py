@@ -11,40 +11,29 @@ from dataclasses import asdict
 
 import FreeCAD
 import FreeCADGui
-import Part
 from PySide import QtCore, QtGui
 
-from ..access.probe import PROBES
-from ..fitting.deviation import DEFAULT_GRID
-from ..fitting.substitute import DEFAULT_DEGREE, default_pole_count
-from ..geometry.validation import InputError
-from ..document.object_types import source_face
-from ..strategies import estimates, memory, optimal, sampling
-from ..strategies.problem import resolve_fit_poles
-from . import icon, resource, settings
-from .qt_compat import flag_value, forget_when_destroyed
-from .selection import SelectionError, selected_face
-from .background import BackgroundCall, BackgroundSampling
-from . import echo
+from ...access.probe import PROBES
+from ...fitting.deviation import DEFAULT_GRID
+from ...fitting.substitute import DEFAULT_DEGREE, default_pole_count
+from ...document.object_types import source_face
+from ...strategies import estimates, memory, optimal, sampling
+from ...strategies.problem import resolve_fit_poles
+from .. import echo, settings
+from ..background import BackgroundSampling
+from ..selection import SelectionError, selected_face
+from .base import ERROR_STYLE, BackgroundRunPanel
+from .fields import (AUTO, Fields, add_choice, detached, duration_text, edge_offset_argument, probe_choice, snap_to_auto,
+                     spacing_argument)
 
-POLL_MS = 100
-# The time estimate is made this long after the last change of a value (it builds the problem).
-TIME_DELAY_MS = 400
 CANCEL_WAIT_S = 1.0
-ERROR_STYLE = "color: #b00000;"
 EXPERT_GROUPS = ("psoGroup", "optimalGroup", "fitGroup", "gridGroup")
 COMMON = ("n", "seed", "edge_offset", "min_spacing", "probe", "fit_degree", "auto_poles", "fit_poles_u",
           "fit_poles_v", "grid")
 OPTION_GROUPS = ("psoGroup", "optimalGroup")
 # Panel stand-ins for options whose default None means automatic or unlimited.
 STAND_INS = {"time_limit": 0.0, "max_evaluations": 0}
-# The value shown as "auto" (the spin box's minimum) of the minimum spacing (sample's
-# min_spacing=None) and of the edge offset (cmmsampling.probe_edge_offset of the face).
-AUTO = -0.5
 AUTOMATIC = ("edge_offset", "min_spacing")
-# Narrowest input fields (px): the panel fits the default width of the combo view.
-FIELD_WIDTH = 70
-CHOICE_CHARACTERS = 10
 
 
 def option_defaults():
@@ -80,31 +69,6 @@ def option_argument(name, values):
     return values[name]
 
 
-def spacing_argument(value):
-    """sample()'s min_spacing (mm) for the panel's value: None ("auto") below zero."""
-    return None if value < 0 else value
-
-
-def edge_offset_argument(value, automatic):
-    """sample()'s edge_offset (mm) for the panel's value: ``automatic`` (the face's probe edge
-    offset, mm) below zero ("auto")."""
-    return automatic if value < 0 else value
-
-
-def fit_narrow_dock(form):
-    """Let the form shrink to the default width of FreeCAD's combo view, which clips (it never
-    scrolls sideways): input fields may be FIELD_WIDTH px narrow, choice lists CHOICE_CHARACTERS
-    characters wide, and a form row wraps its field below its label when both do not fit."""
-    for spin in form.findChildren(QtGui.QAbstractSpinBox):
-        spin.setMinimumWidth(FIELD_WIDTH)
-    for choice in form.findChildren(QtGui.QComboBox):
-        choice.setSizeAdjustPolicy(QtGui.QComboBox.AdjustToMinimumContentsLengthWithIcon)
-        choice.setMinimumContentsLength(CHOICE_CHARACTERS)
-    for layout in form.findChildren(QtGui.QFormLayout):
-        layout.setRowWrapPolicy(QtGui.QFormLayout.WrapLongRows)
-    form.layout().setContentsMargins(0, 0, 0, 0)
-
-
 def progress_total(arguments):
     """(what a progress step is, how many there will be or 0 when unknown) for a run, from its
     strategy's record."""
@@ -120,154 +84,6 @@ class FacePicker:
 
     def addSelection(self, doc, obj, sub, point):
         QtCore.QTimer.singleShot(0, self.on_pick)
-
-
-class BackgroundRunPanel:
-    """A panel for a chosen face (``self.source``: (obj, "FaceK")) whose OK starts a background
-    run (``self.start()``, stored in ``self.run``): its task-dialog buttons, OK labelled OK_TEXT
-    with the tooltip OK_TIP and Cancel, and the face as it is now."""
-
-    OK_TEXT = OK_TIP = ""
-
-    def _set_up(self, ui_file, icon_file, source):
-        """Load the form and its icon, keep the face, and make the timer that polls the run."""
-        self.form = FreeCADGui.PySideUic.loadUi(resource(ui_file))
-        self.form.setWindowIcon(QtGui.QIcon(icon(icon_file)))
-        self.source = source
-        self.automatic_offset = None
-        self.run = None
-        self.buttons = None
-        self.timer = QtCore.QTimer()
-        self.timer.setInterval(POLL_MS)
-        self.timer.timeout.connect(self.poll)
-        fit_narrow_dock(self.form)
-        forget_when_destroyed(self.form)
-
-    def _add_time_line(self, layout, row, tip):
-        """The run's time estimate: a label (``timeInfo``) inserted at ``row`` of ``layout`` (a
-        form or box layout), remade in a background thread (:class:`BackgroundCall`)
-        TIME_DELAY_MS after the last change of a value: connect the values' change signals to
-        ``self.estimate_timer.start``. The subclass gives :meth:`estimate_call` and
-        :meth:`estimate_text`."""
-        self.timeInfo = QtGui.QLabel(self.form)
-        self.timeInfo.setObjectName("timeInfo")
-        self.timeInfo.setWordWrap(True)
-        self.timeInfo.setToolTip(tip)
-        if isinstance(layout, QtGui.QFormLayout):
-            layout.insertRow(row, self.timeInfo)
-        else:
-            layout.insertWidget(row, self.timeInfo)
-        self.estimate = None
-        self.estimate_timer = QtCore.QTimer()
-        self.estimate_timer.setSingleShot(True)
-        self.estimate_timer.setInterval(TIME_DELAY_MS)
-        self.estimate_timer.timeout.connect(self.start_estimate)
-        self.estimate_poll = QtCore.QTimer()
-        self.estimate_poll.setInterval(POLL_MS)
-        self.estimate_poll.timeout.connect(self.show_estimate)
-
-    def estimate_call(self):
-        """(function, keyword arguments) whose value is the estimate, or None for none now."""
-        raise NotImplementedError
-
-    def estimate_text(self, value):
-        """The time line for the estimate's value."""
-        raise NotImplementedError
-
-    def start_estimate(self):
-        """Estimate the run's time in the background (again once the one under way ends);
-        nothing while a run is on or for values the run would refuse (OK says why)."""
-        if self.estimate is not None and self.estimate.running:
-            self.estimate_timer.start()
-            return
-        if self.run is not None:
-            return
-        try:
-            call = self.estimate_call()
-        except (ValueError, TypeError):
-            call = None
-        if call is None:
-            self.timeInfo.setText("")
-            return
-        function, arguments = call
-        self.estimate = BackgroundCall("cmmsampling-estimate", function, **arguments)
-        self.estimate.start()
-        self.estimate_poll.start()
-
-    def show_estimate(self):
-        """Show the finished estimate; nothing for values the run would refuse."""
-        if self.estimate is None or self.estimate.running:
-            return
-        self.estimate_poll.stop()
-        estimate, self.estimate = self.estimate, None
-        self.timeInfo.setText("" if estimate.error is not None else self.estimate_text(estimate.value))
-
-    def stop_estimates(self):
-        """Stop the estimate's timers (the panel closes)."""
-        self.estimate_timer.stop()
-        self.estimate_poll.stop()
-
-    def face_edge_offset(self):
-        """The chosen face's probe edge offset (mm, cmmsampling.probe_edge_offset), measured once
-        per face; 0 when the face is gone or cannot be measured (the run then says why)."""
-        if self.automatic_offset is None:
-            face = self.source_face()
-            try:
-                self.automatic_offset = sampling.probe_edge_offset(face) if face is not None else 0.0
-            except (ValueError, RuntimeError, Part.OCCError):
-                self.automatic_offset = 0.0
-        return self.automatic_offset
-
-    def getStandardButtons(self):
-        return flag_value(QtGui.QDialogButtonBox.Ok | QtGui.QDialogButtonBox.Cancel)
-
-    @staticmethod
-    def report_failure(run):
-        """Put a failed run in the Report view and return 'Type: message' for the panel.
-
-        A refused input (InputError: the engine's message names what to change) is one line;
-        anything else comes with its traceback. The traceback always goes to the log.
-        """
-        message = f"{type(run.error).__name__}: {run.error}"
-        if isinstance(run.error, InputError):
-            FreeCAD.Console.PrintError(f"cmmsampling: {message}\n")
-            FreeCAD.Console.PrintLog(run.details)
-        else:
-            FreeCAD.Console.PrintError(run.details)
-        return message
-
-    def modifyStandardButtons(self, box):
-        self.buttons = box
-        forget_when_destroyed(box)
-        ok = box.button(QtGui.QDialogButtonBox.Ok)
-        ok.setText(self.OK_TEXT)
-        ok.setToolTip(self.OK_TIP)
-
-    def accept(self):
-        """Start the run unless one is under way; the panel stays open until it ends."""
-        if self.run is None:
-            self.start()
-        return False
-
-    def begin(self, run, total, status):
-        """Start a background run: the progress bar from 0 to ``total`` steps (0: busy), the
-        status line, the values disabled while it runs (``update_enabled``), the poll timer on."""
-        self.run = run
-        self.form.progress.setRange(0, total)
-        self.form.progress.setValue(0)
-        self.show_status(status)
-        self.update_enabled()
-        run.start()
-        self.timer.start()
-
-    def source_face(self):
-        """The chosen face as it is now, or None when it (or its object) is gone."""
-        obj, name = self.source
-        try:
-            face = obj.getSubObject(name)
-        except ReferenceError:  # the object was deleted
-            return None
-        return face if isinstance(face, Part.Face) else None
 
 
 class SampleFaceTaskPanel(BackgroundRunPanel):
@@ -288,6 +104,7 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
         self._set_up_automatic_values()
         self._add_probe_choice()
         self._collapse_expert_settings()
+        self.fields = Fields({name: self.widget(name) for name in panel_defaults() if self.widget(name) is not None})
         self.set_values(settings.load(panel_defaults()))
         self.form.strategy.currentIndexChanged.connect(self.update_enabled)
         self.form.auto_poles.toggled.connect(self.update_enabled)
@@ -380,31 +197,12 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
         return getattr(self.form, name, None)
 
     def values(self):
-        """Every value of the panel by name (see :func:`panel_defaults`); choices by the name
-        an entry holds, not the label it shows."""
-        out = {}
-        for name in panel_defaults():
-            widget = self.widget(name)
-            if isinstance(widget, QtGui.QCheckBox):
-                out[name] = widget.isChecked()
-            elif isinstance(widget, (QtGui.QSpinBox, QtGui.QDoubleSpinBox)):
-                out[name] = widget.value()
-            elif isinstance(widget, QtGui.QComboBox):
-                out[name] = widget.currentData()
-        return out
+        """Every value of the panel by name (see :func:`panel_defaults`)."""
+        return self.fields.values()
 
     def set_values(self, values):
         """Show values by name; unknown names and choices are ignored."""
-        for name, value in values.items():
-            widget = self.widget(name)
-            if isinstance(widget, QtGui.QCheckBox):
-                widget.setChecked(bool(value))
-            elif isinstance(widget, (QtGui.QSpinBox, QtGui.QDoubleSpinBox)):
-                widget.setValue(value)
-            elif isinstance(widget, QtGui.QComboBox):
-                index = widget.findData(str(value))
-                if index >= 0:
-                    widget.setCurrentIndex(index)
+        self.fields.show(values)
 
     def sample_arguments(self):
         """The keyword arguments of ``cmmsampling.sample(face, ...)`` for the panel's values; with
@@ -592,34 +390,25 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
         self.begin(BackgroundSampling(face.copy(), detached(arguments)), total,
                    f"Running {sampling.STRATEGIES[arguments['strategy']].label} with N = {arguments['n']}...")
 
-    def poll(self):
-        """Show the run's progress; when it has ended, add the result or show the error."""
-        run = self.run
-        if run is None:
-            self.timer.stop()
-            return
+    def show_progress(self, run):
+        """The swarm's or descent's step and its best maximum deviation so far."""
         total = self.form.progress.maximum()
         if total:
             self.form.progress.setValue(min(run.iteration, total))
         if run.iteration:
             self.show_status(f"{self.step} {run.iteration}{f' of {total}' if total else ''}: "
                              f"best maximum deviation {run.best_mm:.4f} mm")
-        if run.running:
-            return
-        self.timer.stop()
-        self.run = None
-        self.update_enabled()
+
+    def failed(self, run):
         self.form.progress.setRange(0, 1)
-        if run.error is not None:
-            self.form.progress.setValue(0)
-            self.show_status(self.report_failure(run), error=True)
-            return
-        self.form.progress.setValue(1)
-        self.finish(run)
+        self.form.progress.setValue(0)
+        super().failed(run)
 
     def finish(self, run):
         """Add the result to the document (through the echoed console API) and close; on failure
         (e.g. the face was deleted meanwhile) say why and stay open."""
+        self.form.progress.setRange(0, 1)
+        self.form.progress.setValue(1)
         if self.source_face() is None:
             self.source_gone()
             return
@@ -633,54 +422,6 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
         self.stop_estimates()
         FreeCADGui.Control.closeDialog()
         fit_view_to(group)
-
-    def show_status(self, text, error=False):
-        self.form.status.setText(text)
-        self.form.status.setStyleSheet(ERROR_STYLE if error else "")
-
-
-def detached(arguments):
-    """sample()'s arguments for a worker thread: the part (part=) copied, so that the thread never
-    shares the document's shape (OCC meshes it while testing the probe's reach)."""
-    return {**arguments, **({"part": arguments["part"].copy()} if "part" in arguments else {})}
-
-
-def duration_text(seconds):
-    """'under a second', '12 s', '3 min' or '1.5 h' for a duration in seconds."""
-    if seconds < 1:
-        return "under a second"
-    if seconds < 120:
-        return f"{seconds:.0f} s"
-    if seconds < 7200:
-        return f"{seconds / 60:.0f} min"
-    return f"{seconds / 3600:.1f} h"
-
-
-def add_choice(choice, name, label, tip):
-    """Add an entry showing ``label`` that holds ``name``, with the tooltip ``tip``."""
-    choice.addItem(label, name)
-    choice.setItemData(choice.count() - 1, tip, QtCore.Qt.ToolTipRole)
-
-
-def probe_choice(parent, none_tip, outcome, tip):
-    """A choice of the probe whose reach is judged (object name "probe"): "not judged" (tooltip
-    ``none_tip``) or a preset of cmmsampling.PROBES, each entry holding its name (tooltip: what it
-    reaches, then ``outcome``); ``tip``: the choice's own tooltip."""
-    choice = QtGui.QComboBox(parent)
-    choice.setObjectName("probe")
-    add_choice(choice, "", "not judged", none_tip)
-    for name, probe in PROBES.items():
-        add_choice(choice, name, name, f"Keep to what this probe reaches on the part, stylus tilted up to "
-                   f"{probe.max_tilt:g} deg in {probe.index_step:g} deg steps; {outcome}")
-    choice.setToolTip(tip)
-    return choice
-
-
-def snap_to_auto(widget, value):
-    """Show a negative value, which means automatic, as "auto" (the widget's minimum)."""
-    if AUTO < value < 0:
-        widget.setValue(AUTO)
-
 
 def fit_view_to(group):
     """Fit the active 3D view to a result's probe points (not the whole part, nor the

@@ -14,15 +14,15 @@ import FreeCAD
 import FreeCADGui
 from PySide import QtCore, QtGui
 
-from ..fitting.deviation import DEFAULT_GRID
-from ..geometry.validation import InputError
-from ..strategies.sampling import STRATEGIES
-from ..study import DEFAULT_NS, DEFAULT_SEEDS, compare, study_time, write_report
-from . import settings
-from .echo import echo_study, face_expression, source_text
-from .task_panel import (AUTO, ERROR_STYLE, BackgroundRunPanel, duration_text, edge_offset_argument, snap_to_auto,
-                         spacing_argument)
-from .background import BackgroundTask
+from ...fitting.deviation import DEFAULT_GRID
+from ...geometry.validation import InputError
+from ...strategies.sampling import STRATEGIES
+from ...study import DEFAULT_NS, DEFAULT_SEEDS, compare, study_time, write_report
+from .. import settings
+from ..background import BackgroundTask
+from ..echo import echo_study, face_expression, source_text
+from .base import BackgroundRunPanel
+from .fields import AUTO, Fields, duration_text, edge_offset_argument, snap_to_auto, spacing_argument
 
 # The panel's values are stored under these names with this prefix, apart from Sample face's.
 SETTINGS_PREFIX = "Compare_"
@@ -199,6 +199,8 @@ class CompareTaskPanel(BackgroundRunPanel):
         self.source_name = source_text(source)
         self._fill_strategies()
         self._add_constraints()
+        self.fields = Fields({"ns": self.form.ns, **{name: getattr(self.form, name) for name in SPIN_BOXES},
+                              **self.constraint_boxes})
         self.set_values(load_values())
         self.form.faceLabel.setText(self.source_name)
         self.form.folder.setText(default_folder(source[0].Document))
@@ -301,22 +303,15 @@ class CompareTaskPanel(BackgroundRunPanel):
 
     def values(self):
         """The panel's values by name (see :func:`panel_defaults`)."""
-        out = {"ns": self.form.ns.text(), "strategies": ", ".join(self.checked())}
-        out.update({name: getattr(self.form, name).value() for name in SPIN_BOXES})
-        out.update({name: box.value() for name, box in self.constraint_boxes.items()})
-        return out
+        out = self.fields.values()
+        return {"ns": out.pop("ns"), "strategies": ", ".join(self.checked()), **out}
 
     def set_values(self, values):
         """Show values by name; unknown strategy names are ignored."""
-        self.form.ns.setText(values["ns"])
-        self.form.ns.setCursorPosition(0)
+        self.fields.show(values)
         chosen = values["strategies"].split(", ")
         for item in self.items():
             item.setCheckState(QtCore.Qt.Checked if item.text() in chosen else QtCore.Qt.Unchecked)
-        for name in SPIN_BOXES:
-            getattr(self.form, name).setValue(values[name])
-        for name, box in self.constraint_boxes.items():
-            box.setValue(values[name])
 
     def update_enabled(self):
         """Enable the seeds when a chosen strategy is seeded and each strategy setting when a chosen
@@ -372,27 +367,14 @@ class CompareTaskPanel(BackgroundRunPanel):
         self.form.progress.setTextVisible(True)
         self.begin(run, 0, run.message)
 
-    def poll(self):
-        """Show the study's progress; when it has ended, echo it and open its report, or show
-        the error."""
-        run = self.run
-        if run is None:
-            self.timer.stop()
-            return
+    def show_progress(self, run):
+        """The study's steps done and the one under way (not once it is cancelled: the panel
+        says what cancelling does)."""
         if run.total:
             self.form.progress.setRange(0, run.total)
             self.form.progress.setValue(run.done)
-        if run.running:
-            if not run.cancelled:
-                self.show_status(run.message)
-            return
-        self.timer.stop()
-        self.run = None
-        self.update_enabled()
-        if run.error is not None:
-            self.failed(run)
-            return
-        self.finish(run)
+        if run.running and not run.cancelled:
+            self.show_status(run.message)
 
     def failed(self, run):
         """Show why the study or its report failed; a study that ran is kept in the console."""
@@ -426,8 +408,3 @@ class CompareTaskPanel(BackgroundRunPanel):
             self.show_status(f"Cancelled after {run.done} of {run.total} steps. The partial "
                              f"report ({len(study.rows)} runs) is {'open' if shown else 'written'}; "
                              "it is report.html in the report folder.")
-
-    def show_status(self, text, error=False):
-        self.form.status.setText(text)
-        self.form.status.setStyleSheet(ERROR_STYLE if error else "")
-
