@@ -40,6 +40,8 @@ class BackgroundRunPanel:
     with the tooltip OK_TIP and Cancel, and the face as it is now."""
 
     OK_TEXT = OK_TIP = ""
+    # What Cancel says while a run stops (see :meth:`reject`).
+    CANCELLING = ""
 
     def _set_up(self, ui_file, icon_file, source):
         """Load the form and its icon, keep the face, and make the timer that polls the run."""
@@ -49,6 +51,7 @@ class BackgroundRunPanel:
         self.automatic_offset = None
         self.run = None
         self.buttons = None
+        self.estimate_timer = None
         self.timer = QtCore.QTimer()
         self.timer.setInterval(POLL_MS)
         self.timer.timeout.connect(self.poll)
@@ -115,9 +118,10 @@ class BackgroundRunPanel:
         self.timeInfo.setText("" if estimate.error is not None else self.estimate_text(estimate.value))
 
     def stop_estimates(self):
-        """Stop the estimate's timers (the panel closes)."""
-        self.estimate_timer.stop()
-        self.estimate_poll.stop()
+        """Stop the estimate's timers, where the panel has a time line (it closes)."""
+        if self.estimate_timer is not None:
+            self.estimate_timer.stop()
+            self.estimate_poll.stop()
 
     def face_edge_offset(self):
         """The chosen face's probe edge offset (mm, cmmsampling.probe_edge_offset), measured once
@@ -154,6 +158,18 @@ class BackgroundRunPanel:
         ok = box.button(QtGui.QDialogButtonBox.Ok)
         ok.setText(self.OK_TEXT)
         ok.setToolTip(self.OK_TIP)
+        self.update_enabled()
+
+    def reject(self):
+        """Cancel. While a run is on: ask it to stop, say what is kept (CANCELLING) and stay open;
+        the run's finished part is taken when it has stopped. Otherwise close."""
+        if self.run is not None:
+            self.run.cancel()
+            self.show_status(self.CANCELLING)
+            return False
+        self.timer.stop()
+        self.stop_estimates()
+        return True
 
     def accept(self):
         """Start the run unless one is under way; the panel stays open until it ends."""

@@ -192,6 +192,7 @@ class CompareTaskPanel(BackgroundRunPanel):
 
     OK_TEXT = "Compare"
     OK_TIP = "Run the study; the report opens when it ends"
+    CANCELLING = "Cancelling: the step under way ends or stops first; the finished runs are kept and reported."
 
     def __init__(self, source):
         self._set_up("compare.ui", "Compare.svg", source)
@@ -209,23 +210,6 @@ class CompareTaskPanel(BackgroundRunPanel):
         self.form.strategies.itemChanged.connect(self.update_enabled)
         self._add_study_time_line()
         self.update_enabled()
-
-    # --- FreeCAD task dialog interface
-    def modifyStandardButtons(self, box):
-        super().modifyStandardButtons(box)
-        self.update_enabled()
-
-    def reject(self):
-        """While a study runs: ask it to stop and keep the panel open (the finished runs are
-        reported when it has stopped, see :class:`BackgroundComparison`). Otherwise close."""
-        if self.run is not None:
-            self.run.cancel()
-            self.show_status("Cancelling: the step under way ends or stops first; the finished "
-                             "runs are kept and reported.")
-            return False
-        self.timer.stop()
-        self.stop_estimates()
-        return True
 
     # --- values
     def _fill_strategies(self):

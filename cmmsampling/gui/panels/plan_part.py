@@ -124,6 +124,8 @@ class PlanPartTaskPanel(BackgroundRunPanel):
 
     OK_TEXT = "Plan"
     OK_TIP = "Plan every face; the points are added when the plan ends"
+    CANCELLING = ("Cancelling: the faces under way are stopped when the next one ends; the faces done are kept "
+                  "and added.")
 
     def __init__(self, source):
         self._set_up("plan_part.ui", "PlanPart.svg", source)
@@ -145,22 +147,6 @@ class PlanPartTaskPanel(BackgroundRunPanel):
         self.form.byTolerance.toggled.connect(self.update_enabled)
         self.form.progress.setTextVisible(False)
         self.update_enabled()
-
-    # --- FreeCAD task dialog interface
-    def modifyStandardButtons(self, box):
-        super().modifyStandardButtons(box)
-        self.update_enabled()
-
-    def reject(self):
-        """While a plan runs: ask it to stop and keep the panel open (the faces done are added
-        when it has stopped). Otherwise close."""
-        if self.run is not None:
-            self.run.cancel()
-            self.show_status("Cancelling: the faces under way are stopped when the next one ends; the "
-                             "faces done are kept and added.")
-            return False
-        self.timer.stop()
-        return True
 
     # --- values
     def _add_setting_boxes(self):

@@ -23,8 +23,10 @@ from .. import echo, settings
 from ..background import BackgroundSampling
 from ..selection import SelectionError, selected_face
 from .base import ERROR_STYLE, BackgroundRunPanel
-from .fields import (AUTO, Fields, add_choice, detached, duration_text, edge_offset_argument, probe_choice, snap_to_auto,
-                     spacing_argument)
+from .fields import (
+    AUTO, Fields, add_choice, detached, duration_text, edge_offset_argument, probe_choice, snap_to_auto,
+    spacing_argument,
+)
 
 CANCEL_WAIT_S = 1.0
 EXPERT_GROUPS = ("psoGroup", "optimalGroup", "fitGroup", "gridGroup")
@@ -220,10 +222,6 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
             arguments["part"] = self.source[0].Shape
             arguments["probe"] = PROBES[values["probe"]]
         return arguments
-
-    def modifyStandardButtons(self, box):
-        super().modifyStandardButtons(box)
-        self.update_enabled()
 
     def _add_memory_line(self):
         """A line under N with the run's estimated memory, kept up to date with the values."""
