@@ -13,7 +13,7 @@ from .formats.pointfiles import read_points
 from .formats.pointset import PointSet
 from .geometry.freecad_env import import_part
 from .geometry.surface import as_face
-from .geometry.validation import check_real
+from .geometry.validation import InputError, check_real
 
 Part = import_part()
 import FreeCAD  # noqa: E402  (importable once import_part() has set the path)
@@ -68,15 +68,43 @@ def measured_deviation(face: Part.Face, points: PointSet | str | os.PathLike | n
     face = as_face(face)
     point_set = read_points(points) if isinstance(points, (str, os.PathLike)) else as_point_set(points)
     placement = resolve_frame(frame)[0] if frame is not None else placement_from_metadata(point_set.metadata)
-    radius = (float(point_set.metadata.get("probe_radius_mm", 0.0)) if probe_radius is None
+    radius = (_stated_radius(point_set) if probe_radius is None
               else check_real("probe_radius", probe_radius, minimum=0.0))
     measured = checked(point_set)
     positions = measured.points
     if placement is not None:
         positions = to_global(measured.points, measured.normals, placement)[0]
+    _check_extent(positions, measured.labels)
     closest, normals, distances = closest_points(face, positions)
     side = np.sign(np.einsum("ij,ij->i", positions - closest, normals))
     return MeasuredDeviation(measured.labels, side * distances - radius, closest, radius)
+
+
+# The farthest a measured point may lie from the origin, mm: beyond it the file's units or
+# numbers are wrong (no CMM measures a kilometre).
+MAX_COORDINATE_MM = 1e6
+
+
+def _stated_radius(point_set):
+    """The probe radius (mm) the point file states (0 when none); InputError for a stated value
+    that is no finite number of at least 0."""
+    stated = point_set.metadata.get("probe_radius_mm", 0.0)
+    where = point_set.metadata.get("path", "the points")
+    try:
+        value = float(stated)
+    except (TypeError, ValueError):
+        raise InputError(f"{where}: the stated probe_radius_mm {stated!r} is not a number; correct the file's "
+                         "comment or give probe_radius=") from None
+    return check_real(f"{where}: the stated probe_radius_mm", value, minimum=0.0)
+
+
+def _check_extent(positions, labels):
+    """InputError naming the first point farther than MAX_COORDINATE_MM from the origin.
+    positions: (N, 3) mm in the part's frame; labels: N names."""
+    far = np.flatnonzero(np.abs(positions).max(axis=1) > MAX_COORDINATE_MM)
+    if far.size:
+        raise InputError(f"point {labels[far[0]]} lies {np.abs(positions[far[0]]).max():.3g} mm from the origin; "
+                         "check the file's numbers and units (mm)")
 
 
 def closest_points(face, points):

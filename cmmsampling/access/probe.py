@@ -53,6 +53,13 @@ class Probe:
         if self.stylus_diameter > self.ball_diameter:
             raise InputError(f"a stylus of {self.stylus_diameter} mm is thicker than its {self.ball_diameter} mm "
                              "ball: the stylus would touch first; give stylus_diameter below ball_diameter")
+        if self.stylus_length <= self.radius:
+            raise InputError(f"a stylus of {self.stylus_length} mm (ball centre to the body) ends inside its "
+                             f"{self.ball_diameter} mm ball; give stylus_length above the ball's radius, "
+                             f"{self.radius:g} mm")
+        if self.body_diameter < self.stylus_diameter:
+            raise InputError(f"a probe body of {self.body_diameter} mm is thinner than its {self.stylus_diameter} mm "
+                             "stylus; give body_diameter of at least stylus_diameter")
 
     @property
     def radius(self):

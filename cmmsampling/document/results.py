@@ -6,6 +6,7 @@ import json
 
 import numpy as np
 
+from ..access.probe import Probe
 from ..formats.pointset import PointSet
 from ..geometry.freecad_env import import_part
 from ..geometry.validation import InputError, InputTypeError
@@ -110,7 +111,9 @@ def reevaluate(points: FreeCAD.DocumentObject, occ_check: bool = True) -> Sampli
     points: a probe-points object made by :func:`add_to_document`. Keeps each point's (u, v),
     projects it onto the face as it is now, refits the substitute with the stored fit and grid
     settings (no optimisation) and updates the points, the substitute surface and the report in
-    one transaction (rolled back when a step fails). Returns the new SamplingResult.
+    one transaction (rolled back when a step fails); points sampled with a probe are judged with
+    that probe on their part as it is now, so their axes and probe path stay. Returns the new
+    SamplingResult.
     Raises ValueError when the source face is gone (the object is orphaned) or was never set.
     """
     face, problem = source_face(points)
@@ -119,11 +122,19 @@ def reevaluate(points: FreeCAD.DocumentObject, occ_check: bool = True) -> Sampli
     settings = json.loads(points.Parameters)
     uv = np.column_stack([points.U, points.V])
     fit = {key: settings[key] for key in FIT_SETTINGS if key in settings}
-    result = evaluate(face, uv, strategy=points.Strategy, occ_check=occ_check, **fit)
+    result = evaluate(face, uv, strategy=points.Strategy, occ_check=occ_check, **fit, **_reach_of(points))
     with transaction(points.Document, "Re-evaluate probe points"):
         write_result(points, result, settings, points.RunTime)
         recompute(points.Document, [o for o in (points, points.Substitute, points.Report) if o is not None])
     return result
+
+
+def _reach_of(points):
+    """evaluate()'s part= and probe= for probe points sampled with a probe (their source object's
+    shape as it is now and the stored Probe), none for points sampled without."""
+    if not getattr(points, "Probe", ""):
+        return {}
+    return {"part": points.Source[0].Shape, "probe": Probe(**json.loads(points.Probe))}
 
 
 def write_result(points, result, settings, run_time_s):

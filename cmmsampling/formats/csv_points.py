@@ -51,7 +51,9 @@ def write(point_set, facts, options):
 
 def read(text, path="<text>"):
     """PointSet from CSV: leading ``# key: value`` comment lines, a header with label,x,y,z,i,j,k and
-    optionally u,v (empty where unknown), deviation (mm) and face, then one line per point."""
+    optionally u,v (empty where unknown), deviation (mm) and face, then one line per point with as
+    many cells as the header. Cells are separated by commas, or by semicolons where the header
+    has no comma; a number with a decimal comma is refused with its line."""
     lines = list(enumerate(text.splitlines(), start=1))
     lines = [(n, line) for n, line in lines if line.strip()]
     head = next((i for i, (_, line) in enumerate(lines) if not line.startswith(CSV_COMMENT)), len(lines))
@@ -59,7 +61,7 @@ def read(text, path="<text>"):
     numbered = lines[head:]
     if len(numbered) < 2:
         raise InputError(f"{path}: expected a header line and at least one point")
-    rows = list(csv.reader(line for _, line in numbered))
+    rows = list(csv.reader((line for _, line in numbered), delimiter=_delimiter(numbered[0][1])))
     header = [name.strip().lower() for name in rows[0]]
     missing = [name for name in CSV_COLUMNS[:7] if name not in header]
     if missing:
@@ -67,9 +69,13 @@ def read(text, path="<text>"):
             f"{path}, line {numbered[0][0]}: the header lacks the column(s) {', '.join(missing)}; "
             f"got {rows[0]}"
         )
-    cells = [row + [""] * (len(header) - len(row)) for row in rows[1:]]
-    columns = dict(zip(header, map(list, zip(*cells))))
     line_numbers = [n for n, _ in numbered[1:]]
+    cells = rows[1:]
+    for row, line in zip(cells, line_numbers):
+        if len(row) != len(header):
+            raise InputError(f"{path}, line {line}: {len(row)} cells where the header has {len(header)}; "
+                             "is the row cut short, or a comma too many?")
+    columns = dict(zip(header, map(list, zip(*cells))))
     numbers = {name: _column(columns[name], name, path, line_numbers) for name in header
                if name not in TEXT_COLUMNS}
     empty = np.full(len(cells), np.nan)
@@ -83,6 +89,11 @@ def read(text, path="<text>"):
         faces=columns.get("face"),
         axes=np.column_stack([numbers[c] for c in AXIS_COLUMNS]) if set(AXIS_COLUMNS) <= set(numbers) else None,
     )
+
+
+def _delimiter(header):
+    """The header line's cell separator: ';' where it has semicolons and no commas, else ','."""
+    return ";" if ";" in header and "," not in header else ","
 
 
 def _complete(numbers, names, path):

@@ -30,6 +30,8 @@ DMIS_COMMENT_CONTINUED = "$$+"
 DMIS_CONTINUATION = "$"
 ANGLE_DECIMALS = 4
 DMIS_FEATURE_POINT = re.compile(r"(FA?)\(([^()]*)\)=FEAT/POINT,([A-Z]+),(.*)\Z", re.IGNORECASE)
+# A statement that means a point feature but is not written as DMIS_FEATURE_POINT reads it.
+POINT_LIKE = re.compile(r"FEAT\W*POINT", re.IGNORECASE)
 
 
 def write(point_set, facts, options):
@@ -103,10 +105,16 @@ def read(text, path="<text>"):
     for number, statement in statements:
         match = DMIS_FEATURE_POINT.match(_without_blanks(statement))
         if match is None:
+            if POINT_LIKE.search(statement):
+                raise InputError(f"{path}, line {number}: a point statement that cannot be read "
+                                 f"({statement.strip()[:60]}); write it as F(label)=FEAT/POINT,CART,x,y,z,i,j,k")
             continue
         kind, label, system, fields = match.groups()
         if system.upper() != "CART":
             raise InputError(f"{path}, line {number}: only Cartesian points (CART) can be read, got {system}")
+        if label in found[kind.upper()]:
+            raise InputError(f"{path}, line {number}: {kind.upper()}({label}) is given twice; give each point "
+                             "its own label")
         found[kind.upper()][label] = numbers(fields.split(","), 6, path, number)
     points = found["FA"] or found["F"]
     if not points:

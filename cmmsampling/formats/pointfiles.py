@@ -54,7 +54,11 @@ def read_points(path: str | os.PathLike, format: str | None = None) -> PointSet:
     Returns a PointSet; ValueError naming the file and line for what cannot be read.
     """
     fmt = resolve_format(path, format)
-    with open(path, encoding="utf-8", errors="replace", newline="") as stream:
+    if os.path.isdir(path):
+        raise InputError(f"{path}: is a folder, not a point file; give the file's path")
+    if not os.path.isfile(path):
+        raise InputError(f"{path}: no such file")
+    with open(path, encoding="utf-8-sig", errors="replace", newline="") as stream:
         text = stream.read()
     point_set = FORMATS[fmt].read(text, os.fspath(path))
     point_set.metadata.update({"format": fmt, "path": os.path.abspath(path)})

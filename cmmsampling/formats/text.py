@@ -11,6 +11,8 @@ from ..geometry.validation import InputError
 COORDINATE_DECIMALS = 7
 VECTOR_DECIMALS = 9
 PARAMETER_DECIMALS = 10
+# A number written with a decimal comma (12,5), which point files refuse.
+DECIMAL_COMMA = re.compile(r"\s*[-+]?\d*,\d+\s*")
 METADATA_ENTRY = re.compile(r"\s*([A-Za-z][A-Za-z0-9_]*):(.*)\Z", re.DOTALL)
 
 
@@ -31,6 +33,9 @@ def number(text, path, line, name="value"):
     try:
         value = float(text)
     except ValueError:
+        if DECIMAL_COMMA.fullmatch(text):
+            raise InputError(f"{path}, line {line}: {name} {text.strip()!r} has a decimal comma; write numbers "
+                             f"with a decimal point ({text.strip().replace(',', '.')})") from None
         raise InputError(f"{path}, line {line}: {name} {text.strip()!r} is not a number") from None
     if not np.isfinite(value):
         raise InputError(f"{path}, line {line}: {name} {text.strip()!r} is not a finite number")

@@ -18,9 +18,10 @@ class InputTypeError(InputError, TypeError):
 
 
 def check_int(name, value, minimum):
-    """Return value as int; TypeError if it is not a whole number, ValueError if below minimum."""
+    """Return value as int (16.0 counts as 16); TypeError if it is not a whole number (True is none),
+    ValueError if below minimum."""
     if isinstance(value, bool) or not isinstance(value, numbers.Integral):
-        if isinstance(value, numbers.Real) and float(value).is_integer():
+        if not isinstance(value, bool) and isinstance(value, numbers.Real) and float(value).is_integer():
             value = int(value)
         else:
             raise InputTypeError(f"{name} must be a whole number, got {value!r} ({type(value).__name__})")

@@ -26,12 +26,12 @@ from ..access.reach import Access, Reachability
 from ..fitting.substitute import DEFAULT_DEGREE
 from ..geometry.freecad_env import import_part
 from ..geometry.surface import as_face
-from ..geometry.validation import InputError, check_int, check_real
+from ..geometry.validation import InputError, InputTypeError, check_int, check_pair, check_real
 from ..strategies import handover
-from ..strategies.sampling import BEST_STRATEGY, evaluate, probe_edge_offset, sample
+from ..strategies.sampling import BEST_STRATEGY, check_arguments, evaluate, probe_edge_offset, sample
 from ..strategies.threads import blas_threads
 from . import face_runs
-from .points_needed import DEFAULT_MAX_POINTS, points_needed, step_counts
+from .points_needed import DEFAULT_MAX_POINTS, check_max_points, fewest_points, points_needed, step_counts
 
 Part = import_part()
 FIT_KEYS = ("fit_degree", "fit_poles", "smoothing", "grid")
@@ -242,10 +242,12 @@ def plan(shape_or_faces: Part.Shape | list, tolerance: float | None = None, n_to
     arguments = {"workers": 1, **arguments}
     if edge_offset is not None:
         arguments["edge_offset"] = check_real("edge_offset", edge_offset, 0.0)
+    degree = arguments.get("fit_degree", DEFAULT_DEGREE)
+    check_arguments(strategy, arguments, fewest_points(check_pair("fit_degree", degree, 1)))
     start = time.perf_counter()
     if tolerance is not None:
         tolerance = check_real("tolerance", tolerance, above=0.0)
-        n_max = check_int("n_max", n_max, 4)
+        n_max = check_max_points(n_max, degree)
         jobs = [FaceJob(name, face.exportBrepToString(), "tolerance", strategy, tolerance=tolerance, n_max=n_max,
                         arguments=arguments, part_brep=part_brep, probe=probe) for name, face in named]
         outcomes, cancelled, notes = _run(jobs, processes, scheduler, progress)
@@ -267,6 +269,9 @@ def _part(shape_or_faces, part, probe):
         if part is not None:
             raise InputError("part= is what a probe must keep clear of: give probe= (a cmmsampling.Probe) too")
         return None, ""
+    if not isinstance(probe, Probe):
+        raise InputTypeError(f"probe must be a cmmsampling.Probe (e.g. cmmsampling.PROBES['2 mm ball, 20 mm "
+                             f"stylus']), got {probe!r}")
     part = shape_or_faces if part is None and isinstance(shape_or_faces, Part.Shape) else part
     if not isinstance(part, Part.Shape):
         raise InputError("a probe's reach is judged on the whole part: give part= (the solid) with a list of faces")
@@ -284,17 +289,20 @@ def hand_over(shape, arguments, part_plan):
 
 
 def named_faces(shape_or_faces, numbers=None):
-    """[(name, Part.Face)] of a shape (faces numbered from 1, optionally only ``numbers``) or of a
-    list of faces or (name, face) pairs. ValueError naming a face number the shape lacks."""
+    """[(name, Part.Face)] of a shape (faces numbered from 1, optionally only ``numbers``, a list of
+    whole numbers, each once) or of a list of faces or (name, face) pairs. InputError naming a face
+    number the shape lacks, one given twice, or ``numbers`` with a list of faces."""
     if isinstance(shape_or_faces, Part.Shape):
         faces = shape_or_faces.Faces
         if not faces:
             raise InputError("the shape has no faces to plan")
-        chosen = range(1, len(faces) + 1) if numbers is None else list(numbers)
-        bad = [k for k in chosen if not isinstance(k, int) or not 1 <= k <= len(faces)]
+        chosen = range(1, len(faces) + 1) if numbers is None else face_numbers(numbers)
+        bad = [k for k in chosen if not 1 <= k <= len(faces)]
         if bad:
-            raise InputError(f"the shape has faces 1 to {len(faces)}; there is no face {bad[0]!r}")
+            raise InputError(f"the shape has faces 1 to {len(faces)}; there is no face {bad[0]}")
         return [(f"Face{k}", faces[k - 1]) for k in chosen]
+    if numbers is not None:
+        raise InputError("faces= picks faces of a shape by number; with a list of faces, list only the faces to plan")
     named = [item if isinstance(item, tuple) else (f"Face{k}", item)
              for k, item in enumerate(shape_or_faces, start=1)]
     if not named:
@@ -303,6 +311,20 @@ def named_faces(shape_or_faces, numbers=None):
     if len(set(names)) != len(names):
         raise InputError("the faces' names must be unique")
     return [(name, as_face(face)) for name, face in named]
+
+
+def face_numbers(numbers):
+    """faces= as a list of ints (numpy integers too); InputTypeError for anything else (a single
+    number, True), InputError for a number given twice."""
+    if isinstance(numbers, (str, bytes)) or not isinstance(numbers, (list, tuple, range, np.ndarray)):
+        raise InputTypeError(f"faces must be a list of face numbers, e.g. [1, 3, 5], got {numbers!r}")
+    chosen = [check_int("a face number", k, 1) for k in numbers]
+    twice = sorted({k for k in chosen if chosen.count(k) > 1})
+    if twice:
+        raise InputError(f"face {twice[0]} is given twice in faces=; give each face once")
+    if not chosen:
+        raise InputError("faces= is empty; give at least one face number, or leave it out for every face")
+    return chosen
 
 
 def solve_face(job):
@@ -382,17 +404,17 @@ def _completed(outcomes, named):
 
 def _plan_budget(named, budget, strategy, arguments, processes, scheduler, progress, part_brep, probe):
     """The greedy allocation of a total of points (see the module docstring)."""
-    steps = step_counts(max(budget, 16), arguments.get("fit_degree", DEFAULT_DEGREE))
-    first = steps[0][1]
+    degree = arguments.get("fit_degree", DEFAULT_DEGREE)
+    first = fewest_points(degree)
     jobs = [FaceJob(name, face.exportBrepToString(), "points", strategy, n=first, arguments=arguments,
                     part_brep=part_brep, probe=probe) for name, face in named]
     if budget < first * len(jobs):
         raise InputError(f"{budget} points give fewer than {first} to each of the {len(jobs)} faces; give "
                          f"n_total of at least {first * len(jobs)}, or fewer faces")
+    firsts = [s[1] for s in step_counts(budget, degree)]
     outcomes, cancelled, notes = _run(jobs, processes, scheduler, progress)
     faces = _completed(outcomes, named)
     spent = sum(face.n for face in faces)
-    firsts = [s[1] for s in steps]
     while not cancelled:
         worst = max((k for k, face in enumerate(faces) if face.placed), key=lambda k: faces[k].maximum, default=None)
         if worst is None:

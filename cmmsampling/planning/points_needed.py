@@ -17,10 +17,12 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
+import numpy as np
+
 from ..access.reach import Reachability
 from ..fitting.substitute import DEFAULT_DEGREE, default_pole_count
-from ..geometry.validation import InputError, check_int, check_real
-from ..strategies.sampling import BEST_STRATEGY, MIN_POINTS, Part, probe_edge_offset, sample
+from ..geometry.validation import InputError, check_int, check_pair, check_real
+from ..strategies.sampling import BEST_STRATEGY, MIN_POINTS, Part, check_arguments, probe_edge_offset, sample
 
 DEFAULT_MAX_POINTS = 400
 
@@ -28,19 +30,41 @@ DEFAULT_MAX_POINTS = 400
 def step_counts(n_max, degree=DEFAULT_DEGREE):
     """The pole-rule steps up to n_max points: [(poles per direction, fewest N, most N)], in
     increasing order; the fewest N of a step is at least its number of poles (p * p).
-    degree: the substitute's degree, an int or a (u, v) pair (the higher one sets the steps)."""
-    degree = degree if isinstance(degree, int) else max(degree)
+    degree: the substitute's degree, an int or a (u, v) pair (the higher one sets the steps).
+    O(sqrt(n_max) log(n_max)): each step's end is found by bisection."""
+    degree = _highest(degree)
     steps, n = [], MIN_POINTS
     while n <= n_max:
         poles = default_pole_count(n, degree)
-        last = n
-        while last + 1 <= n_max and default_pole_count(last + 1, degree) == poles:
-            last += 1
+        last = _last_with_poles(poles, n, n_max, degree)
         first = max(n, poles * poles)
         if first <= last:
             steps.append((poles, first, last))
         n = last + 1
     return steps
+
+
+def fewest_points(degree=DEFAULT_DEGREE):
+    """The fewest points a search or a plan runs: the first step's fewest N, (degree + 1)^2 (16
+    for the bicubic substitute). degree: an int or a (u, v) pair."""
+    return max(MIN_POINTS, (_highest(degree) + 1) ** 2)
+
+
+def _highest(degree):
+    """The higher degree of an int or a (u, v) pair."""
+    return degree if np.ndim(degree) == 0 else max(degree)
+
+
+def _last_with_poles(poles, n, n_max, degree):
+    """The largest N in [n, n_max] that the pole rule gives ``poles`` (it does at n)."""
+    low, high = n, n_max
+    while low < high:
+        middle = (low + high + 1) // 2
+        if default_pole_count(middle, degree) == poles:
+            low = middle
+        else:
+            high = middle - 1
+    return low
 
 
 @dataclass
@@ -97,7 +121,8 @@ def points_needed(face: Part.Face, tolerance: float, strategy: str = BEST_STRATE
     ``met`` is False and ``reason`` names the best figure reached.
     """
     tolerance = check_real("tolerance", tolerance, above=0.0)
-    n_max = check_int("n_max", n_max, MIN_POINTS)
+    n_max = check_max_points(n_max, fit_degree)
+    check_arguments(strategy, {**arguments, "fit_degree": fit_degree}, fewest_points(fit_degree))
     if edge_offset is None:
         edge_offset = probe_edge_offset(face)
     if arguments.get("part") is not None and not isinstance(arguments["part"], Reachability):
@@ -106,6 +131,17 @@ def points_needed(face: Part.Face, tolerance: float, strategy: str = BEST_STRATE
                      dict(arguments, edge_offset=edge_offset, fit_degree=fit_degree))
     search.run_steps(step_counts(n_max, fit_degree))
     return search.answer(n_max)
+
+
+def check_max_points(n_max, fit_degree=DEFAULT_DEGREE):
+    """n_max as int; InputError when it is below the fewest points a search runs (16 for the
+    bicubic substitute: its 4 x 4 poles)."""
+    fewest = fewest_points(check_pair("fit_degree", fit_degree, 1))
+    n_max = check_int("n_max", n_max, MIN_POINTS)
+    if n_max < fewest:
+        raise InputError(f"n_max ({n_max}) is below the fewest points a degree-{_highest(fit_degree)} substitute "
+                         f"is searched from ({fewest}); give n_max of at least {fewest}")
+    return n_max
 
 
 class _Search:

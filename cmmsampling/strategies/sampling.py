@@ -33,10 +33,13 @@ Part = import_part()
 
 __all__ = ["STRATEGIES", "Setting", "Strategy", "StrategyOutcome", "register_strategy", "unregister_strategy",
            "strategy_label", "strategy_options", "baseline", "make_problem", "sample", "evaluate", "lower_bound",
-           "probe_edge_offset", "hand_over", "DEFAULT_STRATEGY", "BEST_STRATEGY", "PROBE_EDGE_OFFSET_MM",
+           "probe_edge_offset", "hand_over", "check_arguments", "DEFAULT_STRATEGY", "BEST_STRATEGY", "PROBE_EDGE_OFFSET_MM",
            "MIN_POINTS"]
 
 MIN_POINTS = 4
+# sample()'s keyword arguments that every strategy takes; the others are the strategy's options.
+COMMON_ARGUMENTS = ("fit_degree", "fit_poles", "smoothing", "grid", "seed", "progress", "occ_check", "workers",
+                    "edge_offset", "min_spacing", "part", "probe")
 # An int for both parameter directions or a (u, v) pair of them.
 Pair = int | tuple[int, int]
 # progress(iteration, best maximum deviation mm) -> True to cancel.
@@ -64,23 +67,9 @@ def make_problem(face, n, fit_degree=DEFAULT_DEGREE, fit_poles=None, smoothing=D
     run it is for, whose memory is checked (:func:`memory_needed`) before anything is built;
     None checks every run's base.
     """
-    n = check_int("n", n, MIN_POINTS)
-    degree = check_pair("fit_degree", fit_degree, 1)
-    given_poles = None if fit_poles is None else check_pair("fit_poles", fit_poles, 2)
-    poles = resolve_fit_poles(given_poles, n, degree)
-    for axis, (d, p) in enumerate(zip(degree, poles)):
-        if p < d + 1:
-            raise InputError(
-                f"fit_poles along {'uv'[axis]} ({p}) must be at least fit_degree + 1 ({d + 1})"
-            )
-    smoothing = check_real("smoothing", smoothing, above=0.0)
-    grid = check_pair("grid", grid, 2)
-    seed = check_int("seed", seed, 0)
-    workers = check_workers(workers)
+    n, degree, given_poles, poles, smoothing, grid, seed, workers, edge_offset, min_spacing = _checked_settings(
+        n, fit_degree, fit_poles, smoothing, grid, seed, workers, edge_offset, min_spacing)
     _check_memory(n, degree, given_poles, grid, workers, strategy, options or {})
-    edge_offset = check_real("edge_offset", edge_offset, 0.0)
-    if min_spacing is not None:
-        min_spacing = check_real("min_spacing", min_spacing, 0.0)
     model = SurfaceModel.from_face(face)
     _check_area(model)
     problem = SamplingProblem(model, n, degree, poles, smoothing, grid, seed, workers, edge_offset,
@@ -90,6 +79,43 @@ def make_problem(face, n, fit_degree=DEFAULT_DEGREE, fit_poles=None, smoothing=D
         problem.spacing_by_default = True
     _check_room(problem)
     return problem
+
+
+def _checked_settings(n, fit_degree, fit_poles, smoothing, grid, seed, workers, edge_offset, min_spacing):
+    """sample()'s common settings checked, whatever the face: (n, degree pair, given poles pair or
+    None, poles pair, smoothing, grid pair, seed, workers, edge_offset mm, min_spacing mm or None);
+    InputError or InputTypeError naming the first bad one."""
+    n = check_int("n", n, MIN_POINTS)
+    degree = check_pair("fit_degree", fit_degree, 1)
+    given_poles = None if fit_poles is None else check_pair("fit_poles", fit_poles, 2)
+    poles = resolve_fit_poles(given_poles, n, degree)
+    for axis, (d, p) in enumerate(zip(degree, poles)):
+        if p < d + 1:
+            raise InputError(f"fit_poles along {'uv'[axis]} ({p}) must be at least fit_degree + 1 ({d + 1})")
+    smoothing = check_real("smoothing", smoothing, above=0.0)
+    grid = check_pair("grid", grid, 2)
+    seed = check_int("seed", seed, 0)
+    workers = check_workers(workers)
+    edge_offset = check_real("edge_offset", edge_offset, 0.0)
+    if min_spacing is not None:
+        min_spacing = check_real("min_spacing", min_spacing, 0.0)
+    return n, degree, given_poles, poles, smoothing, grid, seed, workers, edge_offset, min_spacing
+
+
+def check_arguments(strategy, arguments, n=MIN_POINTS):
+    """InputError (or InputTypeError) naming the first of sample()'s arguments it would refuse
+    whatever the face, before a plan or a search runs any: the strategy, its options, the common
+    settings, part= and probe=. arguments: sample()'s keyword arguments other than face, n and
+    strategy (the options among them); n: the points of the runs to come."""
+    check_choice("strategy", strategy, list(STRATEGIES))
+    common = {name: arguments[name] for name in COMMON_ARGUMENTS if name in arguments}
+    strategy_options(strategy, {name: value for name, value in arguments.items() if name not in COMMON_ARGUMENTS})
+    _checked_settings(n, common.get("fit_degree", DEFAULT_DEGREE), common.get("fit_poles"),
+                      common.get("smoothing", DEFAULT_SMOOTHING), common.get("grid", DEFAULT_GRID),
+                      common.get("seed", 0), common.get("workers"), common.get("edge_offset", 0.0),
+                      common.get("min_spacing"))
+    if common.get("probe") is not None and not isinstance(common["probe"], Probe):
+        raise InputTypeError(f"probe must be a cmmsampling.Probe, got {common['probe']!r}")
 
 
 def _reachability(part, probe):
@@ -335,14 +361,15 @@ def lower_bound(face: Part.Face, n: int = 81, *, fit_degree: Pair = DEFAULT_DEGR
 
 def evaluate(face: Part.Face, uv: np.ndarray, *, strategy: str = "given", fit_degree: Pair = DEFAULT_DEGREE,
              fit_poles: Pair | None = None, smoothing: float = DEFAULT_SMOOTHING, grid: Pair = DEFAULT_GRID,
-             occ_check: bool = True) -> SamplingResult:
+             occ_check: bool = True, part: Part.Shape | None = None, probe: Probe | None = None) -> SamplingResult:
     """Judge a given point set: fit the substitute to the face's points at uv and measure it.
 
-    uv: (N, 2) parameters on the face (as in SamplingResult.uv); the other arguments as in
+    uv: (N, 2) parameters on the face (as in SamplingResult.uv); part and probe: the probe's
+    pose at each point judged on the part (``result.access``); the other arguments as in
     :func:`sample`. Returns a SamplingResult labelled with ``strategy``.
     """
     uv = check_uv(uv)
-    problem = make_problem(face, len(uv), fit_degree, fit_poles, smoothing, grid)
+    problem = make_problem(face, len(uv), fit_degree, fit_poles, smoothing, grid, part=part, probe=probe)
     settings = {"strategy": strategy, "n": problem.n, **_common_settings(problem)}
     return _judge(problem, StrategyOutcome(uv), strategy, settings, 0.0, occ_check)
 

@@ -291,6 +291,12 @@ def test_the_document_keeps_the_reach_and_draws_the_path_in_two_objects(beside_w
             cmmsampling.export(source, tmp_path / name, order="probe_path")
         assert (tmp_path / "document.dmi").read_text().count("GOTO/") > result.n
         assert gotos(tmp_path / "document.dmi") == gotos(tmp_path / "result.dmi")
+        cmmsampling.reevaluate(points)   # judged again with its probe on its part: the axes and the path stay
+        np.testing.assert_allclose([tuple(a) for a in points.Axes], result.access.axes)
+        assert json.loads(points.Probe) == result.settings["probe"]
+        cmmsampling.export(points, tmp_path / "reevaluated.dmi", order="probe_path")
+        assert gotos(tmp_path / "reevaluated.dmi") == gotos(tmp_path / "result.dmi")
+        doc.undo()
         doc.undo()
         assert doc.getObject("ProbeMoves") is None and [o.Name for o in doc.Objects] == ["Body"]
         plain = cmmsampling.add_to_document(cmmsampling.sample(beside_wall.Faces[index - 1], 9, "halton", grid=20),

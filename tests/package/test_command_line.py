@@ -107,7 +107,7 @@ def test_refused_input_is_an_input_error_with_exit_code_2(part, capsys):
     with pytest.raises(cmmsampling.InputTypeError, match="expected a Part.Face, got NoneType"):
         cmmsampling.sample(None, 9)
     assert cli_main(["sample", part, "--face", "1", "-n", "3"]) == 2
-    assert "n must be at least 4, got 3" in one_error_line(capsys)
+    assert one_error_line(capsys) == "error: --points must be at least 4, got 3"
 
 
 def test_a_cad_file_read_by_part_gives_its_faces(part, capsys):

@@ -1,17 +1,18 @@
-"""Command line: sample faces headless with ``/usr/bin/python3 -m cmmsampling`` or ``freecadcmd``."""
+"""Command line: sample faces headless with ``/usr/bin/python3 -m cmmsampling`` or ``freecadcmd``:
+the parser, the sub-commands and the exit codes (what they print as they run: :mod:`.terminal`)."""
 import argparse
 import os
+import re
 import sys
-import time
 import traceback
 
-from .access.probe import PROBES
-from .formats.cad_files import describe_faces, freecad_reason, read_shape
-from .formats.pointfiles import FORMATS
-from .geometry.surface import reference_face
-from .geometry.validation import InputError
-from .strategies.sampling import (BEST_STRATEGY, PROBE_EDGE_OFFSET_MM, STRATEGIES, baseline, probe_edge_offset,
-                                  sample)
+from ..access.probe import PROBES
+from ..formats.cad_files import describe_faces, freecad_reason, read_shape
+from ..formats.pointfiles import FORMATS
+from ..geometry.surface import reference_face
+from ..geometry.validation import InputError, check_real
+from ..strategies.sampling import BEST_STRATEGY, PROBE_EDGE_OFFSET_MM, STRATEGIES, probe_edge_offset, sample
+from .terminal import FaceProgress, StudyProgress, TerminalProgress, format_table
 
 # --probe's choices: the presets of cmmsampling.PROBES by their ball diameter (mm).
 PROBE_CHOICES = {f"{probe.ball_diameter:g}": name for name, probe in PROBES.items()}
@@ -116,6 +117,9 @@ def _face_numbers(text):
         raise argparse.ArgumentTypeError(f"face numbers are whole numbers separated by commas, got {text!r}")
     if not numbers:
         raise argparse.ArgumentTypeError("give at least one face number")
+    twice = sorted({number for number in numbers if numbers.count(number) > 1})
+    if twice:
+        raise argparse.ArgumentTypeError(f"face {twice[0]} is given twice; give each face once")
     return numbers
 
 
@@ -187,50 +191,6 @@ def finish_progress(options):
         progress.finish()
 
 
-class TerminalProgress:
-    """A one-line progress display on stderr for an optimiser: a bar when ``total`` is known."""
-
-    def __init__(self, label, total=None, unit="step", stream=sys.stderr, every_s=0.2):
-        self.label, self.total, self.unit, self.stream, self.every_s = label, total, unit, stream, every_s
-        self._last = 0.0
-
-    def __call__(self, iteration, best):
-        now = time.monotonic()
-        last = self.total is not None and iteration == self.total
-        if now - self._last >= self.every_s or last:
-            self._last = now
-            if self.total:
-                done = int(30 * iteration / self.total)
-                where = f"[{'#' * done}{'.' * (30 - done)}] {iteration}/{self.total}"
-            else:
-                where = f"{self.unit} {iteration}"
-            self.stream.write(f"\r{self.label} {where} best max {best:.4f} mm ")
-            if last:
-                self.stream.write("\n")
-            self.stream.flush()
-        return False
-
-    def finish(self):
-        """End the progress line."""
-        self.stream.write("\n")
-        self.stream.flush()
-
-
-def format_table(results):
-    """Fixed-width table of results: strategy, max/mean/RMS (mm), ratio to uniform, time (s)."""
-    reference = baseline()
-    uniform = next((r.deviation.maximum for r in results if r.strategy == reference), None)
-    # the ratio column is headed by the baseline label's first word: "x uniform"
-    lines = [f"{'strategy':<20} {'N':>4} {'max mm':>9} {'mean mm':>9} {'RMS mm':>9} "
-             f"{'OCC max':>9} {'x ' + STRATEGIES[reference].label.split()[0]:>9} {'time s':>8}"]
-    for r in results:
-        d = r.deviation
-        ratio = d.maximum / uniform if uniform else float("nan")
-        lines.append(f"{r.strategy:<20} {r.n:>4} {d.maximum:>9.4f} {d.mean:>9.4f} {d.rms:>9.4f} "
-                     f"{d.occ_maximum:>9.4f} {ratio:>9.3f} {r.timings['total_s']:>8.2f}")
-    return "\n".join(lines)
-
-
 def run_demo(args):
     """Every strategy on the reference surface; PSO with the paper's parameters."""
     face = reference_face()
@@ -249,8 +209,8 @@ def run_demo(args):
 
 def _study_report(face, args):
     """Every strategy over the default N list (the paper's Table 1 and Fig. 9-13) as an HTML report."""
-    from .study import write_report
-    from .study import compare
+    from ..study import write_report
+    from ..study import compare
 
     progress = StudyProgress()
     options = {name: given_settings(name, args) for name in STRATEGIES}
@@ -259,21 +219,6 @@ def _study_report(face, args):
     progress.finish()
     print(study.table())
     print(f"report: {write_report(study, args.report)}")
-
-
-class StudyProgress(TerminalProgress):
-    """Progress of a study on stderr: runs done of all, with what runs now."""
-
-    def __init__(self):
-        super().__init__("study")
-
-    def __call__(self, done, total, message):
-        now = time.monotonic()
-        if now - self._last >= self.every_s:
-            self._last = now
-            self.stream.write(f"\rstudy {done}/{total} {message[:60]:<60}")
-            self.stream.flush()
-        return False
 
 
 def run_faces(args):
@@ -308,9 +253,9 @@ def run_sample(args):
 
 def run_plan(args):
     """Plan the faces of a CAD file and write the program and the document asked for."""
-    from .document import add_plan_to_document
-    from .formats.exporting import export
-    from .planning.part_plan import plan
+    from ..document import add_plan_to_document
+    from ..formats.exporting import export
+    from ..planning.part_plan import plan
 
     _check_outputs(args)
     shape = read_shape(args.file)
@@ -332,24 +277,13 @@ def run_plan(args):
     return 0
 
 
-class FaceProgress(TerminalProgress):
-    """Progress of a plan on stderr: faces done of all."""
-
-    def __init__(self):
-        super().__init__("plan")
-
-    def __call__(self, done, total, message):
-        self.stream.write(f"\rplan {done}/{total} faces, {message[:50]:<50}")
-        self.stream.flush()
-        return False
-
-
 def _check_outputs(args):
     """ValueError or OSError before any computation when an output cannot be written: an
     unknown point-file extension, an --fcstd name without .FCStd, a folder that takes no file."""
-    from .formats.files import check_writable
-    from .formats.pointfiles import resolve_format
+    from ..formats.files import check_writable
+    from ..formats.pointfiles import resolve_format
 
+    check_real("--probe-radius", args.probe_radius, 0.0)
     for path in args.out:
         try:
             resolve_format(path)
@@ -365,8 +299,8 @@ def _check_outputs(args):
 
 def _write_outputs(result, args):
     """Point files and the optional FreeCAD document."""
-    from .formats.exporting import export
-    from .formats.pointset import PointSet
+    from ..formats.exporting import export
+    from ..formats.pointset import PointSet
 
     label = f"{os.path.basename(args.file)}:Face{args.face}"
     order = args.order or ("probe_path" if args.probe else "short_path")
@@ -374,7 +308,7 @@ def _write_outputs(result, args):
     for path in args.out:
         print(export(source, path, probe_radius=args.probe_radius, order=order, label=label))
     if args.fcstd:
-        from .document import add_to_document
+        from ..document import add_to_document
 
         _save_document(args, lambda document, part: add_to_document(result, document,
                                                                    source=(part, f"Face{args.face}")))
@@ -403,10 +337,18 @@ def _save_document(args, add):
 def main(argv=None):
     """Entry point; returns the process exit code: 2 for bad input (a file, path or value, with one
     line saying what to do), 1 for anything unexpected; a traceback only with --debug."""
-    args = build_parser().parse_args(argv)
+    parser = build_parser()
+    args = parser.parse_args(argv)
     try:
-        return {"demo": run_demo, "faces": run_faces, "sample": run_sample, "plan": run_plan}[args.command](args)
-    except (InputError, OSError) as exc:
+        code = {"demo": run_demo, "faces": run_faces, "sample": run_sample, "plan": run_plan}[args.command](args)
+        sys.stdout.flush()   # here, so that a reader gone early is met inside this try
+        return code
+    except InputError as exc:
+        return _fail(args, f"error: {option_words(str(exc), parser, args.command)}", 2)
+    except BrokenPipeError:   # the output's reader left (e.g. "| head"): stop quietly, as SIGPIPE would
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return BROKEN_PIPE
+    except OSError as exc:
         return _fail(args, f"error: {exc}", 2)
     except MemoryError:
         return _fail(args, "error: this run needs more memory than the machine has free; lower -n "
@@ -416,6 +358,33 @@ def main(argv=None):
     except Exception as exc:
         return _fail(args, f"error: unexpected {type(exc).__name__}: {exc}; run again with --debug "
                            "for the details and report them", 1)
+
+
+# The exit code of a run whose output's reader left early: 128 + SIGPIPE, as a shell reports it.
+BROKEN_PIPE = 141
+
+# The API's argument names that a command-line option of another name sets.
+API_NAMES = {"n": "points", "n_total": "points", "n_max": "max_points"}
+
+
+def option_words(message, parser, command):
+    """An API message in the command line's words: in a message that starts with an argument's name
+    and what is wrong with it (``n_max (10) is below...``, ``population must be...``,
+    ``grid[0] must...``), that name becomes its option (``--max-points``) throughout."""
+    name = re.match(r"[a-z_]+(?= must |\[| \()", message)
+    if name is None:
+        return message
+    dest = API_NAMES.get(name.group(), name.group())
+    for action in _subparser(parser, command)._actions:
+        if action.dest == dest and action.option_strings:
+            return re.sub(rf"\b{name.group()}\b(?!=)", max(action.option_strings, key=len), message)
+    return message
+
+
+def _subparser(parser, command):
+    """The parser of one sub-command."""
+    return next(action for action in parser._actions
+                if isinstance(action, argparse._SubParsersAction)).choices[command]
 
 
 def _fail(args, message, code):
