@@ -30,12 +30,16 @@ class Obstacles:
         self.tree = cKDTree(self.points)
         self.margin = self.spacing + self.deflection
 
-    def swept_blocked(self, starts, ends, radii, margin=True):
+    def swept_blocked(self, starts, ends, radii, margin=True, overreach=None):
         """Balls swept along segments (capsules from starts (M, 3) to ends (M, 3), radius radii
         (M,), mm) that a part point lies within (plus the margin unless margin=False): (M,) bool.
-        The capsule is covered by balls along its segment, a little larger than it between them."""
-        centres, owner, steps = along_segments(starts, ends, np.maximum(SPHERE_STEP * np.asarray(radii, float), self.spacing))
+        The capsule is covered by balls along its segment, a little larger than it between them:
+        by at most ``overreach`` mm where given (the balls then lie closer together)."""
         radii = np.broadcast_to(np.asarray(radii, float), (len(starts),))
+        steps = np.maximum(SPHERE_STEP * radii, self.spacing)
+        if overreach is not None:   # a ball of radius r every s mm reaches sqrt(r^2 + (s/2)^2) from the axis
+            steps = np.minimum(steps, 2.0 * np.sqrt(2.0 * radii * overreach + overreach ** 2))
+        centres, owner, steps = along_segments(starts, ends, steps)
         reach = np.sqrt(radii ** 2 + (0.5 * steps) ** 2)[owner] + (self.margin if margin else 0.0)
         hit = np.zeros(owner.size, dtype=bool)
         for value in np.unique(reach):

@@ -86,7 +86,8 @@ def touch_blocked(probe, obstacles, points, normals):
     """(M,) bool: points whose ball cannot touch them from ``approach`` mm out along the normal
     without cutting into the part elsewhere, whatever the axis (see :func:`pose_pieces`)."""
     centres, ready = probe.stations(points, normals)
-    return obstacles.swept_blocked(centres, ready, probe.radius - obstacles.deflection - 1e-3, margin=False)
+    return obstacles.swept_blocked(centres, ready, probe.radius - obstacles.deflection - 1e-3, margin=False,
+                                   overreach=0.5 * obstacles.deflection)
 
 
 def poses_blocked(probe, obstacles, points, normals, axes):

@@ -338,3 +338,14 @@ def test_the_command_line_keeps_to_the_probe_and_writes_its_path(beside_wall, tm
                      "--max-points", "40", "--processes", "1", "--probe", "2",
                      "--out", str(tmp_path / "plan.dmi")]) == 0
     assert "tilted" in capsys.readouterr().out and "GOTO/" in (tmp_path / "plan.dmi").read_text()
+
+
+def test_a_large_ball_touches_a_large_plain_face():
+    """The ball's touch is tested by balls along its approach that reach at most half the
+    tessellation's deflection beyond it: a 14 mm ball on a 200 mm plate was refused before
+    ("the probe reaches no point of this face"), as the covering balls reached 0.06 mm past it."""
+    plate = Part.makeBox(200, 200, 20)
+    for ball in (12.0, 14.0, 20.0):
+        probe = Probe(ball_diameter=ball, stylus_diameter=3.0)
+        result = cmmsampling.sample(floor_of(plate, 20.0), 16, "halton", part=plate, probe=probe, grid=20)
+        assert result.access.reachable.all() and not result.access.tilted.any()
