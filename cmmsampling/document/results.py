@@ -9,6 +9,7 @@ import numpy as np
 from ..access.probe import Probe
 from ..formats.pointset import PointSet
 from ..geometry.freecad_env import import_part
+from ..geometry.surface import lies_on
 from ..geometry.validation import InputError, InputTypeError
 from ..planning.part_plan import PartPlan
 from ..planning.probe_moves import probe_moves
@@ -81,6 +82,10 @@ def add_plan_to_document(plan: PartPlan, doc: FreeCAD.Document, part: FreeCAD.Do
     face and a row for the part. Returns the group.
     """
     sources = [_check_source((part, face.name), doc) for face in plan.placed]
+    for face in plan.placed:
+        if not lies_on(plan.shapes[face.name], part.getSubObject(face.name)):
+            raise InputError(f"{part.Label}.{face.name} is not the plan's {face.name}: give the object whose shape "
+                             "was planned")
     results = [plan.result(face.name) for face in plan.placed]
     with transaction(doc, "Add part plan"):
         group = doc.addObject("App::DocumentObjectGroup", "Plan")

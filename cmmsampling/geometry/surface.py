@@ -200,6 +200,22 @@ def as_face(shape):
     )
 
 
+def points_of(face, count=3):
+    """Up to ``count`` points on a face (mm): its coarse tessellation's first, middle and last
+    vertices, (K, 3)."""
+    deflection = max(face.BoundBox.DiagonalLength / 20.0, 1e-6)
+    vertices = face.tessellate(deflection)[0] or [vertex.Point for vertex in face.Vertexes]
+    chosen = np.unique(np.linspace(0, len(vertices) - 1, count).round().astype(int))
+    return np.array([[vertices[k].x, vertices[k].y, vertices[k].z] for k in chosen], dtype=float)
+
+
+def lies_on(face, shape, tolerance=1e-4):
+    """True when face is part of shape: a few of its points (:func:`points_of`) lie within
+    tolerance mm (or the shapes' own tolerance, if larger) of shape."""
+    allowed = max(tolerance, face.Tolerance, shape.getTolerance(1))
+    return all(shape.distToShape(Part.Vertex(FreeCAD.Vector(*point)))[0] <= allowed for point in points_of(face))
+
+
 def reference_poles():
     """Poles of the reference surface: (9, 9, 3) mm.
 

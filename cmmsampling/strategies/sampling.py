@@ -19,7 +19,7 @@ from ..fitting.occ_surface import substitute_surface
 from ..fitting.substitute import DEFAULT_DEGREE, DEFAULT_SMOOTHING
 from ..geometry.domain import face_domain
 from ..geometry.freecad_env import import_part
-from ..geometry.surface import SurfaceModel
+from ..geometry.surface import SurfaceModel, lies_on
 from ..geometry.validation import InputError, InputTypeError, check_choice, check_int, check_pair, check_real, check_uv
 from . import blind, handover, memory, optimal, pso
 from .optimal import default_min_spacing
@@ -73,7 +73,7 @@ def make_problem(face, n, fit_degree=DEFAULT_DEGREE, fit_poles=None, smoothing=D
     model = SurfaceModel.from_face(face)
     _check_area(model)
     problem = SamplingProblem(model, n, degree, poles, smoothing, grid, seed, workers, edge_offset,
-                              min_spacing or 0.0, _reachability(part, probe))
+                              min_spacing or 0.0, _reachability(part, probe, model.source_face))
     if min_spacing is None:
         problem.min_spacing = default_min_spacing(model.area, n, problem.domain.feasible_area)
         problem.spacing_by_default = True
@@ -118,9 +118,10 @@ def check_arguments(strategy, arguments, n=MIN_POINTS):
         raise InputTypeError(f"probe must be a cmmsampling.Probe, got {common['probe']!r}")
 
 
-def _reachability(part, probe):
+def _reachability(part, probe, face):
     """The Reachability of a probe on a part (part itself when it is one), None without a part;
-    TypeError for a part that is no shape or a probe that is no Probe."""
+    TypeError for a part that is no shape or a probe that is no Probe, InputError for a part
+    that face (a Part.Face) is not on."""
     if part is None:
         if probe is not None:
             raise InputError("a probe is checked against the part its face belongs to: give part= (the "
@@ -129,12 +130,24 @@ def _reachability(part, probe):
     if isinstance(part, Reachability):
         if probe is not None and probe != part.probe:
             raise InputError("part= is a Reachability with its own probe; give no other probe=")
+        _check_on_part(face, part.part)
         return part
     if not isinstance(part, Part.Shape) or part.isNull() or not part.Faces:
         raise InputTypeError(f"part must be the Part.Shape the face belongs to (a solid, a shell), got {part!r}")
     if probe is not None and not isinstance(probe, Probe):
         raise InputTypeError(f"probe must be a cmmsampling.Probe, got {probe!r}")
+    _check_on_part(face, part)
     return Reachability(part, probe)
+
+
+def _check_on_part(face, part):
+    """InputError when face (a Part.Face) is not on part (a Part.Shape): the probe's reach would be
+    judged on another part."""
+    if not lies_on(face, part):
+        box = part.BoundBox
+        raise InputError(f"the face is not on part= (a part within x {box.XMin:.4g}..{box.XMax:.4g}, y "
+                         f"{box.YMin:.4g}..{box.YMax:.4g}, z {box.ZMin:.4g}..{box.ZMax:.4g} mm); give the shape "
+                         "the face belongs to")
 
 
 def memory_bytes(n, degree, given_poles, grid, workers, strategy, options):

@@ -208,3 +208,21 @@ def test_20_a_reader_that_leaves_early_ends_the_command_line_quietly(tmp_path):
                          capture_output=True, text=True, cwd=tmp_path, env={**os.environ, "PYTHONPATH": ROOT},
                          timeout=120)
     assert run.stdout.split() == ["141"] and run.stderr == ""
+
+
+def test_12_a_part_that_does_not_hold_the_face_is_refused(part):
+    far = part.copy()
+    far.translate(FreeCAD.Vector(500, 0, 0))
+    with pytest.raises(InputError, match=r"the face is not on part= \(a part within x 500..560"):
+        cmmsampling.sample(part.Faces[0], 16, "halton", part=far, probe=Probe(), grid=20)
+    plan = cmmsampling.plan(part, n_total=16, faces=[1], strategy="uniform_parametric", processes=1)
+    doc = FreeCAD.newDocument("OtherPart")
+    try:
+        other = doc.addObject("Part::Feature", "Other")
+        other.Shape = far
+        doc.recompute()
+        with pytest.raises(InputError, match="Other.Face1 is not the plan's Face1"):
+            cmmsampling.add_plan_to_document(plan, doc, other)
+        assert [obj.Name for obj in doc.Objects] == ["Other"]
+    finally:
+        FreeCAD.closeDocument("OtherPart")
