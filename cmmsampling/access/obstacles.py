@@ -10,23 +10,33 @@ from scipy.spatial import cKDTree
 
 # Ball centres along a swept ball are this fraction of its radius apart.
 SPHERE_STEP = 0.5
+# The finest spacing of a part's points, mm, and the most points a part is modelled by (about
+# 100 MiB with their k-d tree); a larger part gets them farther apart.
+FINEST_SPACING_MM = 0.5
+MAX_POINTS = 2_000_000
 
 
 class Obstacles:
     """A part as points for fast clearance tests.
 
     part: a Part.Shape (solid, shell or faces); spacing: mm between neighbouring points on its
-    faces (default: a fortieth of the part's diagonal, at most 0.5 mm); deflection: OCC's
-    tessellation tolerance, mm (default spacing / 5). box: (2, 3) the part's bounding box, mm;
-    margin: mm added to every capsule's radius.
+    faces (default: a fortieth of the part's diagonal, at most 0.5 mm), widened where the part
+    would take more than max_points points (``coarsened`` says so: a large part's clearances
+    are then judged with a wider margin, erring further on the side of blocking); deflection:
+    OCC's tessellation tolerance, mm (default spacing / 5). box: (2, 3) the part's bounding box,
+    mm; margin: mm added to every capsule's radius.
     """
 
-    def __init__(self, part, spacing=None, deflection=None):
+    def __init__(self, part, spacing=None, deflection=None, max_points=MAX_POINTS):
         box = part.BoundBox
         self.box = np.array([[box.XMin, box.YMin, box.ZMin], [box.XMax, box.YMax, box.ZMax]])
-        self.spacing = float(spacing or min(0.5, box.DiagonalLength / 40.0))
-        self.deflection = float(deflection or self.spacing / 5.0)
-        self.points = np.concatenate([_fill(face, self.spacing, self.deflection) for face in part.Faces])
+        wanted = float(spacing or min(FINEST_SPACING_MM, box.DiagonalLength / 40.0))
+        spacing = max(wanted, np.sqrt(part.Area / max_points))   # a fill holds at least area / spacing^2 points
+        self.deflection = float(deflection or spacing / 5.0)
+        meshes = [_mesh(face, self.deflection) for face in part.Faces]
+        self.spacing = _spacing_within(meshes, spacing, max_points)
+        self.coarsened = self.spacing > wanted
+        self.points = np.concatenate([_fill(vertices, corners, self.spacing) for vertices, corners in meshes])
         self.tree = cKDTree(self.points)
         self.margin = self.spacing + self.deflection
 
@@ -114,22 +124,77 @@ def along_segments(starts, ends, steps):
     return starts[owner] + t[:, None] * (ends - starts)[owner], owner, lengths / np.maximum(counts - 1, 1)
 
 
-def _fill(face, spacing, deflection):
-    """Points on a face: its tessellation's vertices and its triangles filled on a barycentric
-    grid whose steps are at most ``spacing`` mm: (P, 3)."""
+def _mesh(face, deflection):
+    """A face's tessellation: (vertices (V, 3) mm, triangles' corners (T, 3, 3) mm)."""
     vertices, triangles = face.tessellate(deflection)
     vertices = np.array([[v.x, v.y, v.z] for v in vertices], dtype=float).reshape(-1, 3)
     triangles = np.array(triangles, dtype=int).reshape(-1, 3)
-    if not len(triangles):
+    return vertices, vertices[triangles]
+
+
+def _grids(corners, spacing):
+    """How each triangle (corners (T, 3, 3) mm) is filled so that neighbouring points are at
+    most spacing mm apart: (rows (T,), steps (T,)) ints. A triangle of rows 0 is filled on a
+    barycentric grid of ``steps`` steps per side; one with rows > 0 (a long thin triangle, where
+    that takes fewer points) by ``rows`` + 1 segments parallel to its longest side, from that side
+    to the opposite corner, each of ``steps`` steps."""
+    sides = np.linalg.norm(corners - np.roll(corners, 1, axis=1), axis=2)
+    longest = sides.max(axis=1)
+    area = 0.5 * np.linalg.norm(np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1)
+    height = 2.0 * area / np.maximum(longest, 1e-300)
+    steps = np.maximum(np.ceil(longest / spacing).astype(int), 1)
+    rows = np.maximum(np.ceil(height / spacing).astype(int), 1)
+    thin = (rows + 1) * (steps + 1) < (steps + 1) * (steps + 2) // 2
+    return np.where(thin, rows, 0), steps
+
+
+def _point_count(meshes, spacing):
+    """How many points :func:`_fill` puts on the meshes at spacing mm."""
+    total = 0
+    for vertices, corners in meshes:
+        rows, steps = _grids(corners, spacing)
+        total += len(vertices) + int(np.where(rows > 0, (rows + 1) * (steps + 1), (steps + 1) * (steps + 2) // 2).sum())
+    return total
+
+
+def _spacing_within(meshes, spacing, max_points):
+    """The smallest spacing from ``spacing`` up (mm, growing by a quarter) whose fill of the
+    meshes holds at most max_points points, counted before any is made."""
+    while _point_count(meshes, spacing) > max_points:
+        spacing *= 1.25
+    return spacing
+
+
+def _fill(vertices, corners, spacing):
+    """Points on a face's mesh (vertices (V, 3), triangles' corners (T, 3, 3), mm): its vertices
+    and its triangles filled as :func:`_grids` says: (P, 3)."""
+    if not len(corners):
         return vertices
-    corners = vertices[triangles]
-    longest = np.linalg.norm(corners - np.roll(corners, 1, axis=1), axis=2).max(axis=1)
-    divisions = np.maximum(np.ceil(longest / spacing).astype(int), 1)
+    rows, steps = _grids(corners, spacing)
     filled = [vertices]
-    for k in np.unique(divisions):
-        i, j = np.meshgrid(np.arange(k + 1), np.arange(k + 1), indexing="ij")
-        keep = i + j <= k
-        weights = np.stack([i[keep], j[keep], k - i[keep] - j[keep]], axis=1) / k
-        chosen = corners[divisions == k]
-        filled.append(np.einsum("wc,tcd->twd", weights, chosen).reshape(-1, 3))
+    for r, k in set(zip(rows.tolist(), steps.tolist())):
+        chosen = corners[(rows == r) & (steps == k)]
+        filled.append(_barycentric(chosen, k) if r == 0 else _rows(chosen, r, k))
     return np.concatenate(filled)
+
+
+def _barycentric(corners, k):
+    """Points of triangles (corners (T, 3, 3)) on a barycentric grid of k steps: (T * W, 3)."""
+    i, j = np.meshgrid(np.arange(k + 1), np.arange(k + 1), indexing="ij")
+    keep = i + j <= k
+    weights = np.stack([i[keep], j[keep], k - i[keep] - j[keep]], axis=1) / k
+    return np.einsum("wc,tcd->twd", weights, corners).reshape(-1, 3)
+
+
+def _rows(corners, r, k):
+    """Points of triangles (corners (T, 3, 3)) on r + 1 segments parallel to each one's longest
+    side, from that side (t = 0) to the opposite corner (t = 1), k steps each: (T * (r + 1) * (k + 1), 3)."""
+    sides = np.linalg.norm(corners - np.roll(corners, 1, axis=1), axis=2)
+    first = sides.argmax(axis=1)   # side j runs from corner j - 1 to corner j
+    a = corners[np.arange(len(corners)), (first - 1) % 3]
+    b = corners[np.arange(len(corners)), first]
+    c = corners[np.arange(len(corners)), (first + 1) % 3]
+    t = np.linspace(0.0, 1.0, r + 1)[:, None, None]
+    s = np.linspace(0.0, 1.0, k + 1)[None, :, None]
+    points = ((1.0 - t) * (a[:, None, None] + s * (b - a)[:, None, None]) + t * c[:, None, None])
+    return points.reshape(-1, 3)

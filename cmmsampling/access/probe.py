@@ -18,6 +18,14 @@ Part = import_part()
 import FreeCAD  # noqa: E402  (importable once import_part() has set the path)
 
 
+# The largest dimensions a Probe takes, mm: beyond any CMM stylus, and what keeps the pieces a
+# reach test sweeps (and their memory) bounded.
+LARGEST = {"ball_diameter": 100.0, "stylus_diameter": 100.0, "stylus_length": 1000.0, "body_diameter": 500.0,
+           "body_length": 2000.0, "approach": 100.0, "clearance": 200.0}
+# The finest step of an indexing head, degrees (its orientations grow with the inverse square of it).
+FINEST_INDEX_STEP = 2.5
+
+
 @dataclass(frozen=True)
 class Probe:
     """A stylus and probe body, and how the head may tilt them (mm, degrees).
@@ -46,10 +54,15 @@ class Probe:
             check_real(name, getattr(self, name), above=0.0)
         for name in ("approach", "clearance"):
             check_real(name, getattr(self, name), 0.0)
+        for name, largest in LARGEST.items():
+            if getattr(self, name) > largest:
+                raise InputError(f"{name} {getattr(self, name):g} mm is larger than a CMM probe's (at most {largest:g} "
+                                 "mm here, which bounds the reach's memory and time); give a smaller value")
         check_real("max_tilt", self.max_tilt, 0.0, 90.0)
         check_real("max_head_angle", self.max_head_angle, 0.0, 180.0)
-        if self.index_step is not None:
-            check_real("index_step", self.index_step, above=0.0)
+        if self.index_step is not None and check_real("index_step", self.index_step, above=0.0) < FINEST_INDEX_STEP:
+            raise InputError(f"index_step {self.index_step:g} degrees is finer than an indexing head's ({FINEST_INDEX_STEP:g} "
+                             "degrees or more: a PH10 steps 7.5, a Zeiss RDS 2.5); give index_step=None for a continuous head")
         if self.stylus_diameter > self.ball_diameter:
             raise InputError(f"a stylus of {self.stylus_diameter} mm is thicker than its {self.ball_diameter} mm "
                              "ball: the stylus would touch first; give stylus_diameter below ball_diameter")

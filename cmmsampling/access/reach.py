@@ -24,7 +24,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..geometry.freecad_env import import_part
-from .obstacles import Obstacles
+from ..geometry.validation import InputError
+from .obstacles import MAX_POINTS, Obstacles
 from .probe import Probe, Vector, candidate_axes, head_angles
 
 Part = import_part()
@@ -158,6 +159,9 @@ def _inside(part, point):
 
 # How far OCC may find the touching ball inside the part (mm) and still call it a touch.
 TOUCH_TOLERANCE = 1e-3
+# The coarsest the part's model may know its surface, as a share of the ball's radius: the touch
+# test takes that much off the ball.
+COARSEST_DEFLECTION = 0.5
 
 
 class Reachability:
@@ -173,6 +177,12 @@ class Reachability:
         self.part = part
         self.probe = probe if probe is not None else Probe()
         self.obstacles = Obstacles(part, spacing)
+        if self.obstacles.deflection > COARSEST_DEFLECTION * self.probe.radius:
+            raise InputError(
+                f"the part is {part.BoundBox.DiagonalLength:.0f} mm across: modelled by at most "
+                f"{MAX_POINTS:,} points its surface is known to {self.obstacles.deflection:.2g} mm, too coarse to judge "
+                f"a {self.probe.ball_diameter:g} mm ball's touch; give as part= only the faces around this one, or "
+                "leave part= out")
         self._answers = {}
 
     def __call__(self, points, normals):

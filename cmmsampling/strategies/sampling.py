@@ -395,6 +395,11 @@ def _check_reach(problem, result):
     result.access.unreached = problem.domain.unreached_rectangles()
     result.access.unreached_area = problem.domain.unreached_area
     result.settings["probe"] = asdict(problem.reachability.probe)
+    obstacles = problem.reachability.obstacles
+    if obstacles.coarsened:
+        result.notes.append(f"the part is large: it was modelled by points {obstacles.spacing:.2g} mm apart, so the "
+                            f"probe's clearance was judged with a {obstacles.margin:.2g} mm margin (erring on the "
+                            "side of blocking)")
     if problem.domain.unreached_area > 0:
         share = problem.domain.unreached_area / problem.model.area
         result.notes.append(f"the probe cannot reach {problem.domain.unreached_area:.4g} mm^2 of the face "

@@ -349,3 +349,26 @@ def test_a_large_ball_touches_a_large_plain_face():
         probe = Probe(ball_diameter=ball, stylus_diameter=3.0)
         result = cmmsampling.sample(floor_of(plate, 20.0), 16, "halton", part=plate, probe=probe, grid=20)
         assert result.access.reachable.all() and not result.access.tilted.any()
+
+
+@pytest.mark.parametrize("max_points", [2_000_000, 20_000])
+def test_the_parts_points_are_capped_and_still_cover_its_faces(max_points):
+    """A cylinder's caps tessellate into long thin triangles, filled in rows along their longest
+    side; points inside a fine tessellation's triangles lie within the margin (spacing plus
+    deflection) of the model's points, however far a cap on their number widened the spacing."""
+    cylinder = Part.makeCylinder(20, 50)
+    obstacles = Obstacles(cylinder, max_points=max_points)
+    assert len(obstacles.points) <= max_points and obstacles.coarsened == (obstacles.spacing > 0.5)
+    assert obstacles.tree.query(points_within(cylinder))[0].max() <= obstacles.margin
+
+
+def points_within(shape, per_triangle=20, seed=0):
+    """Random points inside the triangles of a fine tessellation of each face, (P, 3) mm."""
+    random = np.random.default_rng(seed)
+    found = []
+    for face in shape.Faces:
+        vertices, triangles = face.tessellate(0.01)
+        corners = np.array([tuple(v) for v in vertices])[np.array(triangles)]
+        weights = random.dirichlet(np.ones(3), size=(len(corners), per_triangle))
+        found.append(np.einsum("tkc,tcd->tkd", weights, corners).reshape(-1, 3))
+    return np.concatenate(found)

@@ -226,3 +226,46 @@ def test_12_a_part_that_does_not_hold_the_face_is_refused(part):
         assert [obj.Name for obj in doc.Objects] == ["Other"]
     finally:
         FreeCAD.closeDocument("OtherPart")
+
+
+@pytest.mark.parametrize("values, message", [
+    ({"ball_diameter": 1e6, "stylus_diameter": 1.0}, "ball_diameter 1e\\+06 mm is larger than a CMM probe's"),
+    ({"index_step": 0.2}, "index_step 0.2 degrees is finer than an indexing head's"),
+    ({"clearance": 1e6}, "clearance 1e\\+06 mm is larger"),
+    ({"approach": 1e6}, "approach 1e\\+06 mm is larger"),
+    ({"body_length": 1e6}, "body_length 1e\\+06 mm is larger"),
+])
+def test_1_a_probe_beyond_any_cmms_is_refused_before_its_reach_is_built(values, message):
+    with pytest.raises(InputError, match=message):
+        Probe(**values)
+
+
+def test_1_the_largest_probe_judges_a_plate_in_bounded_memory(tmp_path):
+    """The largest probe taken, on a 200 mm plate, under a 3 GB address-space limit (FreeCAD's
+    libraries take about 1 GB of it): before, each of the values above asked 4-23 GB."""
+    script = tmp_path / "largest.py"
+    script.write_text(
+        "import sys; sys.path[:0] = ['/usr/lib/freecad-python3/lib', sys.argv[1]]\n"
+        "import FreeCAD, Part, cmmsampling\n"
+        "from cmmsampling.access.probe import LARGEST, Probe\n"
+        "plate = Part.makeBox(200, 200, 20)\n"
+        "top = next(f for f in plate.Faces if abs(f.BoundBox.ZMin - 20) < 1e-9)\n"
+        "probe = Probe(**{**LARGEST, 'stylus_diameter': 3.0, 'body_diameter': 13.2})\n"
+        "result = cmmsampling.sample(top, 16, 'halton', part=plate, probe=probe, grid=20)\n"
+        "print(int(result.access.reachable.sum()))\n")
+    run = subprocess.run(["bash", "-c", f"ulimit -v 3000000; {PYTHON} {script} {ROOT}"], capture_output=True,
+                         text=True, timeout=600)
+    assert run.returncode == 0 and run.stdout.split()[-1] == "16", run.stderr[-2000:]
+
+
+def test_2_a_part_too_large_for_the_ball_is_refused_in_bounded_memory(tmp_path):
+    """A part 50 m across with a 2 mm ball: its model is capped at MAX_POINTS points, too coarse
+    to judge the ball's touch, so it is refused (before, the part was modelled by points 0.5 mm
+    apart: a 3 m part asked 9 GB)."""
+    from cmmsampling.access.obstacles import MAX_POINTS, Obstacles
+
+    hall = Part.makeBox(50000, 20000, 5000)
+    obstacles = Obstacles(hall)
+    assert obstacles.coarsened and len(obstacles.points) <= MAX_POINTS
+    with pytest.raises(InputError, match="too coarse to judge a 2 mm ball's touch"):
+        cmmsampling.sample(hall.Faces[0], 16, "halton", part=hall, probe=Probe(), grid=20)
