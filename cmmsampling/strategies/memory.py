@@ -6,7 +6,8 @@ RSS on the reference face, N = 100 to 4000; the project's memory benchmark print
 against measurement):
 
 * every run: the substitute's normal equations and regulariser, about 6 (K, K) float64 arrays
-  (K = n_u n_v poles, about 4N/9 by default), and a fixed part (the domain raster, the grid);
+  (K = n_u n_v poles, about 4N/9 by default), a fixed part (the domain raster, the default
+  grid), and about 8.5 KiB per node of a grid finer than the default;
 * each strategy adds its own (``Strategy.memory``): PSO fits its whole swarm at once, about
   1.25 (P/W, K, K) float64 arrays in each of its W processes, plus a process; the optimal
   strategy's linearisation, (N, K) and (G, K) arrays.
@@ -18,16 +19,22 @@ import os
 from ..geometry.validation import InputError, check_int
 
 FIXED_BYTES = 80 * 2**20
+# Every grid node's share of a run (its points, normals and basis values on the evaluation grid
+# and the denser check grid), bytes: measured 7.5-9.0 KiB per node on grids of 200 x 200 to 800 x 800,
+# whatever N. The default 60 x 60 grid's share is in FIXED_BYTES.
+GRID_NODE_BYTES = 8704
+DEFAULT_GRID_NODES = 60 * 60
 FIT_ARRAYS = 6
 FLOAT = 8
 # Refuse a run whose estimate exceeds this share of the memory the machine has free.
 SAFE_SHARE = 0.8
 
 
-def base_bytes(poles):
-    """Memory (bytes) every run needs for a substitute with ``poles`` (n_u, n_v)."""
+def base_bytes(poles, nodes=DEFAULT_GRID_NODES):
+    """Memory (bytes) every run needs for a substitute with ``poles`` (n_u, n_v), judged on a
+    grid of ``nodes`` nodes."""
     count = poles[0] * poles[1]
-    return FIXED_BYTES + FIT_ARRAYS * FLOAT * count ** 2
+    return FIXED_BYTES + GRID_NODE_BYTES * max(nodes - DEFAULT_GRID_NODES, 0) + FIT_ARRAYS * FLOAT * count ** 2
 
 
 def available_bytes():

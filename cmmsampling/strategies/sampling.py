@@ -153,7 +153,7 @@ def _check_on_part(face, part):
 def memory_bytes(n, degree, given_poles, grid, workers, strategy, options):
     """Estimated bytes of a run (see :func:`memory_needed`); arguments already checked."""
     poles = resolve_fit_poles(given_poles, n, degree)
-    needed = memory.base_bytes(poles)
+    needed = memory.base_bytes(poles, grid[0] * grid[1])
     entry = STRATEGIES.get(strategy)
     if entry is not None and entry.memory is not None:
         needed += entry.memory(n, poles, grid[0] * grid[1], options, workers)
