@@ -179,7 +179,7 @@ class ProbePoints(TypedProxy):
         obj.Shape = Part.makeCompound([Part.Vertex(p) for p in obj.Points])
         face, problem = source_face(obj)
         obj.Orphaned = face is None and bool(obj.SourceName)
-        obj.Outdated = face is not None and not _passes_through(face, obj)
+        obj.Outdated = face is not None and not passes_through(face, obj)
         if obj.Orphaned:
             obj.Status = f"orphaned: {problem}"
             FreeCAD.Console.PrintWarning(f"{obj.Label} is orphaned: {problem}\n")
@@ -274,7 +274,7 @@ def _view_provider_when_missing(obj):
         view_providers.attach_when_missing(obj)
 
 
-def _passes_through(face, points):
+def passes_through(face, points):
     """True when the face at the stored (u, v) still gives the stored points."""
     if not points.Points:
         return True

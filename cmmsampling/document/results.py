@@ -16,7 +16,8 @@ from ..planning.probe_moves import probe_moves
 from ..strategies.result import SamplingResult
 from ..strategies.sampling import evaluate
 from .object_types import source_face
-from .objects import SUMMARY_FIGURES, ProbePoints, make_probe_path, make_probe_points, make_substitute_surface
+from .objects import (POINT_TOLERANCE_MM, SUMMARY_FIGURES, ProbePoints, make_probe_path, make_probe_points,
+                      make_substitute_surface, passes_through)
 from .sheets import write_deviation_report, write_plan_report
 from .transaction import hide_results, recompute, transaction
 
@@ -124,14 +125,40 @@ def reevaluate(points: FreeCAD.DocumentObject, occ_check: bool = True) -> Sampli
     face, problem = source_face(points)
     if face is None:
         raise InputError(f"cannot re-evaluate {points.Label}: {problem}")
+    face, renamed = _renumbered(points, face)
     settings = json.loads(points.Parameters)
     uv = np.column_stack([points.U, points.V])
     fit = {key: settings[key] for key in FIT_SETTINGS if key in settings}
     result = evaluate(face, uv, strategy=points.Strategy, occ_check=occ_check, **fit, **_reach_of(points))
     with transaction(points.Document, "Re-evaluate probe points"):
+        if renamed is not None:
+            result.notes.append(f"the part's faces were renumbered: the points' face {points.Source[1][0]} is now "
+                                f"{renamed}")
+            points.Source = (points.Source[0], [renamed])
+            points.SourceName = f"{points.Source[0].Label}:{renamed}"
         write_result(points, result, settings, points.RunTime)
         recompute(points.Document, [o for o in (points, points.Substitute, points.Report) if o is not None])
     return result
+
+
+def _renumbered(points, face):
+    """(the face to re-evaluate the points on, its new name or None): the linked face, unless it no
+    longer passes through the points and exactly one other face of the source object does, the
+    same surface under a new number (the part's faces were renumbered), which is taken instead."""
+    if passes_through(face, points):
+        return face, None
+    stored = np.array([tuple(p) for p in points.Points], dtype=float)
+    low, high = stored.min(axis=0) - POINT_TOLERANCE_MM, stored.max(axis=0) + POINT_TOLERANCE_MM
+    found = [(f"Face{k}", other) for k, other in enumerate(points.Source[0].Shape.Faces, start=1)
+             if _box_holds(other.BoundBox, low, high) and passes_through(other, points)]
+    return (found[0][1], found[0][0]) if len(found) == 1 else (face, None)
+
+
+def _box_holds(box, low, high):
+    """True when a FreeCAD BoundBox (grown by the point tolerance) holds the box low..high (3,) mm."""
+    return (box.XMin - POINT_TOLERANCE_MM <= low[0] and box.YMin - POINT_TOLERANCE_MM <= low[1]
+            and box.ZMin - POINT_TOLERANCE_MM <= low[2] and high[0] <= box.XMax + POINT_TOLERANCE_MM
+            and high[1] <= box.YMax + POINT_TOLERANCE_MM and high[2] <= box.ZMax + POINT_TOLERANCE_MM)
 
 
 def _reach_of(points):

@@ -232,3 +232,27 @@ def test_orphaned_points_survive_saving_and_reopening(doc, result, tmp_path):
             document.reevaluate(points)
     finally:
         FreeCAD.closeDocument(reopened.Name)
+
+
+def test_reevaluate_finds_its_face_by_geometry_after_the_parts_faces_are_renumbered():
+    """Issue 33 #21: the part's faces renumbered (the same solid built from its faces in reverse
+    order), Re-evaluate took the new Face6, another face, and said "up to date"."""
+    box = Part.makeBox(30, 20, 10)
+    doc = FreeCAD.newDocument("Renumbered")
+    try:
+        body = doc.addObject("Part::Feature", "Body")
+        body.Shape = box
+        doc.recompute()
+        result = cmmsampling.sample(box.Faces[5], 9, "halton", grid=20)
+        points = cmmsampling.add_to_document(result, doc, source=(body, "Face6")).Group[0]
+        body.Shape = Part.Solid(Part.Shell(list(reversed(box.Faces))))
+        doc.recompute()
+        assert points.Outdated
+        again = cmmsampling.reevaluate(points)
+        doc.recompute()
+        assert points.Source[1] == ["Face1"] and points.SourceName == "Body:Face1"
+        np.testing.assert_allclose(again.points, result.points, atol=1e-9)
+        assert "the part's faces were renumbered: the points' face Face6 is now Face1" in points.Notes
+        assert points.Status == "up to date"
+    finally:
+        FreeCAD.closeDocument("Renumbered")
