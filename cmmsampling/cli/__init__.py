@@ -8,6 +8,7 @@ import traceback
 
 from ..access.probe import PROBES
 from ..formats.cad_files import describe_faces, freecad_reason, read_shape
+from ..formats.files import remove_killed_saves
 from ..formats.pointfiles import FORMATS
 from ..geometry.surface import reference_face
 from ..geometry.validation import InputError, check_real
@@ -325,6 +326,8 @@ def _save_document(args, add):
         part.Shape = read_shape(args.file)
         document.recompute()
         add(document, part)
+        for leftover in remove_killed_saves(args.fcstd):
+            print(f"removed {leftover}, left by a save that was killed midway")
         try:
             document.saveAs(os.path.abspath(args.fcstd))
         except Exception as exc:   # FreeCAD raises its own exception types here

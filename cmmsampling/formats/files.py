@@ -10,6 +10,8 @@ class ExportError(OSError):
 
 # The temporary files of write_atomically: .<file name>.<process id>.<random>.tmp
 TEMPORARY = re.compile(r"^\..+\.(?P<pid>\d+)\.[A-Za-z0-9_]{8}\.tmp$")
+# What FreeCAD writes a document to before it renames it over the file: <file name>.<uuid>
+FREECAD_TEMPORARY = r"\.[0-9A-Fa-f]{8}-[0-9A-Fa-f]{4}-[0-9A-Fa-f]{4}-[0-9A-Fa-f]{4}-[0-9A-Fa-f]{12}"
 
 
 def check_writable(path):
@@ -115,3 +117,15 @@ def _file_mode(target):
     umask = os.umask(0)
     os.umask(umask)
     return 0o666 & ~umask
+
+
+def remove_killed_saves(path):
+    """Remove the temporary files that saves of the FreeCAD document ``path`` killed midway left
+    beside it (``<name>.FCStd.<uuid>``, which FreeCAD renames over the file once it is whole):
+    call it just before saving that document again. Returns the paths removed."""
+    folder, name = os.path.split(os.path.abspath(os.fspath(path)))
+    pattern = re.compile(re.escape(name) + FREECAD_TEMPORARY + "$")
+    removed = [os.path.join(folder, entry) for entry in os.listdir(folder) if pattern.match(entry)]
+    for leftover in removed:
+        os.unlink(leftover)
+    return removed

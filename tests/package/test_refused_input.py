@@ -269,3 +269,16 @@ def test_2_a_part_too_large_for_the_ball_is_refused_in_bounded_memory(tmp_path):
     assert obstacles.coarsened and len(obstacles.points) <= MAX_POINTS
     with pytest.raises(InputError, match="too coarse to judge a 2 mm ball's touch"):
         cmmsampling.sample(hall.Faces[0], 16, "halton", part=hall, probe=Probe(), grid=20)
+
+
+def test_22_saving_a_document_again_removes_what_a_killed_save_left(part, tmp_path, capsys):
+    brep = tmp_path / "part.brep"
+    part.exportBrep(str(brep))
+    leftover = tmp_path / "plan.FCStd.0f8fad5b-d9cb-469f-a165-70867728950e"
+    other = tmp_path / "other.FCStd.0f8fad5b-d9cb-469f-a165-70867728950e"
+    for path in (leftover, other):
+        path.write_bytes(b"PK\x03\x04 cut short")
+    assert cli.main(["sample", str(brep), "--face", "1", "-n", "9", "--strategy", "halton",
+                     "--fcstd", str(tmp_path / "plan.FCStd")]) == 0
+    assert f"removed {leftover}, left by a save that was killed midway" in capsys.readouterr().out
+    assert not leftover.exists() and other.exists() and (tmp_path / "plan.FCStd").stat().st_size > 1000
