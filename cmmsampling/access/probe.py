@@ -12,7 +12,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..geometry.freecad_env import import_part
-from ..geometry.validation import InputError, check_real
+from ..geometry.validation import InputError, InputTypeError, check_real
 
 Part = import_part()
 import FreeCAD  # noqa: E402  (importable once import_part() has set the path)
@@ -116,6 +116,13 @@ class Probe:
         if with_ball:
             parts.append(Part.makeSphere(self.radius, centre))
         return parts[0].fuse(parts[1:]).removeSplitter()
+
+
+def check_probe(probe):
+    """InputTypeError unless probe is a Probe (None is no probe, and passes)."""
+    if probe is not None and not isinstance(probe, Probe):
+        raise InputTypeError(f"probe must be a cmmsampling.Probe (e.g. cmmsampling.PROBES['2 mm ball, 20 mm "
+                             f"stylus']), got {probe!r}")
 
 
 def Vector(values):

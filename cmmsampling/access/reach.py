@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..geometry.freecad_env import import_part
+from ..geometry.surface import lies_on
 from ..geometry.validation import InputError
 from .obstacles import MAX_POINTS, Obstacles
 from .probe import Probe, Vector, candidate_axes, head_angles
@@ -183,7 +184,7 @@ class Reachability:
                 f"{MAX_POINTS:,} points its surface is known to {self.obstacles.deflection:.2g} mm, too coarse to judge "
                 f"a {self.probe.ball_diameter:g} mm ball's touch; give as part= only the faces around this one, or "
                 "leave part= out")
-        self._answers = {}
+        self._answers, self._holds = {}, {}
 
     def __call__(self, points, normals):
         """(M,) bool; the same question (the same points and normals, as a face's raster asks it
@@ -193,6 +194,14 @@ class Reachability:
         if key not in self._answers:
             self._answers[key] = reach(self.probe, self.obstacles, points, normals).reachable
         return self._answers[key].copy()
+
+    def holds(self, face):
+        """True when face (a Part.Face) lies on the part (:func:`cmmsampling.geometry.surface.lies_on`);
+        asked once per face (a search asks it at every N)."""
+        key = face.hashCode()
+        if key not in self._holds:
+            self._holds[key] = lies_on(face, self.part)
+        return self._holds[key]
 
     def final(self, points, normals):
         """The Access of final points: each point's axis from the fast test, then its pose

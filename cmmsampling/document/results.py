@@ -147,18 +147,18 @@ def _renumbered(points, face):
     same surface under a new number (the part's faces were renumbered), which is taken instead."""
     if passes_through(face, points):
         return face, None
-    stored = np.array([tuple(p) for p in points.Points], dtype=float)
-    low, high = stored.min(axis=0) - POINT_TOLERANCE_MM, stored.max(axis=0) + POINT_TOLERANCE_MM
+    spread = FreeCAD.BoundBox()
+    for point in points.Points:
+        spread.add(point)
     found = [(f"Face{k}", other) for k, other in enumerate(points.Source[0].Shape.Faces, start=1)
-             if _box_holds(other.BoundBox, low, high) and passes_through(other, points)]
+             if _grown(other.BoundBox).isInside(spread) and passes_through(other, points)]
     return (found[0][1], found[0][0]) if len(found) == 1 else (face, None)
 
 
-def _box_holds(box, low, high):
-    """True when a FreeCAD BoundBox (grown by the point tolerance) holds the box low..high (3,) mm."""
-    return (box.XMin - POINT_TOLERANCE_MM <= low[0] and box.YMin - POINT_TOLERANCE_MM <= low[1]
-            and box.ZMin - POINT_TOLERANCE_MM <= low[2] and high[0] <= box.XMax + POINT_TOLERANCE_MM
-            and high[1] <= box.YMax + POINT_TOLERANCE_MM and high[2] <= box.ZMax + POINT_TOLERANCE_MM)
+def _grown(box):
+    """A face's FreeCAD BoundBox grown by the points' tolerance (its own copy, changed in place)."""
+    box.enlarge(POINT_TOLERANCE_MM)
+    return box
 
 
 def _reach_of(points):

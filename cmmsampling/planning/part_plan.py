@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..access.probe import Probe
+from ..access.probe import Probe, check_probe
 from ..access.reach import Access, Reachability
 from ..fitting.substitute import DEFAULT_DEGREE
 from ..geometry.freecad_env import import_part
@@ -269,9 +269,7 @@ def _part(shape_or_faces, part, probe):
         if part is not None:
             raise InputError("part= is what a probe must keep clear of: give probe= (a cmmsampling.Probe) too")
         return None, ""
-    if not isinstance(probe, Probe):
-        raise InputTypeError(f"probe must be a cmmsampling.Probe (e.g. cmmsampling.PROBES['2 mm ball, 20 mm "
-                             f"stylus']), got {probe!r}")
+    check_probe(probe)
     part = shape_or_faces if part is None and isinstance(shape_or_faces, Part.Shape) else part
     if not isinstance(part, Part.Shape):
         raise InputError("a probe's reach is judged on the whole part: give part= (the solid) with a list of faces")

@@ -11,7 +11,7 @@ from dataclasses import asdict
 
 import numpy as np
 
-from ..access.probe import Probe
+from ..access.probe import Probe, check_probe
 from ..access.reach import Reachability
 from ..fitting.crosscheck import occ_cross_check
 from ..fitting.deviation import DEFAULT_GRID, DeviationStats
@@ -37,9 +37,10 @@ __all__ = ["STRATEGIES", "Setting", "Strategy", "StrategyOutcome", "register_str
            "MIN_POINTS"]
 
 MIN_POINTS = 4
-# sample()'s keyword arguments that every strategy takes; the others are the strategy's options.
-COMMON_ARGUMENTS = ("fit_degree", "fit_poles", "smoothing", "grid", "seed", "progress", "occ_check", "workers",
-                    "edge_offset", "min_spacing", "part", "probe")
+# sample()'s keyword arguments that every strategy takes (the others are the strategy's options),
+# and those of them that _checked_settings checks whatever the face.
+SETTINGS = ("fit_degree", "fit_poles", "smoothing", "grid", "seed", "workers", "edge_offset", "min_spacing")
+COMMON_ARGUMENTS = SETTINGS + ("progress", "occ_check", "part", "probe")
 # An int for both parameter directions or a (u, v) pair of them.
 Pair = int | tuple[int, int]
 # progress(iteration, best maximum deviation mm) -> True to cancel.
@@ -81,7 +82,8 @@ def make_problem(face, n, fit_degree=DEFAULT_DEGREE, fit_poles=None, smoothing=D
     return problem
 
 
-def _checked_settings(n, fit_degree, fit_poles, smoothing, grid, seed, workers, edge_offset, min_spacing):
+def _checked_settings(n, fit_degree=DEFAULT_DEGREE, fit_poles=None, smoothing=DEFAULT_SMOOTHING, grid=DEFAULT_GRID,
+                      seed=0, workers=None, edge_offset=0.0, min_spacing=None):
     """sample()'s common settings checked, whatever the face: (n, degree pair, given poles pair or
     None, poles pair, smoothing, grid pair, seed, workers, edge_offset mm, min_spacing mm or None);
     InputError or InputTypeError naming the first bad one."""
@@ -108,14 +110,9 @@ def check_arguments(strategy, arguments, n=MIN_POINTS):
     settings, part= and probe=. arguments: sample()'s keyword arguments other than face, n and
     strategy (the options among them); n: the points of the runs to come."""
     check_choice("strategy", strategy, list(STRATEGIES))
-    common = {name: arguments[name] for name in COMMON_ARGUMENTS if name in arguments}
     strategy_options(strategy, {name: value for name, value in arguments.items() if name not in COMMON_ARGUMENTS})
-    _checked_settings(n, common.get("fit_degree", DEFAULT_DEGREE), common.get("fit_poles"),
-                      common.get("smoothing", DEFAULT_SMOOTHING), common.get("grid", DEFAULT_GRID),
-                      common.get("seed", 0), common.get("workers"), common.get("edge_offset", 0.0),
-                      common.get("min_spacing"))
-    if common.get("probe") is not None and not isinstance(common["probe"], Probe):
-        raise InputTypeError(f"probe must be a cmmsampling.Probe, got {common['probe']!r}")
+    _checked_settings(n, **{name: arguments[name] for name in SETTINGS if name in arguments})
+    check_probe(arguments.get("probe"))
 
 
 def _reachability(part, probe, face):
@@ -130,20 +127,19 @@ def _reachability(part, probe, face):
     if isinstance(part, Reachability):
         if probe is not None and probe != part.probe:
             raise InputError("part= is a Reachability with its own probe; give no other probe=")
-        _check_on_part(face, part.part)
+        _refuse_off_part(part.part, part.holds(face))
         return part
     if not isinstance(part, Part.Shape) or part.isNull() or not part.Faces:
         raise InputTypeError(f"part must be the Part.Shape the face belongs to (a solid, a shell), got {part!r}")
-    if probe is not None and not isinstance(probe, Probe):
-        raise InputTypeError(f"probe must be a cmmsampling.Probe, got {probe!r}")
-    _check_on_part(face, part)
+    check_probe(probe)
+    _refuse_off_part(part, lies_on(face, part))
     return Reachability(part, probe)
 
 
-def _check_on_part(face, part):
-    """InputError when face (a Part.Face) is not on part (a Part.Shape): the probe's reach would be
-    judged on another part."""
-    if not lies_on(face, part):
+def _refuse_off_part(part, on):
+    """InputError unless the face lies on part (a Part.Shape), as ``on`` says: the probe's reach would
+    be judged on another part."""
+    if not on:
         box = part.BoundBox
         raise InputError(f"the face is not on part= (a part within x {box.XMin:.4g}..{box.XMax:.4g}, y "
                          f"{box.YMin:.4g}..{box.YMax:.4g}, z {box.ZMin:.4g}..{box.ZMax:.4g} mm); give the shape "
