@@ -25,6 +25,9 @@ import numpy as np
 from ..geometry.bspline import greville_abscissae, kron_rows
 from .exact import Linearisation
 
+# Rounds of minimax_bracket's reweighting at most.
+BRACKET_ROUNDS = 30
+
 
 @dataclass
 class MinimaxBound:
@@ -95,6 +98,37 @@ def pole_normals(space, poles):
     return np.divide(normal, length, out=np.zeros_like(normal), where=length > 0)
 
 
+def minimax_bracket(space, exact, level=None):
+    """(lower, upper) mm around :func:`minimax_bound`'s figure, in milliseconds, by Lawson's
+    reweighted least squares: for probability weights w on the terms, sqrt(min_x sum_k w_k
+    d_lin,k^2) is at most the minimax (weak duality, see the module docstring) and the largest
+    |d_lin,k| of that x at least it; the weights then grow where the terms are largest.
+
+    space, exact: as minimax_bound; level: mm, stop as soon as the bracket lies wholly above or
+    below it (what a search asks: "can this space reach the tolerance?"), else after
+    BRACKET_ROUNDS rounds.
+    """
+    residuals = _GridResiduals(space, exact)
+    rows, target = residuals.rows(residuals.inside), residuals.target(residuals.inside)
+    scale = float(np.abs(target).max(initial=0.0))
+    if scale == 0:
+        return 0.0, 0.0
+    target = target / scale
+    weights = np.full(len(rows), 1.0 / len(rows))
+    lower, upper = 0.0, np.inf
+    for _ in range(BRACKET_ROUNDS):
+        weighted = rows * weights[:, None]
+        x = np.linalg.lstsq(rows.T @ weighted, weighted.T @ target, rcond=None)[0]
+        squared = (rows @ x - target) ** 2
+        lower = max(lower, float(np.sqrt(weights @ squared)))
+        upper = min(upper, float(np.sqrt(squared.max())))
+        if level is not None and (lower * scale > level or upper * scale <= level):
+            break
+        weights = weights * np.sqrt(squared)
+        weights /= weights.sum()
+    return lower * scale, upper * scale
+
+
 def minimax_bound(space, exact, grid):
     """min_x max_k |d_lin,k| over both sides of every node, as a linear programme.
 
@@ -104,14 +138,10 @@ def minimax_bound(space, exact, grid):
     ``lower`` is its optimum, ``upper`` the largest |d_lin,k| of its solution (equal within
     HiGHS's tolerances). Returns a MinimaxBound (mm).
     """
-    from scipy.optimize import linprog
-
     residuals = _GridResiduals(space, exact)
     rows, target = residuals.rows(residuals.inside), residuals.target(residuals.inside)
     count = rows.shape[1]
-    ones = np.ones((len(rows), 1))
-    answer = linprog(np.r_[np.zeros(count), 1.0], A_ub=np.block([[rows, -ones], [-rows, -ones]]),
-                     b_ub=np.r_[target, -target], bounds=[(None, None)] * count + [(0, None)], method="highs")
+    answer = _programme(rows, target)
     if answer.status != 0:
         zero = np.zeros(count)
         own = float(np.sqrt(residuals.everywhere(zero).max()))
@@ -121,3 +151,12 @@ def minimax_bound(space, exact, grid):
     return MinimaxBound(min(float(answer.fun), upper), upper, int(answer.nit), True, tuple(grid), residuals.poles(x))
 
 
+def _programme(rows, target):
+    """HiGHS's answer to: minimise t subject to |rows x - target| <= t; rows (K, M), target (K,)
+    (scaled to about 1 by the caller where the figures are small); scipy's OptimizeResult, x =
+    (x (M,), t)."""
+    from scipy.optimize import linprog
+
+    count, ones = rows.shape[1], np.ones((len(rows), 1))
+    return linprog(np.r_[np.zeros(count), 1.0], A_ub=np.block([[rows, -ones], [-rows, -ones]]),
+                   b_ub=np.r_[target, -target], bounds=[(None, None)] * count + [(0, None)], method="highs")

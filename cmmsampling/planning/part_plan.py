@@ -28,6 +28,7 @@ from ..geometry.freecad_env import import_part
 from ..geometry.surface import as_face
 from ..geometry.validation import InputError, InputTypeError, check_int, check_pair, check_real
 from ..strategies import handover
+from ..strategies.face_setup import reused
 from ..strategies.sampling import BEST_STRATEGY, check_arguments, evaluate, probe_edge_offset, sample
 from ..strategies.threads import blas_threads
 from . import face_runs
@@ -329,7 +330,7 @@ def solve_face(job):
     """A FaceJob's FacePlan (runs in a worker process, or here, with one BLAS thread: the faces
     are the parallel part): the tolerance search, or one run at job.n; a refused face gets its
     reason."""
-    with blas_threads(1):
+    with blas_threads(1), reused():
         return _solve_face(job)
 
 

@@ -9,7 +9,9 @@ points than poles), with a galloping search for the first step that meets the to
 bisection back down between the last step that failed and that one. A step whose result misses
 the tolerance while its local bound (the least maximum deviation reshaping that substitute could
 reach, :meth:`SamplingResult.bounds`) is within it is tried once more at the most points of the
-step before the search moves on. The result of each N tried is kept in ``tried``.
+step before the search moves on; the bound is worked out only there, and only as far as telling
+it from the tolerance needs (:meth:`SamplingResult.bound_exceeds`). The result of each N tried
+is kept in ``tried``.
 """
 from __future__ import annotations
 
@@ -22,6 +24,7 @@ import numpy as np
 from ..access.reach import Reachability
 from ..fitting.substitute import DEFAULT_DEGREE, default_pole_count
 from ..geometry.validation import InputError, check_int, check_pair, check_real
+from ..strategies.face_setup import reused
 from ..strategies.sampling import BEST_STRATEGY, MIN_POINTS, Part, check_arguments, probe_edge_offset, sample
 
 DEFAULT_MAX_POINTS = 400
@@ -70,7 +73,8 @@ def _last_with_poles(poles, n, n_max, degree):
 @dataclass
 class Tried:
     """One N tried: points, the maximum deviation its result reached (mm), the local bound about
-    its substitute (mm), seconds; or the reason the strategy refused that N."""
+    its substitute (mm; NaN where the search needed no more than to know it is above the
+    tolerance), seconds; or the reason the strategy refused that N."""
 
     n: int
     maximum: float = float("nan")
@@ -123,14 +127,15 @@ def points_needed(face: Part.Face, tolerance: float, strategy: str = BEST_STRATE
     tolerance = check_real("tolerance", tolerance, above=0.0)
     n_max = check_max_points(n_max, fit_degree)
     check_arguments(strategy, {**arguments, "fit_degree": fit_degree}, fewest_points(fit_degree))
-    if edge_offset is None:
-        edge_offset = probe_edge_offset(face)
     if arguments.get("part") is not None and not isinstance(arguments["part"], Reachability):
         arguments["part"] = Reachability(arguments["part"], arguments.pop("probe", None))
-    search = _Search(face, strategy, tolerance, progress,
-                     dict(arguments, edge_offset=edge_offset, fit_degree=fit_degree))
-    search.run_steps(step_counts(n_max, fit_degree))
-    return search.answer(n_max)
+    with reused():
+        if edge_offset is None:
+            edge_offset = probe_edge_offset(face)
+        search = _Search(face, strategy, tolerance, progress,
+                         dict(arguments, edge_offset=edge_offset, fit_degree=fit_degree))
+        search.run_steps(step_counts(n_max, fit_degree))
+        return search.answer(n_max)
 
 
 def check_max_points(n_max, fit_degree=DEFAULT_DEGREE):
@@ -171,8 +176,7 @@ class _Search:
             self.tried.append(Tried(n, seconds=time.perf_counter() - start, refused=str(exc)))
             self.results[n] = None
             return None
-        bound = result.bounds()["grid"].lower
-        self.tried.append(Tried(n, result.deviation.maximum, bound, time.perf_counter() - start))
+        self.tried.append(Tried(n, result.deviation.maximum, seconds=time.perf_counter() - start))
         self.results[n] = result
         return result
 
@@ -183,8 +187,11 @@ class _Search:
         if self.meets(first):
             return True
         result = self.results[first]
-        reachable = result is not None and result.bounds()["grid"].lower <= self.tolerance
-        return reachable and last != first and self.meets(last)
+        if result is None or last == first:
+            return False
+        exceeds, bound = result.bound_exceeds(self.tolerance)
+        next(tried for tried in self.tried if tried.n == first).bound = bound
+        return not exceeds and self.meets(last)
 
     def run_steps(self, steps):
         """Run the steps the search needs to find the first that meets the tolerance: galloping

@@ -1,11 +1,10 @@
 """SamplingProblem: everything a strategy needs to place N points on one face."""
 import numpy as np
 
-from ..fitting.bound import minimax_bound
+from ..fitting.bound import minimax_bound, minimax_bracket
 from ..fitting.deviation import DeviationStats, EvaluationGrid, deviation_objective
 from ..fitting.exact import exact_deviation
 from ..fitting.substitute import SubstituteSpace, default_pole_count
-from ..geometry.domain import face_domain
 from .parallel import TwoProcessObjective
 
 
@@ -18,14 +17,15 @@ class SamplingProblem:
     model: SurfaceModel; n: points wanted; fit_degree, fit_poles: (k_u, k_v), (n_u, n_v) of the
     substitute; smoothing: its second-difference weight; grid: (g_u, g_v) evaluation raster;
     seed: for the random parts of the strategies; workers: processes an optimiser's swarm is
-    spread over (1 or 2); edge_offset: mm every point keeps from the face's edges; min_spacing:
-    mm between any two points; spacing_by_default: min_spacing is the default, not the caller's;
-    reachability: None, or where a probe reaches the part the face belongs to
-    (cmmsampling.access.reach.Reachability): what it cannot reach is infeasible, like the trim.
+    spread over (1 or 2); domain: the face's FaceDomain (cmmsampling.geometry.domain: the
+    trim, the edge offset, what the probe reaches); min_spacing: mm between any two points;
+    spacing_by_default: min_spacing is the default, not the caller's; reachability: None, or
+    where a probe reaches the part the face belongs to (cmmsampling.access.reach.Reachability),
+    the one the domain was built with.
     """
 
-    def __init__(self, model, n, fit_degree, fit_poles, smoothing, grid, seed, workers=1,
-                 edge_offset=0.0, min_spacing=0.0, reachability=None):
+    def __init__(self, model, n, fit_degree, fit_poles, smoothing, grid, seed, workers, domain,
+                 min_spacing=0.0, reachability=None):
         self.model = model
         self.reachability = reachability
         self.n = n
@@ -33,12 +33,13 @@ class SamplingProblem:
         self.workers = workers
         self.min_spacing = min_spacing
         self.spacing_by_default = False
-        self.domain = face_domain(model, edge_offset, reachability)
+        self.domain = domain
         self.space = SubstituteSpace(fit_degree, fit_poles, model.bounds, smoothing)
         self.grid = EvaluationGrid(model, grid)
         self._objective = None
         self._check = None
         self._bounds = None
+        self._judged = {}
 
     def spacing_advice(self):
         """How to let more points in, in words that say whether the caller chose the spacing."""
@@ -71,9 +72,22 @@ class SamplingProblem:
 
     def judge(self, poles, check=False):
         """The exact two-sided deviation (cmmsampling.fitting.exact.ExactDeviation) of the substitute
-        with ``poles`` (n_u, n_v, 3) mm at the nodes of the grid or the check grid."""
+        with ``poles`` (n_u, n_v, 3) mm at the nodes of the grid or the check grid (the last one
+        judged on each is kept: a result's deviation, then its bound, ask for the same)."""
+        poles = np.asarray(poles, dtype=float)
+        last = self._judged.get(check)
+        if last is not None and np.array_equal(last[0], poles):
+            return last[1]
         objective = self.check_objective if check else self.objective
-        return exact_deviation(self.space, poles, objective.nodes, objective.model, self.domain.on_face)
+        exact = exact_deviation(self.space, poles, objective.nodes, objective.model, self.domain.on_face)
+        self._judged[check] = (poles.copy(), exact)
+        return exact
+
+    def bound_bracket(self, poles, level=None):
+        """(lower, upper) mm around the local bound on the grid about the substitute with ``poles``
+        (n_u, n_v, 3) mm, in milliseconds; level: mm, stop once it lies outside
+        (cmmsampling.fitting.bound.minimax_bracket)."""
+        return minimax_bracket(self.space, self.judge(poles), level)
 
     def exact(self, uv):
         """The ExactDeviation, on the grid, of the substitute fitted at uv (N, 2)."""

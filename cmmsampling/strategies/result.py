@@ -102,6 +102,18 @@ class SamplingResult:
             self._bounds = self.problem.bounds(self.poles)
         return self._bounds
 
+    def bound_exceeds(self, level):
+        """(exceeds, bound): whether the local bound on the grid (:meth:`bounds`) exceeds ``level``
+        mm, and that bound (mm) where telling took computing it, else NaN. A bracket around it
+        (reweighted least squares, milliseconds) tells where it lies wholly above or below
+        ``level``; the linear programme (a quarter of a second on a 30 x 30 grid) only where not."""
+        if self._bounds is None or "grid" not in self._bounds:
+            lower, upper = self.problem.bound_bracket(self.poles, level)
+            if lower > level or upper <= level:
+                return lower > level, float("nan")
+        bound = self.bounds()["grid"].lower
+        return bound > level, bound
+
     def multiple_of_bound(self, check=False):
         """Maximum deviation as a multiple of the local bound about this substitute (about 1 when
         no reshaping of it along its normals lowers its maximum; see :meth:`bounds`), on the grid

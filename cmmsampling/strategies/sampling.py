@@ -19,9 +19,10 @@ from ..fitting.occ_surface import substitute_surface
 from ..fitting.substitute import DEFAULT_DEGREE, DEFAULT_SMOOTHING
 from ..geometry.domain import face_domain
 from ..geometry.freecad_env import import_part
-from ..geometry.surface import SurfaceModel, lies_on
+from ..geometry.surface import lies_on
 from ..geometry.validation import InputError, InputTypeError, check_choice, check_int, check_pair, check_real, check_uv
 from . import blind, handover, memory, optimal, pso
+from .face_setup import setup_of
 from .optimal import default_min_spacing
 from .problem import SamplingProblem, resolve_fit_poles
 from .registry import (STRATEGIES, Setting, Strategy, StrategyOutcome, baseline, register_strategy,
@@ -71,10 +72,12 @@ def make_problem(face, n, fit_degree=DEFAULT_DEGREE, fit_poles=None, smoothing=D
     n, degree, given_poles, poles, smoothing, grid, seed, workers, edge_offset, min_spacing = _checked_settings(
         n, fit_degree, fit_poles, smoothing, grid, seed, workers, edge_offset, min_spacing)
     _check_memory(n, degree, given_poles, grid, workers, strategy, options or {})
-    model = SurfaceModel.from_face(face)
+    setup = setup_of(face)
+    model = setup.model
     _check_area(model)
-    problem = SamplingProblem(model, n, degree, poles, smoothing, grid, seed, workers, edge_offset,
-                              min_spacing or 0.0, _reachability(part, probe, model.source_face))
+    reachability = _reachability(part, probe, model.source_face)
+    problem = SamplingProblem(model, n, degree, poles, smoothing, grid, seed, workers,
+                              setup.domain(edge_offset, reachability), min_spacing or 0.0, reachability)
     if min_spacing is None:
         problem.min_spacing = default_min_spacing(model.area, n, problem.domain.feasible_area)
         problem.spacing_by_default = True
@@ -312,7 +315,7 @@ def probe_edge_offset(face: Part.Face, cap: float | None = None) -> float:
     cap = PROBE_EDGE_OFFSET_MM if cap is None else check_real("cap", cap, 0.0)
     if cap == 0:
         return 0.0
-    reach = face_domain(SurfaceModel.from_face(face), cap).reach
+    reach = setup_of(face).domain(cap).reach
     return cap if reach >= 2 * cap else _round_down(0.5 * reach)
 
 

@@ -20,6 +20,7 @@ from ..fitting.deviation import DEFAULT_GRID
 from ..fitting.substitute import DEFAULT_DEGREE, DEFAULT_SMOOTHING
 from ..geometry.validation import InputError, InputTypeError, check_choice, check_int
 from ..strategies import handover
+from ..strategies.face_setup import reused
 from ..strategies.estimates import time_needed
 from ..strategies.sampling import MIN_POINTS, STRATEGIES, Pair, Part, make_problem, sample, strategy_options
 from ..strategies.sampling import baseline as baseline_strategy
@@ -255,6 +256,13 @@ def compare(face: Part.Face, ns: tuple = DEFAULT_NS, strategies: tuple | None = 
         raise InputTypeError(f"progress must be callable(done, total, message) or None, got {progress!r}")
     fit = {"fit_degree": fit_degree, "fit_poles": fit_poles, "smoothing": smoothing, "grid": grid,
            "edge_offset": edge_offset, "min_spacing": min_spacing}
+    with reused():
+        return _study(face, ns, strategies, seeds, seeded, options, fit, figure_n, workers, progress)
+
+
+def _study(face, ns, strategies, seeds, seeded, options, fit, figure_n, workers, progress):
+    """compare() once its arguments are checked: the Study of its runs (inside a
+    :func:`cmmsampling.strategies.face_setup.reused` block: the face is built once)."""
     make_problem(face, ns[0], **fit, workers=workers)
     study = Study(face, ns, strategies, figure_n=figure_n, settings={
         "ns": list(ns), "strategies": list(strategies), "seeds": list(seeds), "seeded": list(seeded),
