@@ -19,7 +19,8 @@ class SamplingProblem:
     seed: for the random parts of the strategies; workers: processes an optimiser's swarm is
     spread over (1 or 2); domain: the face's FaceDomain (cmmsampling.geometry.domain: the
     trim, the edge offset, what the probe reaches); min_spacing: mm between any two points;
-    spacing_by_default: min_spacing is the default, not the caller's; reachability: None, or
+    spacing_by_default: min_spacing is the default, not the caller's; measured_split: workers
+    is the default, so a swarm is split only where that is measured faster; reachability: None, or
     where a probe reaches the part the face belongs to (cmmsampling.access.reach.Reachability),
     the one the domain was built with.
     """
@@ -33,6 +34,7 @@ class SamplingProblem:
         self.workers = workers
         self.min_spacing = min_spacing
         self.spacing_by_default = False
+        self.measured_split = False
         self.domain = domain
         self.space = SubstituteSpace(fit_degree, fit_poles, model.bounds, smoothing)
         self.grid = EvaluationGrid(model, grid)
@@ -123,9 +125,10 @@ class SamplingProblem:
         return found
 
     def swarm_objective(self):
-        """The objective for whole swarms: split over two processes when workers == 2."""
+        """The objective for whole swarms: split over two processes when workers == 2 (where
+        that is faster, measured as it runs, when the caller left workers to the default)."""
         if self.workers == 2:
-            return TwoProcessObjective(self.objective)
+            return TwoProcessObjective(self.objective, measured=self.measured_split)
         return self.objective
 
     def spaced(self, uv, rows=None):

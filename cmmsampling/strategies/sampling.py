@@ -69,6 +69,7 @@ def make_problem(face, n, fit_degree=DEFAULT_DEGREE, fit_poles=None, smoothing=D
     run it is for, whose memory is checked (:func:`memory_needed`) before anything is built;
     None checks every run's base.
     """
+    measured_split = workers is None
     n, degree, given_poles, poles, smoothing, grid, seed, workers, edge_offset, min_spacing = _checked_settings(
         n, fit_degree, fit_poles, smoothing, grid, seed, workers, edge_offset, min_spacing)
     _check_memory(n, degree, given_poles, grid, workers, strategy, options or {})
@@ -78,6 +79,7 @@ def make_problem(face, n, fit_degree=DEFAULT_DEGREE, fit_poles=None, smoothing=D
     reachability = _reachability(part, probe, model.source_face)
     problem = SamplingProblem(model, n, degree, poles, smoothing, grid, seed, workers,
                               setup.domain(edge_offset, reachability), min_spacing or 0.0, reachability)
+    problem.measured_split = measured_split
     if min_spacing is None:
         problem.min_spacing = default_min_spacing(model.area, n, problem.domain.feasible_area)
         problem.spacing_by_default = True
@@ -244,8 +246,8 @@ def sample(face: Part.Face, n: int = 81, strategy: str = DEFAULT_STRATEGY, *, fi
     of its second-difference smoothing; grid: evaluation raster (int or pair, default 60 x 60);
     seed: for random parts; progress: callable (iteration, best_max_mm) for the optimisers, returning
     True to stop (the best so far is kept); occ_check: cross-check the final maximum with OCC;
-    workers: processes the optimisers spread each swarm over (1 or 2; None = 2 on a multi-core
-    machine; the results are identical); edge_offset: mm every point keeps from the face's edges
+    workers: processes the optimisers spread each swarm over (1 or 2; None: 2 on a multi-core
+    machine where they are faster, measured as the run goes, else 1; the results are identical); edge_offset: mm every point keeps from the face's edges
     (3D; 0, the paper's setting, allows points on the edges); min_spacing: mm between any two
     points (None: a tenth of the even spacing sqrt(area / n), at least 5 um, lowered where the
     face cannot hold N points that far apart; 0 allows any); part: the Part.Shape the face

@@ -142,3 +142,37 @@ def test_a_silent_worker_is_ended_after_its_start_time(monkeypatch):
     with pytest.raises(parallel.WorkerUnavailable, match="did not answer within 0.5 s"):
         parallel.Worker(parallel.python_executable(), start_seconds=0.5)
     assert time.perf_counter() - start < 30
+
+
+
+def test_a_measured_split_follows_the_faster_way():
+    """SplitChoice times both ways at the start of each window and keeps the faster for the rest."""
+    choice = parallel.SplitChoice()
+    trials = 2 * choice.TRIALS
+    for faster in (False, True, False):
+        for k in range(trials):
+            split = choice.next_split()
+            assert split == (k % 2 == 0)
+            choice.record(split, 0.5 if split == faster else 1.0)
+        assert choice.split is faster
+        for _ in range(choice.WINDOW - trials):
+            assert choice.next_split() is faster
+            choice.record(faster, 1.0)
+
+
+def test_the_default_processes_give_the_same_result_as_one():
+    """workers left to the default: the swarm is split only where measured faster, and scored
+    exactly as in one process either way."""
+    from cmmsampling.strategies.sampling import make_problem
+
+    problem = make_problem(cmmsampling.reference_face(), 25, grid=30)
+    if problem.workers == 1:
+        pytest.skip("one core: the default is one process")
+    objective = problem.swarm_objective()
+    assert problem.measured_split and objective.choice is not None
+    swarms = np.random.default_rng(4).random((2 * parallel.SplitChoice.WINDOW, 8, problem.n, 2))
+    with blas_threads(1):
+        values = np.array([objective(s) for s in swarms])
+        alone = np.array([problem.objective(s) for s in swarms])
+    np.testing.assert_array_equal(values, alone)
+    assert objective.remote >= 2 * parallel.SplitChoice.TRIALS * 4
