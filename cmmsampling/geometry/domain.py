@@ -34,6 +34,8 @@ SHAPE_SAMPLES = 17
 NEAR_CELLS = 5
 # Cells of the coarser raster on which a probe's reach is judged.
 REACH_CELLS = 32 * 32
+# Bands of v a point-in-loops test sorts the loops' segments into (LoopCrossings).
+BANDS = 128
 
 
 class FaceDomain:
@@ -62,6 +64,7 @@ class FaceDomain:
         self._on_face = on_face
         self._loops = loops if trimmed else None
         self._near_loops = None
+        self._crossings = None
         if self._loops is not None:
             touched = np.zeros(tuple(self.shape), dtype=bool)
             cells = self._cells(np.concatenate(self._loops))
@@ -120,7 +123,9 @@ class FaceDomain:
             return inside
         cells = self._cells(uv)
         near = self._in_rectangle(uv) & self._near_loops[cells[..., 0], cells[..., 1]]
-        inside[near] = inside_loops(self._loops, uv[near])
+        if self._crossings is None:
+            self._crossings = LoopCrossings(self._loops)
+        inside[near] = self._crossings.inside(uv[near])
         return inside
 
     def contains(self, uv):
@@ -281,20 +286,57 @@ def _inside_loops(loops, centres):
     return inside
 
 
-def inside_loops(loops, uv, block=4096):
+def inside_loops(loops, uv):
     """Even-odd test of points uv (M, 2) against the loops (list of (K, 2) closed polygons): (M,) bool."""
-    starts = np.concatenate(loops)
-    ends = np.concatenate([np.roll(loop, -1, axis=0) for loop in loops])
-    spanning = starts[:, 1] != ends[:, 1]
-    starts, ends = starts[spanning], ends[spanning]
-    slope = (ends[:, 0] - starts[:, 0]) / (ends[:, 1] - starts[:, 1])
-    inside = np.zeros(len(uv), dtype=bool)
-    for first in range(0, len(uv), block):
-        u, v = uv[first:first + block, 0, None], uv[first:first + block, 1, None]
+    return LoopCrossings(loops).inside(uv)
+
+
+class LoopCrossings:
+    """The even-odd test against closed polygons in (u, v), with their segments sorted into BANDS
+    bands of v: a point is tested against the segments of its own band only (a trimming loop of
+    thousands of segments crosses a few bands each), the same crossings as against all of them.
+
+    loops: list of (K, 2) closed polygons (the last vertex joins the first).
+    """
+
+    def __init__(self, loops, bands=BANDS):
+        starts = np.concatenate(loops)
+        ends = np.concatenate([np.roll(loop, -1, axis=0) for loop in loops])
+        spanning = starts[:, 1] != ends[:, 1]
+        self.starts, self.ends = starts[spanning], ends[spanning]
+        self.slope = (self.ends[:, 0] - self.starts[:, 0]) / (self.ends[:, 1] - self.starts[:, 1])
+        low = np.minimum(self.starts[:, 1], self.ends[:, 1])
+        high = np.maximum(self.starts[:, 1], self.ends[:, 1])
+        self.v0 = float(low.min(initial=0.0))
+        self.width = max(float(high.max(initial=0.0)) - self.v0, 1e-300) / bands
+        self.bands = bands
+        first, last = self.band(low), self.band(high)
+        self.members = [np.flatnonzero((first <= b) & (last >= b)) for b in range(bands)]
+
+    def band(self, v):
+        """Band index (...,) int of v (...,), clipped to the bands."""
+        return np.clip(np.floor((np.asarray(v, dtype=float) - self.v0) / self.width), 0, self.bands - 1).astype(int)
+
+    def inside(self, uv, block=4096):
+        """(M,) bool: uv (M, 2) inside the polygons (even-odd rule)."""
+        uv = np.asarray(uv, dtype=float).reshape(-1, 2)
+        inside = np.zeros(len(uv), dtype=bool)
+        bands = self.band(uv[:, 1])
+        for b in np.unique(bands):
+            points = np.flatnonzero(bands == b)
+            segments = self.members[b]
+            for first in range(0, len(points), block):
+                chosen = points[first:first + block]
+                inside[chosen] = self._crossings(uv[chosen], segments) % 2 == 1
+        return inside
+
+    def _crossings(self, uv, segments):
+        """Crossings (M,) of the rays from uv (M, 2) towards +u with the given segments."""
+        starts, ends = self.starts[segments], self.ends[segments]
+        u, v = uv[:, 0, None], uv[:, 1, None]
         crosses = (starts[:, 1] <= v) != (ends[:, 1] <= v)
-        at = starts[:, 0] + (v - starts[:, 1]) * slope
-        inside[first:first + block] = (crosses & (at > u)).sum(axis=1) % 2 == 1
-    return inside
+        at = starts[:, 0] + (v - starts[:, 1]) * self.slope[segments]
+        return (crosses & (at > u)).sum(axis=1)
 
 
 def _edge_distance(samples, points):

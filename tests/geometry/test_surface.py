@@ -136,3 +136,31 @@ def test_points_off_a_trimmed_face_are_moved_onto_it_and_the_others_stay():
     assert max(after) <= ON_FACE_MM
     # a moved point lands at the hole's edge, 8 mm (the radius) in 3D from the hole's centre
     assert np.allclose(np.linalg.norm(model.points(moved[-2:])[:, :2] - [40, 55], axis=1), 8.0, atol=0.05)
+
+
+def test_the_banded_loop_test_counts_the_crossings_of_every_segment():
+    """LoopCrossings tests a point against its band's segments only: the same answer as the
+    even-odd count over every segment (written out here), also at the loops' own vertices' v,
+    and the answer OCC gives for points clear of the boundary."""
+    from cmmsampling.geometry.domain import LoopCrossings
+
+    face = holed_face()
+    model = SurfaceModel.from_face(face)
+    loops = model.trim_loops(model.diagonal / 1000)
+    starts, ends = np.concatenate(loops), np.concatenate([np.roll(loop, -1, axis=0) for loop in loops])
+    rng = np.random.default_rng(5)
+    u0, u1, v0, v1 = model.bounds
+    uv = np.c_[rng.uniform(u0, u1, 3000), rng.uniform(v0, v1, 3000)]
+    uv[:500, 1] = starts[rng.integers(0, len(starts), 500), 1]
+    u, v = uv[:, 0, None], uv[:, 1, None]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        at = starts[:, 0] + (v - starts[:, 1]) * (ends[:, 0] - starts[:, 0]) / (ends[:, 1] - starts[:, 1])
+    every = (((starts[:, 1] <= v) != (ends[:, 1] <= v)) & (at > u)).sum(axis=1) % 2 == 1
+    tester = LoopCrossings(loops, bands=64)
+    np.testing.assert_array_equal(tester.inside(uv), every)
+    scale = np.array([u1 - u0, v1 - v0])
+    gap = np.min(np.linalg.norm((uv[500:, None] - starts[None]) / scale, axis=-1), axis=1)
+    clear = uv[500:][gap > 0.01][:300]
+    occ = np.array([face.isPartOfDomain(a, b) for a, b in clear])
+    assert len(clear) > 100 and occ.any() and not occ.all()
+    np.testing.assert_array_equal(tester.inside(clear), occ)
