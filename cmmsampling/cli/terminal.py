@@ -51,13 +51,15 @@ class StudyProgress(TerminalProgress):
 
 
 class FaceProgress(TerminalProgress):
-    """Progress of a plan on stderr: faces done of all."""
+    """Progress of a plan on stderr: the plan's tally (faces done, points so far, time left) and
+    the last face's line."""
 
     def __init__(self):
         super().__init__("plan")
 
     def __call__(self, done, total, message):
-        self.stream.write(f"\rplan {done}/{total} faces, {message[:50]:<50}")
+        line, _, tally = message.partition("\n")
+        self.stream.write(f"\rplan: {tally} | {line[:40]:<40}")
         self.stream.flush()
         return False
 

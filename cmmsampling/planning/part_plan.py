@@ -36,6 +36,7 @@ from .points_needed import DEFAULT_MAX_POINTS, check_max_points, fewest_points, 
 
 Part = import_part()
 FIT_KEYS = ("fit_degree", "fit_poles", "smoothing", "grid")
+CANCELLED_REASON = "cancelled before this face ran"
 
 
 @dataclass
@@ -213,7 +214,7 @@ def plan(shape_or_faces: Part.Shape | list, tolerance: float | None = None, n_to
          strategy: str = BEST_STRATEGY, *, faces: list | None = None, n_max: int = DEFAULT_MAX_POINTS,
          edge_offset: float | None = None, processes: int | None = None, scheduler: object = None,
          progress: Callable | None = None, probe: Probe | None = None, part: Part.Shape | None = None,
-         **arguments) -> PartPlan:
+         resume: PartPlan | None = None, **arguments) -> PartPlan:
     """Probe points for a whole part: to a tolerance on every face, or a total of points.
 
     shape_or_faces: a Part.Shape (its faces, or those numbered from 1 in ``faces``, e.g.
@@ -224,15 +225,18 @@ def plan(shape_or_faces: Part.Shape | list, tolerance: float | None = None, n_to
     are the parallel part); edge_offset: mm, None for each face's probe edge offset;
     processes: local processes (None: all cores); scheduler: a Dask scheduler address or
     distributed.Client; progress: callable(done, total, message) after each face's run (message:
-    the face's :attr:`FacePlan.line`), returning True to cancel; probe: a cmmsampling.Probe whose
-    reach on the part is judged (each face keeps to what it reaches, and ``export(plan,
-    order="probe_path")`` writes a collision-free path); part: the shape the probe must keep
-    clear of (default: shape_or_faces when it is a shape). Returns a PartPlan.
+    the face's :attr:`FacePlan.line`, then on a second line the plan's tally, e.g. "12 of 40
+    faces, 610 points so far, about 2 min left"), returning True to cancel; probe: a
+    cmmsampling.Probe whose reach on the part is judged (each face keeps to what it reaches, and
+    ``export(plan, order="probe_path")`` writes a collision-free path); part: the shape the probe
+    must keep clear of (default: shape_or_faces when it is a shape); resume: a cancelled
+    tolerance plan of the same faces, tolerance and strategy, whose faces done are kept and not
+    run again. Returns a PartPlan.
     """
     handed = handover.take(plan, shape_or_faces, {
         "tolerance": tolerance, "n_total": n_total, "strategy": strategy, "faces": faces, "n_max": n_max,
         "edge_offset": edge_offset, "processes": processes, "scheduler": scheduler, "probe": probe, "part": part,
-        **arguments})
+        "resume": resume, **arguments})
     if handed is not None:
         return handed
     if (tolerance is None) == (n_total is None):
@@ -249,12 +253,18 @@ def plan(shape_or_faces: Part.Shape | list, tolerance: float | None = None, n_to
     if tolerance is not None:
         tolerance = check_real("tolerance", tolerance, above=0.0)
         n_max = check_max_points(n_max, degree)
+        kept = kept_faces(resume, named, tolerance, strategy)
         jobs = [FaceJob(name, face.exportBrepToString(), "tolerance", strategy, tolerance=tolerance, n_max=n_max,
-                        arguments=arguments, part_brep=part_brep, probe=probe) for name, face in named]
-        outcomes, cancelled, notes = _run(jobs, processes, scheduler, progress)
+                        arguments=arguments, part_brep=part_brep, probe=probe) for name, face in named
+                if name not in kept]
+        outcomes, cancelled, notes = _run(jobs, processes, scheduler, progress, kept.values())
+        ran = iter(outcomes)
+        outcomes = [kept[name] if name in kept else next(ran) for name, _ in named]
         result = PartPlan(_completed(outcomes, named), "tolerance", strategy, tolerance=tolerance,
                           cancelled=cancelled, notes=notes)
     else:
+        if resume is not None:
+            raise InputError("resume= continues a plan to a tolerance; plan a total of points (n_total=) anew")
         result = _plan_budget(named, check_int("n_total", n_total, 1), strategy, arguments, processes, scheduler,
                               progress, part_brep, probe)
     result.seconds = time.perf_counter() - start
@@ -374,29 +384,92 @@ def _take(planned, result):
     planned.access = result.access
 
 
-def _run(jobs, processes, scheduler, progress):
-    """(outcomes, cancelled, notes) of the jobs through face_runs.run_all."""
-    stopped = []
+def _run(jobs, processes, scheduler, progress, kept=()):
+    """(outcomes, cancelled, notes) of the jobs through face_runs.run_all; kept: FacePlans of a
+    resumed plan's faces done, counted in the progress as done before the jobs."""
+    stopped, kept = [], list(kept)
+    tally = PlanTally(len(kept) + len(jobs), len(kept), sum(face.n for face in kept))
 
     def watched(done, total, message):
-        if progress is not None and progress(done, total, message):
+        if progress is not None and progress(len(kept) + done, len(kept) + total, f"{message}\n{tally.line}"):
             stopped.append(True)
             return True
         return False
 
-    outcomes, notes = face_runs.run_all(solve_face, jobs, processes, scheduler, watched, describe=_outcome_line)
+    outcomes, notes = face_runs.run_all(solve_face, jobs, processes, scheduler, watched, describe=tally.count)
     return outcomes, bool(stopped), notes
 
 
-def _outcome_line(job, outcome):
-    """The progress message of a finished face: its FacePlan's line."""
-    return outcome.line
+class PlanTally:
+    """Faces done, points so far and the time left of a plan's run, for its progress messages.
+
+    total: faces in all; done, points: those of them done before this run (a resumed plan).
+    """
+
+    def __init__(self, total, done=0, points=0):
+        self.total, self.done, self.points = total, done, points
+        self._before = done
+        self._start = time.perf_counter()
+
+    def count(self, job, outcome):
+        """Count a finished face (its FacePlan); returns the face's line."""
+        self.done += 1
+        self.points += outcome.n
+        return outcome.line
+
+    @property
+    def line(self):
+        """e.g. "12 of 40 faces, 610 points so far, about 2 min left" (from the pace of the faces
+        run so far)."""
+        text = f"{self.done} of {self.total} faces, {self.points} points so far"
+        ran = self.done - self._before
+        if ran and self.done < self.total:
+            left = (time.perf_counter() - self._start) / ran * (self.total - self.done)
+            text += f", about {duration_text(left)} left"
+        return text
+
+
+def duration_text(seconds):
+    """A duration in words for a progress line: "40 s", "2 min", "1 h 5 min"."""
+    if seconds < 60:
+        return f"{max(1, round(seconds))} s"
+    minutes = round(seconds / 60)
+    return f"{minutes} min" if minutes < 60 else f"{minutes // 60} h {minutes % 60} min"
+
+
+def kept_faces(resume, named, tolerance, strategy):
+    """{name: FacePlan} of a resumed plan's faces that ran (none without one); InputError when it
+    is not a tolerance plan of these faces with this tolerance and strategy."""
+    if resume is None:
+        return {}
+    if not isinstance(resume, PartPlan):
+        raise InputTypeError(f"resume must be the PartPlan of a cancelled plan, got {type(resume).__name__}")
+    if (resume.mode, resume.tolerance, resume.strategy) != ("tolerance", tolerance, strategy):
+        raise InputError(f"the plan to resume is a {resume.mode} plan with {resume.strategy} (tolerance "
+                         f"{resume.tolerance} mm), not to {tolerance:g} mm with {strategy}: give the same "
+                         "tolerance and strategy, or plan anew without resume=")
+    faces = dict(named)
+    ran = {face.name: face for face in resume.faces if face.reason != CANCELLED_REASON}
+    other = [name for name in ran if name not in faces or not _same_face(resume.shapes[name], faces[name])]
+    if other:
+        raise InputError(f"{other[0]} of the plan to resume is not {other[0]} of this part: resume a plan "
+                         "of the same part and faces, or plan anew without resume=")
+    return ran
+
+
+def _same_face(earlier, face):
+    """True when two Part.Faces are the same face: the same shape, or one read again (the same
+    area and centre of mass within a micrometre)."""
+    if earlier.isSame(face):
+        return True
+    moved = earlier.CenterOfMass.sub(face.CenterOfMass).Length
+    return abs(earlier.Area - face.Area) <= 1e-6 * max(face.Area, 1.0) and moved <= 1e-3
 
 
 def _completed(outcomes, named):
     """FacePlans for every face: the outcomes, and for a face without one (cancelled) a plan
     that says so."""
-    why = "cancelled before this face ran"
+    why = CANCELLED_REASON
     return [outcome if outcome is not None else FacePlan(name, float(face.Area), reason=why)
             for outcome, (name, face) in zip(outcomes, named)]
 

@@ -4,6 +4,7 @@ here: a rational saddle, a plate with a hole, a 2 mm strip (too narrow for the e
 rational patch."""
 import __main__
 import os
+import re
 
 import FreeCAD
 import FreeCADGui
@@ -66,11 +67,10 @@ def hold_plan_at(monkeypatch, faces_done):
     whether Cancel was pressed; keeps every plan made in the panel (``hold.plans``)."""
     hold = Hold(limit_s=60)
     hold.plans = []
-    work = plan_part.BackgroundPlan._work
+    work, progress = plan_part.BackgroundPlan._work, plan_part.BackgroundPlan._progress
 
     def held(self, done, total, message):
-        self.done, self.total = done, total
-        self.lines.append(message)
+        progress(self, done, total, message)
         if done == faces_done and not hold.reached.is_set():
             hold()
         return self.cancelled
@@ -149,6 +149,7 @@ def test_a_plan_runs_face_by_face_and_adds_a_group_per_face(part_doc, monkeypatc
     assert wait_until(hold.reached.is_set, 180), form.status.text()
     assert wait_until(lambda: form.faceLines.count() == 2, 2)
     assert form.progress.text() == "2 / 4 faces" and not task_button(OK).isEnabled()
+    assert re.fullmatch(r"2 of 4 faces, \d+ points so far, about \d+ (s|min) left", form.status.text())
     assert not form.strategy.isEnabled() and not form.tolerance.isEnabled()
     lines = [form.faceLines.item(k) for k in range(2)]
     assert all(line.text().startswith("Face") and line.toolTip() == line.text() for line in lines)

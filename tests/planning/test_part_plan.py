@@ -3,6 +3,7 @@ in this process, on local processes and on a Dask LocalCluster, written as one p
 a document. The faces are built here (a rational saddle, a plate with a hole, a 2 mm strip, a
 rational patch); blind strategies and a coarse grid keep the runs short."""
 import os
+import re
 
 from support import dmis_syntax
 import numpy as np
@@ -144,6 +145,39 @@ def test_cancel_keeps_the_faces_done_and_names_the_others(part):
                             processes=1, progress=lambda done, total, message: done == 1, **FAST)
     assert plan.cancelled and plan.faces[0].placed
     assert [f.reason for f in plan.faces[1:]] == ["cancelled before this face ran"] * 3
+
+
+def test_the_progress_tallies_faces_points_and_time_left(part, tolerance_plan):
+    """After each face: its line, then the plan's tally; the last tally counts every point."""
+    messages = []
+    plan = cmmsampling.plan(part, tolerance=TOLERANCE, strategy="uniform_parametric", edge_offset=1.5, n_max=200,
+                            processes=1, progress=lambda *report: messages.append(report), **FAST)
+    lines = [message.split("\n") for _, _, message in messages]
+    assert [line for line, _ in lines] == [face.line for face in plan.faces]
+    for (done, total, _), (_, tally) in zip(messages[:-1], lines):
+        assert re.fullmatch(rf"{done} of {total} faces, \d+ points so far, about \d+ (s|min) left", tally)
+    assert lines[-1][1] == f"4 of 4 faces, {plan.n_total} points so far"
+    assert plan.n_total == tolerance_plan.n_total
+
+
+def test_a_cancelled_plan_resumes_with_the_faces_done_kept(part, tolerance_plan):
+    arguments = dict(tolerance=TOLERANCE, strategy="uniform_parametric", edge_offset=1.5, n_max=200, **FAST)
+    cancelled = cmmsampling.plan(part, processes=1, progress=lambda done, total, message: done == 2, **arguments)
+    assert cancelled.cancelled and [f.reason for f in cancelled.faces[2:]] == ["cancelled before this face ran"] * 2
+    reports = []
+    resumed = cmmsampling.plan(part, processes=1, resume=cancelled, progress=lambda *report: reports.append(report),
+                               **arguments)
+    assert resumed.faces[:2] == cancelled.faces[:2], "the faces done are kept, not run again"
+    assert [(done, total) for done, total, _ in reports] == [(3, 4), (4, 4)]
+    assert not resumed.cancelled and [f.n for f in resumed.faces] == [f.n for f in tolerance_plan.faces]
+    for face, whole in zip(resumed.faces, tolerance_plan.faces):
+        np.testing.assert_array_equal(face.uv, whole.uv)
+    with pytest.raises(ValueError, match="not to 0.2 mm with uniform_parametric: give the same tolerance"):
+        cmmsampling.plan(part, resume=cancelled, **{**arguments, "tolerance": 0.2})
+    with pytest.raises(ValueError, match="Face1 of the plan to resume is not Face1 of this part"):
+        cmmsampling.plan(Part.Compound([holed_face()] * 4), resume=cancelled, **arguments)
+    with pytest.raises(ValueError, match="resume= continues a plan to a tolerance"):
+        cmmsampling.plan(part, n_total=100, resume=cancelled, strategy="uniform_parametric")
 
 
 def test_faces_are_named_and_checked():

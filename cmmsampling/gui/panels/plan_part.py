@@ -92,7 +92,7 @@ class BackgroundPlan(BackgroundTask):
     """Runs ``plan(shape, progress=..., **arguments)`` in a daemon thread.
 
     The GUI thread polls ``done``/``total`` (faces), ``lines`` (one per face done, see
-    FacePlan.line), ``running``, then ``plan`` or ``error``/``details``; ``cancel()`` makes the
+    FacePlan.line), ``tally`` (faces done, points so far, time left), ``running``, then ``plan`` or ``error``/``details``; ``cancel()`` makes the
     progress callback stop the plan after the next face ends (the processes under way are
     stopped, the faces done kept). The thread never touches the document.
     """
@@ -104,6 +104,7 @@ class BackgroundPlan(BackgroundTask):
         self.done = 0
         self.total = 0
         self.lines = []
+        self.tally = ""
         self.plan = None
 
     def cancel(self):
@@ -111,8 +112,9 @@ class BackgroundPlan(BackgroundTask):
         self._stop.set()
 
     def _progress(self, done, total, message):
+        line, _, self.tally = message.partition("\n")
         self.done, self.total = done, total
-        self.lines.append(message)
+        self.lines.append(line)
         return self.cancelled
 
     def _work(self):
@@ -244,8 +246,11 @@ class PlanPartTaskPanel(BackgroundRunPanel):
                    f"Planning {faces} faces on {values['processes']} processes...")
 
     def show_progress(self, run):
-        """A line per face done and the count of faces done."""
+        """A line per face done, the count of faces done, and the plan's tally in the status line
+        (faces done, points so far, time left) until Cancel is pressed."""
         self.show_lines(run.lines)
+        if run.tally and not run.cancelled:
+            self.show_status(run.tally)
         if run.total:
             self.form.progress.setRange(0, run.total)
             self.form.progress.setValue(run.done)
