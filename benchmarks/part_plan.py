@@ -4,6 +4,8 @@
                                                         # processes and a 2-worker LocalCluster
     /usr/bin/python3 benchmarks/part_plan.py points     # total points for a tolerance: optimal
                                                         # against uniform parametric
+    /usr/bin/python3 benchmarks/part_plan.py ventilator # every face of Ventilator.stp on 2 local
+                                                        # processes and a 2-worker LocalCluster
 
 Prints figures; asserts nothing. The 20 faces are rational and non-rational bicubic patches
 made here from seeds; ``points`` also plans faces of ../shared/testdata/Ventilator.stp when the
@@ -80,6 +82,50 @@ def points(args):
         summarise(name, totals, args.n_max)
 
 
+def ventilator(args):
+    """The whole Ventilator to a tolerance with each strategy asked, on 2 local processes (and
+    on a 2-worker LocalCluster with --dask): seconds, points, faces that meet it, faces that hold
+    none; the per-face times (median, 90th percentile, the slowest and what it ran)."""
+    if not os.path.isfile(VENTILATOR):
+        print(f"{VENTILATOR} is not there: nothing to plan")
+        return
+    import Part
+
+    shape = Part.read(VENTILATOR)
+    print(f"Ventilator.stp: {len(shape.Faces)} faces, tolerance {args.tolerance} mm, grid {args.grid}, "
+          f"optimal time limit {args.time_limit} s per run, {os.cpu_count()} cores")
+    for strategy in args.strategies.split(","):
+        options = {"time_limit": args.time_limit} if strategy == "optimal" else {}
+        ways = [("2 local processes", {"processes": 2})]
+        if args.dask:
+            ways.append(("2-worker Dask LocalCluster", {"scheduler": "local"}))
+        for label, where in ways:
+            plan_whole(shape, strategy, label, where, args, options)
+
+
+def plan_whole(shape, strategy, label, where, args, options):
+    """Plan every face of shape one way and print what the ventilator benchmark prints."""
+    if where.get("scheduler") == "local":
+        import distributed
+
+        with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                      dashboard_address=None) as cluster, distributed.Client(cluster) as client:
+            return plan_whole(shape, strategy, label, {"scheduler": client}, args, options)
+    start = time.perf_counter()
+    plan = cmmsampling.plan(shape, tolerance=args.tolerance, strategy=strategy, grid=args.grid, n_max=args.n_max,
+                            **where, **options)
+    seconds = time.perf_counter() - start
+    met = sum(1 for face in plan.faces if face.met)
+    print(f"{strategy:<20} {label:<28} {seconds:7.0f} s  {plan.n_total:6d} points  {met} of {len(plan.faces)} "
+          f"faces meet it, {len(plan.refused)} hold none", flush=True)
+    times = np.array([face.seconds for face in plan.faces])
+    slowest = plan.faces[int(times.argmax())]
+    tried = ", ".join(f"{t.n}: {t.seconds:.1f} s" for t in slowest.tried)
+    print(f"  per face: median {np.median(times):.2f} s, 90th percentile {np.percentile(times, 90):.2f} s, "
+          f"slowest {slowest.name} {times.max():.1f} s ({slowest.area:.0f} mm^2, N tried {tried or 'none'}; "
+          f"{slowest.line})", flush=True)
+
+
 def summarise(name, totals, n_max):
     """Print the points each strategy needs, and the ratio: on the faces both meet, and over
     all faces counting a face uniform parametric does not meet as n_max + 1 (it needs more:
@@ -100,7 +146,9 @@ def summarise(name, totals, n_max):
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("what", choices=["speed", "points"])
+    parser.add_argument("what", choices=["speed", "points", "ventilator"])
+    parser.add_argument("--strategies", default="uniform_parametric,optimal")
+    parser.add_argument("--dask", action="store_true", help="ventilator: also on a 2-worker LocalCluster")
     parser.add_argument("--tolerance", type=float, default=0.05)
     parser.add_argument("--strategy", default="uniform_parametric")
     parser.add_argument("--grid", type=int, default=30)
@@ -109,7 +157,7 @@ def main():
     parser.add_argument("--ventilator-faces", type=lambda t: [int(k) for k in t.split(",")],
                         default=[11, 61, 101, 151, 201, 251])
     args = parser.parse_args()
-    {"speed": speed, "points": points}[args.what](args)
+    {"speed": speed, "points": points, "ventilator": ventilator}[args.what](args)
 
 
 if __name__ == "__main__":
