@@ -103,12 +103,15 @@ class Worker:
 
     def why(self, silent=None):
         """Why the worker is gone, in words: its exit code and the last line it wrote on stderr
-        (e.g. a ModuleNotFoundError); ``silent`` when it is still running."""
+        (e.g. a ModuleNotFoundError, unless it was closed already); ``silent`` when it is still
+        running."""
         code = self.process.poll()
         if code is None:
             return f"the second process {silent or 'stopped answering'}"
-        self.errors.seek(0)
-        lines = self.errors.read().decode(errors="replace").strip().splitlines()
+        lines = []
+        if not self.errors.closed:
+            self.errors.seek(0)
+            lines = self.errors.read().decode(errors="replace").strip().splitlines()
         ending = f"was killed by signal {-code}" if code < 0 else f"exited with code {code}"
         return f"the second process {ending}" + (f": {lines[-1].strip()}" if lines else "")
 
@@ -225,6 +228,14 @@ class TwoProcessObjective:
     def parallel(self):
         """True while the worker process shares the work."""
         return self.worker is not None
+
+    def check_worker(self):
+        """Notice a worker that has gone while it was not asked (a measured run that scored its
+        swarms here alone): ``fallback`` then says why, as if a call had found it gone."""
+        if self.worker is not None and not self.worker.alive():
+            worker, self.worker = self.worker, None
+            worker.settle()
+            self.fallback = worker.why()
 
     def _guard(self, action):
         """Run a worker action; on any failure drop the worker, say why, and return None."""

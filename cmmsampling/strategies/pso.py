@@ -185,6 +185,8 @@ def _process_notes(problem, objective):
     2 when the second process took part; a note when it was asked for (workers=2) but could not
     help, with the reason."""
     used = 2 if getattr(objective, "remote", 0) > 0 else 1
+    if hasattr(objective, "check_worker"):
+        objective.check_worker()
     fallback = getattr(objective, "fallback", None)
     notes = [f"the swarm ran in this process alone, with the same result, only slower: {fallback}"] \
         if problem.workers == 2 and fallback else []

@@ -176,3 +176,26 @@ def test_the_default_processes_give_the_same_result_as_one():
         alone = np.array([problem.objective(s) for s in swarms])
     np.testing.assert_array_equal(values, alone)
     assert objective.remote >= 2 * parallel.SplitChoice.TRIALS * 4
+
+
+def test_a_worker_killed_while_a_measured_run_scores_alone_is_noticed(reference, one_process_run):
+    """With the default processes a run may score its swarms here alone when the worker dies:
+    the run still says so, whichever way it was going."""
+    import os
+    import signal
+
+    from cmmsampling.strategies.sampling import make_problem
+
+    def kill_at(iteration, best):
+        if iteration == 10:
+            os.kill(parallel.shared_worker()[0].pid, signal.SIGKILL)
+        return False
+
+    run = cmmsampling.sample(reference, 25, "pso", iterations=30, grid=30, occ_check=False, progress=kill_at)
+    assert np.array_equal(run.uv, one_process_run.uv)
+    assert any("the second process was killed by signal 9" in note for note in run.notes)
+    objective = TwoProcessObjective(make_problem(reference, 16, grid=20).objective, measured=True)
+    os.kill(objective.worker.pid, signal.SIGKILL)
+    objective.worker.process.wait(10)
+    objective.check_worker()
+    assert not objective.parallel and "killed by signal 9" in objective.fallback
