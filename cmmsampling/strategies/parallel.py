@@ -231,11 +231,10 @@ class TwoProcessObjective:
 
     def check_worker(self):
         """Notice a worker that has gone while it was not asked (a measured run that scored its
-        swarms here alone): ``fallback`` then says why, as if a call had found it gone."""
-        if self.worker is not None and not self.worker.alive():
-            worker, self.worker = self.worker, None
-            worker.settle()
-            self.fallback = worker.why()
+        swarms here alone): it is pinged, and ``fallback`` says why when it does not answer (its
+        channel closes when it dies, so a worker just killed is found gone, never taken as alive)."""
+        if self.worker is not None:
+            self._guard(lambda: (self.worker.send(("ping",)), self.worker.receive()))
 
     def _guard(self, action):
         """Run a worker action; on any failure drop the worker, say why, and return None."""

@@ -3,7 +3,7 @@
 Started as ``python -c BOOT PACKAGE_PARENT SOCKET_FD`` (see :data:`cmmsampling.strategies.parallel.BOOT`):
 it first answers ("ready", its pid), then receives a batched objective once (pickled, pure numpy)
 and evaluates the point sets it is sent, until the parent closes the channel or dies. Requests:
-("load", token, objective), ("eval", token, uv (P, N, 2)). Replies: ("ok", values (P,)) or
+("load", token, objective), ("eval", token, uv (P, N, 2)), ("ping",). Replies: ("ok", values (P,)) or
 ("error", message).
 """
 import os
@@ -46,5 +46,7 @@ def _answer(request, objectives):
     if request[0] == "load":
         objectives.clear()
         objectives[request[1]] = request[2]
+        return ("ok", None)
+    if request[0] == "ping":
         return ("ok", None)
     return ("ok", objectives[request[1]](request[2]))

@@ -195,7 +195,8 @@ def test_a_worker_killed_while_a_measured_run_scores_alone_is_noticed(reference,
     assert np.array_equal(run.uv, one_process_run.uv)
     assert any("the second process was killed by signal 9" in note for note in run.notes)
     objective = TwoProcessObjective(make_problem(reference, 16, grid=20).objective, measured=True)
+    objective.check_worker()
+    assert objective.parallel, "a live worker answers the ping"
     os.kill(objective.worker.pid, signal.SIGKILL)
-    objective.worker.process.wait(10)
     objective.check_worker()
     assert not objective.parallel and "killed by signal 9" in objective.fallback
