@@ -27,8 +27,12 @@ run_one() {
     near-optimal) page near-optimal "How close each strategy comes to a local optimum" "$PY" benchmarks/near_optimal.py ;;
     part-plan-speed) page part-plan-speed "A 20-face part plan on one and two processes and on Dask" \
                        "$PY" benchmarks/part_plan.py speed ;;
-    part-plan-ventilator) page part-plan-ventilator "The whole Ventilator to 0.05 mm, uniform parametric, on 2 processes" \
-                            "$PY" benchmarks/part_plan.py ventilator --strategies uniform_parametric ;;
+    part-plan-ventilator) page part-plan-ventilator \
+                            "The whole Ventilator to 0.05 mm, uniform parametric, on 2 processes and on Dask" \
+                            "$PY" benchmarks/part_plan.py ventilator --strategies uniform_parametric --dask ;;
+    part-plan-ventilator-optimal) page part-plan-ventilator-optimal \
+                                    "The whole Ventilator to 0.05 mm, optimal, on 2 processes" \
+                                    "$PY" benchmarks/part_plan.py ventilator --strategies optimal ;;
     part-plan-points) page part-plan-points "Points a tolerance needs: optimal against uniform parametric" \
                         "$PY" benchmarks/part_plan.py points ;;
     probe-path) page probe-path "A part plan with the probe's reach and path (Ventilator.stp)" "$PY" benchmarks/probe_path.py ;;
@@ -37,7 +41,7 @@ run_one() {
     *) echo "unknown benchmark '$1'; choose from: $ALL" >&2; return 2 ;;
   esac
 }
-ALL="speed part-plan-speed part-plan-ventilator speed-busy long-runs memory near-optimal probe-path part-plan-points delivered-deviation"
+ALL="speed part-plan-speed part-plan-ventilator part-plan-ventilator-optimal speed-busy long-runs memory near-optimal probe-path part-plan-points delivered-deviation"
 status=0
 for name in ${@:-$ALL}; do
   echo "== $name"

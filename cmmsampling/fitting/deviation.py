@@ -61,8 +61,11 @@ class DeviationObjective:
     model: the CAD truth (a SurfaceModel or NurbsPatch; only its NurbsPatch is kept, so the
     objective pickles without FreeCAD objects); space: SubstituteSpace; grid: EvaluationGrid;
     nodes: FaceNodes on that grid. Calling it with uv: (P, N, 2) returns (P,) maximum expanded
-    deviations in mm over the raster and the edge nodes (see the module docstring).
+    deviations in mm over the raster and the edge nodes (see the module docstring); with the
+    personal bests to beat as well, it skips the point sets that cannot (``beats``).
     """
+
+    beats = True
 
     def __init__(self, model, space, grid, nodes):
         self.model = model.patch()
@@ -87,6 +90,7 @@ class DeviationObjective:
                  np.concatenate([nodes.edge_normals[:, None, :], nodes.edge_across], axis=1))
         self._exact = Expansion((self.grid_u, self.grid_v_t) + counted, edges, np.float64)
         self._single = Expansion((self.grid_u, self.grid_v_t) + counted, edges, np.float32)
+        self._screen = NodeScreen(self._exact, single_rounding(nodes))
 
     @property
     def counted(self):
@@ -130,11 +134,12 @@ class DeviationObjective:
         than the arithmetic, and single precision halves their traffic; the swarm only compares
         values (1e-5 mm apart at worst), and every result is judged exactly in double precision.
         Nodes the objective does not count read 0 (their node, normal and curvatures are zeroed
-        in these arrays), so a plain maximum of the field's magnitude skips them."""
+        in these arrays), so a plain maximum of the field's magnitude skips them. A smaller batch
+        than the arrays' works in their first rows."""
         batch = poles.shape[:-3]
-        if self._scratch is None or self._scratch.batch != batch:
+        if self._scratch is None or self._scratch.batch[1:] != batch[1:] or self._scratch.batch[0] < batch[0]:
             self._scratch = Scratch(batch, np.float32, self.space.poles, self.grid.size)
-        return self._single.field(poles, self._scratch)
+        return self._single.field(poles, self._scratch.first(batch[0]))
 
     def __getstate__(self):
         state = dict(self.__dict__)
@@ -142,18 +147,38 @@ class DeviationObjective:
         state["_last"] = (None, None)
         return state
 
-    def __call__(self, uv):
-        """Maximum expanded deviation of each point set's substitute: uv (P, N, 2) -> (P,) mm."""
+    def __call__(self, uv, above=None):
+        """Maximum expanded deviation of each point set's substitute: uv (P, N, 2) -> (P,) mm.
+
+        above: None, or (P,) mm, each point set's value to beat (a swarm's personal bests): a point
+        set whose deviation at the nodes of :class:`NodeScreen` already exceeds it is not scored
+        over the whole raster, and gets that lower value instead (still at least ``above``), so
+        whether a value beats ``above`` is decided as by the whole raster, and a value that does
+        is the whole raster's.
+        """
         given, uv = uv, np.asarray(uv, dtype=float)
         points = self.points(uv)
         poles = self._fit_points(uv, points)
-        field = self._swarm_field(poles).reshape(uv.shape[0], -1)
         self._last = (given, points)
         self.evaluations += uv.shape[0]
-        worst = np.abs(field, out=field).max(axis=1)
-        if self.nodes.edge_uv.size:
-            worst = np.maximum(worst, np.abs(self._single.edges(poles)).max(axis=1))
-        return worst
+        if above is None:
+            return self._scored(poles)
+        values = self._screen.lower(poles)
+        rows = np.flatnonzero(values - self._screen.slack(values) < np.asarray(above, dtype=float))
+        if rows.size:
+            values[rows] = self._scored(poles[rows], learn=True)
+        return values
+
+    def _scored(self, poles, learn=False):
+        """Maximum expanded deviation over the raster and the edge nodes of the substitutes with
+        poles (P, n_u, n_v, 3): (P,) mm; learn: tell the screen where each maximum lies."""
+        field = self._swarm_field(poles).reshape(poles.shape[0], -1)
+        field = np.abs(field, out=field)
+        edges = np.abs(self._single.edges(poles)) if self.nodes.edge_uv.size else None
+        if learn:
+            self._screen.learn(field, edges)
+        worst = field.max(axis=1)
+        return worst if edges is None else np.maximum(worst, edges.max(axis=1))
 
     def points(self, uv):
         """Face points of point sets, coordinate first: uv (..., N, 2) -> (..., 3, N) mm."""
@@ -252,6 +277,16 @@ class Scratch:
         self.field = np.empty(self.batch + tuple(grid), dtype)
         self.along = np.empty(self.batch + tuple(grid), dtype)
 
+    def first(self, count):
+        """These arrays' first ``count`` rows along the batch's first axis, as a Scratch (views)."""
+        if count == self.batch[0]:
+            return self
+        view = object.__new__(Scratch)
+        view.batch = (count,) + self.batch[1:]
+        for name in ("along_u", "surface", "field", "along"):
+            setattr(view, name, getattr(self, name)[:count])
+        return view
+
 
 class Expansion:
     """The arrays of a DeviationObjective's expansion in one precision, and its evaluation.
@@ -287,19 +322,88 @@ class Expansion:
             field -= along
         return field
 
-    def edges(self, poles):
-        """d_edge of poles (..., n_u, n_v, 3) at the edge nodes: (..., E) mm."""
+    def edges(self, poles, index=slice(None)):
+        """d_edge of poles (..., n_u, n_v, 3) at the edge nodes ``index`` (default all): (..., E) mm."""
         poles = np.asarray(poles, dtype=self.dtype)
         by_coord = np.swapaxes(poles.reshape(poles.shape[:-3] + (-1, 3)), -1, -2)
-        error = np.matmul(by_coord, self.edge_columns)
-        error -= self.edge_points
-        normal = (error * self.edge_directions[0]).sum(-2)
+        error = np.matmul(by_coord, self.edge_columns[:, index])
+        error -= self.edge_points[:, index]
+        normal = (error * self.edge_directions[0][:, index]).sum(-2)
         size = normal * normal
         for direction in self.edge_directions[1:]:
-            part = (error * direction).sum(-2)
+            part = (error * direction[:, index]).sum(-2)
             size += part * part
         size = np.sqrt(size)
         return np.where(normal < 0, -size, size)
+
+    def at_nodes(self, poles, rows, columns):
+        """d2 of poles (P, n_u, n_v, 3) at the raster nodes (rows[k], columns[k]) only: (P, K) mm."""
+        poles = np.asarray(poles, dtype=self.dtype)
+        count, n_u, n_v, _ = poles.shape
+        along_u = np.matmul(self.grid_u[rows], poles.reshape(count, n_u, n_v * 3)).reshape(count, -1, n_v, 3)
+        error = np.einsum("pkbc,bk->pkc", along_u, self.grid_v_t[:, columns])
+        error -= self.foot_points[:, rows, columns].T
+        field = np.einsum("pkc,ck->pk", error, self.normals[:, rows, columns])
+        for half, direction in zip(self.halves, self.directions):
+            along = np.einsum("pkc,ck->pk", error, direction[:, rows, columns])
+            field -= half[rows, columns] * along * along
+        return field
+
+
+class NodeScreen:
+    """A cheap lower bound of a swarm's maxima: the expanded deviation at the few nodes where
+    the latest scored point sets had their maxima (a swarm's particles keep failing at the same
+    places), in double precision.
+
+    expansion: the objective's double-precision Expansion; margin: mm, how far the objective's
+    single-precision maxima can lie from the double-precision values on top of a relative
+    RELATIVE (see single_rounding and :meth:`slack`): a point set is skipped only when its bound
+    exceeds the value to beat by more than that.
+    """
+
+    SIZE = 32
+    RELATIVE = 16.0 * float(np.finfo(np.float32).eps)
+
+    def __init__(self, expansion, margin):
+        self.expansion = expansion
+        self.margin = margin
+        self.raster = expansion.foot_points.shape[1:]
+        self.nodes = np.empty(0, dtype=np.int64)
+
+    def lower(self, poles):
+        """Largest |d| at the screen's nodes: poles (P, n_u, n_v, 3) -> (P,) mm (0 with none)."""
+        values = np.zeros(poles.shape[0])
+        cells = self.raster[0] * self.raster[1]
+        inner, edge = self.nodes[self.nodes < cells], self.nodes[self.nodes >= cells] - cells
+        if inner.size:
+            rows, columns = np.divmod(inner, self.raster[1])
+            values = np.abs(self.expansion.at_nodes(poles, rows, columns)).max(axis=1)
+        if edge.size:
+            values = np.maximum(values, np.abs(self.expansion.edges(poles, edge)).max(axis=-1))
+        return values
+
+    def slack(self, values):
+        """How far single-precision maxima near ``values`` (mm, any shape) can lie from the
+        double-precision ones: the margin plus RELATIVE of their size, mm."""
+        return self.margin + self.RELATIVE * np.abs(values)
+
+    def learn(self, field, edges):
+        """Take the nodes of the latest maxima: field (P, g_u g_v) and edges (P, E) or None, |d| in mm."""
+        found = field.argmax(axis=1)
+        if edges is not None and edges.shape[1]:
+            at_edge = edges.max(axis=1) > field.max(axis=1)
+            found = np.where(at_edge, field.shape[1] + edges.argmax(axis=1), found)
+        recent = np.concatenate([found[::-1], self.nodes])
+        _, first = np.unique(recent, return_index=True)
+        self.nodes = recent[np.sort(first)][: self.SIZE]
+
+
+def single_rounding(nodes):
+    """How far, in mm, a single-precision expanded deviation can lie from the double-precision
+    one on these FaceNodes: a few units in the last place of the largest coordinate (the
+    substitute's and the face's points are rounded to that before they are subtracted)."""
+    coordinates = np.concatenate([np.nan_to_num(nodes.points).reshape(-1), nodes.edge_points.reshape(-1)])
+    return 64.0 * float(np.finfo(np.float32).eps) * (1.0 + float(np.abs(coordinates).max(initial=0.0)))
 
 
 @dataclass

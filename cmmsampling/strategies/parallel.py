@@ -249,28 +249,40 @@ class TwoProcessObjective:
                 self.fallback = worker.why()
             return None
 
-    def __call__(self, uv):
+    @property
+    def beats(self):
+        """True when the objective takes the values to beat (see DeviationObjective)."""
+        return getattr(self.objective, "beats", False)
+
+    def __call__(self, uv, above=None):
+        """The objective's values of uv (P, N, 2), as the objective called alone (above: (P,) or
+        None, passed on with the share of each process)."""
         uv = np.asarray(uv, dtype=float)
         self.evaluations += uv.shape[0]
         if self.worker is None or uv.shape[0] < MIN_PARTICLES:
-            return self.objective(uv)
+            return self._here(uv, above)
         if self.choice is None:
-            return self._split(uv)
+            return self._split(uv, above)
         split = self.choice.next_split()
         start = time.perf_counter()
-        values = self._split(uv) if split else self.objective(uv)
+        values = self._split(uv, above) if split else self._here(uv, above)
         self.choice.record(split, (time.perf_counter() - start) / uv.shape[0])
         return values
 
-    def _split(self, uv):
+    def _here(self, uv, above, rows=slice(None)):
+        """The objective's values of uv[rows] in this process."""
+        return self.objective(uv[rows]) if above is None else self.objective(uv[rows], above[rows])
+
+    def _split(self, uv, above):
         """The values of uv (P, N, 2), half of them scored by the worker."""
         half = (uv.shape[0] + 1) // 2
-        sent = self._guard(lambda: self.worker.send(("eval", self.token, uv[half:])) or True)
-        local = self.objective(uv[:half] if sent else uv)
+        theirs = None if above is None else above[half:]
+        sent = self._guard(lambda: self.worker.send(("eval", self.token, uv[half:], theirs)) or True)
+        local = self._here(uv, above, slice(None, half) if sent else slice(None))
         if not sent:
             return local
         remote = self._guard(self.worker.receive)
         if remote is None:
-            return np.concatenate([local, self.objective(uv[half:])])
+            return np.concatenate([local, self._here(uv, above, slice(half, None))])
         self.remote += uv.shape[0] - half
         return np.concatenate([local, remote])

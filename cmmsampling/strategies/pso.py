@@ -91,11 +91,21 @@ def _screened(values, positions, personal_values, admissible):
     return values
 
 
+def _scores(objective, positions, personal_values):
+    """objective(positions), told the personal bests to beat where it takes them (its ``beats``
+    attribute is True: values that do not beat them may come back as any lower value that still
+    does not)."""
+    if getattr(objective, "beats", False):
+        return objective(positions, personal_values)
+    return objective(positions)
+
+
 def particle_swarm(objective, lower, upper, n_points, settings, seeds=(), project=None, progress=None,
                    admissible=None):
     """Minimise objective over sets of n_points points in the box [lower, upper].
 
-    objective: callable (P, N, 2) -> (P,); lower, upper: (2,) box corners; settings: SwarmSettings;
+    objective: callable (P, N, 2) -> (P,), or with a true ``beats`` attribute (uv, above (P,)) -> (P,)
+    where values at or above ``above`` need not be exact (see :func:`_scores`); lower, upper: (2,) box corners; settings: SwarmSettings;
     seeds: layouts (N, 2) that start as particles 0, 1, ...; project: callable (P, N, 2) -> (P, N, 2)
     mapping positions onto the feasible set (default: clip to the box); progress: callable
     (iteration, best_value), called after every iteration, returning True to stop;
@@ -126,7 +136,7 @@ def particle_swarm(objective, lower, upper, n_points, settings, seeds=(), projec
         moved = positions + velocities
         positions = project(moved)
         velocities[positions != moved] = 0.0
-        values = _screened(objective(positions), positions, personal_values, admissible)
+        values = _screened(_scores(objective, positions, personal_values), positions, personal_values, admissible)
         improved = values < personal_values
         personal[improved] = positions[improved]
         personal_values[improved] = values[improved]

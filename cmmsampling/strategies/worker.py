@@ -3,8 +3,8 @@
 Started as ``python -c BOOT PACKAGE_PARENT SOCKET_FD`` (see :data:`cmmsampling.strategies.parallel.BOOT`):
 it first answers ("ready", its pid), then receives a batched objective once (pickled, pure numpy)
 and evaluates the point sets it is sent, until the parent closes the channel or dies. Requests:
-("load", token, objective), ("eval", token, uv (P, N, 2)), ("ping",). Replies: ("ok", values (P,)) or
-("error", message).
+("load", token, objective), ("eval", token, uv (P, N, 2), above (P,) or None), ("ping",).
+Replies: ("ok", values (P,)) or ("error", message).
 """
 import os
 import socket
@@ -49,4 +49,5 @@ def _answer(request, objectives):
         return ("ok", None)
     if request[0] == "ping":
         return ("ok", None)
-    return ("ok", objectives[request[1]](request[2]))
+    objective, uv, above = objectives[request[1]], request[2], request[3]
+    return ("ok", objective(uv) if above is None else objective(uv, above))
