@@ -322,32 +322,19 @@ class Expansion:
             field -= along
         return field
 
-    def edges(self, poles, index=slice(None)):
-        """d_edge of poles (..., n_u, n_v, 3) at the edge nodes ``index`` (default all): (..., E) mm."""
+    def edges(self, poles):
+        """d_edge of poles (..., n_u, n_v, 3) at the edge nodes: (..., E) mm."""
         poles = np.asarray(poles, dtype=self.dtype)
         by_coord = np.swapaxes(poles.reshape(poles.shape[:-3] + (-1, 3)), -1, -2)
-        error = np.matmul(by_coord, self.edge_columns[:, index])
-        error -= self.edge_points[:, index]
-        normal = (error * self.edge_directions[0][:, index]).sum(-2)
+        error = np.matmul(by_coord, self.edge_columns)
+        error -= self.edge_points
+        normal = (error * self.edge_directions[0]).sum(-2)
         size = normal * normal
         for direction in self.edge_directions[1:]:
-            part = (error * direction[:, index]).sum(-2)
+            part = (error * direction).sum(-2)
             size += part * part
         size = np.sqrt(size)
         return np.where(normal < 0, -size, size)
-
-    def at_nodes(self, poles, rows, columns):
-        """d2 of poles (P, n_u, n_v, 3) at the raster nodes (rows[k], columns[k]) only: (P, K) mm."""
-        poles = np.asarray(poles, dtype=self.dtype)
-        count, n_u, n_v, _ = poles.shape
-        along_u = np.matmul(self.grid_u[rows], poles.reshape(count, n_u, n_v * 3)).reshape(count, -1, n_v, 3)
-        error = np.einsum("pkbc,bk->pkc", along_u, self.grid_v_t[:, columns])
-        error -= self.foot_points[:, rows, columns].T
-        field = np.einsum("pkc,ck->pk", error, self.normals[:, rows, columns])
-        for half, direction in zip(self.halves, self.directions):
-            along = np.einsum("pkc,ck->pk", error, direction[:, rows, columns])
-            field -= half[rows, columns] * along * along
-        return field
 
 
 class NodeScreen:
@@ -369,18 +356,44 @@ class NodeScreen:
         self.margin = margin
         self.raster = expansion.foot_points.shape[1:]
         self.nodes = np.empty(0, dtype=np.int64)
+        self._columns = None
+
+    def _gather(self):
+        """The arrays :meth:`lower` needs at the screen's nodes (K of them): basis columns
+        (n_u n_v, K), nodes (3, K) mm, projection directions (3, 3, K), curvature halves (2, K)
+        1/mm (0 at edge nodes) and which are edge nodes (K,)."""
+        expansion, cells = self.expansion, self.raster[0] * self.raster[1]
+        inner, edge = self.nodes[self.nodes < cells], self.nodes[self.nodes >= cells] - cells
+        rows, columns = np.divmod(inner, self.raster[1])
+        inner_columns = (expansion.grid_u[rows][:, :, None] * expansion.grid_v_t[:, columns].T[:, None, :])
+        self._columns = np.concatenate([inner_columns.reshape(inner.size, expansion.edge_columns.shape[0]).T,
+                                        expansion.edge_columns[:, edge]], axis=1)
+        self._points = np.concatenate([expansion.foot_points[:, rows, columns], expansion.edge_points[:, edge]], axis=1)
+        inner_directions = np.concatenate([expansion.normals[None, :, rows, columns],
+                                           expansion.directions[:, :, rows, columns]])
+        edge_directions = np.stack([direction[:, edge] for direction in expansion.edge_directions])
+        self._directions = np.concatenate([inner_directions, edge_directions], axis=2)
+        self._halves = np.concatenate([expansion.halves[:, rows, columns], np.zeros((2, edge.size))], axis=1)
+        self._edge = np.arange(self.nodes.size) >= inner.size
 
     def lower(self, poles):
-        """Largest |d| at the screen's nodes: poles (P, n_u, n_v, 3) -> (P,) mm (0 with none)."""
-        values = np.zeros(poles.shape[0])
-        cells = self.raster[0] * self.raster[1]
-        inner, edge = self.nodes[self.nodes < cells], self.nodes[self.nodes >= cells] - cells
-        if inner.size:
-            rows, columns = np.divmod(inner, self.raster[1])
-            values = np.abs(self.expansion.at_nodes(poles, rows, columns)).max(axis=1)
-        if edge.size:
-            values = np.maximum(values, np.abs(self.expansion.edges(poles, edge)).max(axis=-1))
-        return values
+        """Largest |d| at the screen's nodes: poles (P, n_u, n_v, 3) -> (P,) mm (0 with none).
+
+        Every node's offset e is one matrix product of the poles with the nodes' basis columns;
+        its three projections (normal, then the two curvature directions at a raster node, or the
+        conormals at an edge node) give d2 = e.n - h1 (e.t1)^2 - h2 (e.t2)^2 at a raster node and
+        d_edge = sqrt of the sum of the squared projections at an edge node."""
+        if self._columns is None:
+            return np.zeros(poles.shape[0])
+        poles = np.asarray(poles, dtype=float)
+        by_coord = np.swapaxes(poles.reshape(poles.shape[0], -1, 3), -1, -2)
+        error = np.matmul(by_coord, self._columns)
+        error -= self._points
+        projected = np.einsum("pck,jck->pjk", error, self._directions)
+        squared = projected[:, 1:] ** 2
+        inner = projected[:, 0] - (self._halves * squared).sum(axis=1)
+        at_edge = np.sqrt(projected[:, 0] ** 2 + squared.sum(axis=1))
+        return np.abs(np.where(self._edge, at_edge, inner)).max(axis=1)
 
     def slack(self, values):
         """How far single-precision maxima near ``values`` (mm, any shape) can lie from the
@@ -395,7 +408,11 @@ class NodeScreen:
             found = np.where(at_edge, field.shape[1] + edges.argmax(axis=1), found)
         recent = np.concatenate([found[::-1], self.nodes])
         _, first = np.unique(recent, return_index=True)
-        self.nodes = recent[np.sort(first)][: self.SIZE]
+        nodes = recent[np.sort(first)][: self.SIZE]
+        changed = not np.array_equal(np.sort(nodes), np.sort(self.nodes))
+        self.nodes = nodes
+        if changed:
+            self._gather()
 
 
 def single_rounding(nodes):
