@@ -174,11 +174,17 @@ class DeviationObjective:
         poles (P, n_u, n_v, 3): (P,) mm; learn: tell the screen where each maximum lies."""
         field = self._swarm_field(poles).reshape(poles.shape[0], -1)
         field = np.abs(field, out=field)
-        edges = np.abs(self._single.edges(poles)) if self.nodes.edge_uv.size else None
+        sets = np.arange(poles.shape[0])
+        node = field.argmax(axis=1)
+        worst = field[sets, node]
+        if self.nodes.edge_uv.size:
+            edges = np.abs(self._single.edges(poles))
+            edge = edges.argmax(axis=1)
+            node = np.where(edges[sets, edge] > worst, field.shape[1] + edge, node)
+            worst = np.maximum(worst, edges[sets, edge])
         if learn:
-            self._screen.learn(field, edges)
-        worst = field.max(axis=1)
-        return worst if edges is None else np.maximum(worst, edges.max(axis=1))
+            self._screen.learn(node)
+        return worst
 
     def points(self, uv):
         """Face points of point sets, coordinate first: uv (..., N, 2) -> (..., 3, N) mm."""
@@ -366,8 +372,8 @@ class NodeScreen:
         inner, edge = self.nodes[self.nodes < cells], self.nodes[self.nodes >= cells] - cells
         rows, columns = np.divmod(inner, self.raster[1])
         inner_columns = (expansion.grid_u[rows][:, :, None] * expansion.grid_v_t[:, columns].T[:, None, :])
-        self._columns = np.concatenate([inner_columns.reshape(inner.size, expansion.edge_columns.shape[0]).T,
-                                        expansion.edge_columns[:, edge]], axis=1)
+        inner_columns = inner_columns.reshape(inner.size, expansion.edge_columns.shape[0]).T
+        self._columns = np.concatenate([inner_columns, expansion.edge_columns[:, edge]], axis=1)
         self._points = np.concatenate([expansion.foot_points[:, rows, columns], expansion.edge_points[:, edge]], axis=1)
         inner_directions = np.concatenate([expansion.normals[None, :, rows, columns],
                                            expansion.directions[:, :, rows, columns]])
@@ -400,12 +406,9 @@ class NodeScreen:
         double-precision ones: the margin plus RELATIVE of their size, mm."""
         return self.margin + self.RELATIVE * np.abs(values)
 
-    def learn(self, field, edges):
-        """Take the nodes of the latest maxima: field (P, g_u g_v) and edges (P, E) or None, |d| in mm."""
-        found = field.argmax(axis=1)
-        if edges is not None and edges.shape[1]:
-            at_edge = edges.max(axis=1) > field.max(axis=1)
-            found = np.where(at_edge, field.shape[1] + edges.argmax(axis=1), found)
+    def learn(self, found):
+        """Take the nodes of the latest maxima: found (P,) int, a raster node's flat index, or the
+        number of raster nodes plus an edge node's index."""
         recent = np.concatenate([found[::-1], self.nodes])
         _, first = np.unique(recent, return_index=True)
         nodes = recent[np.sort(first)][: self.SIZE]

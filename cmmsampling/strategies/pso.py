@@ -104,8 +104,9 @@ def particle_swarm(objective, lower, upper, n_points, settings, seeds=(), projec
                    admissible=None):
     """Minimise objective over sets of n_points points in the box [lower, upper].
 
-    objective: callable (P, N, 2) -> (P,), or with a true ``beats`` attribute (uv, above (P,)) -> (P,)
-    where values at or above ``above`` need not be exact (see :func:`_scores`); lower, upper: (2,) box corners; settings: SwarmSettings;
+    objective: callable (P, N, 2) -> (P,), or with a true ``beats`` attribute (uv, above (P,)) ->
+    (P,) where values at or above ``above`` need not be exact (see :func:`_scores`); lower, upper:
+    (2,) box corners; settings: SwarmSettings;
     seeds: layouts (N, 2) that start as particles 0, 1, ...; project: callable (P, N, 2) -> (P, N, 2)
     mapping positions onto the feasible set (default: clip to the box); progress: callable
     (iteration, best_value), called after every iteration, returning True to stop;

@@ -71,7 +71,7 @@ def test_a_swarm_screened_runs_as_one_scored_whole(problem):
     whole_only = lambda uv: objective(uv)  # noqa: E731 (no 'beats': every set scored whole)
     scored = []
     learn = objective._screen.learn
-    objective._screen.learn = lambda field, edges: (scored.append(len(field)), learn(field, edges))
+    objective._screen.learn = lambda found: (scored.append(len(found)), learn(found))
     settings = SwarmSettings(population=25, iterations=150, seed=2)
     arguments = (problem.domain.lower, problem.domain.upper, problem.n, settings)
     try:
