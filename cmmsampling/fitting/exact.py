@@ -27,6 +27,8 @@ from .substitute import FittedSurface
 
 FOOT_ITERATIONS = 400
 FOOT_STEP_TOLERANCE = 1e-10
+DAMPING_FLOOR = 1e-12
+DAMPING_CEILING = 1e12
 SEARCH_SAMPLES = 48
 
 
@@ -190,9 +192,12 @@ def _nearest_samples(surface, targets):
 def closest_parameters(model, targets, uv):
     """Parameters (K, 2) of the closest points to targets (K, 3), from uv (K, 2), in the model's box.
 
-    model: anything with ``bounds``, ``points(uv)`` and ``derivatives(uv, 1)`` (a NurbsPatch or a
-    FittedSurface). Damped Gauss-Newton on |F(u, v) - target|^2, every target at once; a step is
-    kept only where it brings the point closer.
+    model: anything with ``bounds``, ``points(uv)`` and ``derivatives(uv, 2)`` (a NurbsPatch or a
+    FittedSurface). Damped Newton on |F(u, v) - target|^2, every target at once; a step is
+    kept only where it brings the point closer. The damping (relative, between DAMPING_FLOOR and
+    DAMPING_CEILING) falls where a step gains at least a quarter of what the local model
+    promised and grows where it gains less: a step that overshoots on a curved surface, e.g.
+    along a bound, would otherwise zigzag for hundreds of iterations.
     """
     u0, u1, v0, v1 = model.bounds
     low, high = np.array([u0, v0]), np.array([u1, v1])
@@ -204,31 +209,61 @@ def closest_parameters(model, targets, uv):
         if not active.any():
             break
         index = np.flatnonzero(active)
-        step = _gauss_newton_step(model, targets[index], uv[index], damping[index], low, high)
-        trial = np.clip(uv[index] + step, low, high)
+        start = uv[index]
+        gradient, normal = _local_model(model, targets[index], start)
+        step = _newton_step(gradient, normal, start, damping[index], low, high)
+        trial = np.clip(start + step, low, high)
         trial_squared = ((model.points(trial) - targets[index]) ** 2).sum(1)
-        better = trial_squared <= squared[index]
-        moved = np.abs(trial - uv[index]).max(1) > FOOT_STEP_TOLERANCE * (high - low).max()
+        gain = squared[index] - trial_squared
+        better = gain >= 0
+        moved = np.abs(trial - start).max(1) > FOOT_STEP_TOLERANCE * (high - low).max()
         uv[index[better]] = trial[better]
         squared[index[better]] = trial_squared[better]
-        damping[index] = np.where(better, damping[index] * 0.1, damping[index] * 100.0)
-        active[index] = (better & moved) | (~better & (damping[index] < 1e12))
+        damping[index] = _next_damping(damping[index], gain, _promised_gain(gradient, normal, trial - start))
+        active[index] = (better & moved) | (~better & (damping[index] < DAMPING_CEILING))
     return uv
 
 
-def _gauss_newton_step(model, targets, uv, damping, low, high):
-    """Levenberg-Marquardt step (K, 2) towards the closest points, damping (K,) relative. A
-    parameter on its bound that the step would push out stays there, and the step is taken along
-    the bound in the other parameter alone; at a corner, along the edge that leads inward and
-    gains more (so that a closest point on the rectangle's edge is found as exactly as one inside
-    it)."""
-    d = model.derivatives(uv, 1)
+def _local_model(model, targets, uv):
+    """The quadratic model of the squared distance at uv (K, 2): gradient (K, 2) = J^T r (half the
+    gradient of |r|^2, r = F(uv) - target) and curvature (K, 3) = the columns a, b, c of half its
+    Hessian, J^T J + r . F'' (Newton: quadratic convergence where the surface curves or the
+    point is far), or of J^T J alone where that Hessian is not positive definite."""
+    d = model.derivatives(uv, 2)
     residual = d[(0, 0)] - targets
     su, sv = d[(1, 0)], d[(0, 1)]
-    a, b, c = (su * su).sum(1), (su * sv).sum(1), (sv * sv).sum(1)
+    gradient = np.column_stack([(residual * su).sum(1), (residual * sv).sum(1)])
+    normal = np.column_stack([(su * su).sum(1), (su * sv).sum(1), (sv * sv).sum(1)])
+    hessian = normal + np.column_stack([(residual * d[key]).sum(1) for key in ((2, 0), (1, 1), (0, 2))])
+    definite = (hessian[:, 0] > 0) & (hessian[:, 0] * hessian[:, 2] > hessian[:, 1] ** 2)
+    return gradient, np.where(definite[:, None], hessian, normal)
+
+
+def _promised_gain(gradient, normal, step):
+    """(K,) the decrease of |r|^2 that the quadratic model promises for a step (K, 2)."""
+    a, b, c = normal.T
+    su, sv = step.T
+    return -2.0 * (gradient * step).sum(1) - (a * su * su + 2.0 * b * su * sv + c * sv * sv)
+
+
+def _next_damping(damping, gain, promised):
+    """(K,) the damping after a step that gained ``gain`` (K,) of the ``promised`` (K,) decrease."""
+    kept = gain >= 0
+    grown = np.where(kept, damping * 10.0, damping * 100.0)
+    good = kept & (gain >= 0.25 * promised)
+    return np.clip(np.where(good, damping * 0.1, grown), DAMPING_FLOOR, DAMPING_CEILING)
+
+
+def _newton_step(gradient, normal, uv, damping, low, high):
+    """Damped Newton step (K, 2) towards the closest points from the local model (gradient
+    (K, 2), normal (K, 3): see :func:`_local_model`), damping (K,) relative. A parameter on its
+    bound that the step would push out stays there, and the step is taken along the bound in the
+    other parameter alone; at a corner, along the edge that leads inward and gains more (so that a
+    closest point on the rectangle's edge is found as exactly as one inside it)."""
+    a, b, c = normal.T
     shift = damping * (a + c) + 1e-300
     a, c = a + shift, c + shift
-    gu, gv = (residual * su).sum(1), (residual * sv).sum(1)
+    gu, gv = gradient.T
     det = a * c - b * b
     step = -np.column_stack([c * gu - b * gv, a * gv - b * gu]) / det[:, None]
     pushed = ((uv <= low) & (step < 0)) | ((uv >= high) & (step > 0))

@@ -168,8 +168,8 @@ class FittedSurface:
         return self.space.evaluate(self.poles, uv)
 
     def derivatives(self, uv, order=1):
-        """Point and first partial derivatives: {(0, 0), (1, 0), (0, 1): (M, 3)}; order is 1."""
-        bu, bv = self.space.bases(uv, 1)
-        return {(0, 0): kron_rows(bu[0], bv[0]) @ self._flat,
-                (1, 0): kron_rows(bu[1], bv[0]) @ self._flat,
-                (0, 1): kron_rows(bu[0], bv[1]) @ self._flat}
+        """Point and partial derivatives up to ``order`` (1 or 2): {(a, b): (M, 3)} with the a-th
+        u- and b-th v-derivative, mm per parameter unit."""
+        bu, bv = self.space.bases(uv, order)
+        return {(a, b): kron_rows(bu[a], bv[b]) @ self._flat
+                for a in range(order + 1) for b in range(order + 1 - a)}
