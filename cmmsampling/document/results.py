@@ -72,7 +72,8 @@ def _fill_result_group(group, result, source, with_path=True):
 
 
 def add_plan_to_document(plan: PartPlan, doc: FreeCAD.Document, part: FreeCAD.DocumentObject,
-                         hide_others: bool = True) -> FreeCAD.DocumentObject:
+                         hide_others: bool = True,
+                         replace: FreeCAD.DocumentObject | None = None) -> FreeCAD.DocumentObject:
     """Add a PartPlan to ``doc`` in one transaction (one Undo removes it all).
 
     plan: a :class:`cmmsampling.planning.part_plan.PartPlan` of ``part``'s faces (a document
@@ -80,15 +81,20 @@ def add_plan_to_document(plan: PartPlan, doc: FreeCAD.Document, part: FreeCAD.Do
     :func:`add_to_document`. Creates a group "Plan <part label> (<strategy>)" holding a sub-group
     per face with points (as :func:`add_to_document` makes it) and a "Plan report" spreadsheet:
     face, area (mm^2), N, maximum deviation and bound (mm), tolerance met, notes, one row per
-    face and a row for the part. Returns the group.
+    face and a row for the part. replace: the group this function made for an earlier plan of
+    the part (a cancelled plan that ``plan`` resumed), removed with everything in it in the same
+    transaction. Returns the group.
     """
     sources = [_check_source((part, face.name), doc) for face in plan.placed]
+    replaced = _plan_objects(replace, doc)
     for face in plan.placed:
         if not lies_on(plan.shapes[face.name], part.getSubObject(face.name)):
             raise InputError(f"{part.Label}.{face.name} is not the plan's {face.name}: give the object whose shape "
                              "was planned")
     results = [plan.result(face.name) for face in plan.placed]
     with transaction(doc, "Add part plan"):
+        for obj in replaced:
+            doc.removeObject(obj.Name)
         group = doc.addObject("App::DocumentObjectGroup", "Plan")
         if hide_others:
             hide_results(doc)
@@ -109,6 +115,29 @@ def add_plan_to_document(plan: PartPlan, doc: FreeCAD.Document, part: FreeCAD.Do
             objects += paths
         recompute(doc, objects + [sheet])
     return group
+
+
+def _plan_objects(group, doc):
+    """The objects of a plan's group, the group last ([] for None); InputError when ``group`` is
+    not a plan's group in ``doc``."""
+    if group is None:
+        return []
+    try:
+        in_doc = group.Document == doc and doc.getObject(group.Name) == group
+    except (ReferenceError, AttributeError):
+        in_doc = False
+    if not in_doc or not group.isDerivedFrom("App::DocumentObjectGroup") or not group.Label.startswith("Plan "):
+        raise InputError("replace must be the group add_plan_to_document made for an earlier plan, in this "
+                         "document: give that group, or None to keep it")
+    return _members(group)
+
+
+def _members(group):
+    """A group's objects, those of its sub-groups before each sub-group, the group last."""
+    objects = []
+    for child in group.Group:
+        objects += _members(child) if child.isDerivedFrom("App::DocumentObjectGroup") else [child]
+    return objects + [group]
 
 
 def reevaluate(points: FreeCAD.DocumentObject, occ_check: bool = True) -> SamplingResult:

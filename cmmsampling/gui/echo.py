@@ -3,6 +3,8 @@ replay it as a macro (``Gui.doCommand``). A run made in a worker thread is hande
 echoed call (the engines' ``hand_over``), so the echoed line binds its result without running
 again here. The comparison's and the plan's engines are imported by the functions that echo
 them, so that Sample face does not load matplotlib."""
+import __main__
+
 import FreeCAD
 import FreeCADGui
 
@@ -104,19 +106,24 @@ def echo_study(face, run, alive=True):
         FreeCADGui.doCommand(f"# report = cmmsampling.write_report(study, {run.folder!r})  # ran in the task panel")
 
 
-def add_plan(part, run, result):
+def add_plan(part, run, result, replace=None):
     """Write a finished plan into the part's document through the console API, echoed so that it
     replays as a macro: ``plan = cmmsampling.plan(<part>.Shape, ...)`` (handed the plan made in
-    the worker thread, so it does not run again here) and ``add_plan_to_document``."""
+    the worker thread, so it does not run again here; ``resume=plan`` where it resumed the
+    cancelled plan the console's ``plan`` holds) and ``add_plan_to_document`` (replacing the
+    group ``replace`` of that cancelled plan). Returns the plan's group."""
     from ..planning import part_plan
 
     doc = f"App.getDocument({part.Document.Name!r})"
     part_expr = f"{doc}.getObject({part.Name!r})"
-    call = ", ".join([f"{part_expr}.Shape"] + [f"{key}={argument_text(value)}" for key, value in run.arguments.items()])
+    call = ", ".join([f"{part_expr}.Shape"] + [f"{key}={'plan' if key == 'resume' else argument_text(value)}"
+                                               for key, value in run.arguments.items()])
     note = "ran in the task panel"
     if result.cancelled:
         note += f", cancelled after {len(result.placed)} faces (a replay runs it whole)"
     FreeCADGui.doCommand("import cmmsampling")
     part_plan.hand_over(run.shape, run.arguments, result)
     FreeCADGui.doCommand(f"plan = cmmsampling.plan({call})  # {note}")
-    FreeCADGui.doCommand(f"group = cmmsampling.add_plan_to_document(plan, {doc}, {part_expr})")
+    replacing = "" if replace is None else f", replace={doc}.getObject({replace.Name!r})"
+    FreeCADGui.doCommand(f"group = cmmsampling.add_plan_to_document(plan, {doc}, {part_expr}{replacing})")
+    return part.Document.getObject(__main__.group.Name)

@@ -187,7 +187,8 @@ def test_a_plan_runs_face_by_face_and_adds_a_group_per_face(part_doc, monkeypatc
     assert [o.Name for o in part_doc.Objects] == names
 
 
-def test_cancel_keeps_the_faces_done_and_names_the_others(part_doc, monkeypatch, artifacts):
+def test_cancel_keeps_the_faces_done_and_resume_plans_the_others(part_doc, monkeypatch, artifacts):
+    undo = part_doc.UndoCount
     hold = hold_plan_at(monkeypatch, 1)
     form = open_plan(part_doc, "Face2", "Face4")
     fill(form, processes=1, **QUICK)
@@ -201,15 +202,38 @@ def test_cancel_keeps_the_faces_done_and_names_the_others(part_doc, monkeypatch,
     [made] = hold.plans
     assert made.cancelled and [face.placed for face in made.faces] == [True, False]
     assert form.status.text() == (f"Cancelled: the 1 faces done were added ({made.n_total} points); the plan's "
-                                  "report names the faces not run.")
+                                  "report names the faces not run. Resume plans those 1.")
     assert form.faceLines.item(0).text() == made.faces[0].line
+    assert task_button(OK).text() == "Resume" and not form.tolerance.isEnabled() and not form.strategy.isEnabled()
     form.grab().save(os.path.join(artifacts, "plan_part_cancelled_form.png"))
+    main_window().grab().save(os.path.join(artifacts, "plan_part_resume.png"))
     sheet = part_doc.getObject("PlanReport")
     assert sheet.get("A6") == "Face2" and sheet.get("A7") == "Face4"
     assert sheet.get("G7") == "cancelled before this face ran"
     assert "cancelled after 1 faces (a replay runs it whole)" in dock_text("Python console")
-    task_button(CANCEL).click()
-    assert wait_until(lambda: not FreeCADGui.Control.activeDialog(), 2)
+    cancelled_group = next(o.Name for o in part_doc.Objects if o.Label == "Plan Part (uniform_parametric)")
+
+    task_button(OK).click()
+    assert form.status.text().startswith("Resuming: planning the 1 faces not run")
+    assert wait_until(lambda: not FreeCADGui.Control.activeDialog(), 120), form.status.text()
+    whole = hold.plans[-1]
+    assert __main__.plan is whole and not whole.cancelled
+    assert [face.placed for face in whole.faces] == [True, True]
+    assert whole.faces[0] is made.faces[0], "the face done was planned again"
+    console = dock_text("Python console")
+    assert ", resume=plan)  # ran in the task panel" in console
+    assert f", replace=App.getDocument({part_doc.Name!r}).getObject({cancelled_group!r}))" in console
+    plans = [o for o in part_doc.Objects if o.Label.startswith("Plan Part")]
+    assert len(plans) == 1
+    assert [o.Label for o in plans[0].Group if o.TypeId == "App::DocumentObjectGroup"] == [
+        f"Sampling Part Face{k} (uniform_parametric)" for k in (2, 4)]
+    [sheet] = [o for o in part_doc.Objects if o.TypeId == "Spreadsheet::Sheet" and o.Label.startswith("Plan report")]
+    assert sheet.get("A7") == "Face4" and sheet.get("C7") == whole.faces[1].n
+    assert part_doc.UndoCount == undo + 2
+    part_doc.undo()
+    back = [o for o in part_doc.Objects if o.Label.startswith("Plan Part")]
+    assert [o.Name for o in back] == [cancelled_group]
+    assert len([o for o in back[0].Group if o.TypeId == "App::DocumentObjectGroup"]) == 1
 
 
 def test_a_plan_with_a_probe_draws_its_path(part_doc, monkeypatch, artifacts):

@@ -229,6 +229,34 @@ def test_the_plan_goes_into_the_document_in_one_step(part, tolerance_plan):
         closed("PlanDocument")
 
 
+def test_a_resumed_plan_replaces_the_cancelled_ones_group_in_one_step(part, tolerance_plan):
+    doc = FreeCAD.newDocument("PlanReplace")
+    try:
+        body = doc.addObject("Part::Feature", "Body")
+        body.Shape = part
+        doc.recompute()
+        doc.UndoMode = 1
+        arguments = dict(tolerance=TOLERANCE, strategy="uniform_parametric", edge_offset=1.5, n_max=200, **FAST)
+        cancelled = cmmsampling.plan(part, processes=1, progress=lambda done, total, message: done == 1, **arguments)
+        first = cmmsampling.add_plan_to_document(cancelled, doc, body)
+        first_objects = [o.Name for o in doc.Objects]
+        other = doc.addObject("App::DocumentObjectGroup", "Mine")
+        with pytest.raises(ValueError, match="replace must be the group add_plan_to_document made"):
+            cmmsampling.add_plan_to_document(tolerance_plan, doc, body, replace=other)
+        doc.removeObject(other.Name)
+        assert [o.Name for o in doc.Objects] == first_objects
+        resumed = cmmsampling.plan(part, processes=1, resume=cancelled, **arguments)
+        cmmsampling.add_plan_to_document(resumed, doc, body, replace=first)
+        groups = [o for o in doc.Objects if o.Label.startswith("Plan Body")]
+        assert len(groups) == 1
+        assert len([g for g in groups[0].Group if g.TypeId == "App::DocumentObjectGroup"]) == len(resumed.placed) == 3
+        assert len([o for o in doc.Objects if o.TypeId == "Spreadsheet::Sheet" and o.Label == "Plan report"]) == 1
+        doc.undo()
+        assert sorted(o.Name for o in doc.Objects) == sorted(first_objects)
+    finally:
+        closed("PlanReplace")
+
+
 def test_the_command_line_plans_a_file(part, tmp_path, capsys):
     brep = tmp_path / "part.brep"
     part.exportBrep(str(brep))

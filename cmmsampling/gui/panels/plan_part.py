@@ -4,9 +4,10 @@ The task panel composes a ``cmmsampling.plan(shape, faces=[...], ...)`` call for
 faces (or every face of a part selected whole); the plan runs in a worker thread
 (:class:`BackgroundPlan`) polled by a QTimer, the faces on local processes, with a progress bar
 of faces done and a line per face as it ends. Cancel stops the faces under way and keeps those
-done. The plan is written through the console API (``cmmsampling.add_plan_to_document``: a
-group per face and the plan's spreadsheet, one Undo), echoed in the Python console, where
-``plan`` holds it.
+done; the panel then offers Resume, which plans the faces not run with the same values and puts
+the whole plan in the cancelled one's place. The plan is written through the console API
+(``cmmsampling.add_plan_to_document``: a group per face and the plan's spreadsheet, one Undo),
+echoed in the Python console, where ``plan`` holds it.
 """
 import os
 
@@ -16,7 +17,7 @@ from PySide import QtGui
 
 from ...access.probe import PROBES
 from ...fitting.deviation import DEFAULT_GRID
-from ...planning.part_plan import plan
+from ...planning.part_plan import CANCELLED_REASON, plan
 from ...planning.points_needed import DEFAULT_MAX_POINTS
 from ...strategies.sampling import BEST_STRATEGY, STRATEGIES
 from .. import settings
@@ -126,6 +127,8 @@ class PlanPartTaskPanel(BackgroundRunPanel):
 
     OK_TEXT = "Plan"
     OK_TIP = "Plan every face; the points are added when the plan ends"
+    RESUME_TIP = ("Plan the faces the cancelled plan did not run, with the same values; the faces done are kept, "
+                  "and the whole plan replaces the cancelled one in the document (one Undo)")
     CANCELLING = ("Cancelling: the faces under way are stopped when the next one ends; the faces done are kept "
                   "and added.")
 
@@ -148,6 +151,8 @@ class PlanPartTaskPanel(BackgroundRunPanel):
         self.form.strategy.currentIndexChanged.connect(self.update_enabled)
         self.form.byTolerance.toggled.connect(self.update_enabled)
         self.form.progress.setTextVisible(False)
+        # (plan, group) of the cancelled plan that OK resumes, else None.
+        self.resumable = None
         self.update_enabled()
 
     # --- values
@@ -204,8 +209,9 @@ class PlanPartTaskPanel(BackgroundRunPanel):
 
     def update_enabled(self):
         """The goal's field by the chosen goal, each strategy setting when the chosen strategy
-        offers it; nothing (but Cancel) while a plan runs."""
-        idle = self.run is None
+        offers it; nothing (but Cancel) while a plan runs, nor after a cancelled one (OK resumes
+        it with its values)."""
+        idle = self.run is None and self.resumable is None
         strategy = self.form.strategy.itemData(self.form.strategy.currentIndex())
         offered = {setting.option for setting in STRATEGIES[strategy].settings} if strategy in STRATEGIES else set()
         by_tolerance = self.form.byTolerance.isChecked()
@@ -218,7 +224,10 @@ class PlanPartTaskPanel(BackgroundRunPanel):
         for option, box in self.setting_boxes.items():
             box.setEnabled(idle and option in offered)
         if self.buttons is not None:
-            self.buttons.button(QtGui.QDialogButtonBox.Ok).setEnabled(idle)
+            ok = self.buttons.button(QtGui.QDialogButtonBox.Ok)
+            ok.setEnabled(self.run is None)
+            ok.setText("Resume" if self.resumable else self.OK_TEXT)
+            ok.setToolTip(self.RESUME_TIP if self.resumable else self.OK_TIP)
 
     # --- the run
     def part_shape(self):
@@ -239,11 +248,19 @@ class PlanPartTaskPanel(BackgroundRunPanel):
             return
         values = self.values()
         save_values(values)
-        self.form.faceLines.clear()
         self.form.progress.setTextVisible(True)
         faces = len(self.source[1])
-        self.begin(BackgroundPlan(shape, plan_arguments(values, self.source[1])), faces,
-                   f"Planning {faces} faces on {values['processes']} processes...")
+        arguments = plan_arguments(values, self.source[1])
+        self.form.faceLines.clear()
+        if self.resumable is None:
+            self.begin(BackgroundPlan(shape, arguments), faces, f"Planning {faces} faces on {values['processes']} "
+                                                                 "processes...")
+            return
+        cancelled = self.resumable[0]
+        run = BackgroundPlan(shape, {**arguments, "resume": cancelled})
+        run.lines = [face.line for face in cancelled.faces if face.reason != CANCELLED_REASON]
+        self.begin(run, faces, f"Resuming: planning the {faces - len(run.lines)} faces not run on "
+                               f"{values['processes']} processes...")
 
     def show_progress(self, run):
         """A line per face done, the count of faces done, and the plan's tally in the status line
@@ -276,16 +293,29 @@ class PlanPartTaskPanel(BackgroundRunPanel):
                                                        else ": see the reasons above.") + " Nothing was added.",
                              error=not result.cancelled)
             return
+        replace = self.cancelled_group()
         try:
-            add_plan(self.source[0], run, result)
+            group = add_plan(self.source[0], run, result, replace)
         except Exception as exc:
             self.show_status(f"The plan could not be added to the document: {exc}", error=True)
             return
         if not result.cancelled:
             FreeCADGui.Control.closeDialog()
             return
+        self.resumable = (result, group)
+        self.update_enabled()
+        left = sum(1 for face in result.faces if face.reason == CANCELLED_REASON)
         self.show_status(f"Cancelled: the {len(result.placed)} faces done were added ({result.n_total} points); "
-                         "the plan's report names the faces not run.")
+                         f"the plan's report names the faces not run. Resume plans those {left}.")
+
+    def cancelled_group(self):
+        """The group of the cancelled plan being resumed while it is still in the document, else None."""
+        group = self.resumable[1] if self.resumable is not None else None
+        try:
+            return group if group is not None and group.Document.getObject(group.Name) == group else None
+        except ReferenceError:
+            return None
+
 
 def load_values():
     """The values stored by the last plan, else the defaults."""
