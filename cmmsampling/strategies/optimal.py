@@ -139,15 +139,15 @@ class DescentResult:
 
 
 def descend(objective, start, lower, upper, judge, min_spacing=0.0, time_limit=None,
-            max_evaluations=None, progress=None, project=None):
+            max_evaluations=None, progress=None, project=None, began=None):
     """Minimise the maximum deviation from the point set ``start`` (N, 2) inside the box.
 
     objective: DeviationObjective (its face model and substitute space);
     judge: uv (N, 2) -> the ExactDeviation (cmmsampling.fitting.exact) of its substitute at the
     objective's nodes;
     lower, upper: (2,) parameter box; project: maps uv (N, 2) onto the feasible set (every
-    iterate is evaluated there; default: the box itself); min_spacing: mm between points; time_limit: s;
-    max_evaluations: surrogate evaluations; progress: callable (evaluation, best_max_mm) returning
+    iterate is evaluated there; default: the box itself); min_spacing: mm between points; time_limit: s
+    from ``began`` (a time.perf_counter() value, default: now); max_evaluations: surrogate evaluations; progress: callable (evaluation, best_max_mm) returning
     True to stop. Returns a DescentResult: the point set of smallest exact maximum seen among those
     that keep min_spacing (the start if none is better).
 
@@ -159,7 +159,7 @@ def descend(objective, start, lower, upper, judge, min_spacing=0.0, time_limit=N
     lower, upper = np.asarray(lower, float), np.asarray(upper, float)
     scale = upper - lower
     start = np.asarray(start, dtype=float)
-    began = time.perf_counter()
+    began = time.perf_counter() if began is None else began
     best = {"closest": _spacing_penalty(objective.model.points(start), min_spacing, 0.0)[2]}
     _take(best, start, judge(start), objective)
     state = {"count": 0, "history": [], "cancelled": False}
@@ -244,11 +244,13 @@ def run_optimal(problem, progress, start, time_limit, max_evaluations):
     """Near-optimal points by gradient descent on a smoothed maximum (see cmmsampling.strategies.optimal).
 
     start: "best" (the best of BEST_STARTS by the exact deviation), a strategy name or an (N, 2)
-    uv array; time_limit: s; max_evaluations: surrogate evaluations (None: no limit). Points keep
+    uv array; time_limit: s from the call, choosing the start included (the descent stops there;
+    the result is judged after it); max_evaluations: surrogate evaluations (None: no limit). Points keep
     problem.min_spacing and the feasible domain: a start that does not is repaired first (its
     crowded points moved to free places). The result is never worse than the start; ``notes`` say
     what was done.
     """
+    began = time.perf_counter()
     notes = []
     if isinstance(start, str):
         start_uv, name = _start_layout(problem, start)
@@ -259,7 +261,7 @@ def run_optimal(problem, progress, start, time_limit, max_evaluations):
     objective = problem.objective
     result = descend(objective, start_uv, problem.domain.lower, problem.domain.upper,
                      problem.exact, problem.min_spacing, time_limit, max_evaluations,
-                     progress, problem.project)
+                     progress, problem.project, began)
     if moved:
         notes.append(f"the start had points closer than min_spacing {problem.min_spacing:.3g} mm: "
                      f"{moved} of them were moved to free places before the descent")

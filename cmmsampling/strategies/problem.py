@@ -9,6 +9,9 @@ from .parallel import TwoProcessObjective
 
 
 CHECK_DENSITY = 3
+# Substitutes whose exact deviation a problem keeps per grid: the blind layouts the optimal
+# strategy chooses its start from, the one it starts with, a result's deviation and its bound.
+JUDGED_KEPT = 4
 
 
 class SamplingProblem:
@@ -74,15 +77,17 @@ class SamplingProblem:
 
     def judge(self, poles, check=False):
         """The exact two-sided deviation (cmmsampling.fitting.exact.ExactDeviation) of the substitute
-        with ``poles`` (n_u, n_v, 3) mm at the nodes of the grid or the check grid (the last one
-        judged on each is kept: a result's deviation, then its bound, ask for the same)."""
+        with ``poles`` (n_u, n_v, 3) mm at the nodes of the grid or the check grid (the last
+        JUDGED_KEPT judged on each are kept and not judged again)."""
         poles = np.asarray(poles, dtype=float)
-        last = self._judged.get(check)
-        if last is not None and np.array_equal(last[0], poles):
-            return last[1]
+        kept = self._judged.setdefault(check, [])
+        for judged_poles, exact in kept:
+            if np.array_equal(judged_poles, poles):
+                return exact
         objective = self.check_objective if check else self.objective
         exact = exact_deviation(self.space, poles, objective.nodes, objective.model, self.domain.on_face)
-        self._judged[check] = (poles.copy(), exact)
+        kept.append((poles.copy(), exact))
+        del kept[:-JUDGED_KEPT]
         return exact
 
     def bound_bracket(self, poles, level=None):

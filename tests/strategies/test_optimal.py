@@ -1,9 +1,12 @@
 """The local bound and the near-optimal strategy (issue: beyond the paper)."""
+import time
+
 import numpy as np
 import pytest
 
 import cmmsampling
 from cmmsampling.strategies import blind as strategies
+from cmmsampling.strategies import optimal
 from cmmsampling.fitting.bound import minimax_bound
 from cmmsampling.fitting.exact import Linearisation
 from cmmsampling.strategies.optimal import surrogate
@@ -140,6 +143,22 @@ def test_optimal_starts_from_a_given_layout_and_never_ends_worse(reference):
     named = cmmsampling.sample(reference, 25, "optimal", grid=30, start="hammersley", max_evaluations=100,
                                min_spacing=0.0, occ_check=False)
     assert named.deviation.maximum == pytest.approx(result.deviation.maximum)
+
+
+def test_the_time_limit_counts_from_the_start_of_the_run(reference, monkeypatch):
+    """Choosing the start layout is part of the time a run may take: when it alone outlasts the
+    limit, the descent stops at its first evaluation (the start is returned)."""
+    choose = optimal._start_layout
+
+    def slow(problem, start):
+        chosen = choose(problem, start)
+        time.sleep(0.6)
+        return chosen
+
+    monkeypatch.setattr(optimal, "_start_layout", slow)
+    result = cmmsampling.sample(reference, 25, "optimal", grid=30, time_limit=0.5, occ_check=False)
+    assert result.evaluations == 1 and not result.cancelled
+    assert "the descent found no point set better than its start" in " ".join(result.notes)
 
 
 def test_optimal_can_be_cancelled(reference):
