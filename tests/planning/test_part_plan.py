@@ -206,55 +206,55 @@ def test_the_plan_is_one_program_with_unique_labels_and_a_face_column(tolerance_
     assert report.length_after <= report.length_before
 
 
-def test_the_plan_goes_into_the_document_in_one_step(part, tolerance_plan):
+@pytest.fixture
+def body_doc(part):
+    """A new document with Undo holding the part as 'Body'; closed afterwards."""
     doc = FreeCAD.newDocument("PlanDocument")
     try:
         body = doc.addObject("Part::Feature", "Body")
         body.Shape = part
         doc.recompute()
         doc.UndoMode = 1
-        group = cmmsampling.add_plan_to_document(tolerance_plan, doc, body)
-        assert group.Label == "Plan Body (uniform_parametric)"
-        faces = [g for g in group.Group if g.TypeId == "App::DocumentObjectGroup"]
-        assert [g.Label for g in faces] == [f"Sampling Body {f.name} (uniform_parametric)" for f in tolerance_plan.placed]
-        for sub, planned in zip(faces, tolerance_plan.placed):
-            points = sub.Group[0]
-            assert len(points.Labels) == planned.n and points.MaxDeviation.Value == pytest.approx(planned.maximum)
-        sheet = doc.getObject("PlanReport")
-        assert sheet.get("A5") == "Face" and sheet.get("A8") == "Face3" and "too narrow" in sheet.get("G8")
-        assert sheet.get("A10") == "Part" and int(sheet.get("C10")) == tolerance_plan.n_total
-        doc.undo()
-        assert doc.getObject("PlanReport") is None and [o.Name for o in doc.Objects] == ["Body"]
+        yield doc
     finally:
-        closed("PlanDocument")
+        closed(doc.Name)
 
 
-def test_a_resumed_plan_replaces_the_cancelled_ones_group_in_one_step(part, tolerance_plan):
-    doc = FreeCAD.newDocument("PlanReplace")
-    try:
-        body = doc.addObject("Part::Feature", "Body")
-        body.Shape = part
-        doc.recompute()
-        doc.UndoMode = 1
-        arguments = dict(tolerance=TOLERANCE, strategy="uniform_parametric", edge_offset=1.5, n_max=200, **FAST)
-        cancelled = cmmsampling.plan(part, processes=1, progress=lambda done, total, message: done == 1, **arguments)
-        first = cmmsampling.add_plan_to_document(cancelled, doc, body)
-        first_objects = [o.Name for o in doc.Objects]
-        other = doc.addObject("App::DocumentObjectGroup", "Mine")
-        with pytest.raises(ValueError, match="replace must be the group add_plan_to_document made"):
-            cmmsampling.add_plan_to_document(tolerance_plan, doc, body, replace=other)
-        doc.removeObject(other.Name)
-        assert [o.Name for o in doc.Objects] == first_objects
-        resumed = cmmsampling.plan(part, processes=1, resume=cancelled, **arguments)
-        cmmsampling.add_plan_to_document(resumed, doc, body, replace=first)
-        groups = [o for o in doc.Objects if o.Label.startswith("Plan Body")]
-        assert len(groups) == 1
-        assert len([g for g in groups[0].Group if g.TypeId == "App::DocumentObjectGroup"]) == len(resumed.placed) == 3
-        assert len([o for o in doc.Objects if o.TypeId == "Spreadsheet::Sheet" and o.Label == "Plan report"]) == 1
-        doc.undo()
-        assert sorted(o.Name for o in doc.Objects) == sorted(first_objects)
-    finally:
-        closed("PlanReplace")
+def test_the_plan_goes_into_the_document_in_one_step(body_doc, tolerance_plan):
+    doc, body = body_doc, body_doc.Body
+    group = cmmsampling.add_plan_to_document(tolerance_plan, doc, body)
+    assert group.Label == "Plan Body (uniform_parametric)"
+    faces = [g for g in group.Group if g.TypeId == "App::DocumentObjectGroup"]
+    assert [g.Label for g in faces] == [f"Sampling Body {f.name} (uniform_parametric)" for f in tolerance_plan.placed]
+    for sub, planned in zip(faces, tolerance_plan.placed):
+        points = sub.Group[0]
+        assert len(points.Labels) == planned.n and points.MaxDeviation.Value == pytest.approx(planned.maximum)
+    sheet = doc.getObject("PlanReport")
+    assert sheet.get("A5") == "Face" and sheet.get("A8") == "Face3" and "too narrow" in sheet.get("G8")
+    assert sheet.get("A10") == "Part" and int(sheet.get("C10")) == tolerance_plan.n_total
+    doc.undo()
+    assert doc.getObject("PlanReport") is None and [o.Name for o in doc.Objects] == ["Body"]
+
+
+def test_a_resumed_plan_replaces_the_cancelled_ones_group_in_one_step(part, body_doc, tolerance_plan):
+    doc, body = body_doc, body_doc.Body
+    arguments = dict(tolerance=TOLERANCE, strategy="uniform_parametric", edge_offset=1.5, n_max=200, **FAST)
+    cancelled = cmmsampling.plan(part, processes=1, progress=lambda done, total, message: done == 1, **arguments)
+    first = cmmsampling.add_plan_to_document(cancelled, doc, body)
+    first_objects = [o.Name for o in doc.Objects]
+    other = doc.addObject("App::DocumentObjectGroup", "Mine")
+    with pytest.raises(ValueError, match="replace must be the group add_plan_to_document made"):
+        cmmsampling.add_plan_to_document(tolerance_plan, doc, body, replace=other)
+    doc.removeObject(other.Name)
+    assert [o.Name for o in doc.Objects] == first_objects
+    resumed = cmmsampling.plan(part, processes=1, resume=cancelled, **arguments)
+    cmmsampling.add_plan_to_document(resumed, doc, body, replace=first)
+    groups = [o for o in doc.Objects if o.Label.startswith("Plan Body")]
+    assert len(groups) == 1
+    assert len([g for g in groups[0].Group if g.TypeId == "App::DocumentObjectGroup"]) == len(resumed.placed) == 3
+    assert len([o for o in doc.Objects if o.TypeId == "Spreadsheet::Sheet" and o.Label == "Plan report"]) == 1
+    doc.undo()
+    assert sorted(o.Name for o in doc.Objects) == sorted(first_objects)
 
 
 def test_the_command_line_plans_a_file(part, tmp_path, capsys):
