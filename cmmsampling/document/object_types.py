@@ -27,6 +27,15 @@ def is_substitute_surface(obj):
     return type_of(obj) == SUBSTITUTE_SURFACE
 
 
+def in_document(obj, doc):
+    """True when obj is an object of the FreeCAD document doc now: False once it was deleted
+    (ReferenceError, or RuntimeError where Undo still holds it) or when it is no document object."""
+    try:
+        return obj.Document == doc and doc.getObject(obj.Name) == obj
+    except (ReferenceError, RuntimeError, AttributeError):
+        return False
+
+
 def source_face(points):
     """The probe points' source face as it is now: (Part.Face, None), or (None, why not)."""
     if points.Source is None:

@@ -15,7 +15,7 @@ from ..planning.part_plan import PartPlan
 from ..planning.probe_moves import probe_moves
 from ..strategies.result import SamplingResult
 from ..strategies.sampling import evaluate
-from .object_types import source_face
+from .object_types import in_document, source_face
 from .objects import (POINT_TOLERANCE_MM, SUMMARY_FIGURES, ProbePoints, make_probe_path, make_probe_points,
                       make_substitute_surface, passes_through)
 from .sheets import write_deviation_report, write_plan_report
@@ -122,11 +122,7 @@ def _plan_objects(group, doc):
     not a plan's group in ``doc``."""
     if group is None:
         return []
-    try:
-        in_doc = group.Document == doc and doc.getObject(group.Name) == group
-    except (ReferenceError, AttributeError):
-        in_doc = False
-    if not in_doc or not group.isDerivedFrom("App::DocumentObjectGroup") or not group.Label.startswith("Plan "):
+    if not in_document(group, doc) or not group.isDerivedFrom("App::DocumentObjectGroup") or not group.Label.startswith("Plan "):
         raise InputError("replace must be the group add_plan_to_document made for an earlier plan, in this "
                          "document: give that group, or None to keep it")
     return _members(group)

@@ -187,8 +187,9 @@ def test_a_plan_runs_face_by_face_and_adds_a_group_per_face(part_doc, monkeypatc
     assert [o.Name for o in part_doc.Objects] == names
 
 
-def test_cancel_keeps_the_faces_done_and_resume_plans_the_others(part_doc, monkeypatch, artifacts):
-    undo = part_doc.UndoCount
+def cancel_after_the_first_face(part_doc, monkeypatch):
+    """Plan Face2 and Face4 on one process, Cancel while Face2's end is held; returns the form,
+    the Hold and the cancelled plan once it was added."""
     hold = hold_plan_at(monkeypatch, 1)
     form = open_plan(part_doc, "Face2", "Face4")
     fill(form, processes=1, **QUICK)
@@ -197,9 +198,14 @@ def test_cancel_keeps_the_faces_done_and_resume_plans_the_others(part_doc, monke
     task_button(CANCEL).click()
     assert FreeCADGui.Control.activeDialog() and form.status.text().startswith("Cancelling")
     hold.released.set()
-
     assert wait_until(lambda: task_button(OK).isEnabled(), 60), form.status.text()
     [made] = hold.plans
+    return form, hold, made
+
+
+def test_cancel_keeps_the_faces_done_and_resume_plans_the_others(part_doc, monkeypatch, artifacts):
+    undo = part_doc.UndoCount
+    form, hold, made = cancel_after_the_first_face(part_doc, monkeypatch)
     assert made.cancelled and [face.placed for face in made.faces] == [True, False]
     assert form.status.text() == (f"Cancelled: the 1 faces done were added ({made.n_total} points); the plan's "
                                   "report names the faces not run. Resume plans those 1.")
@@ -234,6 +240,20 @@ def test_cancel_keeps_the_faces_done_and_resume_plans_the_others(part_doc, monke
     back = [o for o in part_doc.Objects if o.Label.startswith("Plan Part")]
     assert [o.Name for o in back] == [cancelled_group]
     assert len([o for o in back[0].Group if o.TypeId == "App::DocumentObjectGroup"]) == 1
+
+
+def test_resume_adds_the_whole_plan_when_the_cancelled_one_was_deleted(part_doc, monkeypatch):
+    form, hold, made = cancel_after_the_first_face(part_doc, monkeypatch)
+    cancelled_group = next(o for o in part_doc.Objects if o.Label == "Plan Part (uniform_parametric)")
+    part_doc.openTransaction("Delete")
+    part_doc.removeObject(cancelled_group.Name)
+    part_doc.commitTransaction()
+    task_button(OK).click()
+    assert wait_until(lambda: not FreeCADGui.Control.activeDialog(), 120), form.status.text()
+    assert not hold.plans[-1].cancelled and __main__.plan is hold.plans[-1]
+    [group] = [o for o in part_doc.Objects if o.Label == "Plan Part (uniform_parametric)"]
+    assert len([o for o in group.Group if o.TypeId == "App::DocumentObjectGroup"]) == 2
+    assert ", replace=" not in dock_text("Python console").split("resume=plan")[-1]
 
 
 def test_a_plan_with_a_probe_draws_its_path(part_doc, monkeypatch, artifacts):

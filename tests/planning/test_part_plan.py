@@ -246,6 +246,15 @@ def test_a_resumed_plan_replaces_the_cancelled_ones_group_in_one_step(part, body
     with pytest.raises(ValueError, match="replace must be the group add_plan_to_document made"):
         cmmsampling.add_plan_to_document(tolerance_plan, doc, body, replace=other)
     doc.removeObject(other.Name)
+    doc.openTransaction("Add")
+    gone = doc.addObject("App::DocumentObjectGroup", "Plan")
+    gone.Label = "Plan gone"
+    doc.commitTransaction()
+    doc.openTransaction("Delete")
+    doc.removeObject(gone.Name)
+    doc.commitTransaction()
+    with pytest.raises(ValueError, match="replace must be the group add_plan_to_document made"):
+        cmmsampling.add_plan_to_document(tolerance_plan, doc, body, replace=gone)
     assert [o.Name for o in doc.Objects] == first_objects
     resumed = cmmsampling.plan(part, processes=1, resume=cancelled, **arguments)
     cmmsampling.add_plan_to_document(resumed, doc, body, replace=first)

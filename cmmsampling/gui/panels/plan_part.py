@@ -16,6 +16,7 @@ import FreeCADGui
 from PySide import QtGui
 
 from ...access.probe import PROBES
+from ...document.object_types import in_document
 from ...fitting.deviation import DEFAULT_GRID
 from ...planning.part_plan import CANCELLED_REASON, plan
 from ...planning.points_needed import DEFAULT_MAX_POINTS
@@ -293,9 +294,8 @@ class PlanPartTaskPanel(BackgroundRunPanel):
                                                        else ": see the reasons above.") + " Nothing was added.",
                              error=not result.cancelled)
             return
-        replace = self.cancelled_group()
         try:
-            group = add_plan(self.source[0], run, result, replace)
+            group = add_plan(self.source[0], run, result, self.cancelled_group())
         except Exception as exc:
             self.show_status(f"The plan could not be added to the document: {exc}", error=True)
             return
@@ -311,10 +311,7 @@ class PlanPartTaskPanel(BackgroundRunPanel):
     def cancelled_group(self):
         """The group of the cancelled plan being resumed while it is still in the document, else None."""
         group = self.resumable[1] if self.resumable is not None else None
-        try:
-            return group if group is not None and group.Document.getObject(group.Name) == group else None
-        except ReferenceError:
-            return None
+        return group if group is not None and in_document(group, self.source[0].Document) else None
 
 
 def load_values():
