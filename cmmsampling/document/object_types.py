@@ -29,9 +29,11 @@ def is_substitute_surface(obj):
 
 def in_document(obj, doc):
     """True when obj is an object of the FreeCAD document doc now: False once it was deleted
-    (ReferenceError, or RuntimeError where Undo still holds it) or when it is no document object."""
+    (ReferenceError; where Undo still holds it, its Name raises RuntimeError on FreeCAD 0.20 and
+    is None on 1.0) or when it is no document object."""
     try:
-        return obj.Document == doc and doc.getObject(obj.Name) == obj
+        name = obj.Name
+        return isinstance(name, str) and obj.Document == doc and doc.getObject(name) == obj
     except (ReferenceError, RuntimeError, AttributeError):
         return False
 
