@@ -2,8 +2,8 @@
 
 The part is stood in for by :class:`cmmsampling.access.obstacles.Obstacles` (points on its faces,
 erring on the side of blocking): the fast test, made for a raster of a face or the pairs of a
-path. :func:`exact_gaps` measures one probe pose with OCC's distance between solids, the truth
-a final point is held to.
+path. :class:`ExactPoses` measures single probe poses with OCC's distances, the truth a final
+point is held to.
 
 A point ``p`` with normal ``n`` (out of the material) is reachable along an axis ``a`` when
 (see :class:`cmmsampling.access.probe.Probe` for the pose):
@@ -19,6 +19,8 @@ A point ``p`` with normal ``n`` (out of the material) is reachable along an axis
 
 The head tries the axes nearest the normal first (:func:`cmmsampling.access.probe.candidate_axes`).
 """
+import contextlib
+import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -140,26 +142,57 @@ def reach(probe, obstacles, points, normals):
     return Access(reachable, axes, tilts, angles, ranks)
 
 
-def exact_gaps(part, probe, point, normal, axis):
-    """OCC's distances for one pose: (ball, stylus and body) in mm, where ball is the distance
-    from the ball centre to the part less the ball radius (0 when it just touches, negative when
-    the ball cuts into the part) and the second the distance from the stylus and body to the
-    part (0 when they touch or cut it)."""
-    centre = np.asarray(point, float) + probe.radius * np.asarray(normal, float)
-    ball = part.distToShape(Part.Vertex(Vector(centre)))[0] - probe.radius
-    if _inside(part, centre):
-        ball = -probe.radius
-    rest = part.distToShape(probe.solid(centre, axis, with_ball=False))[0]
-    return ball, rest
+class ExactPoses:
+    """OCC's verdict on single probe poses, from the part's faces near each pose.
 
+    A pose's ball and its stylus and body can touch only faces whose bounding boxes meet theirs,
+    so OCC measures against a compound of those (a few faces of a large part, a fortieth of the
+    time of the whole part on the Ventilator). part: the Part.Shape; probe: a Probe.
+    """
 
-def _inside(part, point):
-    """True when a closed part holds point (3,) strictly inside."""
-    return bool(part.Solids) and any(solid.isInside(Vector(point), 1e-7, False) for solid in part.Solids)
+    def __init__(self, part, probe):
+        self.part, self.probe = part, probe
+        self.faces = part.Faces
+        self.boxes = np.array([[f.BoundBox.XMin, f.BoundBox.YMin, f.BoundBox.ZMin,
+                                f.BoundBox.XMax, f.BoundBox.YMax, f.BoundBox.ZMax] for f in self.faces]).reshape(-1, 6)
+
+    def near(self, lower, upper):
+        """A compound of the faces whose boxes meet the box [lower, upper] (3,) mm grown by
+        TOUCH_TOLERANCE, or None where there is none."""
+        grown_lower, grown_upper = np.asarray(lower) - TOUCH_TOLERANCE, np.asarray(upper) + TOUCH_TOLERANCE
+        chosen = np.flatnonzero(np.all(self.boxes[:, :3] <= grown_upper, axis=1)
+                                & np.all(self.boxes[:, 3:] >= grown_lower, axis=1))
+        return Part.Compound([self.faces[k] for k in chosen]) if chosen.size else None
+
+    def ball_gap(self, centre):
+        """The ball centre's (3,) mm distance to the part less the ball's radius, mm (0 when it just
+        touches, negative when the ball cuts into the part; the radius where no face is within
+        it). Where the centre lies strictly inside the part is :meth:`inside`'s question."""
+        radius = self.probe.radius
+        nearby = self.near(np.asarray(centre) - radius, np.asarray(centre) + radius)
+        if nearby is None:
+            return radius
+        return nearby.distToShape(Part.Vertex(Vector(centre)))[0] - radius
+
+    def body_clear(self, centre, axis):
+        """True when the stylus and the body with the ball centre at ``centre`` (3,) mm along
+        ``axis`` (3,) unit keep off the part (OCC's distance above 0). They start at the ball
+        centre, outside the part, so they reach into it only through a face near them."""
+        solid = self.probe.solid(centre, axis, with_ball=False)
+        box = solid.BoundBox
+        nearby = self.near((box.XMin, box.YMin, box.ZMin), (box.XMax, box.YMax, box.ZMax))
+        return nearby is None or nearby.distToShape(solid)[0] > 0.0
+
+    def inside(self, point):
+        """True when a closed part holds point (3,) mm strictly inside."""
+        return bool(self.part.Solids) and any(solid.isInside(Vector(point), 1e-7, False)
+                                              for solid in self.part.Solids)
 
 
 # How far OCC may find the touching ball inside the part (mm) and still call it a touch.
 TOUCH_TOLERANCE = 1e-3
+# The seconds OCC's stylus and body checks may take for the final points of one run.
+EXACT_SECONDS = 20.0
 # The coarsest the part's model may know its surface, as a share of the ball's radius: the touch
 # test takes that much off the ball.
 COARSEST_DEFLECTION = 0.5
@@ -184,6 +217,8 @@ class Reachability:
                 f"{MAX_POINTS:,} points its surface is known to {self.obstacles.deflection:.2g} mm, too coarse to judge "
                 f"a {self.probe.ball_diameter:g} mm ball's touch; give as part= only the faces around this one, or "
                 "leave part= out")
+        self.exact = ExactPoses(part, self.probe)
+        self.measures = True
         self._answers, self._holds = {}, {}
 
     def __call__(self, points, normals):
@@ -195,6 +230,16 @@ class Reachability:
             self._answers[key] = reach(self.probe, self.obstacles, points, normals).reachable
         return self._answers[key].copy()
 
+    @contextlib.contextmanager
+    def unmeasured(self):
+        """Within the block, runs leave their final points' poses unmeasured (their result's
+        ``access`` stays None): a search measures only the result it keeps."""
+        self.measures = False
+        try:
+            yield self
+        finally:
+            self.measures = True
+
     def holds(self, face):
         """True when face (a Part.Face) lies on the part (:func:`cmmsampling.geometry.surface.lies_on`);
         asked once per face (a search asks it at every N)."""
@@ -204,14 +249,26 @@ class Reachability:
         return self._holds[key]
 
     def final(self, points, normals):
-        """The Access of final points: each point's axis from the fast test, then its pose
-        measured with OCC (:func:`exact_gaps`); a pose OCC finds touching the part anywhere but
-        at the ball's contact is unreachable. Returns (Access, [index of each point OCC refused])."""
+        """The Access of final points (M, 3) mm with normals (M, 3) unit, all on one face: each
+        point's axis from the fast test, then its pose measured with OCC (:class:`ExactPoses`):
+        the ball's touch at every point, the stylus and the body where the fast test is unsure
+        (:meth:`unsure`), for at most EXACT_SECONDS in all. A pose OCC finds touching the part
+        anywhere but at the ball's contact is unreachable. Returns (Access, [index of each point
+        OCC refused], the number of unsure poses the time left to the fast test, which errs on
+        the side of blocking)."""
         access = reach(self.probe, self.obstacles, points, normals)
-        refused = []
-        for index in np.flatnonzero(access.reachable):
-            ball, rest = exact_gaps(self.part, self.probe, points[index], normals[index], access.axes[index])
-            if ball < -TOUCH_TOLERANCE or rest <= 0.0:
+        reached = np.flatnonzero(access.reachable)
+        centres = points[reached] + self.probe.radius * normals[reached]
+        doubtful = self.unsure(centres, access.axes[reached])
+        refused, unmeasured, outward = [], 0, None
+        ends = time.perf_counter() + EXACT_SECONDS
+        for index, centre, doubt in zip(reached, centres, doubtful):
+            touches = self.exact.ball_gap(centre) < -TOUCH_TOLERANCE
+            if not touches and outward is None:   # one face's normals all point out of the part, or all in
+                outward = not self.exact.inside(centre)
+            if doubt and not touches and outward and time.perf_counter() > ends:
+                unmeasured += 1
+            elif touches or not outward or (doubt and not self.exact.body_clear(centre, access.axes[index])):
                 refused.append(int(index))
         if refused:
             access.reachable[refused] = False
@@ -219,4 +276,15 @@ class Reachability:
             access.tilts[refused] = np.nan
             access.angles[refused] = np.nan
             access.ranks[refused] = -1
-        return access, refused
+        return access, refused, unmeasured
+
+    def unsure(self, centres, axes):
+        """(M,) bool: the poses, ball centres (M, 3) mm along axes (M, 3) unit, whose stylus or body
+        the fast test finds blocked once widened by another margin (it found them clear with
+        one): near enough to the part for OCC to judge them."""
+        probe, count = self.probe, len(centres)
+        starts = np.concatenate([centres + probe.stylus_start * axes, centres + probe.stylus_length * axes])
+        ends = np.concatenate([centres + probe.stylus_length * axes, centres + probe.reach * axes])
+        radii = np.repeat([0.5 * probe.stylus_diameter, 0.5 * probe.body_diameter], count) + self.obstacles.margin
+        blocked = self.obstacles.cylinders_blocked(starts, ends, radii) if count else np.zeros(0, bool)
+        return blocked[:count] | blocked[count:]

@@ -15,6 +15,7 @@ area), never silently dropped.
 """
 from __future__ import annotations
 
+import functools
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -353,9 +354,7 @@ def _solve_face(job):
     planned = FacePlan(job.name, float(face.Area), strategy=job.strategy, met=None)
     arguments = dict(job.arguments)
     if job.part_brep:
-        part = Part.Shape()
-        part.importBrepFromString(job.part_brep)
-        arguments["part"] = Reachability(part, job.probe)
+        arguments["part"] = part_reachability(job.part_brep, job.probe)
     try:
         if "edge_offset" not in arguments:
             arguments["edge_offset"] = probe_edge_offset(face)
@@ -372,6 +371,15 @@ def _solve_face(job):
         _take(planned, result)
     planned.seconds = time.perf_counter() - started
     return planned
+
+
+@functools.lru_cache(maxsize=1)
+def part_reachability(brep, probe):
+    """The Reachability of the part in ``brep`` (a BREP string) for probe (a Probe): built once
+    per process for the faces of a plan it runs (the part's points take seconds to build)."""
+    part = Part.Shape()
+    part.importBrepFromString(brep)
+    return Reachability(part, probe)
 
 
 def _take(planned, result):

@@ -15,6 +15,7 @@ is kept in ``tried``.
 """
 from __future__ import annotations
 
+import contextlib
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -25,7 +26,8 @@ from ..access.reach import Reachability
 from ..fitting.substitute import DEFAULT_DEGREE, default_pole_count
 from ..geometry.validation import InputError, check_int, check_pair, check_real
 from ..strategies.face_setup import reused
-from ..strategies.sampling import BEST_STRATEGY, MIN_POINTS, Part, check_arguments, probe_edge_offset, sample
+from ..strategies.sampling import (BEST_STRATEGY, MIN_POINTS, Part, check_arguments, measure_reach, probe_edge_offset,
+                                   sample)
 
 DEFAULT_MAX_POINTS = 400
 
@@ -119,7 +121,8 @@ def points_needed(face: Part.Face, tolerance: float, strategy: str = BEST_STRATE
     face: a Part.Face; tolerance: mm (> 0); n_max: the most points to try; edge_offset: mm, None
     for the face's probe edge offset (:func:`cmmsampling.probe_edge_offset`); fit_degree and
     ``arguments``: as in :func:`cmmsampling.sample` (e.g. grid, seed, workers, time_limit; part
-    and probe: the probe's reach, judged once for all the N tried);
+    and probe: the probe's reach, judged once for all the N tried, and measured with OCC at the
+    points of the result returned only);
     progress: callable(n, message) before each run, returning True to stop the search (the best
     found so far is returned). Returns a PointsNeeded; when no N up to n_max meets the tolerance,
     ``met`` is False and ``reason`` names the best figure reached.
@@ -134,8 +137,13 @@ def points_needed(face: Part.Face, tolerance: float, strategy: str = BEST_STRATE
             edge_offset = probe_edge_offset(face)
         search = _Search(face, strategy, tolerance, progress,
                          dict(arguments, edge_offset=edge_offset, fit_degree=fit_degree))
-        search.run_steps(step_counts(n_max, fit_degree))
-        return search.answer(n_max)
+        reachability = arguments.get("part")
+        with reachability.unmeasured() if reachability is not None else contextlib.nullcontext():
+            search.run_steps(step_counts(n_max, fit_degree))
+        answer = search.answer(n_max)
+        if reachability is not None and answer.result is not None:
+            measure_reach(answer.result)
+        return answer
 
 
 def check_max_points(n_max, fit_degree=DEFAULT_DEGREE):

@@ -12,7 +12,7 @@ from dataclasses import asdict
 import numpy as np
 
 from ..access.probe import Probe, check_probe
-from ..access.reach import Reachability
+from ..access.reach import EXACT_SECONDS, Reachability
 from ..fitting.crosscheck import occ_cross_check
 from ..fitting.deviation import DEFAULT_GRID, DeviationStats
 from ..fitting.occ_surface import substitute_surface
@@ -388,11 +388,13 @@ def evaluate(face: Part.Face, uv: np.ndarray, *, strategy: str = "given", fit_de
     return _judge(problem, StrategyOutcome(uv), strategy, settings, 0.0, occ_check)
 
 
-def _check_reach(problem, result):
-    """The probe's pose at each final point, measured with OCC (result.access), its settings,
-    and notes on the points tilted or refused."""
+def measure_reach(result):
+    """The probe's pose at each of a result's points, measured with OCC (result.access), its
+    settings, and notes on the points tilted, refused or left to the fast test; for a result of
+    a run with part= (sample does it, unless its Reachability was ``unmeasured``)."""
     started = time.perf_counter()
-    result.access, refused = problem.reachability.final(result.points, result.normals)
+    problem = result.problem
+    result.access, refused, unmeasured = problem.reachability.final(result.points, result.normals)
     result.access.unreached = problem.domain.unreached_rectangles()
     result.access.unreached_area = problem.domain.unreached_area
     result.settings["probe"] = asdict(problem.reachability.probe)
@@ -415,6 +417,9 @@ def _check_reach(problem, result):
         names = ", ".join(f"P{k + 1}" for k in blocked[:10]) + (" ..." if blocked.size > 10 else "")
         result.notes.append(f"{blocked.size} point(s) cannot be reached by the probe without touching the part "
                             f"elsewhere ({names}): measured with OCC at the final points")
+    if unmeasured:
+        result.notes.append(f"{unmeasured} point(s) whose stylus or body passes near the part were judged by the fast "
+                            f"test only (OCC's checks took their {EXACT_SECONDS:g} s): it errs on the side of blocking")
     result.timings["reach_s"] = time.perf_counter() - started
 
 
@@ -454,8 +459,8 @@ def _judge(problem, outcome, strategy, settings, strategy_s, occ_check):
         occ_s = time.perf_counter() - start
     result.timings = {"strategy_s": strategy_s, "evaluation_s": evaluation_s, "occ_check_s": occ_s,
                       "total_s": strategy_s + evaluation_s + occ_s}
-    if problem.reachability is not None:
-        _check_reach(problem, result)
+    if problem.reachability is not None and problem.reachability.measures:
+        measure_reach(result)
     if result.exact:
         result.notes.append(
             f"the substitute reproduces this face exactly (maximum deviation {stats.maximum:.1e} mm, "

@@ -12,7 +12,7 @@ from support.faces import FreeCAD, Part
 import cmmsampling
 from cmmsampling.access.obstacles import Obstacles
 from cmmsampling.access.probe import Probe, candidate_axes, head_angles
-from cmmsampling.access.reach import reach
+from cmmsampling.access.reach import Reachability, reach
 from cmmsampling.planning.probe_moves import moves_through
 
 PROBE = Probe()
@@ -372,3 +372,79 @@ def points_within(shape, per_triangle=20, seed=0):
         weights = random.dirichlet(np.ones(3), size=(len(corners), per_triangle))
         found.append(np.einsum("tkc,tcd->tkd", weights, corners).reshape(-1, 3))
     return np.concatenate(found)
+
+
+def poses_around(part, height, xs, ys):
+    """Floor points of ``part`` at ``height`` on a grid and the fast test's Access of them."""
+    points, normals = floor_points(xs, ys, height)
+    return points, normals, Reachability(part, PROBE)
+
+
+@pytest.mark.parametrize("name", ["slot", "overhang", "beside_wall"])
+def test_final_poses_are_judged_as_occ_judges_them_on_the_whole_part(name, request):
+    """final() measures each pose against the faces near it, and the stylus and body only where
+    the fast test is unsure: it refuses exactly the poses the whole part refuses (occ_gaps)."""
+    part = request.getfixturevalue(name)
+    height, ys = {"slot": (15.0, np.linspace(17.5, 22.5, 9)), "overhang": (10.0, np.linspace(6.0, 38.0, 17)),
+                  "beside_wall": (10.0, np.linspace(2.0, 38.0, 5))}[name]
+    xs = np.linspace(10.5, 30.0, 9) if name == "beside_wall" else [10.0, 30.0]
+    points, normals, reachability = poses_around(part, height, xs, ys)
+    fast = reach(PROBE, reachability.obstacles, points, normals)
+    access, refused, unmeasured = reachability.final(points, normals)
+    expected = []
+    for k in np.flatnonzero(fast.reachable):
+        ball, rest = occ_gaps(part, points[k], normals[k], fast.axes[k])
+        if ball < -1e-3 or rest <= 0.0:
+            expected.append(int(k))
+    assert refused == expected and unmeasured == 0
+    assert access.reachable.sum() == fast.reachable.sum() - len(expected)
+    unsure = reachability.unsure(points[fast.reachable] + PROBE.radius * normals[fast.reachable],
+                                 fast.axes[fast.reachable])
+    print(f"{name}: {fast.reachable.sum()} reached by the fast test, {unsure.sum()} unsure, {len(refused)} refused")
+    assert not unsure.all(), "the poses far from the part are not measured again"
+    if name == "slot":
+        upside_down, _, _ = reachability.final(points, -normals)
+        assert not upside_down.reachable.any(), "a ball centre inside the part touches nothing, and is refused"
+
+
+def test_a_ball_that_grazes_a_low_step_is_refused_by_occ():
+    """A 0.05 mm step lies within the fast touch test's allowance (the tessellation's deflection,
+    0.1 mm here): the fast test lets the ball touch beside it, OCC finds the ball cutting the step."""
+    plate = Part.makeBox(60, 40, 10).fuse(Part.makeBox(30, 40, 0.05, vector((30, 0, 10)))).removeSplitter()
+    points, normals, reachability = poses_around(plate, 10.0, [29.0, 29.5, 29.8, 29.9], [20.0])
+    fast = reach(PROBE, reachability.obstacles, points, normals)
+    access, refused, _ = reachability.final(points, normals)
+    gaps = [occ_gaps(plate, point, normal, UP)[0] for point, normal in zip(points, normals)]
+    assert fast.reachable.all() and refused == [2, 3] and np.all(np.array(gaps)[refused] < -1e-3)
+    assert access.reachable.tolist() == [True, True, False, False]
+
+
+def test_poses_left_unmeasured_when_the_time_runs_out_keep_the_fast_answer(slot, monkeypatch):
+    from cmmsampling.access import reach as reach_module
+
+    points, normals, reachability = poses_around(slot, 15.0, [10.0, 30.0], np.linspace(17.5, 22.5, 9))
+    fast = reach(PROBE, reachability.obstacles, points, normals)
+    unsure = reachability.unsure(points[fast.reachable] + PROBE.radius * normals[fast.reachable],
+                                 fast.axes[fast.reachable])
+    monkeypatch.setattr(reach_module, "EXACT_SECONDS", -1.0)
+    access, refused, unmeasured = reachability.final(points, normals)
+    assert unsure.any() and unmeasured == unsure.sum() and refused == []
+    np.testing.assert_array_equal(access.reachable, fast.reachable)
+    floor = floor_of(slot, 15.0)
+    uv = [tuple(floor.Surface.parameter(vector(point))) for point in points[fast.reachable]]
+    result = cmmsampling.evaluate(floor, uv, part=reachability, grid=20, occ_check=False)
+    assert f"{unsure.sum()} point(s) whose stylus or body passes near the part were judged by the fast test " \
+        "only" in " ".join(result.notes)
+
+
+def test_a_search_measures_only_the_result_it_returns(monkeypatch):
+    """The tolerance search runs several N; OCC measures the probe's poses of the one it keeps."""
+    calls = []
+    measured = Reachability.final
+    monkeypatch.setattr(Reachability, "final", lambda self, *a: calls.append(len(a[0])) or measured(self, *a))
+    cylinder = Part.makeCylinder(20, 50)
+    side = max(cylinder.Faces, key=lambda face: face.Area)
+    answer = cmmsampling.points_needed(side, 1e-4, "halton", part=cylinder, grid=20, n_max=60, occ_check=False)
+    assert len(answer.tried) > 1 and calls == [answer.n]
+    assert answer.result.access is not None and answer.result.settings["probe"]["ball_diameter"] == 2.0
+    assert answer.result.timings["reach_s"] > 0
