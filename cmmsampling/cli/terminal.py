@@ -56,10 +56,12 @@ class FaceProgress(TerminalProgress):
 
     def __init__(self):
         super().__init__("plan")
+        self.last_line = ""
 
     def __call__(self, done, total, message):
         line, _, tally = message.partition("\n")
-        self.stream.write(f"\rplan: {tally} | {line[:40]:<40}")
+        self.last_line = line or self.last_line
+        self.stream.write(f"\rplan: {tally} | {self.last_line[:40]:<40}")
         self.stream.flush()
         return False
 

@@ -11,6 +11,7 @@ unmapped anew, and a face took 1.65x as long (22.5 s against 13.6 s, measured). 
 first sets glibc's thresholds back to sizes that keep those arrays in the heap.
 """
 import concurrent.futures
+import contextvars
 import ctypes
 import multiprocessing
 import os
@@ -28,6 +29,8 @@ from ..strategies.parallel import package_parent, python_executable
 # a Ventilator face's process peaked at about 180 MB; this leaves room for larger grids.
 PROCESS_BYTES = 400 * 2**20
 PARENT_CHECK_SECONDS = 1.0
+# How often a run reports that jobs are still under way (and can be cancelled), s.
+BEAT_SECONDS = 0.5
 
 
 class WorkersFailed(RuntimeError):
@@ -43,8 +46,11 @@ def run_all(function, jobs, processes=None, scheduler=None, progress=None, descr
     memory free for them allow; 1 runs here, one job after another);
     scheduler: a Dask scheduler address ("tcp://host:8786") or a distributed.Client, which then
     runs the jobs instead of local processes (the package is uploaded to its workers); progress:
-    callable(done, total, message) after each job ends, returning True to cancel: jobs not
-    started are dropped, running ones are stopped, and their outcomes are None; describe:
+    callable(done, total, message) after each job ends, and with message None every BEAT_SECONDS
+    while a job runs, returning True to cancel: jobs not started are dropped, running ones are
+    stopped at once (local processes ended, Dask's jobs cancelled; a job in this process runs on
+    in its thread, told to stop (:func:`stop_asked`), and its outcome is dropped), and their
+    outcomes are None; describe:
     callable(job, outcome) -> the progress message of a finished job (default: "<job.name> done").
     notes: sentences on how the jobs ran where that differs from what was asked (fewer processes,
     processes that failed, after which the jobs left ran here).
@@ -60,8 +66,10 @@ def run_all(function, jobs, processes=None, scheduler=None, progress=None, descr
     done = 0
 
     def record(index, outcome):
-        """Keep an outcome and report it; True when the caller cancels."""
+        """Keep an outcome and report it (a beat where index is None); True when the caller cancels."""
         nonlocal done
+        if index is None:
+            return progress is not None and bool(progress(done, total, None))
         done += 1
         outcomes[index] = outcome
         return progress is not None and bool(progress(done, total, describe(jobs[index], outcome)))
@@ -93,9 +101,45 @@ def process_count(processes, jobs, notes=None):
 
 
 def _here(function, jobs):
-    """Each job in this process, in order: (index, outcome)."""
-    for index, job in enumerate(jobs):
-        yield index, function(job)
+    """Each job in this process, in order, in a thread of its own: (index, outcome), and
+    (None, None) every BEAT_SECONDS while it runs. Closing the generator early asks the job under
+    way to stop (:func:`stop_asked`) and leaves it to end in its thread."""
+    stop = threading.Event()
+    try:
+        for index, job in enumerate(jobs):
+            ended = {}
+            thread = threading.Thread(target=_run_job, args=(function, job, stop, ended), daemon=True,
+                                      name="cmmsampling-job")
+            thread.start()
+            thread.join(BEAT_SECONDS)
+            while thread.is_alive():
+                yield None, None
+                thread.join(BEAT_SECONDS)
+            if "error" in ended:
+                raise ended["error"]
+            yield index, ended["outcome"]
+    finally:
+        stop.set()
+
+
+_STOP = contextvars.ContextVar("cmmsampling_job_stop", default=None)
+
+
+def _run_job(function, job, stop, ended):
+    """function(job) into ended["outcome"] (or its exception into ended["error"]), with
+    :func:`stop_asked` answering from ``stop`` (a threading.Event)."""
+    _STOP.set(stop)
+    try:
+        ended["outcome"] = function(job)
+    except BaseException as exc:  # handed to the generator, which raises it in the caller's thread
+        ended["error"] = exc
+
+
+def stop_asked():
+    """True when the run of the job under way in this thread was cancelled (a job run in this
+    process by :func:`run_all`; a job in a local process or on Dask is stopped from outside)."""
+    stop = _STOP.get()
+    return stop is not None and stop.is_set()
 
 
 def _local_processes(function, jobs, count):
@@ -109,13 +153,18 @@ def _local_processes(function, jobs, count):
     pool = concurrent.futures.ProcessPoolExecutor(count, mp_context=context, initializer=follow_parent,
                                                   initargs=(os.getpid(),))
     futures = {pool.submit(function, job): index for index, job in enumerate(jobs)}
+    pending = set(futures)
     try:
-        for future in concurrent.futures.as_completed(futures):
-            try:
-                outcome = future.result()
-            except BrokenProcessPool as exc:
-                raise WorkersFailed(f"a local process ended abruptly ({exc})") from exc
-            yield futures[future], outcome
+        while pending:
+            finished, pending = concurrent.futures.wait(pending, BEAT_SECONDS, concurrent.futures.FIRST_COMPLETED)
+            if not finished:
+                yield None, None
+            for future in finished:
+                try:
+                    outcome = future.result()
+                except BrokenProcessPool as exc:
+                    raise WorkersFailed(f"a local process ended abruptly ({exc})") from exc
+                yield futures[future], outcome
     finally:
         _stop(pool)
 
@@ -144,10 +193,11 @@ def _stop(pool):
 
 
 def _dask_runs(function, jobs, scheduler):
-    """The jobs on a Dask cluster as they end: (index, outcome); closing the generator early (or
-    Ctrl-C) cancels the jobs still queued or running. The package is uploaded to the workers
-    first (:func:`upload_package`); WorkersFailed when they still cannot import it."""
-    from distributed import Client, as_completed
+    """The jobs on a Dask cluster as they end: (index, outcome), and (None, None) every
+    BEAT_SECONDS while none ends; closing the generator early (or Ctrl-C) cancels the jobs still
+    queued or running. The package is uploaded to the workers first (:func:`upload_package`);
+    WorkersFailed when they still cannot import it."""
+    from distributed import Client, wait
 
     client = scheduler if isinstance(scheduler, Client) else Client(scheduler)
     futures = []
@@ -155,12 +205,19 @@ def _dask_runs(function, jobs, scheduler):
         upload_package(client)
         futures = [client.submit(run_with_heap_thresholds, function, job, pure=False) for job in jobs]
         where = {future.key: index for index, future in enumerate(futures)}
-        for future in as_completed(futures):
+        pending = futures
+        while pending:
             try:
-                outcome = future.result()
-            except ImportError as exc:
-                raise WorkersFailed(f"the Dask workers cannot import what the jobs need ({exc})") from exc
-            yield where[future.key], outcome
+                finished, pending = wait(pending, timeout=BEAT_SECONDS, return_when="FIRST_COMPLETED")
+            except TimeoutError:
+                yield None, None
+                continue
+            for future in finished:
+                try:
+                    outcome = future.result()
+                except ImportError as exc:
+                    raise WorkersFailed(f"the Dask workers cannot import what the jobs need ({exc})") from exc
+                yield where[future.key], outcome
     finally:
         client.cancel([future for future in futures if not future.done()])
         if client is not scheduler:

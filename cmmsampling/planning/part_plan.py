@@ -37,7 +37,7 @@ from .points_needed import DEFAULT_MAX_POINTS, check_max_points, fewest_points, 
 
 Part = import_part()
 FIT_KEYS = ("fit_degree", "fit_poles", "smoothing", "grid")
-CANCELLED_REASON = "cancelled before this face ran"
+CANCELLED_REASON = "cancelled before this face was planned"
 
 
 @dataclass
@@ -227,7 +227,9 @@ def plan(shape_or_faces: Part.Shape | list, tolerance: float | None = None, n_to
     processes: local processes (None: all cores); scheduler: a Dask scheduler address or
     distributed.Client; progress: callable(done, total, message) after each face's run (message:
     the face's :attr:`FacePlan.line`, then on a second line the plan's tally, e.g. "12 of 40
-    faces, 610 points so far, about 2 min left"), returning True to cancel; probe: a
+    faces, 610 points so far, about 2 min left") and about every second while faces run (the
+    first line then empty, the tally ending "running for 35 s"), returning True to cancel: the
+    faces under way stop within a second or two, and the faces done are kept; probe: a
     cmmsampling.Probe whose reach on the part is judged (each face keeps to what it reaches, and
     ``export(plan, order="probe_path")`` writes a collision-free path); part: the shape the probe
     must keep clear of (default: shape_or_faces when it is a shape); resume: a cancelled
@@ -360,7 +362,8 @@ def _solve_face(job):
             arguments["edge_offset"] = probe_edge_offset(face)
         planned.edge_offset = arguments["edge_offset"]
         if job.mode == "tolerance":
-            answer = points_needed(face, job.tolerance, job.strategy, n_max=job.n_max, **arguments)
+            answer = points_needed(face, job.tolerance, job.strategy, n_max=job.n_max,
+                                   progress=lambda n, message: face_runs.stop_asked(), **arguments)
             planned.tried, planned.met, planned.reason = answer.tried, answer.met, answer.reason
             result = answer.result
         else:
@@ -399,7 +402,8 @@ def _run(jobs, processes, scheduler, progress, kept=()):
     tally = PlanTally(len(kept) + len(jobs), len(kept), sum(face.n for face in kept))
 
     def watched(done, total, message):
-        if progress is not None and progress(len(kept) + done, len(kept) + total, f"{message}\n{tally.line}"):
+        report = f"{message}\n{tally.line}" if message is not None else f"\n{tally.line}, {tally.elapsed}"
+        if progress is not None and progress(len(kept) + done, len(kept) + total, report):
             stopped.append(True)
             return True
         return False
@@ -435,6 +439,11 @@ class PlanTally:
             left = (time.perf_counter() - self._start) / ran * (self.total - self.done)
             text += f", about {duration_text(left)} left"
         return text
+
+    @property
+    def elapsed(self):
+        """e.g. "running for 35 s": the time since this run started."""
+        return f"running for {duration_text(time.perf_counter() - self._start)}"
 
 
 def duration_text(seconds):

@@ -123,8 +123,9 @@ def points_needed(face: Part.Face, tolerance: float, strategy: str = BEST_STRATE
     ``arguments``: as in :func:`cmmsampling.sample` (e.g. grid, seed, workers, time_limit; part
     and probe: the probe's reach, judged once for all the N tried, and measured with OCC at the
     points of the result returned only);
-    progress: callable(n, message) before each run, returning True to stop the search (the best
-    found so far is returned). Returns a PointsNeeded; when no N up to n_max meets the tolerance,
+    progress: callable(n, message) before each run (message "N = 16") and after each iteration of
+    an optimiser's run (message None), returning True to stop the search (the best found so far
+    is returned). Returns a PointsNeeded; when no N up to n_max meets the tolerance,
     ``met`` is False and ``reason`` names the best figure reached.
     """
     tolerance = check_real("tolerance", tolerance, above=0.0)
@@ -179,7 +180,7 @@ class _Search:
             return None
         start = time.perf_counter()
         try:
-            result = sample(self.face, n, self.strategy, **self.arguments)
+            result = sample(self.face, n, self.strategy, progress=self._during(n), **self.arguments)
         except InputError as exc:
             self.tried.append(Tried(n, seconds=time.perf_counter() - start, refused=str(exc)))
             self.results[n] = None
@@ -187,6 +188,18 @@ class _Search:
         self.tried.append(Tried(n, result.deviation.maximum, seconds=time.perf_counter() - start))
         self.results[n] = result
         return result
+
+    def _during(self, n):
+        """sample()'s progress for the run at n: it asks the search's progress (message None)
+        whether to stop, after each of an optimiser's iterations; None without a progress."""
+        if self.progress is None:
+            return None
+
+        def asked(*_):
+            self.stopped = self.stopped or bool(self.progress(n, None))
+            return self.stopped
+
+        return asked
 
     def step_meets(self, step):
         """True when the step meets the tolerance at its fewest points, or at its most points

@@ -5,6 +5,7 @@ rational patch."""
 import __main__
 import os
 import re
+import time
 
 import FreeCAD
 import FreeCADGui
@@ -66,7 +67,7 @@ def hold_plan_at(monkeypatch, faces_done):
     """Hold the plan's worker thread when ``faces_done`` faces have ended, before it reads
     whether Cancel was pressed; keeps every plan made in the panel (``hold.plans``)."""
     hold = Hold(limit_s=60)
-    hold.plans = []
+    hold.plans, hold.ended = [], []
     work, progress = plan_part.BackgroundPlan._work, plan_part.BackgroundPlan._progress
 
     def held(self, done, total, message):
@@ -78,26 +79,34 @@ def hold_plan_at(monkeypatch, faces_done):
     def kept(self):
         work(self)
         hold.plans.append(self.plan)
+        hold.ended.append(time.perf_counter())
 
     monkeypatch.setattr(plan_part.BackgroundPlan, "_progress", held)
     monkeypatch.setattr(plan_part.BackgroundPlan, "_work", kept)
     return hold
 
 
-def plan_with_probe(monkeypatch, obj, faces, timeout_s, **values):
-    """Select obj's faces, plan them with uniform parametric sampling, the panel's ``values`` and
-    the 2 mm x 20 mm probe, wait until the panel closes; returns the plan made."""
-    hold = hold_plan_at(monkeypatch, 99)
+def start_with_probe(obj, faces, strategy, **values):
+    """Select obj's faces, open Plan part, set the strategy, the panel's ``values`` and the
+    2 mm x 20 mm probe, and start the plan; returns the form."""
     FreeCADGui.Selection.clearSelection()
     for name in faces:
         FreeCADGui.Selection.addSelection(obj, name)
     FreeCADGui.runCommand(commands.PlanPart.NAME)
     assert wait_until(lambda: plan_form() is not None, 5), commands.PlanPart().reason()
     form = plan_form()
-    fill(form, "uniform_parametric", **values)
+    fill(form, strategy, **values)
     probe = child(form, "probe")
     probe.setCurrentIndex(probe.findData("2 mm ball, 20 mm stylus"))
     task_button(OK).click()
+    return form
+
+
+def plan_with_probe(monkeypatch, obj, faces, timeout_s, strategy="uniform_parametric", **values):
+    """Plan obj's faces with the probe (:func:`start_with_probe`), wait until the panel closes;
+    returns the plan made."""
+    hold = hold_plan_at(monkeypatch, 99)
+    form = start_with_probe(obj, faces, strategy, **values)
     assert wait_until(lambda: not FreeCADGui.Control.activeDialog(), timeout_s), form.status.text()
     [made] = hold.plans
     return made
@@ -215,7 +224,7 @@ def test_cancel_keeps_the_faces_done_and_resume_plans_the_others(part_doc, monke
     main_window().grab().save(os.path.join(artifacts, "plan_part_resume.png"))
     sheet = part_doc.getObject("PlanReport")
     assert sheet.get("A6") == "Face2" and sheet.get("A7") == "Face4"
-    assert sheet.get("G7") == "cancelled before this face ran"
+    assert sheet.get("G7") == "cancelled before this face was planned"
     assert "cancelled after 1 faces (a replay runs it whole)" in dock_text("Python console")
     cancelled_group = next(o.Name for o in part_doc.Objects if o.Label == "Plan Part (uniform_parametric)")
 
@@ -306,5 +315,49 @@ def test_a_ventilator_plan_with_a_probe(workbench, monkeypatch, artifacts):
         process_events(0.5)
         FreeCADGui.ActiveDocument.ActiveView.saveImage(os.path.join(artifacts, "plan_ventilator_probe_path.png"),
                                                        1200, 900, "White")
+    finally:
+        documents.close()
+
+
+# The issue's four Ventilator faces: Face60 ran for over 28 minutes with the probe before the reach
+# was bounded; the plan must now end within PLAN_LIMIT_S on 2 processes.
+FOUR_FACES = ["Face14", "Face57", "Face60", "Face61"]
+PLAN_LIMIT_S = 300
+
+
+def test_a_ventilator_plan_of_four_faces_with_the_probe_ends_and_cancels_at_once(workbench, monkeypatch, artifacts):
+    from support.faces import TESTDATA
+
+    path = os.path.join(TESTDATA, "Ventilator.stp")
+    if not os.path.isfile(path):
+        pytest.skip("the shared test data (Ventilator.stp) is not here")
+    documents = document_with("VentilatorFour", {"Ventilator": Part.read(path)})
+    doc = next(documents)
+    try:
+        started = time.perf_counter()
+        made = plan_with_probe(monkeypatch, doc.Ventilator, FOUR_FACES, PLAN_LIMIT_S, "optimal", tolerance=0.05,
+                               processes=2)
+        print(f"Ventilator Faces 14, 57, 60, 61 with the probe, optimal, 2 processes: {time.perf_counter() - started:.0f} s, "
+              f"{made.n_total} points; " + "; ".join(face.line for face in made.faces))
+        assert not made.cancelled and len(made.faces) == 4 and made.placed
+
+        hold = hold_plan_at(monkeypatch, 99)
+        form = start_with_probe(doc.Ventilator, FOUR_FACES, "optimal", tolerance=0.05, processes=2)
+        shown = []
+        assert wait_until(lambda: shown.append(form.status.text()) or form.progress.value() == 3, PLAN_LIMIT_S), \
+            form.status.text()
+        form.grab().save(os.path.join(artifacts, "plan_part_last_face_running.png"))
+        pressed = time.perf_counter()
+        task_button(CANCEL).click()
+        assert any("running for" in text for text in shown), "the tally goes on while faces run"
+        assert wait_until(lambda: form.status.text().startswith("Cancelled"), 30), form.status.text()
+        added = time.perf_counter() - pressed
+        [cancelled], [ended] = hold.plans, hold.ended
+        print(f"Cancel during the last face: the plan stopped after {ended - pressed:.1f} s, its 3 faces were added "
+              f"after {added:.1f} s")
+        assert cancelled.cancelled and len(cancelled.placed) == 3 and ended - pressed < 5.0
+        main_window().grab().save(os.path.join(artifacts, "plan_part_cancelled_last_face.png"))
+        task_button(CANCEL).click()
+        assert wait_until(lambda: not FreeCADGui.Control.activeDialog(), 5)
     finally:
         documents.close()

@@ -4,6 +4,8 @@ a document. The faces are built here (a rational saddle, a plate with a hole, a 
 rational patch); blind strategies and a coarse grid keep the runs short."""
 import os
 import re
+import threading
+import time
 
 from support import dmis_syntax
 import numpy as np
@@ -144,31 +146,60 @@ def test_cancel_keeps_the_faces_done_and_names_the_others(part):
     plan = cmmsampling.plan(part, tolerance=TOLERANCE, strategy="uniform_parametric", edge_offset=1.5, n_max=200,
                             processes=1, progress=lambda done, total, message: done == 1, **FAST)
     assert plan.cancelled and plan.faces[0].placed
-    assert [f.reason for f in plan.faces[1:]] == ["cancelled before this face ran"] * 3
+    assert [f.reason for f in plan.faces[1:]] == ["cancelled before this face was planned"] * 3
 
 
 def test_the_progress_tallies_faces_points_and_time_left(part, tolerance_plan):
-    """After each face: its line, then the plan's tally; the last tally counts every point."""
+    """After each face: its line, then the plan's tally; the last tally counts every point. In
+    between, about every second, a beat: no line, the tally and the time the plan has run."""
     messages = []
     plan = cmmsampling.plan(part, tolerance=TOLERANCE, strategy="uniform_parametric", edge_offset=1.5, n_max=200,
                             processes=1, progress=lambda *report: messages.append(report), **FAST)
-    lines = [message.split("\n") for _, _, message in messages]
-    assert [line for line, _ in lines] == [face.line for face in plan.faces]
-    for (done, total, _), (_, tally) in zip(messages[:-1], lines):
+    reports = [(done, total, *message.split("\n")) for done, total, message in messages]
+    faces = [report for report in reports if report[2]]
+    assert [line for _, _, line, _ in faces] == [face.line for face in plan.faces]
+    for done, total, _, tally in faces[:-1]:
         assert re.fullmatch(rf"{done} of {total} faces, \d+ points so far, about \d+ (s|min) left", tally)
-    assert lines[-1][1] == f"4 of 4 faces, {plan.n_total} points so far"
+    assert faces[-1][3] == f"4 of 4 faces, {plan.n_total} points so far"
+    for done, total, _, tally in (report for report in reports if not report[2]):
+        assert re.fullmatch(rf"{done} of {total} faces, \d+ points so far(, about \d+ (s|min) left)?, running for \d+ "
+                            r"(s|min)", tally)
     assert plan.n_total == tolerance_plan.n_total
+
+
+@pytest.mark.parametrize("processes", [1, 2])
+def test_cancel_stops_the_face_under_way_within_seconds(part, processes):
+    """Cancel at the first beat, while the first faces run (optimal, 30 s a run): the plan ends
+    within a few seconds with no face done, on local processes and in this process alike."""
+    asked = []
+
+    def cancel_at_first_beat(done, total, message):
+        if not message.split("\n")[0] and not asked:
+            asked.append(time.perf_counter())
+        return bool(asked)
+
+    plan = cmmsampling.plan(part, tolerance=1e-6, strategy="optimal", time_limit=30, edge_offset=1.5, n_max=200,
+                            processes=processes, progress=cancel_at_first_beat, **FAST)
+    waited = time.perf_counter() - asked[0]
+    print(f"{processes} process(es): the plan ended {waited:.2f} s after Cancel")
+    assert plan.cancelled and waited < 5.0
+    assert [face.reason for face in plan.faces] == ["cancelled before this face was planned"] * 4
+    deadline = time.perf_counter() + 10.0
+    while any(thread.name == "cmmsampling-job" for thread in threading.enumerate()) and time.perf_counter() < deadline:
+        time.sleep(0.1)
+    assert not any(thread.name == "cmmsampling-job" for thread in threading.enumerate()), \
+        "the face left to end in this process was told to stop, and stopped"
 
 
 def test_a_cancelled_plan_resumes_with_the_faces_done_kept(part, tolerance_plan):
     arguments = dict(tolerance=TOLERANCE, strategy="uniform_parametric", edge_offset=1.5, n_max=200, **FAST)
     cancelled = cmmsampling.plan(part, processes=1, progress=lambda done, total, message: done == 2, **arguments)
-    assert cancelled.cancelled and [f.reason for f in cancelled.faces[2:]] == ["cancelled before this face ran"] * 2
+    assert cancelled.cancelled and [f.reason for f in cancelled.faces[2:]] == ["cancelled before this face was planned"] * 2
     reports = []
     resumed = cmmsampling.plan(part, processes=1, resume=cancelled, progress=lambda *report: reports.append(report),
                                **arguments)
     assert resumed.faces[:2] == cancelled.faces[:2], "the faces done are kept, not run again"
-    assert [(done, total) for done, total, _ in reports] == [(3, 4), (4, 4)]
+    assert [(done, total) for done, total, message in reports if message.split("\n")[0]] == [(3, 4), (4, 4)]
     assert not resumed.cancelled and [f.n for f in resumed.faces] == [f.n for f in tolerance_plan.faces]
     for face, whole in zip(resumed.faces, tolerance_plan.faces):
         np.testing.assert_array_equal(face.uv, whole.uv)

@@ -94,9 +94,10 @@ class BackgroundPlan(BackgroundTask):
     """Runs ``plan(shape, progress=..., **arguments)`` in a daemon thread.
 
     The GUI thread polls ``done``/``total`` (faces), ``lines`` (one per face done, see
-    FacePlan.line), ``tally`` (faces done, points so far, time left), ``running``, then ``plan`` or ``error``/``details``; ``cancel()`` makes the
-    progress callback stop the plan after the next face ends (the processes under way are
-    stopped, the faces done kept). The thread never touches the document.
+    FacePlan.line), ``tally`` (faces done, points so far, time left, renewed about every second),
+    ``running``, then ``plan`` or ``error``/``details``; ``cancel()`` makes the progress callback
+    stop the plan within a second or two (the faces under way are stopped, the faces done
+    kept). The thread never touches the document.
     """
 
     def __init__(self, shape, arguments):
@@ -110,13 +111,14 @@ class BackgroundPlan(BackgroundTask):
         self.plan = None
 
     def cancel(self):
-        """Ask the plan to stop when the next face ends."""
+        """Ask the plan to stop (at its next progress report, within about a second)."""
         self._stop.set()
 
     def _progress(self, done, total, message):
         line, _, self.tally = message.partition("\n")
         self.done, self.total = done, total
-        self.lines.append(line)
+        if line:
+            self.lines.append(line)
         return self.cancelled
 
     def _work(self):
@@ -130,8 +132,7 @@ class PlanPartTaskPanel(BackgroundRunPanel):
     OK_TIP = "Plan every face; the points are added when the plan ends"
     RESUME_TIP = ("Plan the faces the cancelled plan did not run, with the same values; the faces done are kept, "
                   "and the whole plan replaces the cancelled one in the document (one Undo)")
-    CANCELLING = ("Cancelling: the faces under way are stopped when the next one ends; the faces done are kept "
-                  "and added.")
+    CANCELLING = "Cancelling: the faces under way are being stopped; the faces done are kept and added."
 
     def __init__(self, source):
         self._set_up("plan_part.ui", "PlanPart.svg", source)
