@@ -292,31 +292,33 @@ def test_a_plan_with_a_probe_draws_its_path(part_doc, monkeypatch, artifacts):
                                                    "White")
 
 
-def test_a_ventilator_plan_with_a_probe(workbench, monkeypatch, artifacts):
+@pytest.fixture
+def ventilator_doc(workbench):
+    """A document holding Ventilator.stp as the object Ventilator (skipped without the shared test data)."""
     from support.faces import TESTDATA
 
     path = os.path.join(TESTDATA, "Ventilator.stp")
     if not os.path.isfile(path):
         pytest.skip("the shared test data (Ventilator.stp) is not here")
-    documents = document_with("VentilatorPlan", {"Ventilator": Part.read(path)})
-    doc = next(documents)
-    try:
-        made = plan_with_probe(monkeypatch, doc.Ventilator, ["Face251", "Face11"], 300, tolerance=0.2, grid=20,
-                               n_max=46, processes=2)
-        faces = {face.name: face for face in made.faces}
-        assert not faces["Face11"].placed and "the probe reaches no point of this face" in faces["Face11"].reason
-        assert faces["Face251"].placed
-        tilted = sum(face.tilted for face in made.placed)
-        print(f"Ventilator plan: {made.n_total} points, {tilted} tilted, "
-              f"{sum(face.unreached for face in made.placed)} unreachable; Face11 refused")
-        assert doc.getObject("ProbeMoves").Shape.Edges
-        FreeCADGui.Selection.clearSelection()
-        FreeCADGui.SendMsgToActiveView("ViewFit")
-        process_events(0.5)
-        FreeCADGui.ActiveDocument.ActiveView.saveImage(os.path.join(artifacts, "plan_ventilator_probe_path.png"),
-                                                       1200, 900, "White")
-    finally:
-        documents.close()
+    yield from document_with("VentilatorPlan", {"Ventilator": Part.read(path)})
+
+
+def test_a_ventilator_plan_with_a_probe(ventilator_doc, monkeypatch, artifacts):
+    doc = ventilator_doc
+    made = plan_with_probe(monkeypatch, doc.Ventilator, ["Face251", "Face11"], 300, tolerance=0.2, grid=20,
+                           n_max=46, processes=2)
+    faces = {face.name: face for face in made.faces}
+    assert not faces["Face11"].placed and "the probe reaches no point of this face" in faces["Face11"].reason
+    assert faces["Face251"].placed
+    tilted = sum(face.tilted for face in made.placed)
+    print(f"Ventilator plan: {made.n_total} points, {tilted} tilted, "
+          f"{sum(face.unreached for face in made.placed)} unreachable; Face11 refused")
+    assert doc.getObject("ProbeMoves").Shape.Edges
+    FreeCADGui.Selection.clearSelection()
+    FreeCADGui.SendMsgToActiveView("ViewFit")
+    process_events(0.5)
+    FreeCADGui.ActiveDocument.ActiveView.saveImage(os.path.join(artifacts, "plan_ventilator_probe_path.png"),
+                                                   1200, 900, "White")
 
 
 # The issue's four Ventilator faces: Face60 ran for over 28 minutes with the probe before the reach
@@ -325,39 +327,32 @@ FOUR_FACES = ["Face14", "Face57", "Face60", "Face61"]
 PLAN_LIMIT_S = 300
 
 
-def test_a_ventilator_plan_of_four_faces_with_the_probe_ends_and_cancels_at_once(workbench, monkeypatch, artifacts):
-    from support.faces import TESTDATA
+def test_a_ventilator_plan_of_four_faces_with_the_probe_ends_and_cancels_at_once(ventilator_doc, monkeypatch,
+                                                                               artifacts):
+    doc = ventilator_doc
+    started = time.perf_counter()
+    made = plan_with_probe(monkeypatch, doc.Ventilator, FOUR_FACES, PLAN_LIMIT_S, "optimal", tolerance=0.05,
+                           processes=2)
+    print(f"Ventilator Faces 14, 57, 60, 61 with the probe, optimal, 2 processes: "
+          f"{time.perf_counter() - started:.0f} s, {made.n_total} points; "
+          + "; ".join(face.line for face in made.faces))
+    assert not made.cancelled and len(made.faces) == 4 and made.placed
 
-    path = os.path.join(TESTDATA, "Ventilator.stp")
-    if not os.path.isfile(path):
-        pytest.skip("the shared test data (Ventilator.stp) is not here")
-    documents = document_with("VentilatorFour", {"Ventilator": Part.read(path)})
-    doc = next(documents)
-    try:
-        started = time.perf_counter()
-        made = plan_with_probe(monkeypatch, doc.Ventilator, FOUR_FACES, PLAN_LIMIT_S, "optimal", tolerance=0.05,
-                               processes=2)
-        print(f"Ventilator Faces 14, 57, 60, 61 with the probe, optimal, 2 processes: {time.perf_counter() - started:.0f} s, "
-              f"{made.n_total} points; " + "; ".join(face.line for face in made.faces))
-        assert not made.cancelled and len(made.faces) == 4 and made.placed
-
-        hold = hold_plan_at(monkeypatch, 99)
-        form = start_with_probe(doc.Ventilator, FOUR_FACES, "optimal", tolerance=0.05, processes=2)
-        shown = []
-        assert wait_until(lambda: shown.append(form.status.text()) or form.progress.value() == 3, PLAN_LIMIT_S), \
-            form.status.text()
-        form.grab().save(os.path.join(artifacts, "plan_part_last_face_running.png"))
-        pressed = time.perf_counter()
-        task_button(CANCEL).click()
-        assert any("running for" in text for text in shown), "the tally goes on while faces run"
-        assert wait_until(lambda: form.status.text().startswith("Cancelled"), 30), form.status.text()
-        added = time.perf_counter() - pressed
-        [cancelled], [ended] = hold.plans, hold.ended
-        print(f"Cancel during the last face: the plan stopped after {ended - pressed:.1f} s, its 3 faces were added "
-              f"after {added:.1f} s")
-        assert cancelled.cancelled and len(cancelled.placed) == 3 and ended - pressed < 5.0
-        main_window().grab().save(os.path.join(artifacts, "plan_part_cancelled_last_face.png"))
-        task_button(CANCEL).click()
-        assert wait_until(lambda: not FreeCADGui.Control.activeDialog(), 5)
-    finally:
-        documents.close()
+    hold = hold_plan_at(monkeypatch, 99)
+    form = start_with_probe(doc.Ventilator, FOUR_FACES, "optimal", tolerance=0.05, processes=2)
+    shown = []
+    assert wait_until(lambda: shown.append(form.status.text()) or form.progress.value() == 3, PLAN_LIMIT_S), \
+        form.status.text()
+    form.grab().save(os.path.join(artifacts, "plan_part_last_face_running.png"))
+    pressed = time.perf_counter()
+    task_button(CANCEL).click()
+    assert any("running for" in text for text in shown), "the tally goes on while faces run"
+    assert wait_until(lambda: form.status.text().startswith("Cancelled"), 30), form.status.text()
+    added = time.perf_counter() - pressed
+    [cancelled], [ended] = hold.plans, hold.ended
+    print(f"Cancel during the last face: the plan stopped after {ended - pressed:.1f} s, its 3 faces were added "
+          f"after {added:.1f} s")
+    assert cancelled.cancelled and len(cancelled.placed) == 3 and ended - pressed < 5.0
+    main_window().grab().save(os.path.join(artifacts, "plan_part_cancelled_last_face.png"))
+    task_button(CANCEL).click()
+    assert wait_until(lambda: not FreeCADGui.Control.activeDialog(), 5)

@@ -194,7 +194,8 @@ def test_cancel_stops_the_face_under_way_within_seconds(part, processes):
 def test_a_cancelled_plan_resumes_with_the_faces_done_kept(part, tolerance_plan):
     arguments = dict(tolerance=TOLERANCE, strategy="uniform_parametric", edge_offset=1.5, n_max=200, **FAST)
     cancelled = cmmsampling.plan(part, processes=1, progress=lambda done, total, message: done == 2, **arguments)
-    assert cancelled.cancelled and [f.reason for f in cancelled.faces[2:]] == ["cancelled before this face was planned"] * 2
+    assert cancelled.cancelled
+    assert [f.reason for f in cancelled.faces[2:]] == ["cancelled before this face was planned"] * 2
     reports = []
     resumed = cmmsampling.plan(part, processes=1, resume=cancelled, progress=lambda *report: reports.append(report),
                                **arguments)
