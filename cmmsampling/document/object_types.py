@@ -10,6 +10,7 @@ Part = import_part()
 
 PROBE_POINTS = "CMMSampling::ProbePoints"
 SUBSTITUTE_SURFACE = "CMMSampling::SubstituteSurface"
+PART_PLAN = "CMMSampling::PartPlan"
 
 
 def type_of(obj):
@@ -25,6 +26,11 @@ def is_probe_points(obj):
 def is_substitute_surface(obj):
     """True for a substitute-surface object of this workbench."""
     return type_of(obj) == SUBSTITUTE_SURFACE
+
+
+def is_part_plan(obj):
+    """True for the group of a part plan made by this workbench (add_plan_to_document)."""
+    return type_of(obj) == PART_PLAN
 
 
 def in_document(obj, doc):
@@ -53,10 +59,20 @@ def source_face(points):
 
 
 def probe_points_in(objects):
-    """The probe-points objects among ``objects`` and inside those that are groups, once each."""
+    """The probe-points objects among ``objects`` and inside those that are groups (a part plan's
+    at any depth), once each."""
     found = []
     for obj in objects:
-        for candidate in [obj] + list(getattr(obj, "Group", [])):
+        inside = plan_probe_points(obj) if is_part_plan(obj) else list(getattr(obj, "Group", []))
+        for candidate in [obj] + inside:
             if is_probe_points(candidate) and candidate not in found:
                 found.append(candidate)
+    return found
+
+
+def plan_probe_points(group):
+    """The probe-points objects of a part plan's group, face by face (its sub-groups in order)."""
+    found = []
+    for obj in group.Group:
+        found += [obj] if is_probe_points(obj) else plan_probe_points(obj) if hasattr(obj, "Group") else []
     return found

@@ -14,7 +14,7 @@ from ..geometry.freecad_env import import_part
 from ..geometry.surface import SurfaceModel
 from ..geometry.validation import InputError
 from ..planning.probe_moves import moves_through
-from .object_types import PROBE_POINTS, SUBSTITUTE_SURFACE, source_face
+from .object_types import PART_PLAN, PROBE_POINTS, SUBSTITUTE_SURFACE, plan_probe_points, source_face
 
 Part = import_part()
 import FreeCAD  # noqa: E402  (importable once import_part() has set the path)
@@ -126,7 +126,9 @@ class ProbePoints(TypedProxy):
         """Create the properties it lacks (read-only where they come from a run): all of them for
         a new object, those added since for one made by an earlier version."""
         points = [
-            ("App::PropertyStringList", "Labels", "Point labels P1..PN"),
+            ("App::PropertyStringList", "Labels", "Point labels P1..PN, behind LabelPrefix"),
+            ("App::PropertyString", "LabelPrefix",
+             "What the labels start with: the face's name and _ in a part plan (Face61_P1), else nothing"),
             ("App::PropertyVectorList", "Points", "Probe points on the face (mm)"),
             ("App::PropertyVectorList", "Normals",
              "Approach vectors: unit normals out of the material (the probe travels along -normal)"),
@@ -228,6 +230,63 @@ class ProbePoints(TypedProxy):
             raise InputError(f"the part of {obj.Label} was deleted; a probe path needs it to keep clear of")
         probe = Probe(**json.loads(obj.Probe))
         return moves_through(probe, Obstacles(obj.Source[0].Shape), point_set.points, point_set.normals,
+                             point_set.axes, motion)
+
+
+class PartPlanGroup(TypedProxy):
+    """Proxy of a part plan's group (App::DocumentObjectGroupPython): a sub-group per face, each
+    with its probe points, and the plan report. It exports as one program: :meth:`point_set`
+    joins the faces' points (labels Face61_P1, unique across the faces) and :meth:`probe_moves`
+    goes through all of them."""
+
+    Type = PART_PLAN
+
+    def __init__(self, obj):
+        obj.Proxy = self
+
+    def point_set(self, obj):
+        """Every face's probe points as one :class:`cmmsampling.formats.pointset.PointSet`, face
+        by face; InputError for a plan group without points."""
+        members = plan_probe_points(obj)
+        if not members:
+            raise InputError(f"{obj.Label} holds no probe points: plan the part again")
+        sets = [member.Proxy.point_set(member) for member in members]
+        faces = [member.SourceName.rpartition(":")[2] or member.Label for member in members]
+        labels = [label if label.startswith(face + "_") else f"{face}_{label}"
+                  for face, point_set in zip(faces, sets) for label in point_set.labels]
+        axes = [point_set.axes for point_set in sets]
+        metadata = {"source": obj.Label, "faces": len(members), "strategy": sets[0].metadata.get("strategy", ""),
+                    "points_per_face": {face: len(point_set) for face, point_set in zip(faces, sets)}}
+        if members[0].Probe:
+            metadata["probe"] = json.loads(members[0].Probe)
+        return PointSet(labels, np.concatenate([s.points for s in sets]), np.concatenate([s.normals for s in sets]),
+                        np.concatenate([s.uv for s in sets]), np.concatenate([s.deviation for s in sets]), metadata,
+                        [face for face, point_set in zip(faces, sets) for _ in range(len(point_set))],
+                        np.concatenate(axes) if all(a is not None for a in axes) else None)
+
+    def follows_probe(self, obj):
+        """True when every face's points were planned with a probe that reaches them all, on a part
+        still in the document: the plan exports along the probe's path."""
+        members = plan_probe_points(obj)
+        axes = [tuple(axis) for member in members for axis in member.Axes]
+        planned = all(member.Probe and member.Source is not None and len(member.Axes) == len(member.Labels)
+                      for member in members)
+        return bool(members) and planned and bool(np.isfinite(axes).all())
+
+    def probe_moves(self, obj, motion=None):
+        """The collision-free probe path through every face's points on their part (see
+        :meth:`ProbePoints.probe_moves`); ValueError naming what is missing."""
+        members = plan_probe_points(obj)
+        point_set = self.point_set(obj)
+        if point_set.axes is None or not members[0].Probe:
+            raise InputError(f"{obj.Label} was planned without a probe, so its points have no probe axes: plan "
+                             "again with a probe, or export with order='short_path'")
+        if not np.isfinite(point_set.axes).all():
+            raise InputError(f"the probe cannot reach some points of {obj.Label}: export with order='short_path'")
+        if members[0].Source is None:
+            raise InputError(f"the part of {obj.Label} was deleted; a probe path needs it to keep clear of")
+        probe = Probe(**json.loads(members[0].Probe))
+        return moves_through(probe, Obstacles(members[0].Source[0].Shape), point_set.points, point_set.normals,
                              point_set.axes, motion)
 
 

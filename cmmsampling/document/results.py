@@ -16,8 +16,8 @@ from ..planning.probe_moves import probe_moves
 from ..strategies.result import SamplingResult
 from ..strategies.sampling import evaluate
 from .object_types import in_document, source_face
-from .objects import (POINT_TOLERANCE_MM, SUMMARY_FIGURES, ProbePoints, make_probe_path, make_probe_points,
-                      make_substitute_surface, passes_through)
+from .objects import (POINT_TOLERANCE_MM, SUMMARY_FIGURES, PartPlanGroup, ProbePoints, make_probe_path,
+                      make_probe_points, make_substitute_surface, passes_through)
 from .sheets import write_deviation_report, write_plan_report
 from .transaction import hide_results, recompute, transaction
 
@@ -53,15 +53,17 @@ def add_to_document(result: SamplingResult, doc: FreeCAD.Document, source: tuple
     return group
 
 
-def _fill_result_group(group, result, source, with_path=True):
+def _fill_result_group(group, result, source, with_path=True, label_prefix=""):
     """Add a result's probe points, substitute surface and deviation report to ``group`` (inside a
     transaction), and its probe path when it was run with the part and ``with_path`` (a plan
-    draws one path through all its faces instead); returns the objects."""
+    draws one path through all its faces instead); label_prefix: what the points' labels start
+    with (a plan's face name and _); returns the objects."""
     doc = group.Document
     surface = make_substitute_surface(doc)
     report = doc.addObject("Spreadsheet::Sheet", "DeviationReport")
     report.Label = "Deviation report"
     points = make_probe_points(doc, source, surface, report)
+    points.LabelPrefix = label_prefix
     group.addObjects([points, surface, report])
     write_result(points, result, dict(result.settings), result.timings.get("total_s", 0.0))
     paths = []
@@ -95,7 +97,8 @@ def add_plan_to_document(plan: PartPlan, doc: FreeCAD.Document, part: FreeCAD.Do
     with transaction(doc, "Add part plan"):
         for obj in replaced:
             doc.removeObject(obj.Name)
-        group = doc.addObject("App::DocumentObjectGroup", "Plan")
+        group = doc.addObject("App::DocumentObjectGroupPython", "Plan")
+        PartPlanGroup(group)
         if hide_others:
             hide_results(doc)
         group.Label = f"Plan {part.Label} ({plan.strategy})"
@@ -104,7 +107,7 @@ def add_plan_to_document(plan: PartPlan, doc: FreeCAD.Document, part: FreeCAD.Do
             face_group = doc.addObject("App::DocumentObjectGroup", "Sampling")
             face_group.Label = _group_label(result, source)
             group.addObject(face_group)
-            objects += _fill_result_group(face_group, result, source, with_path=False)
+            objects += _fill_result_group(face_group, result, source, with_path=False, label_prefix=f"{source[1]}_")
         sheet = doc.addObject("Spreadsheet::Sheet", "PlanReport")
         sheet.Label = "Plan report"
         group.addObject(sheet)
@@ -200,7 +203,7 @@ def write_result(points, result, settings, run_time_s):
     settings: the parameters of the original run (JSON-friendly dict); run_time_s: its duration.
     """
     point_set = PointSet.from_result(result, points.SourceName)
-    points.Labels = list(point_set.labels)
+    points.Labels = [getattr(points, "LabelPrefix", "") + label for label in point_set.labels]
     points.Points = [FreeCAD.Vector(*p) for p in point_set.points]
     points.Normals = [FreeCAD.Vector(*n) for n in point_set.normals]
     points.U = [float(u) for u in point_set.uv[:, 0]]

@@ -12,7 +12,7 @@ from FreeCAD import Qt
 from PySide import QtGui
 
 from .. import document
-from ..document.object_types import source_face
+from ..document.object_types import is_part_plan, source_face
 from . import icon
 from .export_options import ask_export_options, export_keywords, show_export_report
 from .selection import SelectionError, selected_face, selected_part_faces
@@ -167,15 +167,16 @@ class ExportProbePoints(GuardedCommand):
 
     def reason(self):
         """Why the command cannot act now, or None."""
-        points = selected_probe_points()
+        points = selected_export_sources()
         if not points:
-            return "Select the probe points (or their Sampling group) to export."
+            return "Select the probe points (or their Sampling group, or a part plan's group) to export."
         if len(points) > 1:
-            return f"{len(points)} sets of probe points are selected: select one to export."
+            return (f"{len(points)} sets of probe points are selected: select one (or their part plan's group) "
+                    "to export.")
         return None
 
     def act(self):
-        [points] = selected_probe_points()
+        [points] = selected_export_sources()
         path = choose_export_path(points)
         if not path:
             return
@@ -250,7 +251,7 @@ def export_filters():
 def default_export_name(points):
     """A file name (without extension) for probe points: their source and strategy with
     characters other than letters, digits, '-' and '_' replaced, e.g. 'Body_Face1_pso'."""
-    words = [points.SourceName or points.Label, points.Strategy]
+    words = [getattr(points, "SourceName", "") or points.Label, getattr(points, "Strategy", "")]
     return re.sub(r"[^A-Za-z0-9_-]+", "_", "_".join(w for w in words if w)).strip("_") or "probe_points"
 
 
@@ -282,6 +283,13 @@ def choose_export_path(points):
 def selected_probe_points():
     """Probe-points objects among the selected objects and inside selected groups."""
     return document.probe_points_in(FreeCADGui.Selection.getSelection())
+
+
+def selected_export_sources():
+    """What Export writes: the part plans' groups selected (each one program of all its faces),
+    else :func:`selected_probe_points`."""
+    plans = [obj for obj in FreeCADGui.Selection.getSelection() if is_part_plan(obj)]
+    return plans or selected_probe_points()
 
 
 COMMANDS = (SampleFace, ExportProbePoints, Reevaluate, CompareStrategies, PlanPart)

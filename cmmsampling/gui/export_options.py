@@ -11,6 +11,7 @@ import FreeCAD
 import FreeCADGui
 from PySide import QtCore, QtGui
 
+from ..document.object_types import is_part_plan
 from . import icon, settings
 from .qt_compat import run_modal
 
@@ -146,7 +147,8 @@ class ExportOptionsDialog(QtGui.QDialog):
 
 
 def ask_export_options(points):
-    """Ask the export options for a probe-points object; None when the user cancels.
+    """Ask the export options for a probe-points object or a part plan's group; None when the
+    user cancels.
 
     Returns {"frame": a coordinate system's document object or None, "probe_radius": mm, "order":
     one of ORDER_TEXTS ("probe_path" offered only for points with a probe path, see
@@ -166,7 +168,10 @@ def ask_export_options(points):
 
 def has_probe_path(points):
     """True when a probe-points object was sampled with the part, its probe reaches every point
-    and the part is still there: its export may follow the collision-free probe path."""
+    and the part is still there (for a part plan's group: every face's points): its export may
+    follow the collision-free probe path."""
+    if is_part_plan(points):
+        return points.Proxy.follows_probe(points)
     axes = [tuple(a) for a in getattr(points, "Axes", [])]
     return (bool(getattr(points, "Probe", "")) and points.Source is not None and len(axes) == len(points.Labels) > 0
             and all(value == value for axis in axes for value in axis))

@@ -4,6 +4,7 @@ here with Part: a deep narrow slot, a floor under an overhang, a floor beside a 
 The checks use OCC directly (the probe built here as solids from its dimensions, distToShape),
 not the code under test."""
 import json
+import re
 
 import numpy as np
 import pytest
@@ -250,12 +251,28 @@ def test_a_plan_with_a_probe_keeps_to_its_reach_and_writes_one_path(beside_wall,
         part.Shape = beside_wall
         doc.recompute()
         group = cmmsampling.add_plan_to_document(plan, doc, part)
-        kept = cmmsampling.document.probe_points_in(group.Group)
+        kept = cmmsampling.document.probe_points_in([group])
         for face, points in zip(plan.placed, kept):
             np.testing.assert_allclose([tuple(a) for a in points.Axes], face.axes)
             assert sum(points.Tilted) == face.tilted and points.Report.get("tilted") == face.tilted
+            assert list(points.Labels) == [f"{face.name}_P{k}" for k in range(1, face.n + 1)]
+        exported = cmmsampling.document.export([group], str(tmp_path / "from_document.dmi"))
+        from_document = (tmp_path / "from_document.dmi").read_text()
+        assert dmis_syntax.check(from_document) == [] and exported.order == "probe_path"
+        assert exported.count == plan.n_total and exported.length_after == pytest.approx(report.length_after)
+        labels = re.findall(r"^F\((\w+)\)=FEAT/POINT", from_document, re.M)
+        assert sorted(labels) == sorted(re.findall(r"^F\((\w+)\)=FEAT/POINT", text, re.M))
+        assert len(set(labels)) == len(labels) == plan.n_total
+        name = group.Name
+        doc.saveAs(str(tmp_path / "planned.FCStd"))
+        FreeCAD.closeDocument(doc.Name)
+        reopened = FreeCAD.openDocument(str(tmp_path / "planned.FCStd")).getObject(name)
+        assert cmmsampling.document.export([reopened], str(tmp_path / "reopened.dmi")).count == plan.n_total
+        with pytest.raises(ValueError, match="found 2"):
+            cmmsampling.document.export(cmmsampling.document.probe_points_in([reopened]), str(tmp_path / "two.dmi"))
     finally:
         closed("PlanReach")
+        closed("planned")
     with pytest.raises(ValueError, match="give probe="):
         cmmsampling.plan(beside_wall, tolerance=0.5, part=beside_wall)
 

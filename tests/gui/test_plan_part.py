@@ -3,6 +3,7 @@ cancel, the document and its Undo, the echo) in the real FreeCAD GUI, on a four-
 here: a rational saddle, a plate with a hole, a 2 mm strip (too narrow for the edge offset) and a
 rational patch."""
 import __main__
+import importlib
 import os
 import re
 import time
@@ -11,9 +12,11 @@ import FreeCAD
 import FreeCADGui
 import Part
 import pytest
+from support import dmis_syntax
 from support.faces import holed_face, rational_patch_face, rational_saddle, strip_face
 from PySide import QtGui
 
+from cmmsampling.document.object_types import is_part_plan
 from cmmsampling.gui import commands
 from cmmsampling.gui.panels import plan_part
 
@@ -327,8 +330,8 @@ FOUR_FACES = ["Face14", "Face57", "Face60", "Face61"]
 PLAN_LIMIT_S = 300
 
 
-def test_a_ventilator_plan_of_four_faces_with_the_probe_ends_and_cancels_at_once(ventilator_doc, monkeypatch,
-                                                                               artifacts):
+def test_a_ventilator_plan_of_four_faces_with_the_probe_ends_exports_and_cancels_at_once(
+        ventilator_doc, monkeypatch, artifacts, tmp_path):
     doc = ventilator_doc
     started = time.perf_counter()
     made = plan_with_probe(monkeypatch, doc.Ventilator, FOUR_FACES, PLAN_LIMIT_S, "optimal", tolerance=0.05,
@@ -337,6 +340,20 @@ def test_a_ventilator_plan_of_four_faces_with_the_probe_ends_and_cancels_at_once
           f"{time.perf_counter() - started:.0f} s, {made.n_total} points; "
           + "; ".join(face.line for face in made.faces))
     assert not made.cancelled and len(made.faces) == 4 and made.placed
+    [group] = [obj for obj in doc.Objects if is_part_plan(obj)]
+    FreeCADGui.Selection.clearSelection()
+    FreeCADGui.Selection.addSelection(group)
+    assert commands.ExportProbePoints().reason() is None, "Export takes the plan's group"
+    path = os.path.join(str(tmp_path), "four_faces.dmi")
+    exporter = importlib.import_module(FreeCAD.getExportType("dmi")[0])
+    exporter.export(FreeCADGui.Selection.getSelection(), path)   # what File > Export runs after its file dialog
+    with open(path) as program:
+        text = program.read()
+    labels = re.findall(r"^F\((\w+)\)=FEAT/POINT", text, re.M)
+    assert dmis_syntax.check(text) == [] and len(labels) == len(set(labels)) == made.n_total
+    assert {label.split("_")[0] for label in labels} == {face.name for face in made.placed}
+    print(f"File > Export of the plan's group: one DMIS program of {len(labels)} points, "
+          f"{'along the probe path' if 'GOTO/' in text else 'in the planned order'}")
 
     hold = hold_plan_at(monkeypatch, 99)
     form = start_with_probe(doc.Ventilator, FOUR_FACES, "optimal", tolerance=0.05, processes=2)
