@@ -12,7 +12,7 @@ from PySide import QtCore, QtGui
 
 from ..geometry.domain import inside_loops
 from ..geometry.surface import SurfaceModel
-from ..document.object_types import is_probe_points, is_substitute_surface, source_face
+from ..document.object_types import is_part_plan, is_probe_points, is_substitute_surface, plan_probe_points, source_face
 from ..strategies.blind import spaced
 from . import colormap, icon
 
@@ -145,6 +145,8 @@ class ViewProviderSubstituteSurface(Stateless):
     """Draws the deviation of the substitute surface from the CAD face as colours on the CAD
     face itself ("Deviation" display mode, the default: its own tessellation, smooth along
     trimmed edges, drawn over the part), with a colour legend in mm titled with the face's name.
+    The substitutes of one part plan share one scale, from 0 to the plan's largest maximum, and
+    their legend is titled with the plan's name.
     Where the source face is gone, the substitute's evaluation grid is drawn instead. The Part
     display modes stay available (they show the substitute over the face's whole parameter range).
 
@@ -195,8 +197,10 @@ class ViewProviderSubstituteSurface(Stateless):
         if not obj.Shape.Faces or not obj.DeviationField:
             return
         u, v, field = obj.Proxy.deviation_grid(obj)
-        largest = max(float(np.nanmax(field)), float(getattr(obj, "MaxDeviation", 0.0)))
-        maximum = colormap.shown_maximum(largest)
+        sharing = scale_sharers(obj)
+        largest = max([float(np.nanmax(field))] + [float(getattr(other, "MaxDeviation", 0.0)) for other in sharing])
+        maximum = self.maximum = colormap.shown_maximum(largest)
+        redraw_others(obj, sharing, maximum)
         self.coloured.addChild(in_front())
         face = source_of(obj)
         if face is not None:
@@ -292,9 +296,37 @@ def face_mesh(face, u, v, field, maximum):
     return indexed_mesh(np.array([tuple(p) for p in points]), index, colormap.colours(values, maximum))
 
 
+def plan_of(surface):
+    """The part plan's group that holds this substitute (in one of its faces' groups), or None."""
+    return next((outer for holder in surface.InList for outer in getattr(holder, "InList", []) if is_part_plan(outer)),
+                None)
+
+
+def scale_sharers(surface):
+    """The substitutes whose colours share one scale with this one: its part plan's (itself
+    included), or itself alone."""
+    plan = plan_of(surface)
+    if plan is None:
+        return [surface]
+    return [points.Substitute for points in plan_probe_points(plan) if points.Substitute is not None]
+
+
+def redraw_others(surface, sharing, maximum):
+    """Draw again the substitutes of ``sharing`` other than ``surface`` that were drawn on another
+    scale than ``maximum`` (mm): a plan's faces follow its largest maximum as it is written."""
+    for other in sharing:
+        proxy = getattr(getattr(other, "ViewObject", None), "Proxy", None)
+        if other is not surface and getattr(proxy, "maximum", maximum) != maximum:
+            proxy.redraw(other.ViewObject)
+
+
 def legend_title(surface):
-    """The legend's title: 'Deviation, <object>.<face>' of the probe points that use this
-    substitute, or the substitute's label when they do not say their source."""
+    """The legend's title: 'Deviation, <plan>' for a part plan's substitute (one scale for all its
+    faces), else 'Deviation, <object>.<face>' of the probe points that use this substitute, or
+    the substitute's label when they do not say their source."""
+    plan = plan_of(surface)
+    if plan is not None:
+        return f"Deviation, {plan.Label}"
     points = probe_points_of(surface)
     if points is not None and points.SourceName:
         return f"Deviation, {points.SourceName.replace(':', '.')}"

@@ -16,8 +16,8 @@ from support import dmis_syntax
 from support.faces import holed_face, rational_patch_face, rational_saddle, strip_face
 from PySide import QtGui
 
-from cmmsampling.document.object_types import is_part_plan
-from cmmsampling.gui import commands
+from cmmsampling.document.object_types import is_part_plan, probe_points_in
+from cmmsampling.gui import colormap, commands, view_providers
 from cmmsampling.gui.panels import plan_part
 
 from .helpers import (
@@ -188,6 +188,12 @@ def test_a_plan_runs_face_by_face_and_adds_a_group_per_face(part_doc, monkeypatc
     sheet = part_doc.getObject("PlanReport")
     assert sheet.get("A8") == "Face3" and "too narrow" in sheet.get("G8")
     assert int(sheet.get("C10")) == made.n_total
+    surfaces = [points.Substitute for points in probe_points_in([group])]
+    largest = max(surface.MaxDeviation.Value for surface in surfaces)
+    assert {surface.ViewObject.Proxy.maximum for surface in surfaces} == {colormap.shown_maximum(largest)}, \
+        "the plan's faces share one colour scale"
+    assert {view_providers.legend_title(surface) for surface in surfaces} == {f"Deviation, {group.Label}"}
+    assert sum(surface.ViewObject.ShowLegend for surface in surfaces) == 1
     FreeCADGui.Selection.clearSelection()
     FreeCADGui.SendMsgToActiveView("ViewFit")
     process_events(0.5)
