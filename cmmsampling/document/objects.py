@@ -9,6 +9,7 @@ import numpy as np
 
 from ..access.obstacles import Obstacles
 from ..access.probe import Probe
+from ..formats.exporting import spacing_by_face
 from ..formats.pointset import PointSet
 from ..geometry.freecad_env import import_part
 from ..geometry.surface import SurfaceModel
@@ -256,7 +257,8 @@ class PartPlanGroup(TypedProxy):
                   for face, point_set in zip(faces, sets) for label in point_set.labels]
         axes = [point_set.axes for point_set in sets]
         metadata = {"source": obj.Label, "faces": len(members), "strategy": sets[0].metadata.get("strategy", ""),
-                    "points_per_face": {face: len(point_set) for face, point_set in zip(faces, sets)}}
+                    "points_per_face": {face: len(point_set) for face, point_set in zip(faces, sets)},
+                    **spacing_by_face({face: point_set.metadata for face, point_set in zip(faces, sets)})}
         if members[0].Probe:
             metadata["probe"] = json.loads(members[0].Probe)
         return PointSet(labels, np.concatenate([s.points for s in sets]), np.concatenate([s.normals for s in sets]),

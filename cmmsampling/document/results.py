@@ -83,7 +83,7 @@ def add_plan_to_document(plan: PartPlan, doc: FreeCAD.Document, part: FreeCAD.Do
     :func:`add_to_document`. Creates a group "Plan <part label> (<strategy>)" holding a sub-group
     per face with points (as :func:`add_to_document` makes it) and a "Plan report" spreadsheet:
     face, area (mm^2), N, maximum deviation and bound (mm), tolerance met, notes, one row per
-    face and a row for the part. replace: the group this function made for an earlier plan of
+    face and a row for the part, then the probe, its path's length and the measuring time. replace: the group this function made for an earlier plan of
     the part (a cancelled plan that ``plan`` resumed), removed with everything in it in the same
     transaction. Returns the group.
     """
@@ -111,11 +111,13 @@ def add_plan_to_document(plan: PartPlan, doc: FreeCAD.Document, part: FreeCAD.Do
         sheet = doc.addObject("Spreadsheet::Sheet", "PlanReport")
         sheet.Label = "Plan report"
         group.addObject(sheet)
-        write_plan_report(sheet, plan)
+        moves = None
         if plan.probe is not None and plan.placed and not any(face.unreached for face in plan.placed):
-            paths = make_probe_path(doc, probe_moves(plan))
+            moves = probe_moves(plan)
+            paths = make_probe_path(doc, moves)
             group.addObjects(paths)
             objects += paths
+        write_plan_report(sheet, plan, moves)
         recompute(doc, objects + [sheet])
     return group
 

@@ -131,9 +131,11 @@ def _readable(row):
 PLAN_COLUMNS = ("Face", "Area (mm^2)", "N", "Max deviation (mm)", "Bound (mm)", "Tolerance met", "Notes")
 
 
-def write_plan_report(sheet, plan):
+def write_plan_report(sheet, plan, moves=None):
     """The per-part table of a plan in a spreadsheet: a title, the goal, one row per face and a
-    row for the part (points in all, the worst face's deviation)."""
+    row for the part (points in all, the worst face's deviation); below, for a plan made with a
+    probe, the probe and, given its path (moves: a ProbeMoves), the path's length (mm) and the
+    measuring time (s) as numbers."""
     goal = (f"tolerance {plan.tolerance:g} mm" if plan.tolerance is not None else f"{plan.budget} points")
     rows = [("CMM sampling plan",), ("Goal", goal), ("Strategy", plan.strategy), (), PLAN_COLUMNS]
     for face in plan.faces:
@@ -141,6 +143,7 @@ def write_plan_report(sheet, plan):
                      face.met_text, face.notes))
     rows.append(("Part", f"{plan.area:.2f}", plan.n_total, _figure(plan.worst), "",
                  "", f"{len(plan.refused)} faces without points" if plan.refused else ""))
+    rows += _probe_rows(plan.probe, moves)
     for row, values in enumerate(rows, start=1):
         for column, value in zip(REPORT_COLUMNS, values):
             sheet.set(f"{column}{row}", _cell_text(value))
@@ -148,6 +151,19 @@ def write_plan_report(sheet, plan):
     sheet.setStyle("A5:G5", "bold")
     sheet.setColumnWidth("A", 110)
     sheet.setColumnWidth("G", 400)
+
+
+def _probe_rows(probe, moves):
+    """The plan report's rows on its probe (none without one) and its path (when given)."""
+    if probe is None:
+        return []
+    rows = [(), ("Probe", f"{probe.ball_diameter:g} mm ball, {probe.stylus_length:g} mm stylus "
+                          f"({probe.stylus_diameter:g} mm), {probe.body_diameter:g} mm body")]
+    if moves is not None:
+        rows += [("Probe path", float(moves.travel), "mm of moves between the points, "
+                  f"{moves.detours} over the clearance plane"),
+                 ("Measuring time", float(moves.seconds), "s, estimated from the CMM's speeds")]
+    return rows
 
 
 def _figure(value):

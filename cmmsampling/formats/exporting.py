@@ -191,13 +191,15 @@ def as_point_set(source):
 def plan_point_set(plan):
     """The points of a PartPlan as one PointSet: labels '<face>_P<i>' (unique across the faces),
     the face of each point, and the plan's facts (strategy, tolerance or budget, the worst face's
-    deviation, the faces without points and why)."""
+    deviation, each face's edge offset and point spacing as used, the faces without points and
+    why)."""
     placed = plan.placed
     if not placed:
         raise InputError("the plan has no points: " + "; ".join(f"{f.name}: {f.reason}" for f in plan.faces))
     labels = [f"{face.name}_P{i}" for face in placed for i in range(1, face.n + 1)]
     metadata = {"source": "part plan", "strategy": plan.strategy, "mode": plan.mode, "faces": len(plan.faces),
-                "points_per_face": {face.name: face.n for face in placed}, "worst_max_mm": plan.worst}
+                "points_per_face": {face.name: face.n for face in placed}, "worst_max_mm": plan.worst,
+                **spacing_by_face({face.name: face.settings for face in placed})}
     if plan.tolerance is not None:
         metadata["tolerance_mm"] = plan.tolerance
     if plan.budget is not None:
@@ -290,6 +292,14 @@ def checked(point_set):
         axes = None
     return PointSet(labels, points, normals / lengths[:, None], uv, deviation, dict(point_set.metadata), faces,
                     axes, point_set.travel)
+
+
+def spacing_by_face(settings):
+    """{"edge_offset_mm": {face: mm}, "min_spacing_mm": {face: mm}} from each face's run settings
+    ({face: settings}), as the runs used them (each face has its own where the plan left them
+    automatic)."""
+    return {f"{key}_mm": {face: float(values[key]) for face, values in settings.items() if key in values}
+            for key in ("edge_offset", "min_spacing")}
 
 
 def _check_finite(name, values, labels):

@@ -190,13 +190,13 @@ class PartPlan:
 
     def result(self, name):
         """The SamplingResult of a face of the plan (computed again from its points: the fit,
-        the deviation and OCC's check), for the document."""
+        the deviation and OCC's check), for the document; its settings are the face's run's (the
+        edge offset and spacing it used among them)."""
         face = self.faces[[f.name for f in self.faces].index(name)]
         fit = {key: face.settings[key] for key in FIT_KEYS if key in face.settings}
         result = evaluate(self.shapes[name], face.uv, strategy=face.strategy, **fit)
         result.access = face.access
-        if "probe" in face.settings:
-            result.settings["probe"] = face.settings["probe"]
+        result.settings = {**result.settings, **face.settings}
         return result
 
     def table(self):

@@ -256,6 +256,12 @@ def test_a_plan_with_a_probe_keeps_to_its_reach_and_writes_one_path(beside_wall,
             np.testing.assert_allclose([tuple(a) for a in points.Axes], face.axes)
             assert sum(points.Tilted) == face.tilted and points.Report.get("tilted") == face.tilted
             assert list(points.Labels) == [f"{face.name}_P{k}" for k in range(1, face.n + 1)]
+        sheet = next(obj for obj in group.Group if obj.TypeId == "Spreadsheet::Sheet")
+        below = 7 + len(plan.faces)
+        assert [sheet.get(f"A{below + k}") for k in (1, 2, 3)] == ["Probe", "Probe path", "Measuring time"]
+        assert sheet.get(f"B{below + 1}").startswith("2 mm ball, 20 mm stylus")
+        assert sheet.get(f"B{below + 2}") == pytest.approx(report.length_after)
+        assert sheet.get(f"B{below + 3}") == pytest.approx(report.seconds)
         exported = cmmsampling.document.export([group], str(tmp_path / "from_document.dmi"))
         from_document = (tmp_path / "from_document.dmi").read_text()
         assert dmis_syntax.check(from_document) == [] and exported.order == "probe_path"
@@ -263,6 +269,9 @@ def test_a_plan_with_a_probe_keeps_to_its_reach_and_writes_one_path(beside_wall,
         labels = re.findall(r"^F\((\w+)\)=FEAT/POINT", from_document, re.M)
         assert sorted(labels) == sorted(re.findall(r"^F\((\w+)\)=FEAT/POINT", text, re.M))
         assert len(set(labels)) == len(labels) == plan.n_total
+        for program in (text, from_document):
+            offsets = json.loads(re.search(r"^\$\$ edge_offset_mm: (.*)$", program, re.M).group(1))
+            assert offsets == {face.name: face.settings["edge_offset"] for face in plan.placed}, "the offsets used"
         name = group.Name
         doc.saveAs(str(tmp_path / "planned.FCStd"))
         FreeCAD.closeDocument(doc.Name)
