@@ -319,3 +319,15 @@ def test_the_command_line_plans_a_file(part, tmp_path, capsys):
     assert "there is no face 9" in capsys.readouterr().err
     assert FreeCAD.ActiveDocument is None or FreeCAD.ActiveDocument.Name != "cmmsampling"
     assert os.path.getsize(out) > 0
+
+
+def test_a_face_notes_where_more_points_gave_a_larger_maximum():
+    """The issue's face: N = 81 reached 0.2749 mm where N = 49 reached 0.0084 mm."""
+    from cmmsampling.planning.part_plan import FacePlan
+    from cmmsampling.planning.points_needed import Tried
+
+    rising = FacePlan("Face61", 10.0, n=49, tried=[Tried(16, 0.9), Tried(49, 0.0084), Tried(81, 0.2749),
+                                                    Tried(36, float("nan"), refused="too few")])
+    assert rising.notes == "more points gave a larger maximum: N = 81 reached 0.2749 mm, N = 49 0.0084 mm"
+    falling = FacePlan("Face3", 10.0, n=49, tried=[Tried(16, 0.9), Tried(49, 0.04), Tried(81, 0.045)])
+    assert falling.notes == "", "within the factor a larger N's maximum is no news"
