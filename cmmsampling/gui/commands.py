@@ -14,7 +14,7 @@ from PySide import QtGui
 from .. import document
 from ..document.object_types import is_part_plan, source_face
 from . import icon
-from .export_options import ask_export_options, export_keywords, show_export_report
+from .export_options import ask_export_options, export_keywords, say, show_export_report
 from .selection import SelectionError, selected_face, selected_part_faces
 
 
@@ -145,12 +145,16 @@ class Reevaluate(GuardedCommand):
         for points in selected_probe_points():
             if source_face(points)[0] is None:
                 continue
+            before = points.MaxDeviation.Value
             try:
                 FreeCADGui.doCommand(
                     f"cmmsampling.document.reevaluate(App.getDocument({points.Document.Name!r})"
                     f".getObject({points.Name!r}))")
             except Exception as exc:
                 warn("Re-evaluate", f"{points.Label}: {exc}")
+                continue
+            say(f"Re-evaluated {points.SourceName or points.Label}: maximum deviation "
+                f"{points.MaxDeviation.Value:.4f} mm (was {before:.4f} mm), {points.Status}.")
 
 
 class ExportProbePoints(GuardedCommand):

@@ -67,7 +67,11 @@ def export_keywords(options):
 def show_export_report(report):
     """Tell the user what an export wrote (an ExportReport, in words: the file, the frame, the
     probe path and what the short path saved): in the Report view and the status bar."""
-    line = str(report)
+    say(str(report))
+
+
+def say(line):
+    """Tell the user what a command did, in one line: in the Report view and the status bar."""
     FreeCAD.Console.PrintMessage(line + "\n")
     FreeCADGui.getMainWindow().statusBar().showMessage(line, STATUS_MS)
 

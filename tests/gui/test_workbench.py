@@ -332,14 +332,14 @@ def test_probe_constraints_keep_points_off_the_edges_and_apart(doc):
 BAD_SETTINGS = {
     "poles below degree + 1": (
         dict(n=16, fit_degree=3, auto_poles=False, fit_poles_u=3, fit_poles_v=6),
-        "InputError: fit_poles along u (3) must be at least fit_degree + 1 (4)"),
+        "Not run: fit_poles along u (3) must be at least fit_degree + 1 (4)"),
     "face too small for the edge offset": (
         dict(n=16, edge_offset=60.0),
-        "InputError: the face is too narrow for edge_offset 60 mm: none of its points is farther "
+        "Not run: the face is too narrow for edge_offset 60 mm: none of its points is farther "
         "than 52 mm from its edges; edge_offset 50 mm fits"),
     "too many points for the spacing": (
         dict(n=200, min_spacing=10.0),
-        "InputError: 200 points 10 mm apart do not fit on the"),
+        "Not run: 200 points 10 mm apart do not fit on the"),
 }
 
 
@@ -404,6 +404,9 @@ def test_reevaluate_command_after_the_face_changed_and_when_orphaned(doc):
     FreeCADGui.runCommand(REEVALUATE)
     process_events(0.2)
     assert not points.Outdated and abs(points.MaxDeviation.Value - old) > 0.1
+    said = (f"Re-evaluated Body:Face1: maximum deviation {points.MaxDeviation.Value:.4f} mm (was {old:.4f} mm), "
+            "up to date.")
+    assert said in dock_text("Report view") and FreeCADGui.getMainWindow().statusBar().currentMessage() == said
     legend = texts(group.Group[1].ViewObject.Proxy.coloured)
     assert legend[-2] == colormap.tick_labels(points.MaxDeviation.Value)[-1]
     assert f"cmmsampling.document.reevaluate(App.getDocument('GuiTest').getObject('{points.Name}'))" in \

@@ -139,13 +139,15 @@ class BackgroundRunPanel:
 
     @staticmethod
     def report_failure(run):
-        """Put a failed run in the Report view and return 'Type: message' for the panel.
+        """Put a failed run in the Report view and return its message for the panel.
 
-        A refused input (InputError: the engine's message names what to change) is one line;
-        anything else comes with its traceback. The traceback always goes to the log.
+        A refused input (InputError: the engine's message names what to change) is one line,
+        'Not run: <message>'; anything else, 'Type: message', comes with its traceback. The
+        traceback always goes to the log.
         """
-        message = f"{type(run.error).__name__}: {run.error}"
-        if isinstance(run.error, InputError):
+        refused = isinstance(run.error, InputError)
+        message = f"Not run: {run.error}" if refused else f"{type(run.error).__name__}: {run.error}"
+        if refused:
             FreeCAD.Console.PrintError(f"cmmsampling: {message}\n")
             FreeCAD.Console.PrintLog(run.details)
         else:
