@@ -268,12 +268,23 @@ def default_export_folder(doc):
     return last if last and os.path.isdir(last) else os.path.expanduser("~")
 
 
+def unused_path(stem, extension):
+    """stem + extension, or where that file exists already (an earlier export) the first of
+    stem_2, stem_3 ... that does not, so that a new export does not start on the last one's file."""
+    path, count = stem + extension, 1
+    while os.path.exists(path):
+        count += 1
+        path = f"{stem}_{count}{extension}"
+    return path
+
+
 def choose_export_path(points):
     """Ask for the file to write, starting with :func:`default_export_name` in
-    :func:`default_export_folder`; '' when the user cancels. Without a known extension, the one of
+    :func:`default_export_folder` (numbered where that file exists); '' when the user cancels. Without a known extension, the one of
     the chosen format is added."""
     filters = export_filters()
-    start = os.path.join(default_export_folder(points.Document), default_export_name(points) + filters[0][1][0])
+    start = unused_path(os.path.join(default_export_folder(points.Document), default_export_name(points)),
+                        filters[0][1][0])
     path, chosen = QtGui.QFileDialog.getSaveFileName(
         FreeCADGui.getMainWindow(), "Export probe points", start, ";;".join(text for text, _ in filters))
     if not path:

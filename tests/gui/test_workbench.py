@@ -502,6 +502,10 @@ def test_export_dialog_adds_the_extension_of_the_chosen_format(doc, monkeypatch,
     doc.saveAs(os.path.join(str(tmp_path), "bracket.FCStd"))
     commands.choose_export_path(points)
     assert asked[1][0] == os.path.join(str(tmp_path), "Body_Face1_pso.dmi")
+    for written in ("Body_Face1_pso.dmi", "Body_Face1_pso_2.dmi"):
+        open(os.path.join(str(tmp_path), written), "w").close()
+    commands.choose_export_path(points)
+    assert asked[2][0] == os.path.join(str(tmp_path), "Body_Face1_pso_3.dmi"), "an earlier export's file is not offered"
 
 
 def test_a_registered_format_is_offered_by_the_export_command(doc, monkeypatch, tmp_path):
