@@ -146,8 +146,9 @@ class ExactPoses:
     """OCC's verdict on single probe poses, from the part's faces near each pose.
 
     A pose's ball and its stylus and body can touch only faces whose bounding boxes meet theirs,
-    so OCC measures against a compound of those (a few faces of a large part, a fortieth of the
-    time of the whole part on the Ventilator). part: the Part.Shape; probe: a Probe.
+    so OCC measures against a compound of those (a few faces of a large part: on the Ventilator
+    the ball's distance took 1.5 ms instead of 50 ms, the stylus's and body's 56 ms instead of
+    160 ms). part: the Part.Shape; probe: a Probe.
     """
 
     def __init__(self, part, probe):

@@ -219,19 +219,35 @@ class ProbePoints(TypedProxy):
     def probe_moves(self, obj, motion=None):
         """The collision-free probe path through the points (cmmsampling.planning.probe_moves.
         ProbeMoves) on their source object's shape, with the probe and axes of their run; motion:
-        the CMM's speeds (cmmsampling.access.probe.Motion). ValueError naming what is missing:
-        points sampled without the part, points the probe cannot reach, a deleted source."""
-        if not getattr(obj, "Probe", "") or len(obj.Axes) != len(obj.Labels):
+        the CMM's speeds (cmmsampling.access.probe.Motion). ValueError naming what is missing
+        (:meth:`path_probe`)."""
+        probe, point_set = self.path_probe(obj), self.point_set(obj)
+        return moves_through(probe, Obstacles(obj.Source[0].Shape), point_set.points, point_set.normals,
+                             point_set.axes, motion)
+
+    @staticmethod
+    def path_probe(obj):
+        """The Probe of a run a probe path can go through: InputError naming what is missing
+        where the points were sampled without the part, the probe cannot reach some of them, or
+        their part was deleted."""
+        axes = [tuple(axis) for axis in getattr(obj, "Axes", [])]
+        if not getattr(obj, "Probe", "") or not axes or len(axes) != len(obj.Labels):
             raise InputError(f"{obj.Label} were sampled without the part, so they have no probe axes: sample "
                              "the face again with the part (and a probe), or export with order='short_path'")
-        point_set = self.point_set(obj)
-        if not np.isfinite(point_set.axes).all():
+        if not np.isfinite(axes).all():
             raise InputError(f"the probe cannot reach some of {obj.Label}: export with order='short_path'")
         if obj.Source is None:
             raise InputError(f"the part of {obj.Label} was deleted; a probe path needs it to keep clear of")
-        probe = Probe(**json.loads(obj.Probe))
-        return moves_through(probe, Obstacles(obj.Source[0].Shape), point_set.points, point_set.normals,
-                             point_set.axes, motion)
+        return Probe(**json.loads(obj.Probe))
+
+    def follows_probe(self, obj):
+        """True when the points were sampled with the part, the probe reaches them all and the
+        part is still there: their export may follow the collision-free probe path."""
+        try:
+            self.path_probe(obj)
+        except InputError:
+            return False
+        return True
 
 
 class PartPlanGroup(TypedProxy):
@@ -270,25 +286,16 @@ class PartPlanGroup(TypedProxy):
         """True when every face's points were planned with a probe that reaches them all, on a part
         still in the document: the plan exports along the probe's path."""
         members = plan_probe_points(obj)
-        axes = [tuple(axis) for member in members for axis in member.Axes]
-        planned = all(member.Probe and member.Source is not None and len(member.Axes) == len(member.Labels)
-                      for member in members)
-        return bool(members) and planned and bool(np.isfinite(axes).all())
+        return bool(members) and all(member.Proxy.follows_probe(member) for member in members)
 
     def probe_moves(self, obj, motion=None):
         """The collision-free probe path through every face's points on their part (see
-        :meth:`ProbePoints.probe_moves`); ValueError naming what is missing."""
-        members = plan_probe_points(obj)
+        :meth:`ProbePoints.probe_moves`); ValueError naming what is missing (the first face's
+        :meth:`ProbePoints.path_probe` that says so)."""
         point_set = self.point_set(obj)
-        if point_set.axes is None or not members[0].Probe:
-            raise InputError(f"{obj.Label} was planned without a probe, so its points have no probe axes: plan "
-                             "again with a probe, or export with order='short_path'")
-        if not np.isfinite(point_set.axes).all():
-            raise InputError(f"the probe cannot reach some points of {obj.Label}: export with order='short_path'")
-        if members[0].Source is None:
-            raise InputError(f"the part of {obj.Label} was deleted; a probe path needs it to keep clear of")
-        probe = Probe(**json.loads(members[0].Probe))
-        return moves_through(probe, Obstacles(members[0].Source[0].Shape), point_set.points, point_set.normals,
+        members = plan_probe_points(obj)
+        probes = [ProbePoints.path_probe(member) for member in members]
+        return moves_through(probes[0], Obstacles(members[0].Source[0].Shape), point_set.points, point_set.normals,
                              point_set.axes, motion)
 
 

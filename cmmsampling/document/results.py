@@ -83,9 +83,9 @@ def add_plan_to_document(plan: PartPlan, doc: FreeCAD.Document, part: FreeCAD.Do
     :func:`add_to_document`. Creates a group "Plan <part label> (<strategy>)" holding a sub-group
     per face with points (as :func:`add_to_document` makes it) and a "Plan report" spreadsheet:
     face, area (mm^2), N, maximum deviation and bound (mm), tolerance met, notes, one row per
-    face and a row for the part, then the probe, its path's length and the measuring time. replace: the group this function made for an earlier plan of
-    the part (a cancelled plan that ``plan`` resumed), removed with everything in it in the same
-    transaction. Returns the group.
+    face and a row for the part, then the probe, its path's length and the measuring time.
+    replace: the group this function made for an earlier plan of the part (a cancelled plan that
+    ``plan`` resumed), removed with everything in it in the same transaction. Returns the group.
     """
     sources = [_check_source((part, face.name), doc) for face in plan.placed]
     replaced = _plan_objects(replace, doc)
@@ -127,7 +127,8 @@ def _plan_objects(group, doc):
     not a plan's group in ``doc``."""
     if group is None:
         return []
-    if not in_document(group, doc) or not group.isDerivedFrom("App::DocumentObjectGroup") or not group.Label.startswith("Plan "):
+    if (not in_document(group, doc) or not group.isDerivedFrom("App::DocumentObjectGroup")
+            or not group.Label.startswith("Plan ")):
         raise InputError("replace must be the group add_plan_to_document made for an earlier plan, in this "
                          "document: give that group, or None to keep it")
     return _members(group)

@@ -280,8 +280,8 @@ def unused_path(stem, extension):
 
 def choose_export_path(points):
     """Ask for the file to write, starting with :func:`default_export_name` in
-    :func:`default_export_folder` (numbered where that file exists); '' when the user cancels. Without a known extension, the one of
-    the chosen format is added."""
+    :func:`default_export_folder` (numbered where that file exists); '' when the user cancels.
+    Without a known extension, the one of the chosen format is added."""
     filters = export_filters()
     start = unused_path(os.path.join(default_export_folder(points.Document), default_export_name(points)),
                         filters[0][1][0])

@@ -11,7 +11,6 @@ import FreeCAD
 import FreeCADGui
 from PySide import QtCore, QtGui
 
-from ..document.object_types import is_part_plan
 from . import icon, settings
 from .qt_compat import run_modal
 
@@ -174,8 +173,4 @@ def has_probe_path(points):
     """True when a probe-points object was sampled with the part, its probe reaches every point
     and the part is still there (for a part plan's group: every face's points): its export may
     follow the collision-free probe path."""
-    if is_part_plan(points):
-        return points.Proxy.follows_probe(points)
-    axes = [tuple(a) for a in getattr(points, "Axes", [])]
-    return (bool(getattr(points, "Probe", "")) and points.Source is not None and len(axes) == len(points.Labels) > 0
-            and all(value == value for axis in axes for value in axis))
+    return points.Proxy.follows_probe(points)
