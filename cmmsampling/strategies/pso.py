@@ -13,6 +13,7 @@ size; a coordinate pushed out of the feasible set is projected back and its velo
 Below the algorithm, the strategy: :func:`run_pso` runs it on a sampling problem and :data:`RECORD`
 describes it to the rest of the project.
 """
+import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -109,7 +110,7 @@ def particle_swarm(objective, lower, upper, n_points, settings, seeds=(), projec
     (2,) box corners; settings: SwarmSettings;
     seeds: layouts (N, 2) that start as particles 0, 1, ...; project: callable (P, N, 2) -> (P, N, 2)
     mapping positions onto the feasible set (default: clip to the box); progress: callable
-    (iteration, best_value), called after every iteration, returning True to stop;
+    (iteration, best_value, best (N, 2)), called after every iteration, returning True to stop;
     admissible: callable (positions (P, N, 2), rows (M,) int) -> (M,) bool for positions[rows], a
     constraint checked only for the positions that would become a personal best (inadmissible
     ones never do), so that it costs little; it is given the array just passed to objective.
@@ -146,7 +147,7 @@ def particle_swarm(objective, lower, upper, n_points, settings, seeds=(), projec
             best, best_value = personal[leader].copy(), float(personal_values[leader])
         history[iteration - 1] = best_value
         done = iteration
-        if progress is not None and progress(iteration, best_value):
+        if progress is not None and progress(iteration, best_value, best):
             cancelled = iteration < settings.iterations
             break
     evaluations = settings.population * (done + 1)
@@ -170,14 +171,16 @@ def run_pso(problem, progress, population, iterations, w1, w2, c1, c2, velocity_
     The swarm scores point sets by the expanded deviation (cmmsampling.fitting.deviation). With
     start_from_uniform, particles 0 and 1 start at the uniform parametric and uniform Cartesian
     layouts (the latter where it covers the face), and the swarm's best is judged against them by
-    the exact deviation, so the result is never worse than either.
+    the exact deviation, so the result is never worse than either. progress, where given, is told
+    the exact figure the result would report (:class:`ExactProgress`), not the swarm's estimate.
     """
     settings = SwarmSettings(population, iterations, w1, w2, c1, c2, velocity_limit, problem.seed)
     seeds = _uniform_seeds(problem) if start_from_uniform else {}
     objective = problem.swarm_objective()
+    watched = ExactProgress(problem, progress, list(seeds.values()), iterations) if progress else None
     swarm = particle_swarm(
         objective, problem.domain.lower, problem.domain.upper, problem.n, settings,
-        seeds=list(seeds.values()), project=problem.project, progress=progress,
+        seeds=list(seeds.values()), project=problem.project, progress=watched,
         admissible=problem.spaced if problem.min_spacing > 0 else None,
     )
     if not np.isfinite(swarm.best_value):
@@ -189,6 +192,41 @@ def run_pso(problem, progress, population, iterations, w1, w2, c1, c2, velocity_
         return StrategyOutcome(swarm.best, swarm.history, swarm.evaluations, True, details=details, notes=notes)
     best, exact_notes = _best_exact(problem, swarm.best, seeds)
     return StrategyOutcome(best, swarm.history, swarm.evaluations, False, details=details, notes=notes + exact_notes)
+
+
+class ExactProgress:
+    """What a watched swarm reports: after each iteration, progress(iteration, maximum mm), where
+    maximum is the exact deviation (the figure the result reports, the smaller of the swarm's
+    best and the seed layouts) of the best point set judged so far.
+
+    Judging costs far more than an iteration, so the best is judged again only once it has
+    changed, and at most so often that judging takes about JUDGING_SHARE of the run's time (and
+    not more often than every MIN_INTERVAL_S); the last iteration's best is always judged, so the
+    last figure reported is the result's. problem: SamplingProblem; progress: callable
+    (iteration, mm) -> True to stop; seeds: layouts (N, 2) the result may fall back on;
+    iterations: the swarm's last iteration.
+    """
+
+    JUDGING_SHARE = 0.05
+    MIN_INTERVAL_S = 0.5
+
+    def __init__(self, problem, progress, seeds, iterations):
+        self.problem, self.progress, self.iterations = problem, progress, iterations
+        self.floor = min((problem.exact_maximum(uv) for uv in seeds), default=np.inf)
+        self.maximum = None
+        self.judged_value = None
+        self.next_time = 0.0
+
+    def __call__(self, iteration, best_value, best):
+        """Judge the swarm's best where due; returns what progress returns."""
+        now = time.perf_counter()
+        due = now >= self.next_time or iteration == self.iterations
+        if best_value != self.judged_value and due:
+            self.judged_value = best_value
+            self.maximum = min(self.problem.exact_maximum(best), self.floor)
+            spent = time.perf_counter() - now
+            self.next_time = now + max(self.MIN_INTERVAL_S, spent / self.JUDGING_SHARE)
+        return self.progress(iteration, self.maximum if self.maximum is not None else self.floor)
 
 
 def _process_notes(problem, objective):

@@ -52,8 +52,9 @@ def test_positions_stay_in_the_box():
 def test_progress_can_cancel_and_the_best_so_far_is_kept():
     calls = []
 
-    def progress(iteration, best):
+    def progress(iteration, best, best_set):
         calls.append((iteration, best))
+        assert distance_to_target(best_set[None])[0] == pytest.approx(best)
         return iteration == 5
 
     result = particle_swarm(distance_to_target, LOWER, UPPER, 3, SwarmSettings(10, 100), progress=progress)

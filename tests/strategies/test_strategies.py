@@ -77,3 +77,16 @@ def test_helpers():
     assert len(thin_evenly(np.zeros((10, 2)), 7)) == 7
     counts = allocate(np.array([1.0, 1.0, 2.0]), 9)
     assert counts.sum() == 9 and counts[2] >= counts[0]
+
+
+def test_pso_progress_reports_the_figure_its_result_reports():
+    """The swarm estimates the deviation; progress tells the user the exact maximum of the best so
+    far, ending on the result's own figure (it used to show the estimate: 0.0353 mm against a
+    result of 0.2749 mm)."""
+    face = rational_patch_face()
+    reported = []
+    result = cmmsampling.sample(face, 25, "pso", iterations=40, population=8, occ_check=False,
+                                progress=lambda iteration, mm: reported.append((iteration, mm)))
+    assert [iteration for iteration, _ in reported] == list(range(1, 41))
+    assert reported[-1][1] == pytest.approx(result.deviation.maximum, rel=1e-12)
+    assert abs(result.history[-1] - result.deviation.maximum) > 1e-6   # the estimate is another figure
