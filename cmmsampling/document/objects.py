@@ -304,27 +304,37 @@ class SubstituteSurface(TypedProxy):
 
     Properties: Shape (the fitted face); GridU (g_u), GridV (g_v): the evaluation grid's
     parameters; DeviationField: g_u * g_v deviations in mm, row-major (u first), NaN off the face;
-    MaxDeviation (mm).
+    MaxDeviation (mm); MaxLocation: the face's point (mm) where the largest deviation lies.
     """
 
     Type = SUBSTITUTE_SURFACE
+    PROPERTIES = (
+        ("App::PropertyFloatList", "GridU", "Parameters u of the evaluation grid"),
+        ("App::PropertyFloatList", "GridV", "Parameters v of the evaluation grid"),
+        ("App::PropertyFloatList", "DeviationField",
+         "Deviation from the face at each grid node (mm), u-major, NaN off the face"),
+        ("App::PropertyLength", "MaxDeviation", "Largest deviation of the delivered substitute (mm)"),
+        ("App::PropertyVector", "MaxLocation", "Point of the face where the largest deviation lies (mm)"),
+    )
 
     def __init__(self, obj):
         obj.Proxy = self
-        for kind, name, doc in (
-            ("App::PropertyFloatList", "GridU", "Parameters u of the evaluation grid"),
-            ("App::PropertyFloatList", "GridV", "Parameters v of the evaluation grid"),
-            ("App::PropertyFloatList", "DeviationField",
-             "Deviation from the face at each grid node (mm), u-major, NaN off the face"),
-            ("App::PropertyLength", "MaxDeviation", "Largest deviation of the delivered substitute (mm)"),
-        ):
-            obj.addProperty(kind, name, "Deviation", doc)
-            obj.setEditorMode(name, 1)
+        self.add_missing_properties(obj)
+
+    @classmethod
+    def add_missing_properties(cls, obj):
+        """Add the properties obj lacks (all of them for a new object, MaxLocation for one saved by
+        an earlier version), read-only in the property editor."""
+        for kind, name, doc in cls.PROPERTIES:
+            if not hasattr(obj, name):
+                obj.addProperty(kind, name, "Deviation", doc)
+                obj.setEditorMode(name, 1)
 
     def execute(self, obj):
         """Nothing to rebuild: the shape is written with the result."""
 
     def onDocumentRestored(self, obj):
+        self.add_missing_properties(obj)
         _view_provider_when_missing(obj)
 
     def deviation_grid(self, obj):

@@ -245,7 +245,9 @@ def write_access(points, access, probe):
 def write_substitute(surface, result):
     """The fitted surface as the object's shape, with the deviation field of the result."""
     stats = result.deviation
+    surface.Proxy.add_missing_properties(surface)
     surface.MaxDeviation = float(stats.maximum)
+    surface.MaxLocation = FreeCAD.Vector(*map(float, stats.max_location()))
     surface.Shape = result.substitute_shape()
     surface.GridU = [float(u) for u in stats.grid_uv[:, 0, 0]]
     surface.GridV = [float(v) for v in stats.grid_uv[0, :, 1]]

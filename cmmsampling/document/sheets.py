@@ -5,6 +5,8 @@ from xml.etree import ElementTree
 
 import numpy as np
 
+from ..fitting.deviation import mm_text
+
 REPORT_COLUMNS = "ABCDEFGHIJ"
 REPORT_WIDTHS = {"A": 190, "B": 110, "C": 110, **{c: 95 for c in "DEFGHIJ"}}
 PARAMETER_NAMES = {
@@ -125,7 +127,7 @@ def _readable(row):
     if len(row) < 2 or isinstance(row[1], (str, bool)) or not row[0].endswith(")"):
         return ()
     unit = row[0][row[0].rindex("(") + 1:-1]
-    return (f"{row[1]:.4g} {unit}",)
+    return (mm_text(row[1]),) if unit == "mm" else (f"{row[1]:.4g} {unit}",)
 
 
 PLAN_COLUMNS = ("Face", "Area (mm^2)", "N", "Max deviation (mm)", "Bound (mm)", "Tolerance met", "Notes")

@@ -426,6 +426,19 @@ def single_rounding(nodes):
     return 64.0 * float(np.finfo(np.float32).eps) * (1.0 + float(np.abs(coordinates).max(initial=0.0)))
 
 
+# Deviations below this (mm, a nanometre) are the rounding of an exact fit, e.g. on a plane.
+NUMERICAL_ZERO_MM = 1e-6
+
+
+def mm_text(value):
+    """A deviation in words: '0.2749 mm' (four significant digits), '0 mm' below
+    NUMERICAL_ZERO_MM (never '5.711e-13 mm'), '' for NaN."""
+    value = float(value)
+    if not np.isfinite(value):
+        return ""
+    return "0 mm" if abs(value) < NUMERICAL_ZERO_MM else f"{value:.4g} mm"
+
+
 @dataclass
 class DeviationStats:
     """Deviation of a delivered substitute from the CAD face, all in mm (cmmsampling.fitting.exact).
@@ -450,6 +463,15 @@ class DeviationStats:
     edge_nodes: np.ndarray = None
     spacing: float = float("nan")
     occ_maximum: float = float("nan")
+
+    def max_location(self):
+        """(3,) mm: the face's point at the node of largest deviation, a raster or an edge node."""
+        field = np.nan_to_num(self.field, nan=-1.0)
+        raster = np.unravel_index(int(np.argmax(field)), field.shape)
+        edges = np.abs(self.edge_signed) if self.edge_signed is not None else np.zeros(0)
+        if len(edges) and edges.max() > field[raster]:
+            return np.asarray(self.edge_nodes[int(np.argmax(edges))], dtype=float)
+        return np.asarray(self.nodes[raster], dtype=float)
 
     def figures(self):
         """The summary figures by their keys in reports and point files, mm: max_mm, mean_mm,

@@ -1,7 +1,9 @@
 """Deviation colours (blue, cyan, green, yellow, red from 0 to the maximum) and their legend.
 
 The legend is a coin3d overlay drawn in the 3D view's corner, like the Inspection workbench's
-colour bar: a column of colour bands with tick labels in mm.
+colour bar: a column of colour bands with tick labels in mm, on a light backdrop that keeps it
+readable over the part. Keys (a swatch and its meaning, e.g. the shade of what a probe cannot
+reach) are overlays of the same kind below it.
 """
 import numpy as np
 from pivy import coin
@@ -23,10 +25,17 @@ LEGEND_Y = (-0.7, 0.4)
 # Deviations below this (mm) are shown in one colour: finer than any CMM measures, so a
 # spread of colours there would be rounding noise.
 SMALLEST_SHOWN_MM = 1e-4
-# Legends whose largest deviation is below this (mm) are labelled in micrometres.
-MICROMETRES_BELOW_MM = 0.01
 TEXT_COLOUR = (0.0, 0.0, 0.0)
 FONT_SIZE = 14
+# The backdrop behind the legend and the keys: colour, transparency, margin (view units) and the
+# width a character of FONT_SIZE takes in view units (for a view about 1000 pixels across).
+BACKDROP_COLOUR = (1.0, 1.0, 1.0)
+BACKDROP_TRANSPARENCY = 0.25
+BACKDROP_MARGIN = 0.02
+CHARACTER_WIDTH = 0.017
+# Keys sit below the legend, one KEY_HEIGHT apart (view units).
+KEY_Y = -0.8
+KEY_HEIGHT = 0.07
 
 
 def colours(values, maximum):
@@ -50,23 +59,46 @@ def shown_maximum(maximum):
 
 
 def tick_labels(maximum, count=LEGEND_TICKS):
-    """count labels from 0 to maximum mm with four significant digits at the top, e.g.
-    ['0.0000 mm', ..., '1.053 mm']; below MICROMETRES_BELOW_MM in micrometres ('0.100 um')."""
-    scale, unit = (1000.0, "um") if 0 < maximum < MICROMETRES_BELOW_MM else (1.0, "mm")
-    top = maximum * scale
-    digits = max(0, 3 - int(np.floor(np.log10(top)))) if top > 0 else 3
-    return [f"{value:.{digits}f} {unit}" for value in np.linspace(0, top, count)]
+    """count labels from 0 to maximum mm, always in mm, with four significant digits at the top,
+    e.g. ['0.0000 mm', ..., '1.053 mm'] or ['0.000000 mm', ..., '0.005710 mm']."""
+    digits = max(0, 3 - int(np.floor(np.log10(maximum)))) if maximum > 0 else 3
+    return [f"{value:.{digits}f} mm" for value in np.linspace(0, maximum, count)]
 
 
 def legend(maximum, title="Deviation"):
-    """A coin overlay (SoAnnotation) with the colour bar from 0 to ``maximum`` mm at the left.
+    """A screen overlay (see :func:`overlay`) with the colour bar from 0 to ``maximum`` mm at the
+    left, its tick labels and title on a light backdrop."""
+    labels = tick_labels(maximum)
+    width = LEGEND_X[1] - LEGEND_X[0] + 0.01 + CHARACTER_WIDTH * max(len(text) for text in labels)
+    width = max(width, CHARACTER_WIDTH * len(title))
+    corner = (LEGEND_X[0] - BACKDROP_MARGIN, LEGEND_Y[0] - 0.05)
+    top = LEGEND_Y[1] + 0.05 + KEY_HEIGHT
+    backdrop = _backdrop(corner, (corner[0] + width + 2 * BACKDROP_MARGIN, top))
+    return overlay([backdrop, _bar(maximum), _labels(labels, title)])
 
-    It has its own orthographic camera (the view's [-1, 1] square), is not pickable and does not
-    count in the scene's bounding box (so "fit all" ignores it).
+
+def key(rgb, text, row=0):
+    """A screen overlay (see :func:`overlay`) below the legend: a swatch of colour ``rgb`` and
+    ``text`` beside it on a light backdrop; row 0, 1, ... stacks keys downwards."""
+    y = KEY_Y - row * KEY_HEIGHT
+    x0, x1 = LEGEND_X
+    corner = (x0 - BACKDROP_MARGIN, y - BACKDROP_MARGIN)
+    far = (x1 + 0.01 + CHARACTER_WIDTH * len(text) + BACKDROP_MARGIN, y + KEY_HEIGHT - BACKDROP_MARGIN)
+    swatch = _rectangle((x0, y), (x1, y + KEY_HEIGHT - 2 * BACKDROP_MARGIN), rgb, 0.0)
+    label = text_node(TEXT_COLOUR, FONT_SIZE)
+    label.addChild(text_at(text, (x1 + 0.01, y + 0.005, 0.0)))
+    return overlay([_backdrop(corner, far), swatch, label])
+
+
+def overlay(children):
+    """A coin SoAnnotation drawing ``children`` in the view's [-1, 1] square, on top of the scene.
+
+    It has its own orthographic camera, is not lit, not pickable and does not count in the
+    scene's bounding box (so "fit all" ignores it).
     """
-    overlay = coin.SoAnnotation()
+    node = coin.SoAnnotation()
     skip = coin.SoType.fromName("SoSkipBoundingGroup").createInstance()
-    overlay.addChild(skip)
+    node.addChild(skip)
     camera = coin.SoOrthographicCamera()
     camera.viewportMapping = coin.SoCamera.LEAVE_ALONE
     camera.position = (0, 0, 5)
@@ -77,9 +109,30 @@ def legend(maximum, title="Deviation"):
     pick.style = coin.SoPickStyle.UNPICKABLE
     light = coin.SoLightModel()
     light.model = coin.SoLightModel.BASE_COLOR
-    for node in (pick, camera, light, _bar(maximum), _labels(maximum, title)):
-        skip.addChild(node)
-    return overlay
+    for child in (pick, camera, light, *children):
+        skip.addChild(child)
+    return node
+
+
+def _backdrop(corner, far):
+    """The light, half-transparent rectangle behind a legend or key, from corner (x, y) to far."""
+    return _rectangle(corner, far, BACKDROP_COLOUR, BACKDROP_TRANSPARENCY, depth=-0.1)
+
+
+def _rectangle(corner, far, rgb, transparency, depth=0.0):
+    """A flat rectangle of colour rgb in view units from corner (x, y) to far (x, y)."""
+    (x0, y0), (x1, y1) = corner, far
+    node = coin.SoSeparator()
+    material = coin.SoMaterial()
+    material.diffuseColor = rgb
+    material.transparency = transparency
+    coordinates = coin.SoCoordinate3()
+    coordinates.point.setValues(0, 4, [(x0, y0, depth), (x1, y0, depth), (x1, y1, depth), (x0, y1, depth)])
+    faces = coin.SoFaceSet()
+    faces.numVertices.setValue(4)
+    for child in (material, coordinates, faces):
+        node.addChild(child)
+    return node
 
 
 def _bar(maximum):
@@ -121,11 +174,12 @@ def text_node(rgb, size):
     return node
 
 
-def _labels(maximum, title):
-    """Tick labels right of the bar and the title above it, as screen-aligned text."""
+def _labels(labels, title):
+    """Tick labels (LEGEND_TICKS texts, bottom up) right of the bar and the title above it, as
+    screen-aligned text."""
     node = text_node(TEXT_COLOUR, FONT_SIZE)
     heights = np.linspace(*LEGEND_Y, LEGEND_TICKS)
-    for text, y in zip(tick_labels(maximum), heights):
+    for text, y in zip(labels, heights):
         node.addChild(text_at(text, (LEGEND_X[1] + 0.01, float(y) - 0.015, 0.0)))
     node.addChild(text_at(title, (LEGEND_X[0], LEGEND_Y[1] + 0.05, 0.0)))
     return node

@@ -9,6 +9,7 @@ import FreeCAD
 import FreeCADGui
 
 from ..access.probe import PROBES
+from ..fitting.deviation import mm_text
 from ..strategies import sampling
 
 
@@ -61,7 +62,7 @@ def report_run(source, result):
     """One line in the Report view for a finished run, and its notes below it."""
     FreeCAD.Console.PrintMessage(
         f"cmmsampling: {source}, {sampling.strategy_label(result.strategy)}, N = {result.n}: maximum deviation "
-        f"{result.deviation.maximum:.4g} mm, mean {result.deviation.mean:.4g} mm, "
+        f"{mm_text(result.deviation.maximum)}, mean {mm_text(result.deviation.mean)}, "
         f"{result.timings.get('total_s', 0.0):.1f} s\n")
     for note in result.notes:
         FreeCAD.Console.PrintMessage(f"cmmsampling: note: {note}\n")

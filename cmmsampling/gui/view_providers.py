@@ -10,6 +10,7 @@ from scipy.interpolate import RegularGridInterpolator
 from scipy.ndimage import distance_transform_edt
 from PySide import QtCore, QtGui
 
+from ..fitting.deviation import NUMERICAL_ZERO_MM, mm_text
 from ..geometry.domain import inside_loops
 from ..geometry.surface import SurfaceModel
 from ..document.object_types import is_part_plan, is_probe_points, is_substitute_surface, plan_probe_points, source_face
@@ -28,9 +29,11 @@ LABEL_SPACING_FRACTION = 0.04
 POINT_VIEW_PROPERTIES = ("ShowLabels", "ShowApproach", "ApproachLength", "LabelSize")
 # The shade over the regions a probe cannot reach: colour, transparency, and the quads across the
 # face's parameter range that follow its curvature.
-UNREACHED_COLOUR = (0.6, 0.6, 0.6)
-UNREACHED_TRANSPARENCY = 0.2
+UNREACHED_COLOUR = (0.55, 0.55, 0.55)
+UNREACHED_TRANSPARENCY = 0.35
 UNREACHED_QUADS = 64
+# The mark at the largest deviation: a filled circle and its value beside it.
+MAXIMUM_COLOUR = (0.0, 0.0, 0.0)
 
 
 class Stateless:
@@ -89,7 +92,7 @@ class ViewProviderProbePoints(Stateless):
         self.redraw(vobj)
 
     def updateData(self, obj, prop):
-        if prop in ("Points", "Normals", "Labels", "Unreached") and obj.ViewObject is not None:
+        if prop in ("Points", "Normals", "Labels", "Unreached", "UnreachedArea") and obj.ViewObject is not None:
             self.redraw(obj.ViewObject)
 
     def onChanged(self, vobj, prop):
@@ -124,6 +127,7 @@ class ViewProviderProbePoints(Stateless):
             face = source_face(obj)[0]
             if face is not None:
                 self.annotation.addChild(unreached_shade(face, rectangles))
+                self.annotation.addChild(unreached_key(obj))
 
     def doubleClicked(self, vobj):
         """Open Sample face again on the points' face with the values of their run."""
@@ -211,6 +215,8 @@ class ViewProviderSubstituteSurface(Stateless):
             self.coloured.addChild(coloured_mesh(nodes, field, maximum))
         if getattr(vobj, "ShowLegend", True):
             self.coloured.addChild(colormap.legend(maximum, legend_title(obj)))
+        if getattr(obj, "MaxLocation", None) is not None and obj.MaxDeviation.Value >= NUMERICAL_ZERO_MM:
+            self.coloured.addChild(maximum_mark(obj.MaxLocation, obj.MaxDeviation.Value))
 
     def getIcon(self):
         return icon("SubstituteSurface.svg")
@@ -226,8 +232,8 @@ def in_front():
 
 
 def unreached_shade(face, rectangles):
-    """A nearly opaque grey shade over the regions of ``face`` (Part.Face) a probe cannot reach,
-    drawn over the face and its substitute.
+    """A flat, partly transparent grey shade over the regions of ``face`` (Part.Face) a probe
+    cannot reach, drawn over the face and its substitute (its key: :func:`unreached_key`).
 
     rectangles: (K, 4) parameter rectangles (u0, u1, v0, v1) of the face's NURBS (the probe
     points' Unreached). Each is cut into quads, about UNREACHED_QUADS across the face's parameter
@@ -262,7 +268,35 @@ def unreached_shade(face, rectangles):
     faces.coordIndex.setValues(0, len(index), index)
     hints = coin.SoShapeHints()
     hints.vertexOrdering = coin.SoShapeHints.UNKNOWN_ORDERING
-    for child in (offset, hints, material, coords, faces):
+    flat = coin.SoLightModel()
+    flat.model = coin.SoLightModel.BASE_COLOR   # one grey whatever the light: the key's swatch
+    for child in (offset, hints, flat, material, coords, faces):
+        node.addChild(child)
+    return node
+
+
+def unreached_key(points):
+    """The key of the unreached shade (a colormap key below the legend): its swatch and
+    'Out of the probe's reach: <area> mm^2' of the probe points' face."""
+    area = float(getattr(points, "UnreachedArea", 0.0))
+    return colormap.key(UNREACHED_COLOUR, f"Out of the probe's reach: {area:.4g} mm^2")
+
+
+def maximum_mark(location, maximum):
+    """A filled circle at location (FreeCAD.Vector, mm) and 'max <maximum> mm' beside it, drawn
+    over the scene (an annotation)."""
+    node = coin.SoAnnotation()
+    colour = coin.SoBaseColor()
+    colour.rgb = MAXIMUM_COLOUR
+    coordinates = coin.SoCoordinate3()
+    coordinates.point.setValue(float(location.x), float(location.y), float(location.z))
+    marker = coin.SoMarkerSet()
+    marker.markerIndex = coin.SoMarkerSet.CIRCLE_FILLED_9_9
+    marker.numPoints = 1
+    label = colormap.text_node(MAXIMUM_COLOUR, colormap.FONT_SIZE)
+    label.addChild(colormap.text_at(f"  max {mm_text(maximum)}", (float(location.x), float(location.y),
+                                                                 float(location.z))))
+    for child in (colour, coordinates, marker, label):
         node.addChild(child)
     return node
 

@@ -189,7 +189,8 @@ def groups(doc):
 
 
 def drawn(obj):
-    """Coin nodes our view provider drew for obj: labels/lines or coloured mesh/legend."""
+    """Coin nodes our view provider drew for obj: pick style, labels and lines for probe points;
+    polygon offset, coloured mesh, legend (when shown) and the maximum's mark for a substitute."""
     proxy = obj.ViewObject.Proxy
     node = getattr(proxy, "annotation", None) or getattr(proxy, "coloured", None)
     return node.getNumChildren() if node is not None else 0

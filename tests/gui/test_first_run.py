@@ -142,9 +142,10 @@ def test_a_planar_face_finishes_at_once_with_its_note_shown(workbench, artifacts
         assert wait_until(lambda: line in dock_text("Report view")[len(before):], 2)
         report = dock_text("Report view")[len(before):]
         assert "note: pso was not run: the uniform parametric layout already fits this face exactly" in report
+        assert f"{line} 0 mm, mean 0 mm" in report   # not '5.711e-13 mm'
         texts = []
         _collect_texts(surface.ViewObject.Proxy.coloured, texts)
-        assert texts[-2] == "0.1000 um", texts
+        assert texts[-2:] == ["0.0001000 mm", "Deviation, Body.Face6"], texts   # in mm; no max to mark
         FreeCADGui.ActiveDocument.ActiveView.saveImage(os.path.join(artifacts, "first_run_planar.png"),
                                                        1000, 750, "White")
     finally:

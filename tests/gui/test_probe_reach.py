@@ -18,7 +18,8 @@ import cmmsampling
 from cmmsampling.access.probe import PROBES
 from cmmsampling.gui import echo, export_options, view_providers
 
-from .helpers import dock_text, document_with, fill, open_panel, process_events, task_button, task_form, wait_until
+from .helpers import (dock_text, document_with, fill, open_panel, process_events, task_button, task_form, texts,
+                      wait_until)
 
 OK = QtGui.QDialogButtonBox.Ok
 PRESET = "2 mm ball, 20 mm stylus"
@@ -101,8 +102,10 @@ def test_sample_face_with_a_probe_keeps_to_its_reach_and_shades_the_rest(slot_do
     middle = shade[(shade[:, 0] > 10.0) & (shade[:, 0] < 50.0), 1]
     low, high = middle[middle < 20.0].max(), middle[middle > 20.0].min()
     assert ((probe[:, 1] >= low - 1e-9) & (probe[:, 1] <= high + 1e-9)).all(), "the points lie between the strips"
+    key = f"Out of the probe's reach: {points.UnreachedArea.Value:.4g} mm^2"
+    assert key in texts(points.ViewObject.Proxy.annotation)
     points.ViewObject.ShowUnreached = False
-    assert len(shade_points(points)) == 0
+    assert len(shade_points(points)) == 0 and key not in texts(points.ViewObject.Proxy.annotation)
     points.ViewObject.ShowUnreached = True
 
     view = FreeCADGui.ActiveDocument.ActiveView

@@ -183,7 +183,7 @@ def test_copy_and_paste_of_a_group_gives_a_consistent_copy(doc, clipboard):
     assert points.Source == (body, ["Face1"])
     assert points.Substitute == surface and points.Report == report
     assert points.Status == "up to date" and all("Invalid" not in o.State for o in pasted)
-    assert drawn(points) == 3 and drawn(surface) == 3
+    assert drawn(points) == 3 and drawn(surface) == 4
     original = group.Group[0]
     assert np.array_equal(points.Proxy.point_set(points).uv, original.Proxy.point_set(original).uv)
     assert report.get("max_mm") == pytest.approx(original.MaxDeviation.Value, rel=1e-9)

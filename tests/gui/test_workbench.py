@@ -51,7 +51,8 @@ def test_colour_map_runs_blue_to_red_with_grey_off_the_face():
     assert np.allclose(rgb[3], colormap.OFF_FACE)
     assert colormap.tick_labels(1.0533) == ["0.000 mm", "0.263 mm", "0.527 mm", "0.790 mm", "1.053 mm"]
     assert colormap.tick_labels(0.01234)[-1] == "0.01234 mm"
-    assert colormap.tick_labels(1e-4) == ["0.0000 um", "0.0250 um", "0.0500 um", "0.0750 um", "0.1000 um"]
+    assert colormap.tick_labels(1e-4) == ["0.0000000 mm", "0.0000250 mm", "0.0000500 mm", "0.0000750 mm",
+                                          "0.0001000 mm"]   # mm, as the reports say, never um
 
 
 def test_panel_defaults_are_the_papers_and_options_follow_the_strategy(doc):
@@ -245,10 +246,12 @@ def test_short_pso_through_the_panel_then_one_undo(doc, artifacts):
     assert report.get("max_mm") == pytest.approx(points.MaxDeviation.Value, rel=1e-9)
     assert isinstance(points.ViewObject.Proxy, view_providers.ViewProviderProbePoints)
     assert surface.ViewObject.DisplayMode == "Deviation"
-    assert drawn(points) == 3 and drawn(surface) == 3
+    assert drawn(points) == 3 and drawn(surface) == 4
     assert texts(points.ViewObject.Proxy.annotation) == [f"P{i}" for i in range(1, 26)]
     assert texts(surface.ViewObject.Proxy.coloured) == colormap.tick_labels(surface.MaxDeviation.Value) + [
-        "Deviation, Body.Face1"]
+        "Deviation, Body.Face1", f"  max {surface.MaxDeviation.Value:.4g} mm"]
+    assert doc.Body.Shape.Faces[0].distToShape(Part.Vertex(surface.MaxLocation))[0] < 1e-6
+    assert np.nanmax(surface.Proxy.deviation_grid(surface)[2]) <= surface.MaxDeviation.Value
     assert doc.Body.ViewObject.Visibility
     console = dock_text("Python console")
     assert ">>> result = cmmsampling.sample(face, n=25, strategy='pso', seed=2" in console
@@ -269,7 +272,7 @@ def test_short_pso_through_the_panel_then_one_undo(doc, artifacts):
     FreeCADGui.runCommand("Std_Redo")
     process_events(0.1)
     assert [o.Name for o in doc.Objects] == made and doc.Body.ViewObject.Visibility
-    assert group.Group == [points, surface, report] and drawn(points) == 3 and drawn(surface) == 3
+    assert group.Group == [points, surface, report] and drawn(points) == 3 and drawn(surface) == 4
     assert report.getContents("B4") == "25" and len(points.Proxy.point_set(points)) == 25
     FreeCADGui.runCommand("Std_Undo")
     process_events(0.1)
@@ -408,7 +411,8 @@ def test_reevaluate_command_after_the_face_changed_and_when_orphaned(doc):
             "up to date.")
     assert said in dock_text("Report view") and FreeCADGui.getMainWindow().statusBar().currentMessage() == said
     legend = texts(group.Group[1].ViewObject.Proxy.coloured)
-    assert legend[-2] == colormap.tick_labels(points.MaxDeviation.Value)[-1]
+    assert legend[-3:] == [colormap.tick_labels(points.MaxDeviation.Value)[-1], "Deviation, Body.Face1",
+                           f"  max {points.MaxDeviation.Value:.4g} mm"]
     assert f"cmmsampling.document.reevaluate(App.getDocument('GuiTest').getObject('{points.Name}'))" in \
         dock_text("Python console")
 
@@ -440,7 +444,7 @@ def test_one_deviation_legend_at_a_time(doc, artifacts):
     first.ViewObject.ShowLegend = True
     assert shown() == [True, False]
     first.ViewObject.ShowLegend = False
-    assert shown() == [False, False] and drawn(first) == 2
+    assert shown() == [False, False] and drawn(first) == 3
 
 
 def test_export_command_writes_the_selected_points(doc, tmp_path, monkeypatch):
@@ -612,7 +616,7 @@ def test_save_and_reopen_here_and_in_a_fresh_session(doc, tmp_path, artifacts):
         assert isinstance(points.ViewObject.Proxy, view_providers.ViewProviderProbePoints)
         assert isinstance(surface.ViewObject.Proxy, view_providers.ViewProviderSubstituteSurface)
         assert surface.ViewObject.DisplayMode == "Deviation"
-        assert drawn(points) == 3 and drawn(surface) == 3
+        assert drawn(points) == 3 and drawn(surface) == 4
         assert points.Proxy.point_set(points).labels[-1] == "P25"
         assert report.get("n") == 25
     finally:
@@ -649,7 +653,7 @@ def test_a_document_made_headless_gets_its_view_providers_in_the_gui(workbench, 
         assert isinstance(points.ViewObject.Proxy, view_providers.ViewProviderProbePoints)
         assert isinstance(surface.ViewObject.Proxy, view_providers.ViewProviderSubstituteSurface)
         assert surface.ViewObject.DisplayMode == "Deviation" and points.ViewObject.ShowLabels
-        assert drawn(points) == 3 and drawn(surface) == 3
+        assert drawn(points) == 3 and drawn(surface) == 4
         view = FreeCADGui.ActiveDocument.ActiveView
         view.viewIsometric()
         view.fitAll()

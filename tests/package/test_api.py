@@ -26,23 +26,21 @@ def test_pso_with_the_paper_parameters_beats_uniform(paper_runs):
     assert paper_runs["pso"].evaluations == 25 * 3001
 
 
-PAPER_RUN_BEST = {"1.24": 0.7230643072190776, "2.2": 0.7750444227374422}
+# The paper's run (seed 0) as measured: 0.7231 mm with numpy 1.24 on an AMD EPYC; 0.7750 mm with
+# numpy 1.24 on an Intel Xeon and with numpy 2.2.
+PAPER_RUN_BEST = (0.7230643072190776, 0.7750444227374422)
 
 
 def test_speed_ups_kept_the_paper_run_result(paper_runs):
     """The best maximum of the paper's run (seed 0) on the delivered substitute (issue 31: the
     two-sided distance, no extension, edge nodes); it was 0.5033950471752482 mm before, on the feet
     of a reference fit with the substitute extended. The swarm's path follows the last digits of
-    its single-precision fitness, which another numpy and BLAS round differently: 0.7231 mm with
-    numpy 1.24 (FreeCAD 0.20), 0.7750 mm with numpy 2.2 (FreeCAD 1.0). Held to 1% on a numpy
-    measured here, to 10% on another; bit-identity between one and two processes is in
-    test_parallel."""
-    version = ".".join(np.__version__.split(".")[:2])
-    expected = PAPER_RUN_BEST.get(version)
-    if expected is None:
-        assert paper_runs["pso"].deviation.maximum == pytest.approx(PAPER_RUN_BEST["1.24"], rel=0.1)
-    else:
-        assert paper_runs["pso"].deviation.maximum == pytest.approx(expected, rel=0.01)
+    its single-precision fitness, which other BLAS kernels (another processor, another numpy)
+    round differently, so the figure is held to 10% of the ones measured, and to a clear gain
+    over uniform sampling; bit-identity between one and two processes is in test_parallel."""
+    best = paper_runs["pso"].deviation.maximum
+    assert 0.9 * min(PAPER_RUN_BEST) <= best <= 1.1 * max(PAPER_RUN_BEST)
+    assert best < 0.85 * paper_runs["uniform_parametric"].deviation.maximum
 
 
 def test_uniform_figures_are_geometric(paper_runs):
