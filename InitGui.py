@@ -22,9 +22,12 @@ class CMMSamplingWorkbench(FreeCADGui.Workbench):
         self.__class__.Icon = os.path.join(os.path.dirname(package), "icons", "Workbench.svg")
 
     def Initialize(self):
+        import os
+
         from cmmsampling.gui import commands, resource
 
         names = commands.register()
+        FreeCADGui.addIconPath(os.path.dirname(self.Icon))   # the preferences group's icon
         FreeCADGui.addPreferencePage(resource("preferences.ui"), "CMM sampling")
         self.appendToolbar("CMM Sampling", names)
         self.appendMenu("CMM Sampling", names)

@@ -1,14 +1,25 @@
-"""The spreadsheets of the document: a result's deviation report and a plan's report, as text
-a CMM programmer reads (coordinates to 0.1 um) with aliases for expressions."""
+"""The spreadsheets of the document: a result's deviation report and a plan's report, as a CMM
+programmer reads them (coordinates to 0.1 um), the figures numbers with aliases for expressions.
+
+FreeCAD shows a number with the user's number of decimals (two by default), which would show a
+deviation of 0.0084 mm as 0.01. Deviation cells therefore hold the number in mm (what an
+expression such as ``=DeviationReport.max_mm`` gets) and display it in micrometres
+(DEVIATION_DISPLAY_UNIT: '8.41 µm', 10 nm at two decimals).
+"""
 import json
 from xml.etree import ElementTree
 
 import numpy as np
 
-from ..fitting.deviation import mm_text
-
 REPORT_COLUMNS = "ABCDEFGHIJ"
-REPORT_WIDTHS = {"A": 190, "B": 110, "C": 110, **{c: 95 for c in "DEFGHIJ"}}
+DEVIATION_DISPLAY_UNIT = "µm"
+DEVIATION_ALIASES = ("max_mm", "mean_mm", "rms_mm", "std_mm", "occ_max_mm")
+# Column widths (pixels) from the longest entry: CHARACTER_PIXELS a character plus COLUMN_PADDING,
+# between the bounds; the notes' column keeps NOTES_WIDTH.
+CHARACTER_PIXELS = 7
+COLUMN_PADDING = 16
+COLUMN_WIDTHS = (60, 260)
+NOTES_WIDTH = 400
 PARAMETER_NAMES = {
     "fit_degree": "Fit degree (u x v)", "fit_poles": "Fit poles (u x v)", "smoothing": "Fit smoothing",
     "grid": "Evaluation grid (u x v)", "seed": "Seed", "workers": "Processes",
@@ -25,26 +36,27 @@ def write_deviation_report(sheet, points):
     table, in readable columns.
 
     The summary figures are numbers in column B with aliases (strategy, n, max_mm, mean_mm,
-    rms_mm, std_mm, occ_max_mm, time_s) for expressions such as ``=DeviationReport.max_mm``;
-    column C repeats them readably, with their unit (the spreadsheet shows numbers with two
-    decimals, which hides micrometres). The per-point table is text at the CMM's resolution.
+    rms_mm, std_mm, occ_max_mm, time_s) for expressions such as ``=DeviationReport.max_mm``, the
+    deviations in mm shown in micrometres (see the module's docstring). The per-point table is
+    text at the CMM's resolution.
     """
     clear_cells(sheet)
     summary = summary_rows(points)
-    rows = ([row[:2] + _readable(row) for row in summary] + parameter_rows(points)
-            + note_rows(points) + [()] + table_rows(points))
+    notes = note_rows(points)
+    rows = [row[:2] for row in summary] + parameter_rows(points) + notes + [()] + table_rows(points)
     for row, values in enumerate(rows, start=1):
         for column, value in zip(REPORT_COLUMNS, values):
             sheet.set(f"{column}{row}", _cell_text(value))
     for row, entry in enumerate(summary, start=1):
         if len(entry) == 3:
             sheet.setAlias(f"B{row}", entry[2])
+            if entry[2] in DEVIATION_ALIASES:
+                sheet.setDisplayUnit(f"B{row}", DEVIATION_DISPLAY_UNIT)
     header = len(rows) - len(points.Labels)
     sheet.setStyle("A1", "bold")
     sheet.setStyle(f"A{header}:J{header}", "bold")
     sheet.setAlignment(f"B{header}:J{len(rows)}", "right")
-    for column, width in REPORT_WIDTHS.items():
-        sheet.setColumnWidth(column, width)
+    fit_columns(sheet, [row for row in rows if row not in notes])
 
 
 def clear_cells(sheet):
@@ -64,11 +76,11 @@ def summary_rows(points):
         ("Source", points.SourceName or "(none)"),
         ("Strategy", points.Strategy, "strategy"),
         ("Points", len(points.Labels), "n"),
-        ("Max deviation (mm)", points.MaxDeviation.Value, "max_mm"),
-        ("Mean deviation (mm)", points.MeanDeviation.Value, "mean_mm"),
-        ("RMS deviation (mm)", points.RmsDeviation.Value, "rms_mm"),
-        ("Std deviation (mm)", points.StdDeviation.Value, "std_mm"),
-        ("OCC max deviation (mm)", points.OccMaxDeviation.Value, "occ_max_mm"),
+        ("Max deviation", points.MaxDeviation.Value, "max_mm"),
+        ("Mean deviation", points.MeanDeviation.Value, "mean_mm"),
+        ("RMS deviation", points.RmsDeviation.Value, "rms_mm"),
+        ("Std deviation", points.StdDeviation.Value, "std_mm"),
+        ("OCC max deviation", points.OccMaxDeviation.Value, "occ_max_mm"),
         ("Sampling time (s)", points.RunTime, "time_s"),
         ("Cancelled", "yes" if points.Cancelled else "no"),
     ] + reach_rows(points)
@@ -120,39 +132,54 @@ def table_rows(points):
     ]
 
 
-def _readable(row):
-    """(text,) for a summary row (name, number[, alias]) whose name ends in its unit, 'Max
-    deviation (mm)': the number to four significant digits with the unit, so that micrometres
-    show; () for other rows."""
-    if len(row) < 2 or isinstance(row[1], (str, bool)) or not row[0].endswith(")"):
-        return ()
-    unit = row[0][row[0].rindex("(") + 1:-1]
-    return (mm_text(row[1]),) if unit == "mm" else (f"{row[1]:.4g} {unit}",)
-
-
-PLAN_COLUMNS = ("Face", "Area (mm^2)", "N", "Max deviation (mm)", "Bound (mm)", "Tolerance met", "Notes")
+PLAN_COLUMNS = ("Face", "Area (mm^2)", "N", "Max deviation", "Local bound", "Tolerance met", "Notes")
 
 
 def write_plan_report(sheet, plan, moves=None):
     """The per-part table of a plan in a spreadsheet: a title, the goal, one row per face and a
     row for the part (points in all, the worst face's deviation); below, for a plan made with a
     probe, the probe and, given its path (moves: a ProbeMoves), the path's length (mm) and the
-    measuring time (s) as numbers."""
+    measuring time (s) as numbers. Area, N, maximum and bound are numbers (the deviations in mm,
+    shown in micrometres; empty where there is none)."""
     goal = (f"tolerance {plan.tolerance:g} mm" if plan.tolerance is not None else f"{plan.budget} points")
-    rows = [("CMM sampling plan",), ("Goal", goal), ("Strategy", plan.strategy), (), PLAN_COLUMNS]
+    head = [("CMM sampling plan",), ("Goal", goal), ("Strategy", plan.strategy), (), PLAN_COLUMNS]
+    rows = list(head)
     for face in plan.faces:
-        rows.append((face.name, f"{face.area:.2f}", face.n, _figure(face.maximum), _figure(face.bound),
+        rows.append((face.name, float(face.area), face.n, _figure(face.maximum), _figure(face.bound),
                      face.met_text, face.notes))
-    rows.append(("Part", f"{plan.area:.2f}", plan.n_total, _figure(plan.worst), "",
+    rows.append(("Part", float(plan.area), plan.n_total, _figure(plan.worst), "",
                  "", f"{len(plan.refused)} faces without points" if plan.refused else ""))
+    table = range(len(head) + 1, len(rows) + 1)
     rows += _probe_rows(plan.probe, moves)
     for row, values in enumerate(rows, start=1):
         for column, value in zip(REPORT_COLUMNS, values):
             sheet.set(f"{column}{row}", _cell_text(value))
+    for row in table:
+        for column in "DE":
+            sheet.setDisplayUnit(f"{column}{row}", DEVIATION_DISPLAY_UNIT)
     sheet.setStyle("A1", "bold")
     sheet.setStyle("A5:G5", "bold")
-    sheet.setColumnWidth("A", 110)
-    sheet.setColumnWidth("G", 400)
+    fit_columns(sheet, [row[:6] for row in rows[:table.stop - 1]])
+    sheet.setColumnWidth("G", NOTES_WIDTH)
+
+
+def fit_columns(sheet, rows):
+    """Widen each column of a spreadsheet to its longest entry among rows (tuples of cell
+    values, from column A), so that no header is cut; widths within COLUMN_WIDTHS."""
+    longest = {}
+    for values in rows:
+        for column, value in zip(REPORT_COLUMNS, values):
+            longest[column] = max(longest.get(column, 0), len(_shown_text(value)))
+    for column, characters in longest.items():
+        width = CHARACTER_PIXELS * characters + COLUMN_PADDING
+        sheet.setColumnWidth(column, int(min(max(width, COLUMN_WIDTHS[0]), COLUMN_WIDTHS[1])))
+
+
+def _shown_text(value):
+    """About the text a cell shows for a value: numbers with two decimals and a unit."""
+    if isinstance(value, (float, np.floating)):
+        return f"{value:.2f} mm^2"
+    return str(value)
 
 
 def _probe_rows(probe, moves):
@@ -169,8 +196,8 @@ def _probe_rows(probe, moves):
 
 
 def _figure(value):
-    """A deviation in mm as text at the CMM's resolution ('' for NaN)."""
-    return "" if not np.isfinite(value) else f"{value:.6f}"
+    """A deviation in mm as a number ('' for NaN)."""
+    return "" if not np.isfinite(value) else float(value)
 
 
 def _parameter_text(value):

@@ -5,8 +5,12 @@ document: the part's measurement frame), the probe radius (0: contact points on 
 probe-ball centres p + r n, stated in the file) and the point order (as optimised, or a short probe
 path). :func:`ask_export_options` returns them as keyword arguments of ``cmmsampling.export``,
 which :func:`export_keywords` turns into the echoed call's text; :func:`show_export_report`
-tells the user what was written. The values persist in the workbench's parameter group.
+tells the user what was written. The values persist in the workbench's parameter group: the
+frame for the document it belongs to only, the probe radius where the points do not bring their
+own probe; the dialog says where its starting values come from.
 """
+import json
+
 import FreeCAD
 import FreeCADGui
 from PySide import QtCore, QtGui
@@ -49,6 +53,21 @@ def frame_tip(obj):
             f"axes {axes} in the document's global frame")
 
 
+def frame_setting(doc, name):
+    """The stored form of a frame: '<document's file or name>|<object name>' ('' for global)."""
+    return f"{doc.FileName or doc.Name}|{name}" if name else ""
+
+
+def own_probe(points):
+    """The probe settings (dict of cmmsampling.Probe's fields) probe points were sampled with (for
+    a part plan's group: its first face's), or None."""
+    from ..document.object_types import is_part_plan, plan_probe_points
+
+    members = plan_probe_points(points) if is_part_plan(points) else [points]
+    text = getattr(members[0], "Probe", "") if members else ""
+    return json.loads(text) if text else None
+
+
 def export_keywords(options):
     """The options of :func:`ask_export_options` as keyword text for the echoed export call, e.g.
     ", frame=App.getDocument('D').getObject('LCS'), probe_radius=1.5, order='short_path'";
@@ -78,9 +97,10 @@ def say(line):
 class ExportOptionsDialog(QtGui.QDialog):
     """The export options for probe points of a document, starting from the stored values.
     title: what is exported, for the window title; probe_path: offer the collision-free probe
-    path (the points were sampled with the part and the probe reaches them all)."""
+    path (the points were sampled with the part and the probe reaches them all); probe: the probe
+    settings (dict) the points were sampled with, whose ball radius the dialog starts with."""
 
-    def __init__(self, doc, title, parent=None, probe_path=False):
+    def __init__(self, doc, title, parent=None, probe_path=False, probe=None):
         super().__init__(parent)
         self.setObjectName("ExportOptions")
         self.setWindowTitle(f"Export options: {title}")
@@ -96,7 +116,7 @@ class ExportOptionsDialog(QtGui.QDialog):
         for obj in frame_objects(doc):
             self.frame.addItem(obj.Label, obj.Name)
             self.frame.setItemData(self.frame.count() - 1, frame_tip(obj), QtCore.Qt.ToolTipRole)
-            if obj.Name == stored["ExportFrame"]:
+            if frame_setting(doc, obj.Name) == stored["ExportFrame"]:
                 self.frame.setCurrentIndex(self.frame.count() - 1)
         self.frame.setToolTip(
             "The coordinate system the points and approach vectors are written in: the document's "
@@ -109,7 +129,7 @@ class ExportOptionsDialog(QtGui.QDialog):
         self.probe_radius.setDecimals(RADIUS_DECIMALS)
         self.probe_radius.setSuffix(" mm")
         self.probe_radius.setSpecialValueText("0 mm: contact points")
-        self.probe_radius.setValue(stored["ExportProbeRadius"])
+        self.probe_radius.setValue(probe["ball_diameter"] / 2 if probe else stored["ExportProbeRadius"])
         self.probe_radius.setToolTip(
             "Probe-ball radius r: above 0 the file holds ball centres p + r n (n the outward "
             "approach vector), and says so in its header (DMIS, CSV; an XYZ file has none: keep the "
@@ -130,11 +150,24 @@ class ExportOptionsDialog(QtGui.QDialog):
             "axis its run chose, and moves that would hit the part go over a clearance plane; a "
             "DMIS file gets the sensors and the GOTO moves.")
         layout.addRow("Point order", self.order)
+        self.origin = QtGui.QLabel(self.origin_text(probe), self)
+        self.origin.setObjectName("origin")
+        self.origin.setWordWrap(True)
+        self.origin.setStyleSheet("color: gray")
+        layout.addRow(self.origin)
         buttons = QtGui.QDialogButtonBox(QtGui.QDialogButtonBox.Ok | QtGui.QDialogButtonBox.Cancel,
                                          parent=self)
         buttons.accepted.connect(self.accept)
         buttons.rejected.connect(self.reject)
         layout.addRow(buttons)
+
+    def origin_text(self, probe):
+        """Where the starting values come from, in one line under the fields."""
+        frame = ("the frame of this document's last export" if self.frame.currentIndex() > 0
+                 else "the document's global frame")
+        radius = (f"the {probe['ball_diameter']:g} mm ball of the probe these points were planned with"
+                  if probe else "the radius of the last export")
+        return f"Starting from {frame} and {radius}."
 
     def options(self):
         """{"frame": the frame's document object or None (global), "probe_radius": mm,
@@ -145,7 +178,7 @@ class ExportOptionsDialog(QtGui.QDialog):
 
     def stored(self):
         """The values to keep for the next export."""
-        return {"ExportFrame": self.frame.currentData() or "",
+        return {"ExportFrame": frame_setting(self.doc, self.frame.currentData()),
                 "ExportProbeRadius": self.probe_radius.value(), "ExportOrder": self.order.currentData()}
 
 
@@ -159,7 +192,7 @@ def ask_export_options(points):
     for their console text."""
     groups = [o.Label for o in points.InList if o.isDerivedFrom("App::DocumentObjectGroup")]
     dialog = ExportOptionsDialog(points.Document, (groups or [points.Label])[0], FreeCADGui.getMainWindow(),
-                                 probe_path=has_probe_path(points))
+                                 probe_path=has_probe_path(points), probe=own_probe(points))
     try:
         if run_modal(dialog) != QtGui.QDialog.Accepted:
             return None

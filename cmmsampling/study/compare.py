@@ -181,7 +181,7 @@ class Step:
         """A short line for progress messages."""
         if self.strategy is None:
             return f"N = {self.n}: local bound about the best"
-        return f"N = {self.n}: {self.strategy} (seed {self.seed})"
+        return f"N = {self.n}: {STRATEGIES[self.strategy].label} (seed {self.seed})"
 
 
 def study_steps(ns, strategies, seeds, seeded):

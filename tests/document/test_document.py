@@ -120,7 +120,14 @@ def test_report_has_summary_and_point_table(group, result):
     deviation = cmmsampling.PointSet.from_result(result).deviation[0]
     assert float(first[9]) == pytest.approx(deviation, rel=1e-5, abs=1e-12)
     rows = {cell(report, f"A{row}"): row for row in range(1, header)}
-    assert cell(report, f"C{rows['Max deviation (mm)']}") == f"{result.deviation.maximum:.4g} mm"
+    maximum = rows["Max deviation"]   # a number in mm, shown in micrometres (two decimals: 10 nm)
+    assert report.get(f"B{maximum}") == pytest.approx(result.deviation.maximum, rel=1e-9)
+    assert report.getDisplayUnit(f"B{maximum}") == "µm" and cell(report, f"C{maximum}") == ""
+    report.set("K1", "=max_mm * 1000")
+    report.recompute()
+    assert report.get("K1") == pytest.approx(1000 * result.deviation.maximum, rel=1e-9)
+    report.clear("K1")
+    assert report.getColumnWidth("A") >= 7 * len("OCC max deviation")
     assert cell(report, f"B{rows['Edge offset (mm)']}") == 0 and "fit_degree" not in rows
     assert cell(report, f"A{header + 25}") == "P25" and cell(report, f"A{header + 26}") == ""
 

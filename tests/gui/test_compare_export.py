@@ -135,7 +135,7 @@ def items(form):
 
 
 def checked(form):
-    return [item.text() for item in items(form) if item.checkState() == QtCore.Qt.Checked]
+    return [item.data(QtCore.Qt.UserRole) for item in items(form) if item.checkState() == QtCore.Qt.Checked]
 
 
 def fill(form, folder=None, **values):
@@ -145,7 +145,7 @@ def fill(form, folder=None, **values):
     if "strategies" in values:
         chosen = values.pop("strategies").split(", ")
         for item in items(form):
-            item.setCheckState(QtCore.Qt.Checked if item.text() in chosen else QtCore.Qt.Unchecked)
+            item.setCheckState(QtCore.Qt.Checked if item.data(QtCore.Qt.UserRole) in chosen else QtCore.Qt.Unchecked)
     for name, value in values.items():
         (getattr(form, name, None) or child(form, name)).setValue(value)
     if folder is not None:
@@ -200,6 +200,7 @@ def test_panel_defaults_are_the_papers_study_and_options_follow_the_strategies(d
     assert form.faceLabel.text() == "Body.Face1"
     assert form.ns.text() == "25, 36, 49, 64, 81, 100, 121, 144"
     assert checked(form) == list(cmmsampling.STRATEGIES)
+    assert [item.text() for item in items(form)][-2:] == ["PSO (paper)", "optimal (this project)"]   # no keys
     assert [form.seeds.value(), form.iterations.value(), form.population.value(), form.grid.value()] == [
         5, 3000, 25, 60]
     assert child(form, "edge_offset").text() == "auto" and child(form, "min_spacing").text() == "auto"
@@ -248,7 +249,7 @@ def test_tiny_comparison_runs_in_the_background_and_opens_its_report(doc, comman
     hold, form = start_held_study(doc, monkeypatch, folder)
     assert wait_until(lambda: form.progress.value() == 3, 2), form.status.text()
     assert form.progress.maximum() == 6 and form.progress.text() == "3 / 6 steps"
-    assert form.status.text() == "N = 25: uniform_parametric (seed 0)"
+    assert form.status.text() == "N = 25: uniform parametric (seed 0)"
     assert not task_button(OK).isEnabled() and not form.ns.isEnabled() and not form.strategies.isEnabled()
     main_window().grab().save(os.path.join(artifacts, "compare_running.png"))
     form.grab().save(os.path.join(artifacts, "compare_running_form.png"))
@@ -380,7 +381,7 @@ def test_the_system_browser_gets_the_report(workbench, tmp_path, browser):
     assert compare_panel.open_in_browser(page) and browser == [page]
 
 
-def test_without_a_browser_the_report_view_says_where_the_report_is(workbench, tmp_path, monkeypatch):
+def test_without_a_browser_the_report_opens_in_a_tab_of_freecad(workbench, tmp_path, monkeypatch):
     """No program to open web pages on the PATH (as in a bare system): Qt finds no launcher."""
     page = report_page(tmp_path)
     monkeypatch.setenv("PATH", str(tmp_path))
@@ -388,8 +389,17 @@ def test_without_a_browser_the_report_view_says_where_the_report_is(workbench, t
         monkeypatch.delenv(name, raising=False)
     before = dock_text("Report view")
     assert not compare_panel.open_in_browser(page)
-    assert wait_until(lambda: f"no web browser could be started; open {page} in one" in
+    area = main_window().findChild(QtGui.QMdiArea)
+    windows = area.subWindowList()
+    if importlib.util.find_spec("WebGui") is None:   # FreeCAD 1.0 and 1.1: the whole way
+        assert compare_panel.open_report(page, "Compare strategies: Body.Face1")
+    else:
+        assert compare_panel.show_in_tab(page, "Compare strategies: Body.Face1")
+    [tab] = [w for w in area.subWindowList() if w not in windows]
+    assert tab.windowTitle() == "Compare strategies: Body.Face1" and "Table 1" in tab.widget().toPlainText()
+    assert wait_until(lambda: f"no web browser could be started; the report {page} is shown in a tab" in
                       dock_text("Report view")[len(before):], 2)
+    tab.close()
 
 
 def run_dialog(action, handle, timeout_s=10):
@@ -497,15 +507,21 @@ def test_export_options_persist_and_cancel_returns_none(doc):
     coordinate_systems(doc)
     assert export_options.export_keywords(
         {"frame": None, "probe_radius": 0.0, "order": "as_optimised"}) == ""
-    settings.save({"ExportFrame": "LCS", "ExportProbeRadius": 2.0, "ExportOrder": "short_path"})
+    settings.save({"ExportFrame": "Elsewhere.FCStd|LCS", "ExportProbeRadius": 2.0, "ExportOrder": "short_path"})
     seen = []
 
     def look(dialog):
-        seen.append((dialog.frame.currentText(), dialog.probe_radius.value(), dialog.order.currentData()))
+        seen.append((dialog.frame.currentText(), dialog.probe_radius.value(), dialog.order.currentData(),
+                     dialog.origin.text()))
         dialog.reject()
 
     assert run_dialog(lambda: export_options.ask_export_options(points), look) is None
-    assert seen == [("Measurement frame", 2.0, "short_path")]
+    assert seen[-1][:3] == ("Global (document)", 2.0, "short_path"), "another document's frame is not reused"
+    settings.save({"ExportFrame": export_options.frame_setting(doc, "LCS")})
+    assert run_dialog(lambda: export_options.ask_export_options(points), look) is None
+    assert seen[-1] == ("Measurement frame", 2.0, "short_path", "Starting from the frame of this document's last "
+                        "export and the radius of the last export.")
+    seen.clear()
     doc.removeObject("LCS")
     doc.recompute()
 
@@ -515,7 +531,7 @@ def test_export_options_persist_and_cancel_returns_none(doc):
         dialog.accept()
 
     options = run_dialog(lambda: export_options.ask_export_options(points), defaults)
-    assert seen[1] == ("Global (document)", "2.000 mm")
+    assert seen[0] == ("Global (document)", "2.000 mm")
     assert options == {"frame": None, "probe_radius": 0.0, "order": "short_path"}
     assert settings.load(export_options.DEFAULTS) == {
         "ExportFrame": "", "ExportProbeRadius": 0.0, "ExportOrder": "short_path"}

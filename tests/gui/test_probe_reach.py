@@ -115,9 +115,13 @@ def test_sample_face_with_a_probe_keeps_to_its_reach_and_shades_the_rest(slot_do
     view.saveImage(os.path.join(artifacts, "sample_face_unreached_top.png"), 1200, 900, "White")
 
     assert export_options.has_probe_path(points)
-    dialog = export_options.ExportOptionsDialog(slot_doc, "slot", probe_path=True)
+    probe = export_options.own_probe(points)
+    dialog = export_options.ExportOptionsDialog(slot_doc, "slot", probe_path=True, probe=probe)
     offered = [dialog.order.itemData(i) for i in range(dialog.order.count())]
     assert offered == ["as_optimised", "short_path", "probe_path"]
+    assert dialog.probe_radius.value() == pytest.approx(PROBES[PRESET].ball_diameter / 2)   # the points' own ball
+    assert f"the {PROBES[PRESET].ball_diameter:g} mm ball of the probe these points were planned with" in \
+        dialog.origin.text()
     dialog.deleteLater()
     report_written = cmmsampling.export(points, str(tmp_path / "slot.dmi"), order="probe_path")
     assert report_written.count == 16 and "GOTO/" in (tmp_path / "slot.dmi").read_text()

@@ -678,7 +678,7 @@ def test_the_preferences_page_sets_what_the_panel_starts_with(doc, artifacts):
              for w in page.iter("widget") if w.get("class", "").startswith("Gui::Pref")}
     defaults = {**sample_face.panel_defaults(), "ExportProbeRadius": export_options.DEFAULTS["ExportProbeRadius"]}
     assert shown == {name: defaults[name] for name in shown}
-    seen = []
+    seen, icons = [], []
 
     def set_points():
         dialog = QtGui.QApplication.activeModalWidget()
@@ -687,6 +687,9 @@ def test_the_preferences_page_sets_what_the_panel_starts_with(doc, artifacts):
             return
         timer.stop()
         box.setValue(49)
+        groups = dialog.findChild(QtGui.QListWidget, "listBox")
+        [item] = [groups.item(i) for i in range(groups.count()) if groups.item(i).text() == "CMM sampling"]
+        icons.append(not item.icon().isNull())   # FreeCAD finds preferences-cmm_sampling.svg
         seen.append(dialog.grab())
         dialog.accept()
 
@@ -697,6 +700,7 @@ def test_the_preferences_page_sets_what_the_panel_starts_with(doc, artifacts):
     FreeCADGui.showPreferences("CMM sampling", 0)
     timer.stop()
     assert seen, "the CMM sampling preferences page did not open"
+    assert icons == [True]
     seen[0].save(os.path.join(artifacts, "preferences.png"))
     assert settings.load({"n": 0})["n"] == 49
     form = open_panel(doc)

@@ -264,6 +264,10 @@ def test_the_plan_goes_into_the_document_in_one_step(body_doc, tolerance_plan):
     sheet = doc.getObject("PlanReport")
     assert sheet.get("A5") == "Face" and sheet.get("A8") == "Face3" and "too narrow" in sheet.get("G8")
     assert sheet.get("A10") == "Part" and int(sheet.get("C10")) == tolerance_plan.n_total
+    assert sheet.get("D10") == pytest.approx(tolerance_plan.worst, rel=1e-9)   # numbers, for expressions
+    assert sheet.get("B10") == pytest.approx(tolerance_plan.area, rel=1e-9)
+    assert all(sheet.getDisplayUnit(f"{column}{row}") == "µm" for column in "DE" for row in range(6, 11))
+    assert sheet.getColumnWidth("D") >= 7 * len("Max deviation")   # no header cut
     doc.undo()
     assert doc.getObject("PlanReport") is None and [o.Name for o in doc.Objects] == ["Body"]
 

@@ -116,8 +116,8 @@ def test_progress_reports_every_step_then_completion(study, calls):
     assert [c[0] for c in steps] == list(range(total + 1))
     assert all(c[1] == total for c in calls) and steps[-1][2] == "study complete"
     assert steps[13][2] == "N = 16: local bound about the best"
-    assert any(re.search(r"pso \(seed 1\): iteration 20, best max \d", c[2]) for c in calls)
-    assert any("optimal (seed 0): surrogate evaluation" in c[2] for c in calls)
+    assert any(re.search(r"PSO \(paper\) \(seed 1\): iteration 20, best max \d", c[2]) for c in calls)
+    assert any("optimal (this project) (seed 0): surrogate evaluation" in c[2] for c in calls)
     done = [c[0] for c in calls]
     assert done == sorted(done)
 

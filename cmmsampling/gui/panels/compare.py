@@ -115,13 +115,14 @@ def default_folder(doc):
 def open_report(path, title):
     """Show an HTML file in FreeCAD's web view, in a tab named ``title``, where FreeCAD has one
     (the Web module's GUI, FreeCAD 0.20), else in the system's web browser (FreeCAD 1.0 dropped
-    the Web workbench; its Help opens the system's browser too). Returns whether it could be
-    shown (see :func:`open_in_browser`). While the web tab is the active one, FreeCAD's Undo and
-    Redo do not reach the document (they act on the active view): the Report view says so."""
+    the Web workbench; its Help opens the system's browser too), else, where no browser can be
+    started, in a plain tab of FreeCAD (:func:`show_in_tab`). Returns True. While the web tab is
+    the active one, FreeCAD's Undo and Redo do not reach the document (they act on the active
+    view): the Report view says so."""
     try:
         import WebGui
     except ImportError:
-        return open_in_browser(path)
+        return open_in_browser(path) or show_in_tab(path, title)
     with open(path, encoding="utf-8") as page:
         html = page.read()
     base = QtCore.QUrl.fromLocalFile(os.path.dirname(os.path.abspath(path)) + os.sep).toString()
@@ -132,13 +133,27 @@ def open_report(path, title):
 
 
 def open_in_browser(path):
-    """Ask the system to open a file in its web browser; when none can be started (no desktop,
-    no browser), say in the Report view where the file is. Returns whether one was started."""
-    if QtGui.QDesktopServices.openUrl(QtCore.QUrl.fromLocalFile(os.path.abspath(path))):
-        return True
-    FreeCAD.Console.PrintWarning(f"cmmsampling: no web browser could be started; open {path} "
-                                 "in one to see the report.\n")
-    return False
+    """Ask the system to open a file in its web browser. Returns whether one was started (not
+    where there is no desktop or no browser)."""
+    return bool(QtGui.QDesktopServices.openUrl(QtCore.QUrl.fromLocalFile(os.path.abspath(path))))
+
+
+def show_in_tab(path, title):
+    """Show an HTML file in a tab of FreeCAD's main area named ``title`` (a QTextBrowser: the
+    tables and figures, without the page's styles), and say in the Report view that no browser
+    could be started and where the file is. Returns True."""
+    view = QtGui.QTextBrowser()
+    view.setObjectName("CMMSamplingReport")
+    view.setOpenExternalLinks(True)
+    view.setSource(QtCore.QUrl.fromLocalFile(os.path.abspath(path)))
+    area = FreeCADGui.getMainWindow().findChild(QtGui.QMdiArea)
+    window = area.addSubWindow(view)
+    window.setWindowTitle(title)
+    window.show()
+    area.setActiveSubWindow(window)
+    FreeCAD.Console.PrintMessage(f"cmmsampling: no web browser could be started; the report {path} is shown in "
+                                 "a tab of FreeCAD.\n")
+    return True
 
 
 class BackgroundComparison(BackgroundTask):
@@ -213,11 +228,13 @@ class CompareTaskPanel(BackgroundRunPanel):
 
     # --- values
     def _fill_strategies(self):
-        """One checkable line per strategy, its description as tooltip; the list shows them all
-        once the panel is shown (when the rows' height is known)."""
+        """One checkable line per strategy, by its label ('PSO (paper)'), its key ('pso') kept as
+        the item's data and its description as tooltip; the list shows them all once the panel is
+        shown (when the rows' height is known)."""
         strategies = self.form.strategies
         for name, strategy in STRATEGIES.items():
-            item = QtGui.QListWidgetItem(name, strategies)
+            item = QtGui.QListWidgetItem(strategy.label, strategies)
+            item.setData(QtCore.Qt.UserRole, name)
             item.setFlags(item.flags() | QtCore.Qt.ItemIsUserCheckable)
             item.setCheckState(QtCore.Qt.Unchecked)
             item.setToolTip(strategy.description)
@@ -283,7 +300,7 @@ class CompareTaskPanel(BackgroundRunPanel):
 
     def checked(self):
         """Names of the checked strategies, in STRATEGIES order."""
-        return [item.text() for item in self.items() if item.checkState() == QtCore.Qt.Checked]
+        return [item.data(QtCore.Qt.UserRole) for item in self.items() if item.checkState() == QtCore.Qt.Checked]
 
     def values(self):
         """The panel's values by name (see :func:`panel_defaults`)."""
@@ -295,7 +312,7 @@ class CompareTaskPanel(BackgroundRunPanel):
         self.fields.show(values)
         chosen = values["strategies"].split(", ")
         for item in self.items():
-            item.setCheckState(QtCore.Qt.Checked if item.text() in chosen else QtCore.Qt.Unchecked)
+            item.setCheckState(QtCore.Qt.Checked if item.data(QtCore.Qt.UserRole) in chosen else QtCore.Qt.Unchecked)
 
     def update_enabled(self):
         """Enable the seeds when a chosen strategy is seeded and each strategy setting when a chosen
