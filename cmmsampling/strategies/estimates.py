@@ -1,6 +1,7 @@
 """Estimates of a sample() run made before it starts: its peak memory and its time."""
 from __future__ import annotations
 
+import os
 import time
 
 import numpy as np
@@ -18,6 +19,9 @@ Part = import_part()
 
 # Swarms timed by time_needed (the first one warms the caches and is not counted).
 TIMED_SWARMS = 4
+# Exact judgings after an optimiser's run: its best and the (up to two) uniform layouts it
+# started from (the result's own judging reuses the best's).
+JUDGINGS = 3
 
 
 def memory_needed(n: int, strategy: str | None = DEFAULT_STRATEGY, *, fit_degree: Pair = DEFAULT_DEGREE,
@@ -45,9 +49,12 @@ def time_needed(face: Part.Face, n: int = 81, strategy: str = DEFAULT_STRATEGY, 
     The problem is built (as sample() builds it, the probe's reach on ``part`` included: that
     time counts) and the objective the
     strategy iterates is timed on a few random swarms; its cost times the strategy's progress
-    steps (PSO: iterations over its workers) is added. None when the number of steps is not
-    known in advance (the optimal strategy without max_evaluations or time_limit: until it
-    converges). Raises what sample() would raise for these arguments.
+    steps (PSO: iterations over the processes that will share them, see
+    :func:`sharing_processes`) is added, and for an optimiser the exact judging of its result
+    (JUDGINGS exact deviations, one timed). None when the number of steps is not known in
+    advance (the optimal strategy without max_evaluations or time_limit: until it converges).
+    Raises what sample() would raise for these arguments. On a machine that gets busier during
+    the run it takes longer: the panels' progress gives the time left from the run's own pace.
     """
     check_choice("strategy", strategy, list(STRATEGIES))
     entry = STRATEGIES[strategy]
@@ -59,6 +66,7 @@ def time_needed(face: Part.Face, n: int = 81, strategy: str = DEFAULT_STRATEGY, 
     built_s = time.perf_counter() - start
     if not entry.optimiser:
         return built_s
+    built_s += JUDGINGS * _judging_seconds(problem)
     if options.get("time_limit") is not None:
         return built_s + options["time_limit"]
     steps = entry.progress_steps(options)
@@ -72,8 +80,28 @@ def time_needed(face: Part.Face, n: int = 81, strategy: str = DEFAULT_STRATEGY, 
         start = time.perf_counter()
         for positions in swarm[1:]:
             _one_step(problem, positions)
-    per_step = (time.perf_counter() - start) / (TIMED_SWARMS - 1) / problem.workers
+    per_step = (time.perf_counter() - start) / (TIMED_SWARMS - 1) / sharing_processes(problem.workers)
     return built_s + steps * per_step
+
+
+def sharing_processes(workers, load=None, cores=None):
+    """How many of a run's ``workers`` processes will share its steps: all of them where the
+    machine has a core free for each beside what already runs (load: the 1-minute load average,
+    default the machine's; cores: default the machine's), else 1, since the default measured
+    split then keeps the swarm in one process and ``workers=2`` gains nothing."""
+    load = os.getloadavg()[0] if load is None else load
+    cores = (os.cpu_count() or 1) if cores is None else cores
+    return workers if load + workers <= cores + 0.5 else 1
+
+
+def _judging_seconds(problem):
+    """Seconds of one exact deviation (the judging of a result) on this problem, timed on the
+    substitute of the uniform parametric layout."""
+    uv = STRATEGIES["uniform_parametric"].run(problem, None, **STRATEGIES["uniform_parametric"].options).uv
+    start = time.perf_counter()
+    with blas_threads(1):
+        problem.exact_maximum(uv)
+    return time.perf_counter() - start
 
 
 def _one_step(problem, positions):

@@ -232,9 +232,11 @@ def test_short_pso_through_the_panel_then_one_undo(doc, artifacts):
     before = doc.UndoCount
     task_button(OK).click()
     seen = []
-    wait_until(lambda: seen.append((form.progress.value(), form.status.text())) or form.progress.value(), 20)
-    assert wait_until(lambda: not FreeCADGui.Control.activeDialog(), 60), form.status.text()
+    assert wait_until(lambda: not FreeCADGui.Control.activeDialog()
+                      or seen.append((form.progress.value(), form.status.text())), 60)
     assert any(value > 0 and "best maximum deviation" in text for value, text in seen)
+    assert any(re.search(r"best maximum deviation [0-9.]+ mm, (about [0-9]+ s|under a second) left", text)
+               for _, text in seen), sorted(set(text for _, text in seen))
 
     [group] = groups(doc)
     assert group.Label == "Sampling Body Face1 (pso)"

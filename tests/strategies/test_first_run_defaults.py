@@ -7,6 +7,7 @@ from support.faces import Part, strip_face
 import cmmsampling
 from cmmsampling.cli import main as cli_main
 from cmmsampling.strategies import sampling
+from cmmsampling.strategies.estimates import JUDGINGS, sharing_processes
 from cmmsampling.strategies.sampling import PROBE_EDGE_OFFSET_MM
 
 
@@ -84,6 +85,24 @@ def test_the_time_estimate_follows_the_strategys_steps():
     assert cmmsampling.time_needed(face, 25, "optimal", time_limit=30.0) >= 30.0
     with pytest.raises(ValueError, match="inertia must decrease"):
         cmmsampling.time_needed(face, 25, "pso", w1=0.1, w2=0.5)
+
+
+def test_the_time_estimate_counts_a_second_process_only_where_a_core_is_free():
+    """A 2-core desktop beside one CPU-bound process: the split would not pay, the default keeps
+    the swarm in one process, and the estimate must not halve the steps (it read 5x low)."""
+    assert sharing_processes(2, load=0.3, cores=2) == 2
+    assert sharing_processes(2, load=1.0, cores=2) == 1
+    assert sharing_processes(2, load=1.0, cores=4) == 2
+    assert sharing_processes(1, load=0.0, cores=8) == 1
+
+
+def test_the_time_estimate_counts_the_judging_of_an_optimisers_result():
+    """An optimiser's result is judged exactly (its best and the uniform layouts it started
+    from): time the estimate counts even where the optimiser itself has none."""
+    face = cmmsampling.reference_face()
+    estimate = cmmsampling.time_needed(face, 25, "optimal", time_limit=0.001)
+    judged_s = cmmsampling.sample(face, 25, "uniform_parametric", occ_check=False).timings["evaluation_s"]
+    assert estimate >= 0.5 * JUDGINGS * judged_s > 0
 
 
 def test_more_poles_than_points_is_said():

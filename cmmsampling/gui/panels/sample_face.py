@@ -7,6 +7,7 @@ thread through the console API (``cmmsampling.add_to_document``), echoed in the 
 console.
 """
 import json
+import time
 from dataclasses import asdict
 
 import FreeCAD
@@ -29,6 +30,8 @@ from .fields import (
 )
 
 CANCEL_WAIT_S = 1.0
+# Steps after the first one seen before the progress line gives the time left from their pace.
+PACE_STEPS = 20
 EXPERT_GROUPS = ("psoGroup", "optimalGroup", "fitGroup", "gridGroup")
 COMMON = ("n", "seed", "edge_offset", "min_spacing", "probe", "fit_degree", "auto_poles", "fit_poles_u",
           "fit_poles_v", "grid")
@@ -383,19 +386,34 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
             return
         arguments = self.sample_arguments()
         self.run_face = face
+        self.paced_from = None
         self.step, total = progress_total(arguments)
         self.run_arguments = arguments
         self.begin(BackgroundSampling(face.copy(), detached(arguments)), total,
                    f"Running {sampling.STRATEGIES[arguments['strategy']].label} with N = {arguments['n']}...")
 
     def show_progress(self, run):
-        """The swarm's or descent's step and its best maximum deviation so far."""
+        """The swarm's or descent's step, its best maximum deviation so far and the time left at
+        the pace of the steps so far (the estimate before the run cannot know how busy the
+        machine will be)."""
         total = self.form.progress.maximum()
         if total:
             self.form.progress.setValue(min(run.iteration, total))
         if run.iteration:
             self.show_status(f"{self.step} {run.iteration}{f' of {total}' if total else ''}: "
-                             f"best maximum deviation {run.best_mm:.4f} mm")
+                             f"best maximum deviation {run.best_mm:.4f} mm{self.time_left(run.iteration, total)}")
+
+    def time_left(self, iteration, total):
+        """', about 40 s left' from the pace since the first step seen, or '' (no total, or too
+        early to say)."""
+        now = time.perf_counter()
+        if self.paced_from is None:
+            self.paced_from = (now, iteration)
+        start, first = self.paced_from
+        if not total or iteration - first < PACE_STEPS:
+            return ""
+        words = duration_text((now - start) / (iteration - first) * (total - iteration))
+        return f", {'' if words.startswith('under') else 'about '}{words} left"
 
     def failed(self, run):
         self.form.progress.setRange(0, 1)
