@@ -12,7 +12,7 @@ from ..fitting.substitute import DEFAULT_DEGREE
 from ..geometry.freecad_env import import_part
 from ..geometry.validation import check_choice, check_int, check_pair
 from .registry import STRATEGIES, strategy_options
-from .sampling import DEFAULT_STRATEGY, MIN_POINTS, Pair, check_workers, make_problem, memory_bytes
+from .sampling import DEFAULT_STRATEGY, MIN_POINTS, Pair, baseline, check_workers, make_problem, memory_bytes
 from .threads import blas_threads
 
 Part = import_part()
@@ -96,8 +96,9 @@ def sharing_processes(workers, load=None, cores=None):
 
 def _judging_seconds(problem):
     """Seconds of one exact deviation (the judging of a result) on this problem, timed on the
-    substitute of the uniform parametric layout."""
-    uv = STRATEGIES["uniform_parametric"].run(problem, None, **STRATEGIES["uniform_parametric"].options).uv
+    substitute of the baseline strategy's layout."""
+    name = baseline()
+    uv = STRATEGIES[name].run(problem, None, **STRATEGIES[name].options).uv
     start = time.perf_counter()
     with blas_threads(1):
         problem.exact_maximum(uv)

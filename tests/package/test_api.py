@@ -83,7 +83,7 @@ def test_progress_is_reported_and_can_cancel(reference):
     result = cmmsampling.sample(reference, 25, "pso", iterations=50, occ_check=False,
                                 progress=lambda k, best: seen.append((k, best)) or k >= 10)
     assert result.cancelled and len(seen) == 10 and len(result.history) == 10
-    assert seen[-1][1] == result.history[-1]
+    assert seen[-1][1] > 0 and seen[-1][1] != result.history[-1]   # the exact figure, not the swarm's estimate
 
 
 def test_pso_never_worse_than_the_uniform_layouts(reference):
