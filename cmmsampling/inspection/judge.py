@@ -1,0 +1,206 @@
+"""Measured points back in: paired with the planned ones, aligned to the CAD model and judged
+against a profile tolerance (ISO 1101, form only: a zone of width t centred on the nominal).
+
+The deviation of an aligned measured point is its signed distance from the CAD face it was
+planned on, along the face's outward normal (+ out of the material). The profile is the width
+of the smallest zone centred on the nominal that holds every point: 2 max |d|. A point passes
+where |d| <= t / 2, the face (or part) where the profile is at most t.
+"""
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..formats.exporting import as_point_set
+from ..formats.pointfiles import read_points
+from ..formats.pointset import PointSet
+from ..geometry.freecad_env import import_part
+from ..geometry.surface import as_face
+from ..geometry.validation import InputError, InputTypeError, check_real
+from ..measurement import closest_points
+from ..planning.part_plan import PartPlan
+from ..strategies.result import SamplingResult
+from .align import ALIGNMENTS, Alignment, align, check_locked
+
+Part = import_part()
+import FreeCAD  # noqa: E402  (importable once import_part() has set the path)
+
+
+@dataclass
+class Inspection:
+    """Measured points judged against the CAD model.
+
+    labels: N; nominal: (N, 3) mm, the planned points (NaN where none was planned, a bare face);
+    measured: (N, 3) mm, as read (contact points); points: (N, 3) mm, aligned to the CAD model;
+    deviations: (N,) mm, signed (+ out of the material); transform: (4, 4) measured -> CAD;
+    alignment: the Alignment; tolerance: the profile tolerance t (mm) or None; faces: N names of
+    the faces the points were judged on; notes: what the pairing found (points planned but not
+    measured).
+    """
+
+    labels: list
+    nominal: np.ndarray
+    measured: np.ndarray
+    points: np.ndarray
+    deviations: np.ndarray
+    transform: np.ndarray
+    alignment: Alignment
+    tolerance: float = None
+    faces: list = None
+    notes: list = field(default_factory=list)
+
+    @property
+    def placement(self):
+        """The alignment as a FreeCAD.Placement (measured -> CAD)."""
+        return FreeCAD.Placement(FreeCAD.Matrix(*self.transform.ravel().tolist()))
+
+    @property
+    def profile(self):
+        """The form profile, mm: the width of the zone centred on the nominal that holds every
+        point, 2 max |d|."""
+        return 2.0 * float(np.abs(self.deviations).max())
+
+    @property
+    def within(self):
+        """(N,) bool: the point lies inside the tolerance zone (all True without a tolerance)."""
+        if self.tolerance is None:
+            return np.ones(len(self.labels), dtype=bool)
+        return np.abs(self.deviations) <= self.tolerance / 2.0
+
+    @property
+    def passed(self):
+        """The profile is within the tolerance (None without one)."""
+        return None if self.tolerance is None else self.profile <= self.tolerance
+
+    def summary(self):
+        """The inspection in a few lines: points, alignment, profile, verdict."""
+        lines = [f"{len(self.labels)} points, alignment {self.alignment.method} "
+                 f"({self.alignment.iterations} steps, points moved up to {self.alignment.moved_mm:.4g} mm)",
+                 f"deviation {self.deviations.min():+.4f} .. {self.deviations.max():+.4f} mm, "
+                 f"profile {self.profile:.4f} mm"]
+        if self.tolerance is not None:
+            outside = int((~self.within).sum())
+            lines.append(f"tolerance {self.tolerance:g} mm: {'PASS' if self.passed else 'FAIL'}"
+                         f"{f', {outside} points outside the zone' if outside else ''}")
+        return "\n".join(lines + [f"note: {note}" for note in self.notes])
+
+
+@dataclass
+class Planned:
+    """What was planned: labels N, nominal points (N, 3) mm (or None for a bare face), the faces
+    (Part.Face) and the index of each point's face."""
+
+    labels: list
+    points: np.ndarray
+    faces: list
+    names: list
+    owner: np.ndarray
+
+
+def inspect(source, measured, alignment="best_fit", tolerance=None, locked=(), part=None, probe_radius=None):
+    """Judge measured points against the CAD model they were planned on.
+
+    source: a Part.Face (the measured points are taken as they come), a SamplingResult or a
+    PartPlan (with part=, the part's shape: its faces by name); the measured points pair with the
+    planned ones by label, else by order when the counts agree. measured: a path (DMIS output
+    with FA(label) actuals, the project's CSV or XYZIJK) or a PointSet of contact points (a
+    file's stated probe radius, or probe_radius mm, is taken off along its vectors).
+    alignment: 'none', 'best_fit' or 'min_max' (cmmsampling.inspection.align); locked: degrees
+    of freedom held fixed (rx, ry, rz, x, y, z); tolerance: the profile tolerance t, mm.
+    One alignment for all the points (a plan: the whole part). Returns an Inspection.
+    """
+    if alignment not in ALIGNMENTS:
+        raise InputError(f"alignment must be one of {', '.join(ALIGNMENTS)}, got {alignment!r}")
+    locked = check_locked(locked)
+    tolerance = None if tolerance is None else check_real("tolerance", tolerance, above=0.0)
+    planned = _planned(source, part)
+    read = read_points(measured) if isinstance(measured, (str, os.PathLike)) else as_point_set(measured)
+    contact = _contact_points(read, probe_radius)
+    order, notes = pair(planned, read)
+    points = contact[order[0]]
+    owner = np.zeros(len(points), dtype=int) if planned.owner is None else planned.owner[order[1]]
+
+    def closest(where):
+        return _closest(planned.faces, owner, where)
+
+    found = align(points, closest, alignment, locked)
+    nominal = planned.points[order[1]] if planned.points is not None else np.full_like(points, np.nan)
+    return Inspection([read.labels[i] for i in order[0]], nominal, points, found.apply(points), found.deviations,
+                      found.matrix, found, tolerance, [planned.names[i] for i in owner], notes)
+
+
+def _planned(source, part):
+    """The Planned of a face, a SamplingResult or a PartPlan (with its part)."""
+    if isinstance(source, SamplingResult):
+        labels = PointSet.from_result(source).labels
+        return Planned(labels, source.points, [source.face], ["face"], np.zeros(source.n, dtype=int))
+    if isinstance(source, PartPlan):
+        if part is None:
+            raise InputError("a plan is inspected on its part: give part=<the part's shape> (e.g. obj.Shape)")
+        point_set = as_point_set(source)
+        names = [face.name for face in source.placed]
+        faces = [part.getElement(name) for name in names]
+        owner = np.array([names.index(name) for name in point_set.faces])
+        return Planned(point_set.labels, point_set.points, faces, names, owner)
+    if isinstance(source, Part.Face) or isinstance(source, Part.Shape):
+        return Planned(None, None, [as_face(source)], ["face"], None)
+    raise InputTypeError(f"cannot inspect against a {type(source).__name__}; give a Part.Face, a SamplingResult "
+                         "or a PartPlan")
+
+
+def _contact_points(point_set, probe_radius):
+    """The measured contact points (N, 3) mm: ball centres moved back by the probe radius along
+    their vectors (the file's stated radius, or probe_radius mm; 0 for contact points)."""
+    stated = point_set.metadata.get("probe_radius_mm", 0.0) if probe_radius is None else probe_radius
+    radius = check_real("probe_radius", float(stated), minimum=0.0)
+    points = np.asarray(point_set.points, dtype=float)
+    if not np.isfinite(points).all():
+        row = int(np.flatnonzero(~np.isfinite(points).all(axis=1))[0])
+        raise InputError(f"measured point {point_set.labels[row]} has no finite coordinates; measure it again or "
+                         "leave it out of the file")
+    return points - radius * np.asarray(point_set.normals, dtype=float)
+
+
+def pair(planned, measured):
+    """((measured rows, planned rows), notes): the measured points paired with the planned ones
+    by label where the measured labels are planned ones, else by order when the counts agree.
+    InputError for a label given twice, a measured label not planned (when the others pair by
+    label), or counts that differ with labels that do not pair."""
+    labels = list(measured.labels)
+    seen = set()
+    for label in labels:
+        if label in seen:
+            raise InputError(f"measured point {label} is given twice; keep one measurement per point")
+        seen.add(label)
+    if planned.labels is None:
+        rows = np.arange(len(labels))
+        return (rows, rows), []
+    where = {label: index for index, label in enumerate(planned.labels)}
+    known = [label in where for label in labels]
+    if any(known):
+        if not all(known):
+            stranger = labels[known.index(False)]
+            raise InputError(f"measured point {stranger} was not planned (planned: {planned.labels[0]} .. "
+                             f"{planned.labels[-1]}); correct its label or leave it out")
+        missing = [label for label in planned.labels if label not in seen]
+        notes = [f"{len(missing)} planned points were not measured: {', '.join(missing[:8])}"
+                 f"{' ...' if len(missing) > 8 else ''}"] if missing else []
+        return (np.arange(len(labels)), np.array([where[label] for label in labels])), notes
+    if len(labels) != len(planned.labels):
+        raise InputError(f"the {len(labels)} measured points carry no planned label and there are "
+                         f"{len(planned.labels)} planned points, so they cannot be paired by order; "
+                         "label them as planned (e.g. P1) or measure every planned point")
+    rows = np.arange(len(labels))
+    return (rows, rows), ["paired by order: the measured labels are not the planned ones"]
+
+
+def _closest(faces, owner, points):
+    """Feet (N, 3) mm and outward normals (N, 3) of points (N, 3) on their own faces."""
+    feet, normals = np.empty_like(points), np.empty_like(points)
+    for index, face in enumerate(faces):
+        rows = np.flatnonzero(owner == index)
+        if rows.size:
+            feet[rows], normals[rows], _ = closest_points(face, points[rows])
+    return feet, normals
