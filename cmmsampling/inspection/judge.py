@@ -14,15 +14,16 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..formats.exporting import as_point_set
-from ..formats.pointfiles import read_points
 from ..formats.pointset import PointSet
 from ..geometry.freecad_env import import_part
 from ..geometry.surface import as_face
 from ..geometry.validation import InputError, InputTypeError, check_real
+from ..fitting.occ_surface import substitute_surface
 from ..measurement import closest_points
 from ..planning.part_plan import PartPlan
 from ..strategies.result import SamplingResult
 from .align import ALIGNMENTS, Alignment, align, check_locked
+from .measured import read_measured
 
 Part = import_part()
 import FreeCAD  # noqa: E402  (importable once import_part() has set the path)
@@ -37,7 +38,9 @@ class Inspection:
     deviations: (N,) mm, signed (+ out of the material); transform: (4, 4) measured -> CAD;
     alignment: the Alignment; tolerance: the profile tolerance t (mm) or None; faces: N names of
     the faces the points were judged on; notes: what the pairing found (points planned but not
-    measured).
+    measured); for a SamplingResult's points (the paper's step), substitute_poles: (n_u, n_v, 3)
+    mm, the substitute fitted to the aligned measured points at their planned (u, v), and
+    substitute_deviation: its DeviationStats against the CAD face (the deviation map); else None.
     """
 
     labels: list
@@ -50,6 +53,14 @@ class Inspection:
     tolerance: float = None
     faces: list = None
     notes: list = field(default_factory=list)
+    substitute_poles: np.ndarray = None
+    substitute_deviation: object = None
+    space: object = None
+
+    @property
+    def substitute(self):
+        """The substitute rebuilt from the measured points as a Part.BSplineSurface, or None."""
+        return None if self.substitute_poles is None else substitute_surface(self.space, self.substitute_poles)
 
     @property
     def placement(self):
@@ -105,7 +116,8 @@ def inspect(source, measured, alignment="best_fit", tolerance=None, locked=(), p
     source: a Part.Face (the measured points are taken as they come), a SamplingResult or a
     PartPlan (with part=, the part's shape: its faces by name); the measured points pair with the
     planned ones by label, else by order when the counts agree. measured: a path (DMIS output
-    with FA(label) actuals, the project's CSV or XYZIJK) or a PointSet of contact points (a
+    with FA(label) actuals, the project's CSV or XYZIJK, labelled x y z text:
+    cmmsampling.inspection.measured) or a PointSet of contact points (a
     file's stated probe radius, or probe_radius mm, is taken off along its vectors).
     alignment: 'none', 'best_fit' or 'min_max' (cmmsampling.inspection.align); locked: degrees
     of freedom held fixed (rx, ry, rz, x, y, z); tolerance: the profile tolerance t, mm.
@@ -116,7 +128,7 @@ def inspect(source, measured, alignment="best_fit", tolerance=None, locked=(), p
     locked = check_locked(locked)
     tolerance = None if tolerance is None else check_real("tolerance", tolerance, above=0.0)
     planned = _planned(source, part)
-    read = read_points(measured) if isinstance(measured, (str, os.PathLike)) else as_point_set(measured)
+    read = read_measured(measured) if isinstance(measured, (str, os.PathLike)) else as_point_set(measured)
     contact = _contact_points(read, probe_radius)
     order, notes = pair(planned, read)
     points = contact[order[0]]
@@ -127,8 +139,20 @@ def inspect(source, measured, alignment="best_fit", tolerance=None, locked=(), p
 
     found = align(points, closest, alignment, locked)
     nominal = planned.points[order[1]] if planned.points is not None else np.full_like(points, np.nan)
-    return Inspection([read.labels[i] for i in order[0]], nominal, points, found.apply(points), found.deviations,
-                      found.matrix, found, tolerance, [planned.names[i] for i in owner], notes)
+    inspection = Inspection([read.labels[i] for i in order[0]], nominal, points, found.apply(points),
+                            found.deviations, found.matrix, found, tolerance, [planned.names[i] for i in owner], notes)
+    if isinstance(source, SamplingResult):
+        rebuild(inspection, source, order[1])
+    return inspection
+
+
+def rebuild(inspection, result, planned_rows):
+    """The paper's step: the substitute fitted to the aligned measured points at their planned
+    (u, v) in the result's space, and its exact deviation from the CAD face, into inspection."""
+    poles = result.space.fit(result.uv[planned_rows], inspection.points)
+    inspection.substitute_poles, inspection.space = poles, result.space
+    if result.problem is not None:
+        inspection.substitute_deviation = result.problem.deviation(poles)
 
 
 def _planned(source, part):
@@ -156,11 +180,15 @@ def _contact_points(point_set, probe_radius):
     stated = point_set.metadata.get("probe_radius_mm", 0.0) if probe_radius is None else probe_radius
     radius = check_real("probe_radius", float(stated), minimum=0.0)
     points = np.asarray(point_set.points, dtype=float)
+    normals = np.asarray(point_set.normals, dtype=float)
+    if radius > 0 and not np.isfinite(normals).all():
+        raise InputError(f"the measured points are ball centres (probe radius {radius:g} mm) but carry no vectors "
+                         "to take the radius off along; give contact points, or the file with i, j, k")
     if not np.isfinite(points).all():
         row = int(np.flatnonzero(~np.isfinite(points).all(axis=1))[0])
         raise InputError(f"measured point {point_set.labels[row]} has no finite coordinates; measure it again or "
                          "leave it out of the file")
-    return points - radius * np.asarray(point_set.normals, dtype=float)
+    return points - radius * np.nan_to_num(normals)
 
 
 def pair(planned, measured):

@@ -138,3 +138,65 @@ def test_bad_measurements_are_named(planned, tmp_path):
         cmmsampling.inspect(planned, few, alignment="icp")
     with pytest.raises(InputError, match="'tz' is no degree of freedom"):
         cmmsampling.inspect(planned, few, locked=("tz",))
+
+
+@pytest.mark.parametrize("separator", [", ", ";", "  "])
+def test_labelled_text_in_any_separator_pairs_by_label(planned, tmp_path, separator):
+    made = cmmsampling.simulate_measurement(planned, tmp_path / "measured.dmi", misplacement={"z": 0.3})
+    order = np.random.default_rng(1).permutation(len(made.labels))[:30]
+    lines = ["# measured on the CMM, contact points, mm"] + [
+        separator.join([made.labels[k]] + [f"{c:.7f}" for c in made.actual[k]]) for k in order]
+    (tmp_path / "measured.txt").write_text("\n".join(lines) + "\n")
+    found = cmmsampling.inspect(planned, tmp_path / "measured.txt", locked=("rx", "ry", "rz"))
+    assert found.labels == [made.labels[k] for k in order]
+    assert np.abs(found.deviations).max() < 1e-5 and found.notes == [
+        "6 planned points were not measured: " + ", ".join(l for l in made.labels if l not in found.labels)]
+
+
+def test_labelled_text_refuses_what_it_cannot_read(planned, tmp_path):
+    def refused(text, message):
+        (tmp_path / "bad.txt").write_text(text)
+        with pytest.raises(InputError, match=message):
+            cmmsampling.inspect(planned, tmp_path / "bad.txt")
+
+    refused("P1;12,5;3,25;1,0\n", r"bad.txt, line 1: '12,5' has a decimal comma; write numbers with a decimal "
+                                  r"point \(12.5\)")
+    refused("P1 12,5 3,25 1,0\n", "line 1: '12,5' has a decimal comma")
+    refused("# head\nP1, 1, 2, 3\nP2, 1, 2\n", "line 3: 3 fields where the first point has 4")
+    refused("P1, 1, 2, 3\nP1, 1, 2, 4\n", "line 2: point P1 is given twice")
+    refused("P1, 1, 2, nan\n", "line 1: z 'nan' is not a finite number")
+    refused("# nothing\n\n", "no measured point found")
+    refused("1, 2\n", "line 1: 2 fields; a measured point is one of x y z")
+    (tmp_path / "centres.csv").write_text("P1, 1, 2, 3\n")
+    with pytest.raises(InputError, match="ball centres .* carry no vectors"):
+        cmmsampling.inspect(planned, tmp_path / "centres.csv", probe_radius=1.0)
+
+
+def test_a_plan_is_inspected_with_one_alignment_for_the_part(tmp_path):
+    block = Part.makeBox(40, 30, 10)
+    made_plan = cmmsampling.plan(block, n_total=48, strategy="uniform_parametric", faces=[1, 3, 6], processes=1)
+    made = cmmsampling.simulate_measurement(made_plan, tmp_path / "part.dmi", misplacement=MISPLACED)
+    with pytest.raises(InputError, match="give part="):
+        cmmsampling.inspect(made_plan, tmp_path / "part.dmi")
+    found = cmmsampling.inspect(made_plan, tmp_path / "part.dmi", part=block, tolerance=0.01)
+    assert sorted(set(found.faces)) == ["Face1", "Face3", "Face6"] and len(found.labels) == 48
+    assert found.labels[0].startswith(found.faces[0] + "_P")
+    assert np.linalg.norm(found.points - made.nominal, axis=1).max() < 1e-3 and found.passed
+
+
+def test_the_substitute_is_rebuilt_from_the_measured_points(planned, tmp_path):
+    """The paper's step: the measured points' substitute and its deviation map from the nominal;
+    without a form error it is the planned substitute, with one it departs by about that much."""
+    cmmsampling.simulate_measurement(planned, tmp_path / "exact.dmi", misplacement=MISPLACED)
+    exact = cmmsampling.inspect(planned, tmp_path / "exact.dmi")
+    assert np.abs(exact.substitute_poles - planned.poles).max() < 1e-3
+    assert exact.substitute_deviation.maximum == pytest.approx(planned.deviation.maximum, abs=1e-3)
+    cmmsampling.simulate_measurement(planned, tmp_path / "formed.dmi", form_error=0.05, misplacement=MISPLACED)
+    formed = cmmsampling.inspect(planned, tmp_path / "formed.dmi")
+    assert 0.01 < np.abs(formed.substitute_poles - planned.poles).max() < 1.0
+    change = np.nanmax(np.abs(formed.substitute_deviation.field - planned.deviation.field))
+    assert 0.005 < change < 0.5
+    assert formed.substitute.NbUPoles == planned.substitute.NbUPoles
+    u, v = planned.uv[0]
+    ours = formed.space.evaluate(formed.substitute_poles, planned.uv[:1])[0]
+    assert formed.substitute.value(u, v).distanceToPoint(FreeCAD.Vector(*ours)) < 1e-9   # OCC's surface is ours
