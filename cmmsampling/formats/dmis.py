@@ -29,6 +29,9 @@ DMIS_COMMENT = "$$"
 DMIS_COMMENT_CONTINUED = "$$+"
 DMIS_CONTINUATION = "$"
 ANGLE_DECIMALS = 4
+# The head's mounting vector of an SNSDEF: a vertical head on the quill (the ball below the pivot
+# at A = 0), +Z as DMIS writes it for a vertical CMM.
+HEAD_MOUNTING = (0.0, 0.0, 1.0)
 DMIS_FEATURE_POINT = re.compile(r"(FA?)\(([^()]*)\)=FEAT/POINT,([A-Z]+),(.*)\Z", re.IGNORECASE)
 # A statement that means a point feature but is not written as DMIS_FEATURE_POINT reads it.
 POINT_LIKE = re.compile(r"FEAT\W*POINT", re.IGNORECASE)
@@ -43,12 +46,12 @@ def write(point_set, facts, options):
                for key, text in comment_entries(point_set, facts, options)]
     lines = [f"DMISMN/'{options.name}',{DMIS_VERSION}", f"{DMIS_COMMENT} probe points written by cmmsampling"]
     lines += metadata_comment_lines(entries, f"{DMIS_COMMENT} ", DMIS_COMMENT_CONTINUED, DMIS_LINE_LIMIT)
-    lines += ["UNITS/MM,ANGDEC", "MODE/PROG,MAN"]
+    sensors = sensor_labels(point_set) if point_set.travel is not None else None
+    lines += ["UNITS/MM,ANGDEC", "MODE/AUTO,PROG,MAN" if sensors is not None else "MODE/PROG,MAN"]
     distances = {"APPRCH": options.approach, "RETRCT": options.retract, "SEARCH": options.search}
     lines += [f"SNSET/{word},{fixed(value, COORDINATE_DECIMALS).item()}" for word, value in distances.items()]
-    sensors = sensor_labels(point_set) if point_set.travel is not None else None
     if sensors is not None:
-        lines += sensor_definitions(point_set.axes, sensors, options.probe or {})
+        lines += sensor_definitions(sensors, options.probe or {})
     selected = None
     for index, (label, position, vector) in enumerate(zip(point_set.labels, xyz.tolist(), ijk.tolist())):
         if sensors is not None:
@@ -65,7 +68,18 @@ def write(point_set, facts, options):
     if sensors is not None:
         lines += goto_lines(point_set.travel[-1][0])
     lines.append("ENDFIL")
-    return "\n".join(lines) + "\n"
+    return "\n".join(without_repeated_gotos(lines)) + "\n"
+
+
+def without_repeated_gotos(lines):
+    """The lines without a GOTO that repeats the line just before it (a move to where the probe
+    already is: where one move ends and the next begins, or around a sensor change)."""
+    kept = []
+    for line in lines:
+        if line.startswith("GOTO/") and kept and kept[-1] == line:
+            continue
+        kept.append(line)
+    return kept
 
 
 def sensor_labels(point_set):
@@ -75,21 +89,25 @@ def sensor_labels(point_set):
     return [f"A{a:g}B{b:g}" for a, b in angles.tolist()]
 
 
-def sensor_definitions(axes, sensors, probe):
-    """SNSDEF statements, one per sensor in the order first used: an indexed probe at its head
-    angles A, B, the stylus direction (head to ball, -axis), the stylus length and the ball
-    diameter (mm; probe: the run's Probe as a dict)."""
+def sensor_definitions(sensors, probe):
+    """SNSDEF statements, one per sensor in the order first used, in DMIS's meaning for an
+    indexed head: S(name)=SNSDEF/PROBE,INDEX,POL,A,B,i,j,k,len,dia with the head angles A, B,
+    the head's mounting vector i,j,k (HEAD_MOUNTING: a vertical head on the quill, whatever the
+    angles), len the distance from the head's pivot to the ball centre (the probe body's and
+    the stylus's lengths) and dia the ball diameter (mm; probe: the run's Probe as a dict)."""
     lines, seen = [], set()
-    length = fixed(probe.get("stylus_length", 0.0), COORDINATE_DECIMALS).item()
+    reach = probe.get("stylus_length", 0.0) + probe.get("body_length", 0.0)
+    length = fixed(reach, COORDINATE_DECIMALS).item()
     diameter = fixed(probe.get("ball_diameter", 0.0), COORDINATE_DECIMALS).item()
-    for axis, name in zip(axes, sensors):
+    mounting = fixed(np.array(HEAD_MOUNTING), VECTOR_DECIMALS).tolist()
+    for name in sensors:
         if name in seen:
             continue
         seen.add(name)
         a, b = name[1:].split("B")
         lines += dmis_statement([f"S({name})=SNSDEF/PROBE", "INDEX", "POL", fixed(float(a), ANGLE_DECIMALS).item(),
                                  fixed(float(b), ANGLE_DECIMALS).item()],
-                                fixed(-np.asarray(axis), VECTOR_DECIMALS).tolist() + [length, diameter])
+                                mounting + [length, diameter])
     return lines
 
 

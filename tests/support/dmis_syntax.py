@@ -4,10 +4,12 @@ Physical lines: at most 80 characters of printable ASCII; ``$$`` starts a commen
 ending in ``$`` goes on in the next one. Statements, in this order::
 
     DMISMN/'name',NN.N                        first
-    UNITS/MM,ANGDEC   MODE/PROG,MAN   SNSET/(APPRCH|RETRCT|SEARCH),d
-    S(label)=SNSDEF/PROBE,INDEX,POL,a,b,i,j,k,l,d   label new, (i, j, k) unit, l and d positive
+    UNITS/MM,ANGDEC   MODE/[AUTO,]PROG,MAN   SNSET/(APPRCH|RETRCT|SEARCH),d
+    S(label)=SNSDEF/PROBE,INDEX,POL,a,b,i,j,k,l,d   label new, (i, j, k) the head's mounting
+                                              vector (unit), l and d positive
     SNSLCT/S(label)                           label defined, not inside MEAS
-    GOTO/x,y,z                                not inside MEAS
+    GOTO/x,y,z                                not inside MEAS, in a MODE/AUTO,PROG,MAN
+                                              (DCC) program only, never the line before again
     F(label)=FEAT/POINT,CART,x,y,z,i,j,k      label new, after UNITS
     MEAS/POINT,F(label),n                     label defined, not inside another MEAS
     PTMEAS/CART,x,y,z,i,j,k                   only inside MEAS, n of them
@@ -27,7 +29,7 @@ VECTOR_TOLERANCE = 1e-6
 SIMPLE = {
     "DMISMN": re.compile(r"DMISMN/'[ -&(-~]*',\d\d\.\d\Z"),
     "UNITS": re.compile(r"UNITS/MM,ANGDEC\Z"),
-    "MODE": re.compile(r"MODE/PROG,MAN\Z"),
+    "MODE": re.compile(r"MODE/(AUTO,)?PROG,MAN\Z"),
     "SNSET": re.compile(rf"SNSET/(APPRCH|RETRCT|SEARCH),{NUMBER}\Z"),
     "ENDMES": re.compile(r"ENDMES\Z"),
     "ENDFIL": re.compile(r"ENDFIL\Z"),
@@ -96,12 +98,19 @@ class ProgramState:
         self.expected = 0
         self.points = 0
         self.ended = False
+        self.automatic = False
+        self.previous = ""
 
     def take(self, statement):
         """Errors of the next statement, given the state; updates the state."""
         if self.ended:
             return ["statement after ENDFIL"]
+        previous, self.previous = self.previous, statement
         keyword = re.match(r"[A-Z]*", statement).group()
+        if keyword == "GOTO" and statement == previous:
+            return [f"{statement} repeats the move before it"]
+        if keyword == "MODE":
+            self.automatic = statement.startswith("MODE/AUTO")
         if keyword == "F" and statement.startswith("F("):
             return self.feature(statement)
         if keyword == "S" and statement.startswith("S("):
@@ -146,7 +155,7 @@ class ProgramState:
             return errors + [f"expected 7 fixed-notation numbers a,b,i,j,k,length,diameter, got {fields!r}"]
         length = sum(float(v) ** 2 for v in values[2:5]) ** 0.5
         if abs(length - 1.0) > VECTOR_TOLERANCE:
-            errors.append(f"the stylus direction has length {length:.9f}, not 1")
+            errors.append(f"the head's mounting vector has length {length:.9f}, not 1")
         if float(values[5]) <= 0 or float(values[6]) <= 0:
             errors.append("the stylus length and ball diameter must be positive")
         if label in self.sensors:
@@ -158,6 +167,7 @@ class ProgramState:
         """SNSLCT/S(label) of a defined sensor, GOTO/x,y,z; neither inside MEAS."""
         errors = ["statement inside MEAS"] if self.measuring else []
         if keyword == "GOTO":
+            errors += [] if self.automatic else ["GOTO in a program not in MODE/AUTO,PROG,MAN (DCC)"]
             return errors + ([] if GOTO.match(statement) else [f"malformed GOTO: {statement!r}"])
         match = SELECT.match(statement)
         if match is None:
