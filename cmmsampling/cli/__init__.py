@@ -17,6 +17,11 @@ from .terminal import FaceProgress, StudyProgress, TerminalProgress, format_tabl
 
 # --probe's choices: the presets of cmmsampling.PROBES by their ball diameter (mm).
 PROBE_CHOICES = {f"{probe.ball_diameter:g}": name for name, probe in PROBES.items()}
+# The demo's virtual measurement: a 0.02 mm form error, 1 um probing noise, the part turned by
+# up to a degree and shifted by up to 2 mm on the table; judged against a 0.1 mm profile.
+DEMO_MEASUREMENT = {"form_error": 0.02, "noise": 0.001, "seed": 7,
+                    "misplacement": {"rx": 0.4, "ry": -0.3, "rz": 0.9, "x": 1.2, "y": -2.0, "z": 0.5}}
+DEMO_TOLERANCE = 0.1
 
 DESCRIPTION = """Where should a CMM's contact probe touch a free-form face?
 
@@ -52,6 +57,10 @@ def build_parser():
     demo.add_argument("-n", "--points", type=int, default=81, help="probe points per strategy (default 81)")
     _strategy_settings(demo)
     demo.add_argument("--seed", type=int, default=0, help="seed of the random parts (default 0)")
+    demo.add_argument("--inspection", metavar="FOLDER", default="out/inspection",
+                      help="then measure the PSO points on a virtual CMM (a misplaced part with a form "
+                           "error), inspect them and write the file and the colour map here (default "
+                           "out/inspection; 'none' skips it)")
     demo.add_argument("--report", metavar="FOLDER", default="out/report",
                       help="then compare every strategy over N = 25..144 and write the HTML report "
                            "with its figures here (default out/report; 'none' skips it, ~3.5 min)")
@@ -203,9 +212,28 @@ def run_demo(args):
         results.append(sample(face, args.points, name, seed=args.seed, **options))
         finish_progress(options)
     print(format_table(results))
+    if args.inspection != "none":
+        _inspection_loop(face, next(r for r in results if r.strategy == "pso"), args.inspection)
     if args.report != "none":
         _study_report(face, args)
     return 0
+
+
+def _inspection_loop(face, result, folder):
+    """The paper's loop after the program: a virtual CMM measures the result's points on a part
+    with a form error, misplaced on the table (DEMO_MEASUREMENT); the measured points are read
+    back, aligned by best fit and judged against DEMO_TOLERANCE; the file and the measured
+    face's colour map go into folder."""
+    from ..inspection.figure import write_inspection_figure
+    from ..inspection.judge import inspect
+    from ..inspection.simulate import simulate_measurement
+
+    os.makedirs(folder, exist_ok=True)
+    measured = simulate_measurement(result, os.path.join(folder, "measured.dmi"), **DEMO_MEASUREMENT)
+    found = inspect(result, measured.path, tolerance=DEMO_TOLERANCE)
+    print(f"\nInspection of the PSO points measured on a virtual CMM ({measured.path}):")
+    print(found.summary())
+    print(f"colour map: {write_inspection_figure(found, face, os.path.join(folder, 'deviation.png'))}")
 
 
 def _study_report(face, args):

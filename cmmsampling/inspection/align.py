@@ -35,8 +35,10 @@ MAX_ITERATIONS = 200
 DAMPING = (1e-9, 1e9)
 DAMPING_FALL = 0.3
 DAMPING_RISE = 10.0
-# A tiny step taken with at most this damping (an undamped Gauss-Newton step) ends the search.
+# A tiny step taken with at most this damping (an undamped Gauss-Newton step) ends the search,
+# as does a step that lowers the sum of squares by less than this fraction of it.
 CONVERGED_DAMPING = 1e-6
+COST_TOLERANCE = 1e-12
 # The min-max programme's trust region: the largest rotation (rad) and shift (mm) of one step,
 # shrunk by TRUST_SHRINK where a step does not lower the largest deviation.
 TRUST_ROTATION = 0.02
@@ -164,7 +166,7 @@ def _least_squares(points, closest, free):
         trial_cost = float(trial_deviations @ trial_deviations)
         small = np.linalg.norm(transform(motion, moved) - moved, axis=1).max() < STEP_TOLERANCE_MM
         if trial_cost <= cost:
-            if small and damping <= CONVERGED_DAMPING:
+            if (small and damping <= CONVERGED_DAMPING) or cost - trial_cost <= COST_TOLERANCE * cost:
                 return trial, iteration
             matrix, cost, damping = trial, trial_cost, max(damping * DAMPING_FALL, DAMPING[0])
             deviations, jacobian, centre = trial_deviations, trial_jacobian, trial_centre

@@ -200,3 +200,20 @@ def test_the_substitute_is_rebuilt_from_the_measured_points(planned, tmp_path):
     u, v = planned.uv[0]
     ours = formed.space.evaluate(formed.substitute_poles, planned.uv[:1])[0]
     assert formed.substitute.value(u, v).distanceToPoint(FreeCAD.Vector(*ours)) < 1e-9   # OCC's surface is ours
+
+
+def test_the_demo_closes_the_loop_and_draws_the_measured_face(tmp_path, capsys):
+    from cmmsampling.cli import _inspection_loop
+    from cmmsampling.inspection.figure import write_inspection_figure
+
+    face = cmmsampling.reference_face()
+    result = cmmsampling.sample(face, 25, "halton", occ_check=False)
+    _inspection_loop(face, result, str(tmp_path / "loop"))
+    said = capsys.readouterr().out
+    assert "Inspection of the PSO points measured on a virtual CMM" in said and "tolerance 0.1 mm: PASS" in said
+    assert cmmsampling.read_points(tmp_path / "loop" / "measured.dmi").metadata["dmis_features"] == "actual"
+    assert (tmp_path / "loop" / "deviation.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    cmmsampling.simulate_measurement(result, tmp_path / "bad.dmi", form_error=0.05, seed=3)
+    failed = cmmsampling.inspect(result, tmp_path / "bad.dmi", alignment="none", tolerance=0.04)
+    assert not failed.passed and (~failed.within).any()
+    assert write_inspection_figure(failed, face, str(tmp_path / "bad.png")) == str(tmp_path / "bad.png")
