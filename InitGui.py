@@ -26,11 +26,11 @@ class CMMSamplingWorkbench(FreeCADGui.Workbench):
 
         from cmmsampling.gui import commands, resource
 
-        names = commands.register()
+        toolbar, menu = commands.register()
         FreeCADGui.addIconPath(os.path.dirname(self.Icon))   # the preferences group's icon
         FreeCADGui.addPreferencePage(resource("preferences.ui"), "CMM sampling")
-        self.appendToolbar("CMM Sampling", names)
-        self.appendMenu("CMM Sampling", names)
+        self.appendToolbar("CMM Sampling", toolbar)
+        self.appendMenu("CMM Sampling", menu)
 
     def GetClassName(self):
         return "Gui::PythonWorkbench"

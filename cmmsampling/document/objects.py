@@ -324,11 +324,21 @@ class SubstituteSurface(TypedProxy):
     @classmethod
     def add_missing_properties(cls, obj):
         """Add the properties obj lacks (all of them for a new object, MaxLocation for one saved by
-        an earlier version), read-only in the property editor."""
+        an earlier version: then taken at the raster node of largest deviation, on the
+        substitute), read-only in the property editor."""
         for kind, name, doc in cls.PROPERTIES:
             if not hasattr(obj, name):
                 obj.addProperty(kind, name, "Deviation", doc)
                 obj.setEditorMode(name, 1)
+                if name == "MaxLocation" and obj.DeviationField and obj.Shape.Faces:
+                    obj.MaxLocation = cls.raster_maximum(obj)
+
+    @classmethod
+    def raster_maximum(cls, obj):
+        """FreeCAD.Vector: the substitute's point at the raster node of largest deviation."""
+        u, v, field = cls.deviation_grid(obj)
+        i, j = np.unravel_index(int(np.nanargmax(field)), field.shape)
+        return obj.Shape.Faces[0].Surface.value(float(u[i]), float(v[j]))
 
     def execute(self, obj):
         """Nothing to rebuild: the shape is written with the result."""
@@ -337,7 +347,8 @@ class SubstituteSurface(TypedProxy):
         self.add_missing_properties(obj)
         _view_provider_when_missing(obj)
 
-    def deviation_grid(self, obj):
+    @staticmethod
+    def deviation_grid(obj):
         """(GridU (g_u,), GridV (g_v,), field (g_u, g_v) mm) as numpy arrays."""
         u = np.array(obj.GridU, dtype=float)
         v = np.array(obj.GridV, dtype=float)

@@ -159,7 +159,7 @@ def write_plan_report(sheet, plan, moves=None):
             sheet.setDisplayUnit(f"{column}{row}", DEVIATION_DISPLAY_UNIT)
     sheet.setStyle("A1", "bold")
     sheet.setStyle("A5:G5", "bold")
-    fit_columns(sheet, [row[:6] for row in rows[:table.stop - 1]])
+    fit_columns(sheet, [row[:6] for row in rows])
     sheet.setColumnWidth("G", NOTES_WIDTH)
 
 
@@ -176,7 +176,7 @@ def fit_columns(sheet, rows):
 
 
 def _shown_text(value):
-    """About the text a cell shows for a value: numbers with two decimals and a unit."""
+    """About the text a cell shows for a value: a number with two decimals and room for a unit."""
     if isinstance(value, (float, np.floating)):
         return f"{value:.2f} mm^2"
     return str(value)

@@ -73,7 +73,8 @@ def write(point_set, facts, options):
 
 def without_repeated_gotos(lines):
     """The lines without a GOTO that repeats the line just before it (a move to where the probe
-    already is: where one move ends and the next begins, or around a sensor change)."""
+    already is, where one move ends and the next begins; the GOTOs on either side of a sensor
+    change stay)."""
     kept = []
     for line in lines:
         if line.startswith("GOTO/") and kept and kept[-1] == line:

@@ -307,12 +307,40 @@ def selected_export_sources():
     return plans or selected_probe_points()
 
 
+class OpenComparisonReport(GuardedCommand):
+    """*Open comparison report...*: show a report Compare strategies wrote, again."""
+
+    NAME = "CMMSampling_OpenReport"
+    TITLE = Qt.QT_TRANSLATE_NOOP("CMMSampling_OpenReport", "Open comparison report")
+    MENU = Qt.QT_TRANSLATE_NOOP("CMMSampling_OpenReport", "Open comparison report...")
+    ICON = "Compare.svg"
+    TIP = Qt.QT_TRANSLATE_NOOP(
+        "CMMSampling_OpenReport",
+        "Open an HTML report that Compare strategies wrote: in FreeCAD's web view, else in the "
+        "system's browser, else in a tab of FreeCAD")
+
+    def reason(self):
+        return None
+
+    def act(self):
+        from .panels.compare import default_folder, open_report
+
+        doc = FreeCAD.ActiveDocument
+        folder = default_folder(doc) if doc is not None else os.path.expanduser("~")
+        path = QtGui.QFileDialog.getOpenFileName(
+            FreeCADGui.getMainWindow(), self.TITLE, os.path.join(folder, "report.html"), "HTML report (*.html)")[0]
+        if path:
+            open_report(path, f"Compare strategies: {os.path.basename(os.path.dirname(path))}")
+
+
 COMMANDS = (SampleFace, ExportProbePoints, Reevaluate, CompareStrategies, PlanPart)
+MENU_ONLY = (OpenComparisonReport,)
 
 
 def register():
-    """Add the commands to FreeCAD (once); returns their names in toolbar order."""
-    for command in COMMANDS:
+    """Add the commands to FreeCAD (once); returns (the toolbar's names, the menu's names)."""
+    for command in COMMANDS + MENU_ONLY:
         if command.NAME not in FreeCADGui.listCommands():
             FreeCADGui.addCommand(command.NAME, command())
-    return [command.NAME for command in COMMANDS]
+    toolbar = [command.NAME for command in COMMANDS]
+    return toolbar, toolbar + [command.NAME for command in MENU_ONLY]

@@ -14,7 +14,8 @@ and iterated with exact closest points until the motion stops.
 * ``none``: the points are taken as they are (already in the part's frame).
 
 Degrees of freedom: x, y, z (shifts) and rx, ry, rz (rotations about the centroid's axes);
-``locked`` names those held fixed. Pure numpy/scipy: the closest points come from a callable.
+``locked`` names those held fixed (each step holds them; steps about two axes compose to a
+rotation about the third of their product's order, below 1e-4 rad for a degree's misplacement). Pure numpy/scipy: the closest points come from a callable.
 """
 from __future__ import annotations
 
@@ -35,10 +36,12 @@ MAX_ITERATIONS = 200
 DAMPING = (1e-9, 1e9)
 DAMPING_FALL = 0.3
 DAMPING_RISE = 10.0
-# A tiny step taken with at most this damping (an undamped Gauss-Newton step) ends the search,
-# as does a step that lowers the sum of squares by less than this fraction of it.
+# A step taken with at most this damping (nearly a Gauss-Newton step) ends the search where it is
+# tiny or lowers the sum of squares by less than COST_TOLERANCE of it. The damping of a motion
+# the points hardly constrain (sliding along a plane) is at least SCALE_FLOOR of the largest.
 CONVERGED_DAMPING = 1e-6
 COST_TOLERANCE = 1e-12
+SCALE_FLOOR = 1e-6
 # The min-max programme's trust region: the largest rotation (rad) and shift (mm) of one step,
 # shrunk by TRUST_SHRINK where a step does not lower the largest deviation.
 TRUST_ROTATION = 0.02
@@ -85,8 +88,8 @@ def rotation_matrix(vector):
 
 
 def check_locked(locked):
-    """The locked degrees of freedom as a tuple; InputError naming an unknown one, or when all
-    six are locked with an alignment asked for."""
+    """The locked degrees of freedom as a tuple; InputError naming an unknown one (all six
+    locked leaves the points as they are, as alignment 'none' does)."""
     locked = tuple(locked or ())
     unknown = [name for name in locked if name not in DEGREES_OF_FREEDOM]
     if unknown:
@@ -105,7 +108,9 @@ def align(points, closest, method="best_fit", locked=()):
     if method not in ALIGNMENTS:
         raise InputError(f"alignment must be one of {', '.join(ALIGNMENTS)}, got {method!r}")
     locked = check_locked(locked)
-    points = np.asarray(points, dtype=float)
+    points = np.asarray(points, dtype=float).reshape(-1, 3)
+    if not len(points):
+        raise InputError("there are no measured points to align; give the file or PointSet of the measurement")
     free = [index for index, name in enumerate(DEGREES_OF_FREEDOM) if name not in locked]
     needed = 3 if method == "best_fit" else 4
     if method != "none" and len(points) < max(needed, len(free)):
@@ -157,7 +162,7 @@ def _least_squares(points, closest, free):
     cost = float(deviations @ deviations)
     for iteration in range(1, MAX_ITERATIONS + 1):
         normal = jacobian.T @ jacobian
-        scale = np.diag(normal) + np.finfo(float).tiny
+        scale = np.maximum(np.diag(normal), SCALE_FLOOR * np.diag(normal).max() + np.finfo(float).tiny)
         step = np.linalg.solve(normal + damping * np.diag(scale), -jacobian.T @ deviations)
         motion = _step_matrix(step, free, centre)
         moved = transform(matrix, points)
@@ -166,7 +171,7 @@ def _least_squares(points, closest, free):
         trial_cost = float(trial_deviations @ trial_deviations)
         small = np.linalg.norm(transform(motion, moved) - moved, axis=1).max() < STEP_TOLERANCE_MM
         if trial_cost <= cost:
-            if (small and damping <= CONVERGED_DAMPING) or cost - trial_cost <= COST_TOLERANCE * cost:
+            if damping <= CONVERGED_DAMPING and (small or cost - trial_cost <= COST_TOLERANCE * cost):
                 return trial, iteration
             matrix, cost, damping = trial, trial_cost, max(damping * DAMPING_FALL, DAMPING[0])
             deviations, jacobian, centre = trial_deviations, trial_jacobian, trial_centre
@@ -185,15 +190,15 @@ def _min_max(points, closest, free, matrix):
     for iteration in range(1, MAX_ITERATIONS + 1):
         step = _chebyshev_step(deviations, jacobian, radius)
         motion = _step_matrix(step, free, centre)
+        before = transform(matrix, points)
         trial = motion @ matrix
-        moved = transform(trial, points)
-        trial_deviations, trial_jacobian, trial_centre = _model(moved, closest, free)
+        trial_deviations, trial_jacobian, trial_centre = _model(transform(trial, points), closest, free)
         if np.abs(trial_deviations).max() < worst:
             matrix, worst = trial, np.abs(trial_deviations).max()
             deviations, jacobian, centre = trial_deviations, trial_jacobian, trial_centre
         else:
             radius *= TRUST_SHRINK
-        if np.linalg.norm(transform(motion, moved) - moved, axis=1).max() < STEP_TOLERANCE_MM:
+        if np.linalg.norm(transform(motion, before) - before, axis=1).max() < STEP_TOLERANCE_MM:
             return matrix, iteration
     return matrix, MAX_ITERATIONS
 

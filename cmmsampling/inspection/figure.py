@@ -24,7 +24,7 @@ def write_inspection_figure(inspection, face, path, title="Measured deviation"):
     for a plan) to the PNG ``path``; returns path."""
     faces = face if isinstance(face, (list, tuple)) else [face]
     outlines = [_triangles(as_face(f)) for f in faces]
-    every = np.concatenate([np.concatenate(o).reshape(-1, 3) for o in outlines] + [inspection.points])
+    every = np.concatenate([o.reshape(-1, 3) for o in outlines] + [inspection.points])
     axes_2d = np.sort(np.argsort(-np.ptp(every, axis=0), kind="stable")[:2])
     fig = Figure(figsize=(7.5, 6))
     FigureCanvasAgg(fig)

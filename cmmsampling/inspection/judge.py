@@ -114,7 +114,7 @@ def inspect(source, measured, alignment="best_fit", tolerance=None, locked=(), p
     """Judge measured points against the CAD model they were planned on.
 
     source: a Part.Face (the measured points are taken as they come), a SamplingResult or a
-    PartPlan (with part=, the part's shape: its faces by name); the measured points pair with the
+    PartPlan (with part=, the shape the plan was made of: its faces by name); the measured points pair with the
     planned ones by label, else by order when the counts agree. measured: a path (DMIS output
     with FA(label) actuals, the project's CSV or XYZIJK, labelled x y z text:
     cmmsampling.inspection.measured) or a PointSet of contact points (a
@@ -165,7 +165,7 @@ def _planned(source, part):
             raise InputError("a plan is inspected on its part: give part=<the part's shape> (e.g. obj.Shape)")
         point_set = as_point_set(source)
         names = [face.name for face in source.placed]
-        faces = [part.getElement(name) for name in names]
+        faces = [_face_of(part, name) for name in names]
         owner = np.array([names.index(name) for name in point_set.faces])
         return Planned(point_set.labels, point_set.points, faces, names, owner)
     if isinstance(source, Part.Face) or isinstance(source, Part.Shape):
@@ -174,10 +174,21 @@ def _planned(source, part):
                          "or a PartPlan")
 
 
+def _face_of(part, name):
+    """The face ``name`` ('Face3') of the plan's part; InputError where the part has none."""
+    try:
+        return part.getElement(name)
+    except Exception:
+        raise InputError(f"the part given has no {name}: give part= the shape the plan was made of") from None
+
+
 def _contact_points(point_set, probe_radius):
     """The measured contact points (N, 3) mm: ball centres moved back by the probe radius along
-    their vectors (the file's stated radius, or probe_radius mm; 0 for contact points)."""
-    stated = point_set.metadata.get("probe_radius_mm", 0.0) if probe_radius is None else probe_radius
+    their vectors (probe_radius mm, else the radius the file states, except for DMIS actuals,
+    which a CMM reports as contact points already; 0 for contact points)."""
+    actual = point_set.metadata.get("dmis_features") == "actual"
+    stated = (0.0 if actual else point_set.metadata.get("probe_radius_mm", 0.0)) if probe_radius is None \
+        else probe_radius
     radius = check_real("probe_radius", float(stated), minimum=0.0)
     points = np.asarray(point_set.points, dtype=float)
     normals = np.asarray(point_set.normals, dtype=float)
@@ -193,29 +204,31 @@ def _contact_points(point_set, probe_radius):
 
 def pair(planned, measured):
     """((measured rows, planned rows), notes): the measured points paired with the planned ones
-    by label where the measured labels are planned ones, else by order when the counts agree.
+    by label (as DMIS, regardless of case) where the measured labels are planned ones, else by
+    order when the counts agree.
     InputError for a label given twice, a measured label not planned (when the others pair by
     label), or counts that differ with labels that do not pair."""
     labels = list(measured.labels)
     seen = set()
     for label in labels:
-        if label in seen:
+        if label.casefold() in seen:
             raise InputError(f"measured point {label} is given twice; keep one measurement per point")
-        seen.add(label)
+        seen.add(label.casefold())
     if planned.labels is None:
         rows = np.arange(len(labels))
         return (rows, rows), []
-    where = {label: index for index, label in enumerate(planned.labels)}
-    known = [label in where for label in labels]
+    where = {label.casefold(): index for index, label in enumerate(planned.labels)}
+    known = [label.casefold() in where for label in labels]
     if any(known):
         if not all(known):
             stranger = labels[known.index(False)]
             raise InputError(f"measured point {stranger} was not planned (planned: {planned.labels[0]} .. "
                              f"{planned.labels[-1]}); correct its label or leave it out")
-        missing = [label for label in planned.labels if label not in seen]
+        measured_names = {label.casefold() for label in labels}
+        missing = [label for label in planned.labels if label.casefold() not in measured_names]
         notes = [f"{len(missing)} planned points were not measured: {', '.join(missing[:8])}"
                  f"{' ...' if len(missing) > 8 else ''}"] if missing else []
-        return (np.arange(len(labels)), np.array([where[label] for label in labels])), notes
+        return (np.arange(len(labels)), np.array([where[label.casefold()] for label in labels])), notes
     if len(labels) != len(planned.labels):
         raise InputError(f"the {len(labels)} measured points carry no planned label and there are "
                          f"{len(planned.labels)} planned points, so they cannot be paired by order; "

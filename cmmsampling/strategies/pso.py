@@ -177,7 +177,7 @@ def run_pso(problem, progress, population, iterations, w1, w2, c1, c2, velocity_
     settings = SwarmSettings(population, iterations, w1, w2, c1, c2, velocity_limit, problem.seed)
     seeds = _uniform_seeds(problem) if start_from_uniform else {}
     objective = problem.swarm_objective()
-    watched = ExactProgress(problem, progress, list(seeds.values()), iterations) if progress else None
+    watched = None if progress is None else ExactProgress(problem, progress, list(seeds.values()), iterations)
     swarm = particle_swarm(
         objective, problem.domain.lower, problem.domain.upper, problem.n, settings,
         seeds=list(seeds.values()), project=problem.project, progress=watched,

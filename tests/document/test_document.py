@@ -268,3 +268,15 @@ def test_file_export_hook_writes_the_points_of_a_group(group, tmp_path):
     assert rows[0].startswith("label,x,y,z,i,j,k") and len(rows) == 26
     with pytest.raises(ValueError, match="exactly one set of probe points"):
         document.export([group.Group[1]], path)
+
+
+def test_a_substitute_saved_before_max_location_gets_it_at_its_largest_raster_deviation(group, result):
+    surface = group.Group[1]
+    assert surface.MaxLocation.distanceToPoint(FreeCAD.Vector(*result.deviation.max_location())) < 1e-9
+    surface.removeProperty("MaxLocation")   # as a document saved by an earlier version
+    surface.Proxy.onDocumentRestored(surface)
+    u, v, field = surface.Proxy.deviation_grid(surface)
+    i, j = np.unravel_index(int(np.nanargmax(field)), field.shape)
+    node = result.deviation.nodes[i, j]
+    assert surface.MaxLocation.distanceToPoint(FreeCAD.Vector(*node)) <= 2 * result.deviation.maximum   # near it
+    assert surface.MaxLocation.Length > 0   # not the origin an added property starts at

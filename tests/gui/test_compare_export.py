@@ -402,6 +402,20 @@ def test_without_a_browser_the_report_opens_in_a_tab_of_freecad(workbench, tmp_p
     tab.close()
 
 
+def test_open_comparison_report_shows_a_report_again(workbench, tmp_path, monkeypatch):
+    """From the menu, where FreeCAD 1.0 without a browser could not show a report once closed."""
+    page = report_page(tmp_path)
+    asked, shown = [], []
+    monkeypatch.setattr(QtGui.QFileDialog, "getOpenFileName",
+                        lambda parent, title, start, filters: asked.append((title, start, filters)) or (page, filters))
+    monkeypatch.setattr(compare_panel, "open_report", lambda path, title: shown.append((path, title)) or True)
+    menu = next(a.menu() for a in main_window().menuBar().actions() if a.text() == "CMM Sampling")
+    assert "Open comparison report..." in [a.text() for a in menu.actions()]
+    FreeCADGui.runCommand(commands.OpenComparisonReport.NAME)
+    assert asked and asked[0][2] == "HTML report (*.html)" and asked[0][1].endswith("report.html")
+    assert shown == [(page, f"Compare strategies: {tmp_path.name}")]
+
+
 def run_dialog(action, handle, timeout_s=10):
     """Run action(), which opens the export options dialog modally; handle(dialog) is called with
     it open and must close it. A dialog still open after timeout_s is rejected."""

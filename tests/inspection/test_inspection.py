@@ -217,3 +217,22 @@ def test_the_demo_closes_the_loop_and_draws_the_measured_face(tmp_path, capsys):
     failed = cmmsampling.inspect(result, tmp_path / "bad.dmi", alignment="none", tolerance=0.04)
     assert not failed.passed and (~failed.within).any()
     assert write_inspection_figure(failed, face, str(tmp_path / "bad.png")) == str(tmp_path / "bad.png")
+
+
+def test_an_unconstrained_motion_does_not_run_away():
+    """Points on a tilted plane whose normals carry rounding noise: sliding along the plane costs
+    nothing, and the fit must not slide the points far (it slid them 1e16 mm)."""
+    from cmmsampling.inspection.align import align
+
+    normal = np.array([1e-17, -0.5, np.sqrt(0.75)])
+    rng = np.random.default_rng(0)
+    grid = rng.uniform(-20, 20, (30, 2))
+    along = np.array([[1.0, 0.0, 0.0], [0.0, np.sqrt(0.75), 0.5]])
+    points = grid @ along + 0.3 * normal
+
+    def closest(where):
+        heights = where @ normal
+        return where - heights[:, None] * normal, np.tile(normal, (len(where), 1))
+
+    found = align(points, closest)
+    assert np.abs(found.deviations).max() < 1e-9 and found.moved_mm < 1.0
