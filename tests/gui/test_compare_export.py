@@ -409,8 +409,8 @@ def test_open_comparison_report_shows_a_report_again(workbench, tmp_path, monkey
     monkeypatch.setattr(QtGui.QFileDialog, "getOpenFileName",
                         lambda parent, title, start, filters: asked.append((title, start, filters)) or (page, filters))
     monkeypatch.setattr(compare_panel, "open_report", lambda path, title: shown.append((path, title)) or True)
-    menu = next(a.menu() for a in main_window().menuBar().actions() if a.text() == "CMM Sampling")
-    assert "Open comparison report..." in [a.text() for a in menu.actions()]
+    menus = [m for m in main_window().findChildren(QtGui.QMenu) if m.title() == "CMM Sampling"]
+    assert any("Open comparison report..." in [a.text() for a in m.actions()] for m in menus)
     FreeCADGui.runCommand(commands.OpenComparisonReport.NAME)
     assert asked and asked[0][2] == "HTML report (*.html)" and asked[0][1].endswith("report.html")
     assert shown == [(page, f"Compare strategies: {tmp_path.name}")]
