@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Main job: install what is missing, then sample the built-in reference surface with every
 # strategy at N = 81 (PSO with the paper's parameters) and print the deviation table; measure the
-# PSO points on a virtual CMM, inspect them (out/inspection/); compare the strategies over N
+# best strategy's points on a virtual CMM, inspect them (out/inspection/); compare the strategies over N
 # (out/report/).
 set -euo pipefail
 cd "$(dirname "$0")/.."

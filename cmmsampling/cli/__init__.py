@@ -58,9 +58,9 @@ def build_parser():
     _strategy_settings(demo)
     demo.add_argument("--seed", type=int, default=0, help="seed of the random parts (default 0)")
     demo.add_argument("--inspection", metavar="FOLDER", default="out/inspection",
-                      help="then measure the PSO points on a virtual CMM (a misplaced part with a form "
-                           "error), inspect them and write the file and the colour map here (default "
-                           "out/inspection; 'none' skips it)")
+                      help="then measure the points of the strategy with the smallest maximum on a virtual "
+                           "CMM (a misplaced part with a form error), inspect them and write the file and "
+                           "the colour map here (default out/inspection; 'none' skips it)")
     demo.add_argument("--report", metavar="FOLDER", default="out/report",
                       help="then compare every strategy over N = 25..144 and write the HTML report "
                            "with its figures here (default out/report; 'none' skips it, ~3.5 min)")
@@ -213,7 +213,7 @@ def run_demo(args):
         finish_progress(options)
     print(format_table(results))
     if args.inspection != "none":
-        _inspection_loop(face, next(r for r in results if r.strategy == "pso"), args.inspection)
+        _inspection_loop(face, min(results, key=lambda r: r.deviation.maximum), args.inspection)
     if args.report != "none":
         _study_report(face, args)
     return 0
@@ -231,7 +231,8 @@ def _inspection_loop(face, result, folder):
     os.makedirs(folder, exist_ok=True)
     measured = simulate_measurement(result, os.path.join(folder, "measured.dmi"), **DEMO_MEASUREMENT)
     found = inspect(result, measured.path, tolerance=DEMO_TOLERANCE)
-    print(f"\nInspection of the PSO points measured on a virtual CMM ({measured.path}):")
+    print(f"\nInspection of the {STRATEGIES[result.strategy].label} points measured on a virtual CMM "
+          f"({measured.path}):")
     print(found.summary())
     print(f"colour map: {write_inspection_figure(found, face, os.path.join(folder, 'deviation.png'))}")
 

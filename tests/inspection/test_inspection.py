@@ -210,7 +210,7 @@ def test_the_demo_closes_the_loop_and_draws_the_measured_face(tmp_path, capsys):
     result = cmmsampling.sample(face, 25, "halton", occ_check=False)
     _inspection_loop(face, result, str(tmp_path / "loop"))
     said = capsys.readouterr().out
-    assert "Inspection of the PSO points measured on a virtual CMM" in said and "tolerance 0.1 mm: PASS" in said
+    assert "Inspection of the Halton points measured on a virtual CMM" in said and "tolerance 0.1 mm: PASS" in said
     assert cmmsampling.read_points(tmp_path / "loop" / "measured.dmi").metadata["dmis_features"] == "actual"
     assert (tmp_path / "loop" / "deviation.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     cmmsampling.simulate_measurement(result, tmp_path / "bad.dmi", form_error=0.05, seed=3)
