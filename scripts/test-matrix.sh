@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Run the whole test suite (scripts/test.sh: headless, then GUI under Xvfb) on the FreeCAD of other
 # Debian suites: trixie (Debian 13, FreeCAD 1.0) and sid (FreeCAD 1.1), each inside a Debian root
-# built with debootstrap; in each root the Addon Manager also installs the workbench from a git URL
+# built with debootstrap, the suites side by side; in each root the Addon Manager also installs the workbench from a git URL
 # served from a bare clone of this checkout's HEAD (tests/addon_manager_install.py). Needs root
 # (debootstrap, mount, chroot), git and deb.debian.org.
 #
@@ -184,15 +184,36 @@ main() {
   exec 9>"$cache/.lock"
   flock 9   # one matrix run at a time per machine: they share the roots
   prepare_addon_remote
+  local ready=()
   for suite in "${suites[@]}"; do
-    if ! ensure_root "$suite"; then
+    if ensure_root "$suite"; then
+      ready+=("$suite")
+    else
       log "$suite: FAILED to build the root"
       status=1
-      continue
     fi
-    run_suite "$suite" || status=1
   done
+  [ ${#ready[@]} -eq 0 ] || run_suites "${ready[@]}" || status=1
   exit "$status"
+}
+
+run_suites() {
+  # run_suites SUITE...: run_suite of every suite at once, each in its own root, its output in
+  # artifacts/matrix-<suite>.log, printed in order once it has ended. A suite's tests spend much
+  # of their time waiting (the GUI's timers, the worker processes), so on two cores the suites
+  # side by side take about as long as the slower one alone. Non-zero when any fails.
+  local suite index status=0 pids=() logs=()
+  mkdir -p "$repo/artifacts"
+  for suite in "$@"; do
+    logs+=("$repo/artifacts/matrix-$suite.log")
+    run_suite "$suite" >"${logs[-1]}" 2>&1 &
+    pids+=("$!")
+  done
+  for index in "${!pids[@]}"; do
+    wait "${pids[index]}" || status=1
+    cat "${logs[index]}" >&2
+  done
+  return "$status"
 }
 
 main "$@"
