@@ -68,7 +68,7 @@ def measured_deviation(face: Part.Face, points: PointSet | str | os.PathLike | n
     face = as_face(face)
     point_set = read_points(points) if isinstance(points, (str, os.PathLike)) else as_point_set(points)
     placement = resolve_frame(frame)[0] if frame is not None else placement_from_metadata(point_set.metadata)
-    radius = (_stated_radius(point_set) if probe_radius is None
+    radius = (stated_radius(point_set) if probe_radius is None
               else check_real("probe_radius", probe_radius, minimum=0.0))
     measured = checked(point_set)
     positions = measured.points
@@ -85,7 +85,7 @@ def measured_deviation(face: Part.Face, points: PointSet | str | os.PathLike | n
 MAX_COORDINATE_MM = 1e6
 
 
-def _stated_radius(point_set):
+def stated_radius(point_set):
     """The probe radius (mm) the point file states (0 when none); InputError for a stated value
     that is no finite number of at least 0."""
     stated = point_set.metadata.get("probe_radius_mm", 0.0)

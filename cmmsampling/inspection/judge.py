@@ -19,7 +19,7 @@ from ..geometry.freecad_env import import_part
 from ..geometry.surface import as_face
 from ..geometry.validation import InputError, InputTypeError, check_real
 from ..fitting.occ_surface import substitute_surface
-from ..measurement import closest_points
+from ..measurement import closest_points, stated_radius
 from ..planning.part_plan import PartPlan
 from ..strategies.result import SamplingResult
 from .align import ALIGNMENTS, Alignment, align, check_locked
@@ -187,9 +187,10 @@ def _contact_points(point_set, probe_radius):
     their vectors (probe_radius mm, else the radius the file states, except for DMIS actuals,
     which a CMM reports as contact points already; 0 for contact points)."""
     actual = point_set.metadata.get("dmis_features") == "actual"
-    stated = (0.0 if actual else point_set.metadata.get("probe_radius_mm", 0.0)) if probe_radius is None \
-        else probe_radius
-    radius = check_real("probe_radius", float(stated), minimum=0.0)
+    if probe_radius is not None:
+        radius = check_real("probe_radius", probe_radius, minimum=0.0)
+    else:
+        radius = 0.0 if actual else stated_radius(point_set)
     points = np.asarray(point_set.points, dtype=float)
     normals = np.asarray(point_set.normals, dtype=float)
     if radius > 0 and not np.isfinite(normals).all():
