@@ -64,6 +64,7 @@ _API = {
     "PartPlan": "planning.part_plan",
     "add_to_document": "document",
     "add_plan_to_document": "document",
+    "add_inspection_to_document": "document",
     "reevaluate": "document",
     "compare": "study",
     "write_report": "study",

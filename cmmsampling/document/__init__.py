@@ -14,15 +14,18 @@ Lengths are in mm, times in s.
 
 The room's modules: objects (the proxies and their makers), results (add_to_document,
 add_plan_to_document, reevaluate), sheets (the spreadsheets), transaction (undoable steps),
-object_types (what an object is, by its proxy's Type) and export_hook (File > Export).
+object_types (what an object is, by its proxy's Type), export_hook (File > Export) and
+inspections (measured points judged against the CAD model: add_inspection_to_document).
 Documents saved with the proxies at ``cmmsampling.document.ProbePoints`` (before this room had
 modules) still open: the names below keep that path.
 """
 from .export_hook import export
+from .inspections import MeasuredPoints, add_inspection_to_document
 from .object_types import probe_points_in
 from .objects import ProbePoints, SubstituteSurface, TypedProxy
 from .results import add_plan_to_document, add_to_document, reevaluate
 from .transaction import recompute, transaction
 
-__all__ = ["ProbePoints", "SubstituteSurface", "TypedProxy", "add_plan_to_document", "add_to_document", "export",
+__all__ = ["MeasuredPoints", "ProbePoints", "SubstituteSurface", "TypedProxy", "add_inspection_to_document",
+           "add_plan_to_document", "add_to_document", "export",
            "probe_points_in", "recompute", "reevaluate", "transaction"]

@@ -11,6 +11,7 @@ Part = import_part()
 PROBE_POINTS = "CMMSampling::ProbePoints"
 SUBSTITUTE_SURFACE = "CMMSampling::SubstituteSurface"
 PART_PLAN = "CMMSampling::PartPlan"
+MEASURED_POINTS = "CMMSampling::MeasuredPoints"
 
 
 def type_of(obj):
@@ -26,6 +27,11 @@ def is_probe_points(obj):
 def is_substitute_surface(obj):
     """True for a substitute-surface object of this workbench."""
     return type_of(obj) == SUBSTITUTE_SURFACE
+
+
+def is_measured_points(obj):
+    """True for the measured points of an inspection (add_inspection_to_document)."""
+    return type_of(obj) == MEASURED_POINTS
 
 
 def is_part_plan(obj):

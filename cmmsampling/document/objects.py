@@ -14,6 +14,7 @@ from ..formats.pointset import PointSet
 from ..geometry.freecad_env import import_part
 from ..geometry.surface import SurfaceModel
 from ..geometry.validation import InputError
+from ..inspection.judge import Planned
 from ..planning.probe_moves import moves_through
 from .object_types import PART_PLAN, PROBE_POINTS, SUBSTITUTE_SURFACE, plan_probe_points, source_face
 
@@ -216,6 +217,17 @@ class ProbePoints(TypedProxy):
             axes=np.array(axes, dtype=float) if len(axes) == len(obj.Labels) and axes else None,
         )
 
+    def planned(self, obj):
+        """What measured points are judged against (cmmsampling.inspect): the labels, the points
+        and their source face as it is now; InputError where the face is gone."""
+        face, why = source_face(obj)
+        if face is None:
+            raise InputError(f"{obj.Label} cannot be inspected: {why}; measured points are judged on the face "
+                             "they were planned on")
+        point_set = self.point_set(obj)
+        return Planned(point_set.labels, point_set.points, [face], [obj.SourceName or obj.Label],
+                       np.zeros(len(point_set), dtype=int))
+
     def probe_moves(self, obj, motion=None):
         """The collision-free probe path through the points (cmmsampling.planning.probe_moves.
         ProbeMoves) on their source object's shape, with the probe and axes of their run; motion:
@@ -281,6 +293,16 @@ class PartPlanGroup(TypedProxy):
                         np.concatenate([s.uv for s in sets]), np.concatenate([s.deviation for s in sets]), metadata,
                         [face for face, point_set in zip(faces, sets) for _ in range(len(point_set))],
                         np.concatenate(axes) if all(a is not None for a in axes) else None)
+
+    def planned(self, obj):
+        """What measured points are judged against (cmmsampling.inspect): every face's labels
+        (Face61_P1, as exported), points and faces; InputError where a face is gone."""
+        members = plan_probe_points(obj)
+        point_set = self.point_set(obj)
+        faces = [member.Proxy.planned(member).faces[0] for member in members]
+        names = [member.SourceName or member.Label for member in members]
+        counts = [len(member.Labels) for member in members]
+        return Planned(point_set.labels, point_set.points, faces, names, np.repeat(np.arange(len(members)), counts))
 
     def follows_probe(self, obj):
         """True when every face's points were planned with a probe that reaches them all, on a part

@@ -163,6 +163,54 @@ def write_plan_report(sheet, plan, moves=None):
     sheet.setColumnWidth("G", NOTES_WIDTH)
 
 
+INSPECTION_COLUMNS = ("Label", "Face", "Nominal X (mm)", "Nominal Y (mm)", "Nominal Z (mm)", "Measured X (mm)",
+                      "Measured Y (mm)", "Measured Z (mm)", "Deviation (mm)", "Band")
+BAND_TEXTS = {-2: "OUT below", -1: "near below", 0: "in", 1: "near above", 2: "OUT above"}
+
+
+def write_inspection_report(sheet, points):
+    """The inspection report of measured points (cmmsampling.document.inspections): the summary
+    (profile, tolerance, verdict, points outside the zone, alignment, its 4 x 4 matrix measured ->
+    CAD) with aliases (n, profile_mm, tolerance_mm, verdict, outside, moved_mm), then one row
+    per point: label, face, nominal, measured (aligned) and the deviation as text to 0.1 um, and
+    its band. The figures in mm are numbers shown in micrometres, as in the deviation report."""
+    clear_cells(sheet)
+    bands = np.array(points.Bands, dtype=int)
+    matrix = points.AlignmentPlacement.toMatrix()
+    summary = [
+        ("Inspection report",),
+        ("Measured file", points.MeasuredFile or "(points given in the console)"),
+        ("Points", len(points.Labels), "n"),
+        ("Profile (form)", points.Profile.Value, "profile_mm"),
+        ("Tolerance", points.Tolerance.Value if points.Tolerance.Value > 0 else "none", "tolerance_mm"),
+        ("Verdict", points.Verdict, "verdict"),
+        ("Points outside the zone", int(np.count_nonzero(np.abs(bands) == 2)), "outside"),
+        ("Alignment", points.Alignment + (f", locked {', '.join(points.Locked)}" if points.Locked else "")),
+        ("Moved the points by up to", points.MovedBy.Value, "moved_mm"),
+    ] + [("Transform (measured -> CAD)" if row == 0 else "", *(f"{matrix.A[4 * row + column]:.9g}"
+                                                               for column in range(4))) for row in range(4)]
+    notes = [("Note", note) for note in points.Notes]
+    table = [INSPECTION_COLUMNS] + [
+        (label, face, *(f"{c:.4f}" for c in nominal), *(f"{c:.4f}" for c in measured), f"{d:+.4f}",
+         BAND_TEXTS[band])
+        for label, face, nominal, measured, d, band in zip(points.Labels, points.Faces, points.Nominal,
+                                                         points.Points, points.Deviation, bands)]
+    rows = [row[:5] if len(row) == 5 else row[:2] for row in summary] + notes + [()] + table
+    for row, values in enumerate(rows, start=1):
+        for column, value in zip(REPORT_COLUMNS, values):
+            sheet.set(f"{column}{row}", _cell_text(value))
+    for row, entry in enumerate(summary, start=1):
+        if len(entry) == 3:
+            sheet.setAlias(f"B{row}", entry[2])
+            if entry[2].endswith("_mm") and not isinstance(entry[1], str):
+                sheet.setDisplayUnit(f"B{row}", DEVIATION_DISPLAY_UNIT)
+    header = len(rows) - len(points.Labels)
+    sheet.setStyle("A1", "bold")
+    sheet.setStyle(f"A{header}:J{header}", "bold")
+    sheet.setAlignment(f"C{header}:I{len(rows)}", "right")
+    fit_columns(sheet, [row for row in rows if row not in notes])
+
+
 def fit_columns(sheet, rows):
     """Widen each column of a spreadsheet to its longest entry among rows (tuples of cell
     values, from column A), so that no header is cut; widths within COLUMN_WIDTHS."""

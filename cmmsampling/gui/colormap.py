@@ -77,6 +77,25 @@ def legend(maximum, title="Deviation"):
     return overlay([backdrop, _bar(maximum), _labels(labels, title)])
 
 
+def band_legend(rows, title):
+    """A screen overlay (see :func:`overlay`) listing colour bands at the legend's place: rows
+    [(rgb, text)] from the top down, each a swatch and its text, the title above, on a light
+    backdrop (e.g. the bands of a tolerance zone)."""
+    x0, x1 = LEGEND_X
+    top = LEGEND_Y[1]
+    width = max([x1 - x0 + 0.01 + CHARACTER_WIDTH * len(text) for _, text in rows] + [CHARACTER_WIDTH * len(title)])
+    bottom = top - KEY_HEIGHT * len(rows)
+    corner = (x0 - BACKDROP_MARGIN, bottom - BACKDROP_MARGIN)
+    children = [_backdrop(corner, (x0 + width + BACKDROP_MARGIN, top + 0.05 + KEY_HEIGHT))]
+    labels = text_node(TEXT_COLOUR, FONT_SIZE)
+    for row, (rgb, text) in enumerate(rows):
+        y = top - KEY_HEIGHT * (row + 1)
+        children.append(_rectangle((x0, y), (x1, y + KEY_HEIGHT - 2 * BACKDROP_MARGIN), rgb, 0.0))
+        labels.addChild(text_at(text, (x1 + 0.01, y + 0.005, 0.0)))
+    labels.addChild(text_at(title, (x0, top + 0.05, 0.0)))
+    return overlay(children + [labels])
+
+
 def key(rgb, text, row=0):
     """A screen overlay (see :func:`overlay`) below the legend: a swatch of colour ``rgb`` and
     ``text`` beside it on a light backdrop; row 0, 1, ... stacks keys downwards."""

@@ -9,7 +9,7 @@ import re
 import FreeCAD
 import FreeCADGui
 from FreeCAD import Qt
-from PySide import QtGui
+from PySide import QtCore, QtGui
 
 from .. import document
 from ..document.object_types import is_part_plan, source_face
@@ -192,6 +192,57 @@ class ExportProbePoints(GuardedCommand):
             show_export_report(report)
 
 
+class InspectMeasured(GuardedCommand):
+    """*Inspect measured points...*: read the CMM's measured points of the selected probe points
+    (or part plan), align them to the CAD model, judge them against a profile tolerance and add
+    the coloured points and the inspection report to the document."""
+
+    NAME = "CMMSampling_Inspect"
+    TITLE = Qt.QT_TRANSLATE_NOOP("CMMSampling_Inspect", "Inspect measured points")
+    MENU = Qt.QT_TRANSLATE_NOOP("CMMSampling_Inspect", "Inspect measured points...")
+    ICON = "Inspect.svg"
+    TIP = Qt.QT_TRANSLATE_NOOP(
+        "CMMSampling_Inspect",
+        "Read the points the CMM measured for the selected probe points (or part plan), align them to the "
+        "CAD model (best fit, min-max or none), judge their deviations (mm) against a profile tolerance "
+        "and colour them on the part, with an inspection report")
+
+    def reason(self):
+        """Why the command cannot act now, or None."""
+        points = selected_export_sources()
+        if not points:
+            return "Select the probe points (or their Sampling group, or a part plan's group) that were measured."
+        if len(points) > 1:
+            return f"{len(points)} sets of probe points are selected: select the one that was measured."
+        return None
+
+    def act(self):
+        from .inspect_dialog import ask_inspection, inspection_call, report_inspection
+
+        [points] = selected_export_sources()
+        arguments = ask_inspection(points)
+        if arguments is None:
+            return
+        FreeCADGui.doCommand("import cmmsampling")
+        judge, add = inspection_call(points, arguments)
+        before = getattr(__main__, "inspection", None), getattr(__main__, "group", None)
+        QtGui.QApplication.setOverrideCursor(QtCore.Qt.WaitCursor)
+        try:
+            FreeCADGui.doCommand(judge)
+            inspection = getattr(__main__, "inspection", None)
+            if inspection is before[0]:
+                raise RuntimeError("The measured points were not inspected: the Report view says why.")
+            FreeCADGui.doCommand(add)
+            if getattr(__main__, "group", None) is before[1]:
+                raise RuntimeError("The inspection was not added to the document: the Report view says why.")
+        except Exception as exc:
+            warn(self.TITLE, str(exc))
+            return
+        finally:
+            QtGui.QApplication.restoreOverrideCursor()
+        report_inspection(inspection)
+
+
 class CompareStrategies(FaceCommand):
     """*Compare strategies...*: open the comparison panel for the one selected face."""
 
@@ -333,7 +384,7 @@ class OpenComparisonReport(GuardedCommand):
             open_report(path, f"Compare strategies: {os.path.basename(os.path.dirname(path))}")
 
 
-COMMANDS = (SampleFace, ExportProbePoints, Reevaluate, CompareStrategies, PlanPart)
+COMMANDS = (SampleFace, ExportProbePoints, Reevaluate, CompareStrategies, PlanPart, InspectMeasured)
 MENU_ONLY = (OpenComparisonReport,)
 
 

@@ -41,6 +41,10 @@ DAMPING_RISE = 10.0
 # the points hardly constrain (sliding along a plane) is at least SCALE_FLOOR of the largest.
 CONVERGED_DAMPING = 1e-6
 COST_TOLERANCE = 1e-12
+# The search ends too where a Gauss-Newton step would lower the sum of squares by no more than
+# COST_TOLERANCE of it plus GAIN_FLOOR_MM2 (mm^2): at the bottom of a flat valley (a blade the
+# points may slide along a little), where rounding alone decides whether a step lowers the sum.
+GAIN_FLOOR_MM2 = 1e-18
 SCALE_FLOOR = 1e-6
 # The min-max programme's trust region: the largest rotation (rad) and shift (mm) of one step,
 # shrunk by TRUST_SHRINK where a step does not lower the largest deviation.
@@ -156,14 +160,19 @@ def _step_matrix(step, free, centre):
 def _least_squares(points, closest, free):
     """Levenberg-Marquardt on sum d^2 (Gauss-Newton steps, damped where a step would not lower
     the sum, so that a weakly constrained motion, e.g. sliding along a nearly flat face, cannot
-    make it oscillate): (matrix (4, 4), iterations)."""
+    make it oscillate), ended where a Gauss-Newton step could gain nothing: (matrix (4, 4),
+    iterations)."""
     matrix, damping = np.eye(4), DAMPING[0]
     deviations, jacobian, centre = _model(points, closest, free)
     cost = float(deviations @ deviations)
     for iteration in range(1, MAX_ITERATIONS + 1):
         normal = jacobian.T @ jacobian
         scale = np.maximum(np.diag(normal), SCALE_FLOOR * np.diag(normal).max() + np.finfo(float).tiny)
-        step = np.linalg.solve(normal + damping * np.diag(scale), -jacobian.T @ deviations)
+        gradient = jacobian.T @ deviations
+        if gradient @ np.linalg.solve(normal + DAMPING[0] * np.diag(scale), gradient) <= (
+                COST_TOLERANCE * cost + GAIN_FLOOR_MM2):
+            return matrix, iteration - 1
+        step = np.linalg.solve(normal + damping * np.diag(scale), -gradient)
         motion = _step_matrix(step, free, centre)
         moved = transform(matrix, points)
         trial = motion @ matrix

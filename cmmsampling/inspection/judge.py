@@ -28,6 +28,10 @@ from .measured import read_measured
 Part = import_part()
 import FreeCAD  # noqa: E402  (importable once import_part() has set the path)
 
+# A point inside the zone is "near" its limit beyond this fraction of the half zone t / 2.
+NEAR_FRACTION = 0.8
+BANDS = ("out below", "near below", "in", "near above", "out above")
+
 
 @dataclass
 class Inspection:
@@ -56,6 +60,7 @@ class Inspection:
     substitute_poles: np.ndarray = None
     substitute_deviation: object = None
     space: object = None
+    measured_file: str = ""
 
     @property
     def substitute(self):
@@ -81,6 +86,15 @@ class Inspection:
         return np.abs(self.deviations) <= self.tolerance / 2.0
 
     @property
+    def bands(self):
+        """(N,) int in -2 .. 2, the point's band in the tolerance zone (BANDS[band + 2]): 0 in,
+        +-1 near the limit (|d| beyond NEAR_FRACTION of t / 2), +-2 out of the zone, + above the
+        nominal (out of the material); all 0 without a tolerance."""
+        if self.tolerance is None:
+            return np.zeros(len(self.labels), dtype=int)
+        return tolerance_bands(self.deviations, self.tolerance)
+
+    @property
     def passed(self):
         """The profile is within the tolerance (None without one)."""
         return None if self.tolerance is None else self.profile <= self.tolerance
@@ -100,8 +114,8 @@ class Inspection:
 
 @dataclass
 class Planned:
-    """What was planned: labels N, nominal points (N, 3) mm (or None for a bare face), the faces
-    (Part.Face) and the index of each point's face."""
+    """What was planned: labels N (None for a bare face), nominal points (N, 3) mm (or None), the
+    faces (Part.Face), their names and owner (N,) int, the index of each point's face (or None)."""
 
     labels: list
     points: np.ndarray
@@ -110,12 +124,27 @@ class Planned:
     owner: np.ndarray
 
 
+def tolerance_bands(deviations, tolerance):
+    """(N,) int in -2 .. 2 for deviations (N,) mm against a profile tolerance t mm: 0 where |d| <=
+    NEAR_FRACTION t / 2, +-1 up to t / 2, +-2 beyond, signed as d."""
+    half = tolerance / 2.0
+    size = np.where(np.abs(deviations) > half, 2, np.where(np.abs(deviations) > NEAR_FRACTION * half, 1, 0))
+    return (np.sign(deviations) * size).astype(int)
+
+
+def band_limits(tolerance):
+    """The deviations (mm) where the bands meet for a tolerance t mm: (-t/2, -0.8 t/2, 0.8 t/2, t/2)."""
+    half = tolerance / 2.0
+    return (-half, -NEAR_FRACTION * half, NEAR_FRACTION * half, half)
+
+
 def inspect(source, measured, alignment="best_fit", tolerance=None, locked=(), part=None, probe_radius=None):
     """Judge measured points against the CAD model they were planned on.
 
-    source: a Part.Face (the measured points are taken as they come), a SamplingResult or a
-    PartPlan (with part=, the shape the plan was made of: its faces by name); the measured points pair with the
-    planned ones by label, else by order when the counts agree. measured: a path (DMIS output
+    source: a Part.Face (the measured points are taken as they come), a SamplingResult, a
+    PartPlan (with part=, the shape the plan was made of: its faces by name), a Planned, or a
+    document object whose Proxy has planned(obj) (the workbench's probe points and part plans);
+    the measured points pair with the planned ones by label, else by order when the counts agree. measured: a path (DMIS output
     with FA(label) actuals, the project's CSV or XYZIJK, labelled x y z text:
     cmmsampling.inspection.measured) or a PointSet of contact points (a
     file's stated probe radius, or probe_radius mm, is taken off along its vectors).
@@ -140,7 +169,8 @@ def inspect(source, measured, alignment="best_fit", tolerance=None, locked=(), p
     found = align(points, closest, alignment, locked)
     nominal = planned.points[order[1]] if planned.points is not None else np.full_like(points, np.nan)
     inspection = Inspection([read.labels[i] for i in order[0]], nominal, points, found.apply(points),
-                            found.deviations, found.matrix, found, tolerance, [planned.names[i] for i in owner], notes)
+                            found.deviations, found.matrix, found, tolerance, [planned.names[i] for i in owner], notes,
+                            measured_file=os.fspath(measured) if isinstance(measured, (str, os.PathLike)) else "")
     if isinstance(source, SamplingResult):
         rebuild(inspection, source, order[1])
     return inspection
@@ -156,7 +186,13 @@ def rebuild(inspection, result, planned_rows):
 
 
 def _planned(source, part):
-    """The Planned of a face, a SamplingResult or a PartPlan (with its part)."""
+    """The Planned of a face, a SamplingResult, a PartPlan (with its part), a Planned or a document
+    object whose Proxy has planned(obj)."""
+    if isinstance(source, Planned):
+        return source
+    method = getattr(getattr(source, "Proxy", None), "planned", None)
+    if callable(method):
+        return method(source)
     if isinstance(source, SamplingResult):
         labels = PointSet.from_result(source).labels
         return Planned(labels, source.points, [source.face], ["face"], np.zeros(source.n, dtype=int))
@@ -170,8 +206,8 @@ def _planned(source, part):
         return Planned(point_set.labels, point_set.points, faces, names, owner)
     if isinstance(source, Part.Face) or isinstance(source, Part.Shape):
         return Planned(None, None, [as_face(source)], ["face"], None)
-    raise InputTypeError(f"cannot inspect against a {type(source).__name__}; give a Part.Face, a SamplingResult "
-                         "or a PartPlan")
+    raise InputTypeError(f"cannot inspect against a {type(source).__name__}; give a Part.Face, a SamplingResult, "
+                         "a PartPlan or the workbench's probe points in a document")
 
 
 def _face_of(part, name):

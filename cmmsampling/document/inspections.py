@@ -1,0 +1,149 @@
+"""Inspections in the document: the measured points, aligned to the CAD model and coloured by
+their deviation's band in the tolerance zone, and the inspection report, added in one
+transaction (one Undo removes them; a fault adds nothing).
+
+The part is never moved: the alignment (measured -> CAD) is applied to the measured points and
+shown as a placement. Lengths in mm.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..geometry.freecad_env import import_part
+from ..geometry.validation import InputError, InputTypeError
+from ..inspection.judge import Inspection
+from .object_types import MEASURED_POINTS, in_document, is_measured_points
+from .objects import TypedProxy
+from .sheets import write_inspection_report
+from .transaction import hide_results, recompute, transaction
+
+Part = import_part()
+import FreeCAD  # noqa: E402  (importable once import_part() has set the path)
+
+NO_TOLERANCE = "no tolerance"
+
+
+def add_inspection_to_document(inspection: Inspection, doc: FreeCAD.Document,
+                               source: FreeCAD.DocumentObject | None = None) -> FreeCAD.DocumentObject:
+    """Add an Inspection (cmmsampling.inspect) to ``doc`` in one transaction.
+
+    source: the probe points or part plan's group the points were planned as (linked from the
+    measured points), or None. Creates a group "Inspection <source> (<verdict>)" holding the
+    "Measured points" (the aligned points as vertices, with their deviations, bands and the
+    alignment) and the "Inspection report" spreadsheet; hides the earlier results' points,
+    substitutes and measured points (Undo shows them again). Returns the group.
+    """
+    if not isinstance(inspection, Inspection):
+        raise InputTypeError(f"add_inspection_to_document takes an Inspection (cmmsampling.inspect), got a "
+                             f"{type(inspection).__name__}")
+    if source is not None and not in_document(source, doc):
+        raise InputError("source must be the probe points or part plan in this document the points were planned "
+                         "as, or None")
+    with transaction(doc, "Add inspection"):
+        group = doc.addObject("App::DocumentObjectGroup", "Inspection")
+        hide_results(doc)
+        for other in doc.Objects:
+            if is_measured_points(other) and other.Visibility:
+                other.Visibility = False
+        points = make_measured_points(doc)
+        report = doc.addObject("Spreadsheet::Sheet", "InspectionReport")
+        report.Label = "Inspection report"
+        group.addObjects([points, report])
+        points.Source, points.Report = source, report
+        write_inspection(points, inspection)
+        group.Label = f"Inspection {source.Label if source is not None else 'face'} ({points.Verdict})"
+        write_inspection_report(report, points)
+        recompute(doc, [points, report])
+    return group
+
+
+def make_measured_points(doc):
+    """A measured-points object (Part::FeaturePython), empty until :func:`write_inspection`."""
+    obj = doc.addObject("Part::FeaturePython", "MeasuredPoints")
+    MeasuredPoints(obj)
+    obj.Label = "Measured points"
+    if FreeCAD.GuiUp:
+        from ..gui import inspection_view
+
+        inspection_view.ViewProviderMeasuredPoints(obj.ViewObject)
+    return obj
+
+
+def write_inspection(points, inspection):
+    """Copy an Inspection into a measured-points object."""
+    vectors = lambda rows: [FreeCAD.Vector(*map(float, row)) for row in rows]  # noqa: E731
+    points.Labels = list(inspection.labels)
+    points.Faces = list(inspection.faces)
+    points.Nominal = vectors(np.nan_to_num(inspection.nominal))
+    points.Measured = vectors(inspection.measured)
+    points.Points = vectors(inspection.points)
+    points.Deviation = [float(d) for d in inspection.deviations]
+    points.Bands = [int(b) for b in inspection.bands]
+    points.Tolerance = 0.0 if inspection.tolerance is None else inspection.tolerance
+    points.Profile = inspection.profile
+    points.Verdict = verdict(inspection)
+    points.Alignment = inspection.alignment.method
+    points.Locked = list(inspection.alignment.locked)
+    points.AlignmentPlacement = inspection.placement
+    points.MovedBy = inspection.alignment.moved_mm
+    points.MeasuredFile = inspection.measured_file
+    points.Notes = list(inspection.notes)
+
+
+def verdict(inspection):
+    """'PASS', 'FAIL' or NO_TOLERANCE."""
+    return NO_TOLERANCE if inspection.passed is None else "PASS" if inspection.passed else "FAIL"
+
+
+class MeasuredPoints(TypedProxy):
+    """Proxy of the measured points of an inspection: N points measured on the part, aligned to
+    the CAD model, with their signed deviations (+ out of the material) and bands in the
+    tolerance zone (cmmsampling.inspection.judge.BANDS).
+
+    Properties: Labels, Faces (the face each was judged on); Points (aligned, mm), Measured (as
+    read, mm), Nominal (planned, mm; 0 where none was planned); Deviation (mm); Bands (-2 .. 2);
+    Tolerance (mm, 0 without one), Profile (mm, 2 max |d|), Verdict; Alignment, Locked,
+    AlignmentPlacement (measured -> CAD), MovedBy (mm); MeasuredFile, Notes; Source (the probe
+    points or plan) and Report.
+    """
+
+    Type = MEASURED_POINTS
+    PROPERTIES = (
+        ("App::PropertyStringList", "Labels", "Measured", "Point labels, as in the measured file"),
+        ("App::PropertyStringList", "Faces", "Measured", "The face each point was judged on"),
+        ("App::PropertyVectorList", "Points", "Measured", "Measured points aligned to the CAD model (mm)"),
+        ("App::PropertyVectorList", "Measured", "Measured", "Measured points as read from the file (mm)"),
+        ("App::PropertyVectorList", "Nominal", "Measured", "Planned points (mm); 0 where none was planned"),
+        ("App::PropertyFloatList", "Deviation", "Measured",
+         "Signed distance from the CAD face along its normal (mm), + out of the material"),
+        ("App::PropertyIntegerList", "Bands", "Measured",
+         "Band in the tolerance zone: 0 in, +-1 near the limit, +-2 out (+ above the nominal)"),
+        ("App::PropertyLength", "Tolerance", "Verdict", "Profile tolerance t (mm), 0 without one"),
+        ("App::PropertyLength", "Profile", "Verdict", "Profile of the surface, form only: 2 max |d| (mm)"),
+        ("App::PropertyString", "Verdict", "Verdict", "PASS, FAIL or no tolerance"),
+        ("App::PropertyString", "Alignment", "Alignment", "none, best_fit or min_max"),
+        ("App::PropertyStringList", "Locked", "Alignment", "Degrees of freedom held fixed"),
+        ("App::PropertyPlacement", "AlignmentPlacement", "Alignment",
+         "The alignment, measured -> CAD, applied to the measured points (the part is not moved)"),
+        ("App::PropertyLength", "MovedBy", "Alignment", "How far the alignment moved the points at most (mm)"),
+        ("App::PropertyString", "MeasuredFile", "Measured", "The file the points were read from"),
+        ("App::PropertyStringList", "Notes", "Measured", "What the pairing of the points found"),
+    )
+
+    def __init__(self, obj):
+        obj.Proxy = self
+        for kind, name, group, doc in self.PROPERTIES:
+            obj.addProperty(kind, name, group, doc)
+            obj.setEditorMode(name, 1)
+        obj.addProperty("App::PropertyLink", "Source", "Measured", "The probe points or part plan measured")
+        obj.addProperty("App::PropertyLink", "Report", "Verdict", "The inspection report sheet")
+
+    def execute(self, obj):
+        """Shape: a compound of the aligned points as vertices."""
+        obj.Shape = Part.makeCompound([Part.Vertex(p) for p in obj.Points])
+
+    def onDocumentRestored(self, obj):
+        if FreeCAD.GuiUp:
+            from ..gui import inspection_view
+
+            inspection_view.attach_when_missing(obj)

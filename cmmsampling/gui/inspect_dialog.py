@@ -1,0 +1,163 @@
+"""*Inspect measured points...*: the measured file, the alignment, the locked degrees of freedom
+and the profile tolerance, asked in a small dialog; the inspection then runs as its echoed API
+calls (``inspection = cmmsampling.inspect(...)``, ``cmmsampling.add_inspection_to_document``).
+
+The values persist in the workbench's parameter group; the file starts in the folder of the last
+one read, else beside the document.
+"""
+import os
+
+import FreeCAD
+import FreeCADGui
+from PySide import QtCore, QtGui
+
+from ..inspection.align import ALIGNMENTS, DEGREES_OF_FREEDOM
+from . import icon, settings
+from .qt_compat import run_modal
+
+ALIGNMENT_TEXTS = {
+    "best_fit": ("Best fit (least squares)",
+                 "The rigid motion that makes the sum of squared deviations along the CAD normals smallest, "
+                 "iterated with exact closest points"),
+    "min_max": ("Min-max (Chebyshev)", "The rigid motion that makes the largest |deviation| smallest: the "
+                                       "narrowest zone, never wider than the best fit's"),
+    "none": ("None (points in the part's frame)", "The measured points are judged where they are: the CMM "
+                                                  "measured in the part's own frame"),
+}
+DEFAULTS = {"InspectFile": "", "InspectAlignment": "best_fit", "InspectTolerance": 0.1, "InspectLocked": ""}
+MEASURED_FILTERS = ("Measured points (*.dmi *.dmis *.dmo *.csv *.xyz *.txt);;All files (*)")
+MAX_TOLERANCE_MM = 100.0
+
+
+class InspectDialog(QtGui.QDialog):
+    """What to inspect the probe points ``title`` names with: the measured file, the alignment,
+    the locked degrees of freedom and the tolerance (0: none), from the stored values; ``folder``:
+    where the file dialog starts without a stored file."""
+
+    def __init__(self, title, folder, parent=None):
+        super().__init__(parent)
+        self.setObjectName("InspectMeasured")
+        self.setWindowTitle(f"Inspect measured points: {title}")
+        self.setWindowIcon(QtGui.QIcon(icon("Inspect.svg")))
+        stored = settings.load(DEFAULTS)
+        self.folder = os.path.dirname(stored["InspectFile"]) or folder
+        layout = QtGui.QFormLayout(self)
+        self.path = QtGui.QLineEdit(stored["InspectFile"], self)
+        self.path.setObjectName("path")
+        self.path.setToolTip("The CMM's measured points: DMIS output (FA(label) actuals), the CSV or XYZIJK this "
+                             "workbench writes, or labelled x, y, z text (comma, semicolon or spaces). They pair "
+                             "with the planned points by label.")
+        browse = QtGui.QPushButton("Browse...", self)
+        browse.setObjectName("browse")
+        browse.clicked.connect(self.browse)
+        row = QtGui.QHBoxLayout()
+        row.addWidget(self.path)
+        row.addWidget(browse)
+        layout.addRow("Measured file", row)
+        self.alignment = QtGui.QComboBox(self)
+        self.alignment.setObjectName("alignment")
+        for name in ALIGNMENTS:
+            text, tip = ALIGNMENT_TEXTS[name]
+            self.alignment.addItem(text, name)
+            self.alignment.setItemData(self.alignment.count() - 1, tip, QtCore.Qt.ToolTipRole)
+        self.alignment.setCurrentIndex(max(0, self.alignment.findData(stored["InspectAlignment"])))
+        self.alignment.setToolTip("How the measured points are brought onto the CAD model (the part is not moved: "
+                                  "the motion is applied to the points)")
+        layout.addRow("Alignment", self.alignment)
+        self.locked = {}
+        boxes = QtGui.QHBoxLayout()
+        for name in DEGREES_OF_FREEDOM:
+            box = QtGui.QCheckBox(name, self)
+            box.setObjectName(f"locked_{name}")
+            box.setChecked(name in stored["InspectLocked"].split(","))
+            box.setToolTip(f"Hold {'the rotation about ' + name[1] if name.startswith('r') else 'the shift along ' + name}"
+                           " fixed (e.g. a part clamped on a datum plane)")
+            boxes.addWidget(box)
+            self.locked[name] = box
+        layout.addRow("Locked", boxes)
+        self.tolerance = QtGui.QDoubleSpinBox(self)
+        self.tolerance.setObjectName("tolerance")
+        self.tolerance.setRange(0.0, MAX_TOLERANCE_MM)
+        self.tolerance.setDecimals(4)
+        self.tolerance.setSingleStep(0.01)
+        self.tolerance.setSuffix(" mm")
+        self.tolerance.setSpecialValueText("none")
+        self.tolerance.setValue(stored["InspectTolerance"])
+        self.tolerance.setToolTip("Profile tolerance t of the surface (ISO 1101, form only): a zone of width t "
+                                  "centred on the nominal; a point passes where |deviation| <= t/2, the face where "
+                                  "the profile 2 max |deviation| <= t. 'none': deviations only.")
+        layout.addRow("Profile tolerance", self.tolerance)
+        self.buttons = QtGui.QDialogButtonBox(QtGui.QDialogButtonBox.Ok | QtGui.QDialogButtonBox.Cancel, parent=self)
+        self.buttons.accepted.connect(self.accept)
+        self.buttons.rejected.connect(self.reject)
+        layout.addRow(self.buttons)
+        self.path.textChanged.connect(self.check)
+        self.check()
+        self.resize(560, self.sizeHint().height())
+
+    def browse(self):
+        """Pick the measured file."""
+        path = QtGui.QFileDialog.getOpenFileName(self, "Measured points", self.path.text() or self.folder,
+                                                 MEASURED_FILTERS)[0]
+        if path:
+            self.path.setText(path)
+
+    def check(self):
+        """OK only with a file that exists."""
+        found = os.path.isfile(self.path.text())
+        self.buttons.button(QtGui.QDialogButtonBox.Ok).setEnabled(found)
+
+    def arguments(self):
+        """{"measured": path, "alignment": ..., "locked": tuple, "tolerance": mm or None}: keyword
+        arguments of cmmsampling.inspect."""
+        return {"measured": self.path.text(), "alignment": self.alignment.currentData(),
+                "locked": tuple(name for name, box in self.locked.items() if box.isChecked()),
+                "tolerance": self.tolerance.value() or None}
+
+    def stored(self):
+        """The values to keep for the next inspection."""
+        chosen = self.arguments()
+        return {"InspectFile": chosen["measured"], "InspectAlignment": chosen["alignment"],
+                "InspectTolerance": self.tolerance.value(), "InspectLocked": ",".join(chosen["locked"])}
+
+
+def ask_inspection(points):
+    """Ask what to inspect a probe-points object or a part plan's group with; None when the user
+    cancels, else the keyword arguments of cmmsampling.inspect (see InspectDialog.arguments)."""
+    doc = points.Document
+    folder = os.path.dirname(doc.FileName) if doc.FileName else os.path.expanduser("~")
+    groups = [o.Label for o in points.InList if o.isDerivedFrom("App::DocumentObjectGroup")]
+    dialog = InspectDialog((groups or [points.Label])[0], folder, FreeCADGui.getMainWindow())
+    try:
+        if run_modal(dialog) != QtGui.QDialog.Accepted:
+            return None
+        settings.save(dialog.stored())
+        return dialog.arguments()
+    finally:
+        dialog.deleteLater()
+
+
+def inspection_call(points, arguments):
+    """The echoed lines of an inspection: ``inspection = cmmsampling.inspect(<points>, <file>,
+    ...)`` (the defaults left out) and ``group = cmmsampling.add_inspection_to_document(...)``."""
+    doc = f"App.getDocument({points.Document.Name!r})"
+    source = f"{doc}.getObject({points.Name!r})"
+    words = [source, repr(arguments["measured"])]
+    if arguments["alignment"] != "best_fit":
+        words.append(f"alignment={arguments['alignment']!r}")
+    if arguments["locked"]:
+        words.append(f"locked={arguments['locked']!r}")
+    if arguments["tolerance"] is not None:
+        words.append(f"tolerance={arguments['tolerance']!r}")
+    return [f"inspection = cmmsampling.inspect({', '.join(words)})",
+            f"group = cmmsampling.add_inspection_to_document(inspection, {doc}, source={source})"]
+
+
+def report_inspection(inspection):
+    """The inspection's summary in the Report view, its profile and verdict in the status bar."""
+    for line in inspection.summary().splitlines():
+        FreeCAD.Console.PrintMessage(f"cmmsampling: {line}\n")
+    verdict = "" if inspection.passed is None else (
+        f", tolerance {inspection.tolerance:g} mm: {'PASS' if inspection.passed else 'FAIL'}")
+    FreeCADGui.getMainWindow().statusBar().showMessage(
+        f"Inspection of {len(inspection.labels)} measured points: profile {inspection.profile:.4f} mm{verdict}", 20000)

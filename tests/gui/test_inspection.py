@@ -1,0 +1,149 @@
+"""*Inspect measured points...* on a Ventilator blade: the points a virtual CMM measured on a
+misplaced part with a form error come back, are aligned and judged against a tolerance, coloured
+by band on the part, with the inspection report, in one Undo, echoed as the API calls."""
+import os
+
+import FreeCAD
+import FreeCADGui
+import numpy as np
+import Part
+import pytest
+from support.faces import TESTDATA
+
+import cmmsampling
+from cmmsampling.document.object_types import is_measured_points
+from cmmsampling.gui import commands, inspect_dialog, inspection_view
+from cmmsampling.inspection.judge import tolerance_bands
+
+from PySide import QtCore, QtGui
+
+from .helpers import dock_text, document_with, main_window, modal_message, process_events, texts
+
+BLADE = "Face176"
+MISPLACED = {"rx": 0.5, "ry": -0.4, "rz": 0.8, "x": 1.2, "y": -1.5, "z": 0.6}
+
+
+@pytest.fixture
+def blade_points(workbench):
+    """A document with the Ventilator and 36 Halton probe points on a blade (skipped without the
+    shared test data); (document, the probe points)."""
+    path = os.path.join(TESTDATA, "Ventilator.stp")
+    if not os.path.isfile(path):
+        pytest.skip("the shared test data (Ventilator.stp) is not here")
+    for doc in document_with("Inspection", {"Ventilator": Part.read(path)}):
+        result = cmmsampling.sample(doc.Ventilator.getSubObject(BLADE), 36, "halton", occ_check=False)
+        group = cmmsampling.add_to_document(result, doc, source=(doc.Ventilator, BLADE))
+        yield doc, group.Group[0]
+
+
+def inspect_with(points, handle, timeout_s=20):
+    """Select points, run the command and answer its dialog with handle(dialog), which must close it."""
+    FreeCADGui.Selection.clearSelection()
+    FreeCADGui.Selection.addSelection(points)
+    timer = QtCore.QTimer()
+    timer.setInterval(50)
+
+    def poll():
+        dialog = QtGui.QApplication.activeModalWidget()
+        if isinstance(dialog, inspect_dialog.InspectDialog):
+            timer.stop()
+            try:
+                handle(dialog)
+            finally:
+                if dialog.isVisible():
+                    dialog.reject()
+
+    timer.timeout.connect(poll)
+    timer.start()
+    QtCore.QTimer.singleShot(int(timeout_s * 1000), timer.stop)
+    FreeCADGui.runCommand(commands.InspectMeasured.NAME)
+    timer.stop()
+
+
+def test_inspect_measured_points_on_a_ventilator_blade(blade_points, tmp_path, artifacts):
+    doc, points = blade_points
+    measured = str(tmp_path / "blade.dmi")
+    cmmsampling.simulate_measurement(points, measured, form_error=0.03, misplacement=MISPLACED, seed=4)
+    seen = {}
+
+    def choose(dialog):
+        seen["title"] = dialog.windowTitle()
+        seen["ok before"] = dialog.buttons.button(QtGui.QDialogButtonBox.Ok).isEnabled()
+        dialog.path.setText(measured)
+        dialog.tolerance.setValue(0.013)
+        dialog.alignment.setCurrentIndex(dialog.alignment.findData("best_fit"))
+        dialog.grab().save(os.path.join(artifacts, "inspect_dialog.png"))
+        dialog.accept()
+
+    before, undo = len(doc.Objects), doc.UndoCount
+    console = dock_text("Python console")
+    inspect_with(points, choose)
+    assert seen["title"] == f"Inspect measured points: Sampling Ventilator {BLADE} (halton)"
+    assert not seen["ok before"], "OK waits for a file"
+    [group] = [obj for obj in doc.Objects if obj.Label.startswith("Inspection ") and hasattr(obj, "Group")]
+    measured_points, report = group.Group
+    assert is_measured_points(measured_points) and report.TypeId == "Spreadsheet::Sheet"
+    assert doc.UndoCount == undo + 1 and len(doc.Objects) == before + 3
+
+    expected = cmmsampling.inspect(points, measured, tolerance=0.013)
+    deviations = np.array(measured_points.Deviation)
+    assert np.abs(deviations - expected.deviations).max() < 1e-9
+    assert list(measured_points.Bands) == tolerance_bands(deviations, 0.013).tolist()
+    assert len(set(measured_points.Bands)) >= 3, "the picture shows points in, near and out of the zone"
+    assert group.Label == f"Inspection Probe points ({measured_points.Verdict})"
+    assert measured_points.Verdict == ("PASS" if expected.passed else "FAIL")
+    assert report.get("profile_mm") == pytest.approx(expected.profile)
+    assert report.get("verdict") == measured_points.Verdict and report.get("n") == 36
+    echoed = dock_text("Python console")[len(console):]
+    assert (f"inspection = cmmsampling.inspect(App.getDocument({doc.Name!r}).getObject({points.Name!r}), "
+            f"{measured!r}, tolerance=0.013)") in echoed
+    assert "group = cmmsampling.add_inspection_to_document(inspection, " in echoed
+    assert "profile" in main_window().statusBar().currentMessage()
+    assert not points.Visibility and measured_points.Visibility, "the inspection is shown alone"
+
+    proxy = measured_points.ViewObject.Proxy
+    assert isinstance(proxy, inspection_view.ViewProviderMeasuredPoints)
+    assert proxy.annotation.getNumChildren() == 3, "dots, labels and legend"
+    assert texts(proxy.annotation)[-1] == (f"Profile {expected.profile:.4f} mm, tolerance 0.013 mm: "
+                                           f"{measured_points.Verdict}")
+    view = FreeCADGui.ActiveDocument.ActiveView
+    view.setViewDirection(tuple(-points.Proxy.point_set(points).normals.mean(axis=0)))
+    FreeCADGui.Selection.clearSelection()
+    FreeCADGui.Selection.addSelection(doc.Ventilator, BLADE)
+    FreeCADGui.SendMsgToActiveView("ViewSelection")
+    FreeCADGui.Selection.clearSelection()
+    process_events(0.5)
+    FreeCADGui.ActiveDocument.ActiveView.saveImage(os.path.join(artifacts, "inspection_ventilator_blade.png"),
+                                                   1200, 900, "White")
+    print(f"Ventilator {BLADE}: {expected.summary()}")
+
+    doc.undo()
+    assert len(doc.Objects) == before and points.Visibility
+
+
+def test_a_bad_measured_file_is_named_and_adds_nothing(blade_points, tmp_path):
+    doc, points = blade_points
+    bad = tmp_path / "bad.txt"
+    bad.write_text("P1; 1,5; 2,0; 3,0\n")
+    before = len(doc.Objects)
+
+    def choose(dialog):
+        dialog.path.setText(str(bad))
+        dialog.accept()
+
+    said = modal_message(lambda: inspect_with(points, choose))
+    assert "decimal comma" in said, said
+    assert len(doc.Objects) == before
+
+
+def test_without_a_tolerance_the_points_take_the_deviation_colours(blade_points, tmp_path):
+    doc, points = blade_points
+    measured = tmp_path / "blade.csv"
+    cmmsampling.simulate_measurement(points, measured, form_error=0.03, seed=2)
+    inspection = cmmsampling.inspect(points, measured, alignment="none")
+    group = cmmsampling.add_inspection_to_document(inspection, doc, source=points)
+    measured_points = group.Group[0]
+    assert measured_points.Verdict == "no tolerance" and group.Label == "Inspection Probe points (no tolerance)"
+    assert set(measured_points.Bands) == {0}
+    measured_points.ViewObject.ShowLabels = False
+    assert measured_points.ViewObject.Proxy.annotation.getNumChildren() == 2, "dots and legend"
