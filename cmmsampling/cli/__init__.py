@@ -97,7 +97,8 @@ def _plan_arguments(parser):
                         help=f"write all points as one program in one short probe path: {formats()} (CSV "
                              "with a face column); repeat for several files")
     parser.add_argument("--probe-radius", type=float, default=0.0, metavar="MM",
-                        help="write ball centres instead of contact points (default 0)")
+                        help="write ball centres instead of contact points (default 0; a DMIS program "
+                             "keeps contact points and states the radius)")
     _probe_argument(parser)
     parser.add_argument("--fcstd", metavar="FILE",
                         help="also save a FreeCAD document: the part, one group per face, the plan's table")
@@ -157,7 +158,8 @@ def _sample_arguments(parser):
                              "(repeat for several files)")
     parser.add_argument("--probe-radius", type=float, default=0.0, metavar="MM",
                         help="write ball centres (point + radius * normal) instead of contact points "
-                             "(default 0: contact points)")
+                             "(default 0: contact points; a DMIS program keeps contact points, its "
+                             "FEAT/PTMEAS are surface points, and states the radius)")
     _probe_argument(parser)
     parser.add_argument("--order", default=None, choices=["as_optimised", "short_path", "probe_path"],
                         help="point order in the files: a short probe path, as optimised, or (with --probe) the "

@@ -48,6 +48,7 @@ def write(point_set, facts, options):
     lines += metadata_comment_lines(entries, f"{DMIS_COMMENT} ", DMIS_COMMENT_CONTINUED, DMIS_LINE_LIMIT)
     sensors = sensor_labels(point_set) if point_set.travel is not None else None
     lines += ["UNITS/MM,ANGDEC", "MODE/AUTO,PROG,MAN" if sensors is not None else "MODE/PROG,MAN"]
+    lines += frame_statements(facts)
     distances = {"APPRCH": options.approach, "RETRCT": options.retract, "SEARCH": options.search}
     lines += [f"SNSET/{word},{fixed(value, COORDINATE_DECIMALS).item()}" for word, value in distances.items()]
     if sensors is not None:
@@ -69,6 +70,34 @@ def write(point_set, facts, options):
         lines += goto_lines(point_set.travel[-1][0])
     lines.append("ENDFIL")
     return "\n".join(without_repeated_gotos(lines)) + "\n"
+
+
+def frame_statements(facts):
+    """The local frame the points are written in (facts: cmmsampling.formats.frames.frame_facts),
+    as DMIS datum statements from the part's CAD (global) frame: D(name)=TRANS/XORIG,x,YORIG,y,
+    ZORIG,z moves the origin to the frame's (mm, in the CAD frame), then D(name)=ROTAT/ZAXIS,a,
+    ROTAT/YAXIS,b, ROTAT/XAXIS,c turn it about its own current axes (degrees, right-handed: the
+    frame's rotation is Rz(a) Ry(b) Rx(c)); rotations of 0 are left out. [] for global points."""
+    if facts.get("frame", "global") == "global":
+        return []
+    label = sanitise_labels([facts.get("frame_name") or "LOCAL"])[0]
+    rotation = np.column_stack([facts[f"frame_{axis}_axis"] for axis in "xyz"])
+    origin = fixed(np.asarray(facts["frame_origin_mm"], dtype=float), COORDINATE_DECIMALS).tolist()
+    lines = [f"{DMIS_COMMENT} the local frame, from the part's CAD frame: TRANS, then ROTAT about Z, Y, X",
+             *dmis_statement([f"D({label})=TRANS/XORIG", origin[0], "YORIG", origin[1], "ZORIG", origin[2]])]
+    for axis, angle in zip(("ZAXIS", "YAXIS", "XAXIS"), zyx_angles(rotation)):
+        text = fixed(angle, ANGLE_DECIMALS).item()
+        if float(text) != 0.0:
+            lines.append(f"D({label})=ROTAT/{axis},{text}")
+    return lines
+
+
+def zyx_angles(rotation):
+    """(a, b, c) degrees with rotation (3, 3) = Rz(a) Ry(b) Rx(c); c = 0 where b is +-90 deg."""
+    pitch = np.arcsin(np.clip(-rotation[2, 0], -1.0, 1.0))
+    if abs(np.cos(pitch)) < 1e-9:
+        return np.degrees([np.arctan2(-rotation[0, 1], rotation[1, 1]), pitch, 0.0])
+    return np.degrees([np.arctan2(rotation[1, 0], rotation[0, 0]), pitch, np.arctan2(rotation[2, 1], rotation[2, 2])])
 
 
 def without_repeated_gotos(lines):
@@ -243,4 +272,4 @@ def dmis_statement(*groups):
     return lines + [line]
 
 
-FORMAT = FileFormat("dmis", NAME, DESCRIPTION, EXTENSIONS, ENCODING, write, read)
+FORMAT = FileFormat("dmis", NAME, DESCRIPTION, EXTENSIONS, ENCODING, write, read, contact_nominals=True)

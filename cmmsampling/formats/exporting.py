@@ -27,7 +27,7 @@ from .pointset import PointSet
 
 ORDERS = ("as_optimised", "short_path", "probe_path")
 UNIT_TOLERANCE = 1e-3
-PROBE_KEYS = ("probe_radius_mm", "points")
+PROBE_KEYS = ("probe_radius_mm", "ball_radius_mm", "points")
 ORDER_KEYS = ("order", "path_length_mm")
 WRITTEN_KEYS = FRAME_KEYS + PROBE_KEYS + ORDER_KEYS + ("count", "units") + READER_KEYS
 
@@ -52,7 +52,8 @@ class ExportReport:
     path: absolute path; format: 'dmis', 'xyz' or 'csv'; count: points written; order: the order
     asked for; length_before, length_after: mm, open 3D path through the written points in the
     source's order and in the written order; frame: 'global' or 'local'; probe_radius: mm added
-    along the normals (0: contact points); for a probe path: length_before is the straight
+    along the normals (0: contact points); ball_radius: mm, the radius stated beside contact
+    points (DMIS); for a probe path: length_before is the straight
     nearest-neighbour order with the detours it needs, length_after the path's travel, detours
     its moves over the clearance plane and seconds the estimated measuring time.
     """
@@ -67,6 +68,7 @@ class ExportReport:
     probe_radius: float
     detours: int = 0
     seconds: float = None
+    ball_radius: float = 0.0
 
     @property
     def saving(self):
@@ -74,7 +76,8 @@ class ExportReport:
         return self.length_before - self.length_after
 
     def __str__(self):
-        what = "contact points" if self.probe_radius == 0 else f"ball centres, probe radius {self.probe_radius:g} mm"
+        what = (f"ball centres, probe radius {self.probe_radius:g} mm" if self.probe_radius > 0 else
+                f"contact points, ball radius {self.ball_radius:g} mm stated" if self.ball_radius > 0 else "contact points")
         line = (f"Wrote {self.count} points to {self.path} ({FORMATS[self.format].title}, "
                 f"{self.frame} frame, {what}). ")
         if self.order == "probe_path":
@@ -104,8 +107,11 @@ def export(source: SamplingResult | PartPlan | PointSet | object, path: str | os
     object with a Placement (e.g. a datum coordinate system; its global placement is used): points
     are written as placement.inverse() * p, normals rotated only.
     probe_radius: mm; when positive the points are probe-ball centres p + r * n (the radius is
-    stated in DMIS and CSV comments; the XYZ format has no comments, so an XYZ file holds the
-    points as written and the caller has to keep the radius with it).
+    stated in CSV comments; the XYZ format has no comments, so an XYZ file holds the points as
+    written and the caller has to keep the radius with it). DMIS nominals (FEAT/POINT, PTMEAS)
+    are surface points whatever the radius: the CMM takes its ball's radius off itself, so a DMIS
+    file keeps the contact points and states the radius (``$$ ball_radius_mm``); its GOTO moves
+    are ball centres.
     order: 'as_optimised' keeps the source's order, 'short_path' visits the points along a short
     path (nearest neighbour + 2-opt, :mod:`cmmsampling.planning.probe_path`), 'probe_path' along
     the collision-free path of a run made with the part (``sample(..., part=)``,
@@ -138,7 +144,7 @@ def export(source: SamplingResult | PartPlan | PointSet | object, path: str | os
     if order == "probe_path":
         moves = probe_moves(source, motion)
         point_set = along_moves(point_set, moves)
-    point_set, facts = prepared(point_set, placement, radius, frame_name)
+    point_set, facts = prepared(point_set, placement, radius, frame_name, FORMATS[fmt].contact_nominals)
     if moves is not None:
         path_order = PathOrder(np.arange(len(point_set)), moves.baseline, moves.travel)
         options = replace(options, probe=point_set.metadata.get("probe"))
@@ -150,7 +156,7 @@ def export(source: SamplingResult | PartPlan | PointSet | object, path: str | os
     target = write_atomically(path, text, FORMATS[fmt].encoding)
     return ExportReport(target, fmt, len(point_set), order, path_order.length_before, path_order.length_after,
                         facts["frame"], facts["probe_radius_mm"], 0 if moves is None else moves.detours,
-                        None if moves is None else moves.seconds)
+                        None if moves is None else moves.seconds, facts.get("ball_radius_mm", 0.0))
 
 
 def along_moves(point_set, moves):
@@ -215,13 +221,15 @@ def plan_point_set(plan):
                     [face.name for face in placed for _ in range(face.n)], axes)
 
 
-def prepared(point_set, placement, radius, frame_name=""):
+def prepared(point_set, placement, radius, frame_name="", contact_nominals=False):
     """The point set as it is written, and the facts that say what its numbers mean.
 
     Checks the point set, moves the points to the ball centres p + radius * n, then into the
     placement's frame. A point set whose metadata already states a local frame or a probe radius
     (e.g. one read from a file) keeps those facts when neither is applied again, and is refused
-    when one would be applied on top. Returns (PointSet, facts dict).
+    when one would be applied on top. contact_nominals (a format of nominal surface points,
+    DMIS): the points stay (or go back to) contact points and the radius is stated as
+    ball_radius_mm. Returns (PointSet, facts dict).
     """
     point_set = checked(point_set)
     stated = point_set.metadata
@@ -232,7 +240,9 @@ def prepared(point_set, placement, radius, frame_name=""):
     if radius > 0 and stated_radius > 0:
         raise InputError(f"these points are already probe-ball centres (radius {stated_radius} mm); "
                          "export them with probe_radius=0, or export the contact points")
-    points = point_set.points + radius * point_set.normals
+    total = radius + stated_radius
+    offset = -stated_radius if contact_nominals else radius
+    points = point_set.points + offset * point_set.normals
     normals, axes, travel = point_set.normals, point_set.axes, point_set.travel
     if placement is None:
         facts = {key: stated[key] for key in FRAME_KEYS if key in stated} or {"frame": "global"}
@@ -241,13 +251,22 @@ def prepared(point_set, placement, radius, frame_name=""):
         points, normals = to_local(points, normals, placement)
         axes = None if axes is None else to_local(np.zeros_like(axes), axes, placement)[1]
         travel = None if travel is None else [tuple(_local(p, placement) for p in pair) for pair in travel]
-    total = radius + stated_radius
-    facts["probe_radius_mm"] = total
-    facts["points"] = (f"probe-ball centres (contact point + {total:g} mm * normal)" if total > 0
-                       else "contact points on the face")
+    facts.update(_radius_facts(total, contact_nominals))
     metadata = {key: value for key, value in stated.items() if key not in WRITTEN_KEYS}
     return PointSet(point_set.labels, points, normals, point_set.uv, point_set.deviation, metadata,
                     point_set.faces, axes, travel), facts
+
+
+def _radius_facts(radius, contact_nominals):
+    """The facts on the probe radius (mm) of written points: ball centres where it is added,
+    else contact points (with the ball's radius stated where the format takes contact points
+    only)."""
+    if contact_nominals and radius > 0:
+        return {"probe_radius_mm": 0.0, "ball_radius_mm": radius,
+                "points": f"contact points on the face (the CMM takes its {radius:g} mm ball radius off)"}
+    if radius > 0:
+        return {"probe_radius_mm": radius, "points": f"probe-ball centres (contact point + {radius:g} mm * normal)"}
+    return {"probe_radius_mm": 0.0, "points": "contact points on the face"}
 
 
 def _local(positions, placement):

@@ -20,7 +20,10 @@ class FileFormat:
     name in messages (e.g. "DMIS"); description: one line for file dialogs and ``--help``;
     extensions: file extensions with the dot, lower case, the first the one a new file gets;
     encoding: of the file's text; write: (PointSet, facts dict, ExportOptions) -> the file's
-    text; read: (text, path) -> PointSet, raising ValueError naming the path and line.
+    text; read: (text, path) -> PointSet, raising ValueError naming the path and line;
+    contact_nominals: the format's points are nominal surface points whose probe radius the CMM
+    takes off itself (DMIS's FEAT/POINT and PTMEAS): a probe radius is stated (ball_radius_mm),
+    never added to the points.
     """
 
     name: str
@@ -30,6 +33,7 @@ class FileFormat:
     encoding: str
     write: object
     read: object
+    contact_nominals: bool = False
 
     @property
     def patterns(self):

@@ -131,9 +131,10 @@ class ExportOptionsDialog(QtGui.QDialog):
         self.probe_radius.setSpecialValueText("0 mm: contact points")
         self.probe_radius.setValue(probe["ball_diameter"] / 2 if probe else stored["ExportProbeRadius"])
         self.probe_radius.setToolTip(
-            "Probe-ball radius r: above 0 the file holds ball centres p + r n (n the outward "
-            "approach vector), and says so in its header (DMIS, CSV; an XYZ file has none: keep the "
-            "radius with it). 0: the contact points on the face.")
+            "Probe-ball radius r: above 0 a CSV or XYZ file holds ball centres p + r n (n the outward "
+            "approach vector; CSV says so in its header, an XYZ file has none: keep the radius with "
+            "it), a DMIS program keeps the contact points (its FEAT/PTMEAS are surface points, the CMM "
+            "takes the radius off) and states r. 0: the contact points on the face.")
         layout.addRow("Probe radius", self.probe_radius)
         self.order = QtGui.QComboBox(self)
         self.order.setObjectName("order")

@@ -110,7 +110,7 @@ def test_dmis_without_comments_still_states_frame_and_radius(point_sets, tmp_pat
     path, _ = exported(point_sets["reference"], tmp_path, "dmis", comments=False, probe_radius=1.5)
     text = path.read_text()
     assert "strategy" not in text and "max_mm" not in text
-    assert "$$ probe_radius_mm: 1.5" in text and "$$ frame: global" in text
+    assert "$$ ball_radius_mm: 1.5" in text and "$$ probe_radius_mm: 0.0" in text and "$$ frame: global" in text
 
 
 def test_long_labels_and_comments_wrap_within_80_characters(point_sets, tmp_path):
@@ -190,7 +190,7 @@ def test_frame_from_a_document_object(point_sets, tmp_path):
         FreeCAD.closeDocument(doc.Name)
 
 
-@pytest.mark.parametrize("fmt", sorted(EXTENSIONS))
+@pytest.mark.parametrize("fmt", sorted(set(EXTENSIONS) - {"dmis"}))
 def test_probe_radius_moves_points_along_the_normals(point_sets, tmp_path, fmt):
     original = point_sets["cylinder"]
     path, report = exported(original, tmp_path, fmt, probe_radius=1.5)
@@ -201,12 +201,31 @@ def test_probe_radius_moves_points_along_the_normals(point_sets, tmp_path, fmt):
         assert back.metadata["probe_radius_mm"] == 1.5 and "ball centres" in back.metadata["points"]
 
 
+def test_dmis_nominals_stay_contact_points_and_state_the_ball_radius(point_sets, tmp_path):
+    """DMIS FEAT/POINT and PTMEAS are surface points (the CMM takes its ball radius off itself):
+    a probe radius is stated, never added; ball centres read from a CSV go back to contact points."""
+    original = point_sets["cylinder"]
+    path, report = exported(original, tmp_path, "dmis", probe_radius=1.5)
+    back = read_points(path)
+    assert report.probe_radius == 0.0 and report.ball_radius == 1.5
+    assert "contact points, ball radius 1.5 mm stated" in str(report)
+    assert np.abs(back.points - original.points).max() < 1e-7
+    assert back.metadata["probe_radius_mm"] == 0.0 and back.metadata["ball_radius_mm"] == 1.5
+    assert back.metadata["points"].startswith("contact points on the face")
+    centres, _ = exported(original, tmp_path, "csv", probe_radius=1.5)
+    again, report = exported(read_points(centres), tmp_path, "dmis")
+    assert report.ball_radius == 1.5 and np.abs(read_points(again).points - original.points).max() < 1e-7
+
+
 def test_probe_radius_in_a_local_frame(point_sets, tmp_path):
     original = point_sets["reference"]
-    path, _ = exported(original, tmp_path, "dmis", frame=PLACEMENT, probe_radius=2.0)
+    path, _ = exported(original, tmp_path, "csv", frame=PLACEMENT, probe_radius=2.0)
     back = read_points(path)
     points, _ = in_global(back.points, back.normals, PLACEMENT)
     assert np.abs(points - (original.points + 2.0 * original.normals)).max() < 1e-7
+    contact, _ = exported(original, tmp_path, "dmis", frame=PLACEMENT, probe_radius=2.0)
+    points, _ = in_global(read_points(contact).points, back.normals, PLACEMENT)
+    assert np.abs(points - original.points).max() < 1e-7
 
 
 def test_compensating_or_moving_twice_is_refused(point_sets, tmp_path):
@@ -216,7 +235,7 @@ def test_compensating_or_moving_twice_is_refused(point_sets, tmp_path):
         export(back, tmp_path / "again.csv", probe_radius=1.0)
     with pytest.raises(ValueError, match="already in a local frame"):
         export(back, tmp_path / "again.csv", frame=PLACEMENT)
-    again = read_points(export(back, tmp_path / "again.dmi").path)
+    again = read_points(export(back, tmp_path / "again.csv").path)
     assert again.metadata["probe_radius_mm"] == 1.0 and again.metadata["frame"] == "local"
     assert np.abs(again.points - back.points).max() < 1e-7
 
@@ -441,7 +460,7 @@ def test_measured_deviation_is_signed_along_the_outward_normal(point_sets, tmp_p
 def test_measured_deviation_reads_frame_and_radius_from_the_file(point_sets, tmp_path):
     offsets = np.linspace(-0.1, 0.1, 25)
     measured_points = displaced(point_sets["cylinder"], offsets)
-    path, _ = exported(measured_points, tmp_path, "dmis", frame=PLACEMENT, probe_radius=1.0)
+    path, _ = exported(measured_points, tmp_path, "csv", frame=PLACEMENT, probe_radius=1.0)
     measured = measured_deviation(Part.makeCylinder(10, 20).Faces[0], str(path))
     assert measured.probe_radius == 1.0
     assert np.abs(measured.distances - offsets).max() < 1e-6

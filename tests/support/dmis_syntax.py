@@ -5,6 +5,8 @@ ending in ``$`` goes on in the next one. Statements, in this order::
 
     DMISMN/'name',NN.N                        first
     UNITS/MM,ANGDEC   MODE/[AUTO,]PROG,MAN   SNSET/(APPRCH|RETRCT|SEARCH),d
+    D(label)=TRANS/XORIG,x,YORIG,y,ZORIG,z     after UNITS, before any FEAT
+    D(label)=ROTAT/(XAXIS|YAXIS|ZAXIS),a      the datum's TRANS before it, before any FEAT
     S(label)=SNSDEF/PROBE,INDEX,POL,a,b,i,j,k,l,d   label new, (i, j, k) the head's mounting
                                               vector (unit), l and d positive
     SNSLCT/S(label)                           label defined, not inside MEAS
@@ -40,6 +42,8 @@ POINT = re.compile(r"PTMEAS/CART,(.*)\Z")
 SENSOR = re.compile(r"S\(([^()]*)\)=SNSDEF/PROBE,INDEX,POL,(.*)\Z")
 SELECT = re.compile(r"SNSLCT/S\(([^()]*)\)\Z")
 GOTO = re.compile(rf"GOTO/{NUMBER},{NUMBER},{NUMBER}\Z")
+TRANSLATE = re.compile(rf"D\(([^()]*)\)=TRANS/XORIG,{NUMBER},YORIG,{NUMBER},ZORIG,{NUMBER}\Z")
+ROTATE = re.compile(rf"D\(([^()]*)\)=ROTAT/[XYZ]AXIS,{NUMBER}\Z")
 
 
 def check(text):
@@ -94,6 +98,7 @@ class ProgramState:
         self.units = False
         self.features = set()
         self.sensors = set()
+        self.datums = set()
         self.measuring = None
         self.expected = 0
         self.points = 0
@@ -115,6 +120,8 @@ class ProgramState:
             return self.feature(statement)
         if keyword == "S" and statement.startswith("S("):
             return self.sensor(statement)
+        if keyword == "D" and statement.startswith("D("):
+            return self.datum(statement)
         if keyword in ("SNSLCT", "GOTO"):
             return self.move(keyword, statement)
         if keyword == "MEAS":
@@ -162,6 +169,21 @@ class ProgramState:
             errors.append(f"S({label}) defined twice")
         self.sensors.add(label)
         return errors + (["SNSDEF inside MEAS"] if self.measuring else [])
+
+    def datum(self, statement):
+        """D(label)=TRANS/XORIG,x,YORIG,y,ZORIG,z, then D(label)=ROTAT/axis,a: the frame the
+        points are written in, set before the first feature."""
+        translated, rotated = TRANSLATE.match(statement), ROTATE.match(statement)
+        if translated is None and rotated is None:
+            return [f"malformed datum statement: {statement!r}"]
+        label = (translated or rotated).group(1)
+        errors = label_errors(label)
+        if rotated is not None and label not in self.datums:
+            errors.append(f"ROTAT of D({label}) before its TRANS")
+        if not self.units or self.features or self.measuring:
+            errors.append("a datum statement belongs after UNITS and before the first FEAT")
+        self.datums.add(label)
+        return errors
 
     def move(self, keyword, statement):
         """SNSLCT/S(label) of a defined sensor, GOTO/x,y,z; neither inside MEAS."""
