@@ -80,7 +80,9 @@ def write_inspection(points, inspection):
     points.Deviation = [float(d) for d in inspection.deviations]
     points.Bands = [int(b) for b in inspection.bands]
     points.Tolerance = 0.0 if inspection.tolerance is None else inspection.tolerance
+    points.ZoneOffset = inspection.zone_offset
     points.Profile = inspection.profile
+    points.FaceProfiles = face_lines(inspection)
     points.Verdict = verdict(inspection)
     points.Alignment = inspection.alignment.method
     points.Locked = list(inspection.alignment.locked)
@@ -88,6 +90,13 @@ def write_inspection(points, inspection):
     points.MovedBy = inspection.alignment.moved_mm
     points.MeasuredFile = inspection.measured_file
     points.Notes = list(inspection.notes)
+
+
+def face_lines(inspection):
+    """'Face3: 0.0123 mm PASS' for each face judged (the verdict left out without a tolerance)."""
+    return [f"{name}: {value:.4f} mm" + ("" if inspection.tolerance is None else
+                                          f" {'PASS' if inspection.face_passed(value) else 'FAIL'}")
+            for name, value in inspection.face_profiles.items()]
 
 
 def verdict(inspection):
@@ -102,7 +111,8 @@ class MeasuredPoints(TypedProxy):
 
     Properties: Labels, Faces (the face each was judged on); Points (aligned, mm), Measured (as
     read, mm), Nominal (planned, mm; 0 where none was planned); Deviation (mm); Bands (-2 .. 2);
-    Tolerance (mm, 0 without one), Profile (mm, 2 max |d|), Verdict; Alignment, Locked,
+    Tolerance (mm, 0 without one), ZoneOffset (mm), Profile (mm, 2 max |d - offset|), Verdict,
+    FaceProfiles; Alignment, Locked,
     AlignmentPlacement (measured -> CAD), MovedBy (mm); MeasuredFile, Notes; Source (the probe
     points or plan) and Report.
     """
@@ -119,7 +129,10 @@ class MeasuredPoints(TypedProxy):
         ("App::PropertyIntegerList", "Bands", "Measured",
          "Band in the tolerance zone: 0 in, +-1 near the limit, +-2 out (+ above the nominal)"),
         ("App::PropertyLength", "Tolerance", "Verdict", "Profile tolerance t (mm), 0 without one"),
-        ("App::PropertyLength", "Profile", "Verdict", "Profile of the surface, form only: 2 max |d| (mm)"),
+        ("App::PropertyDistance", "ZoneOffset", "Verdict",
+         "The tolerance zone's centre from the nominal (mm, + out of the material; ISO 1101 UZ)"),
+        ("App::PropertyLength", "Profile", "Verdict", "Profile of the surface, form only: 2 max |d - offset| (mm)"),
+        ("App::PropertyStringList", "FaceProfiles", "Verdict", "Each face's profile (mm) and verdict"),
         ("App::PropertyString", "Verdict", "Verdict", "PASS, FAIL or no tolerance"),
         ("App::PropertyString", "Alignment", "Alignment", "none, best_fit or min_max"),
         ("App::PropertyStringList", "Locked", "Alignment", "Degrees of freedom held fixed"),

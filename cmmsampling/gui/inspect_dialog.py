@@ -24,7 +24,8 @@ ALIGNMENT_TEXTS = {
     "none": ("None (points in the part's frame)", "The measured points are judged where they are: the CMM "
                                                   "measured in the part's own frame"),
 }
-DEFAULTS = {"InspectFile": "", "InspectAlignment": "best_fit", "InspectTolerance": 0.1, "InspectLocked": ""}
+DEFAULTS = {"InspectFile": "", "InspectAlignment": "best_fit", "InspectTolerance": 0.1, "InspectLocked": "",
+            "InspectZoneOffset": 0.0}
 MEASURED_FILTERS = ("Measured points (*.dmi *.dmis *.dmo *.csv *.xyz *.txt);;All files (*)")
 MAX_TOLERANCE_MM = 100.0
 
@@ -87,6 +88,17 @@ class InspectDialog(QtGui.QDialog):
                                   "centred on the nominal; a point passes where |deviation| <= t/2, the face where "
                                   "the profile 2 max |deviation| <= t. 'none': deviations only.")
         layout.addRow("Profile tolerance", self.tolerance)
+        self.zone_offset = QtGui.QDoubleSpinBox(self)
+        self.zone_offset.setObjectName("zone_offset")
+        self.zone_offset.setRange(-MAX_TOLERANCE_MM, MAX_TOLERANCE_MM)
+        self.zone_offset.setDecimals(4)
+        self.zone_offset.setSingleStep(0.01)
+        self.zone_offset.setSuffix(" mm")
+        self.zone_offset.setValue(stored["InspectZoneOffset"])
+        self.zone_offset.setToolTip("Where the tolerance zone's centre lies from the nominal surface (ISO 1101 UZ), + "
+                                    "out of the material: 0 a zone centred on the nominal, +t/2 a unilateral zone "
+                                    "outside the material, -t/2 inside.")
+        layout.addRow("Zone offset (UZ)", self.zone_offset)
         self.buttons = QtGui.QDialogButtonBox(QtGui.QDialogButtonBox.Ok | QtGui.QDialogButtonBox.Cancel, parent=self)
         self.buttons.accepted.connect(self.accept)
         self.buttons.rejected.connect(self.reject)
@@ -108,17 +120,18 @@ class InspectDialog(QtGui.QDialog):
         self.buttons.button(QtGui.QDialogButtonBox.Ok).setEnabled(found)
 
     def arguments(self):
-        """{"measured": path, "alignment": ..., "locked": tuple, "tolerance": mm or None}: keyword
-        arguments of cmmsampling.inspect."""
+        """{"measured": path, "alignment": ..., "locked": tuple, "tolerance": mm or None,
+        "zone_offset": mm}: keyword arguments of cmmsampling.inspect."""
         return {"measured": self.path.text(), "alignment": self.alignment.currentData(),
                 "locked": tuple(name for name, box in self.locked.items() if box.isChecked()),
-                "tolerance": self.tolerance.value() or None}
+                "tolerance": self.tolerance.value() or None, "zone_offset": self.zone_offset.value()}
 
     def stored(self):
         """The values to keep for the next inspection."""
         chosen = self.arguments()
         return {"InspectFile": chosen["measured"], "InspectAlignment": chosen["alignment"],
-                "InspectTolerance": self.tolerance.value(), "InspectLocked": ",".join(chosen["locked"])}
+                "InspectTolerance": self.tolerance.value(), "InspectLocked": ",".join(chosen["locked"]),
+                "InspectZoneOffset": chosen["zone_offset"]}
 
 
 def ask_inspection(points):
@@ -149,6 +162,8 @@ def inspection_call(points, arguments):
         words.append(f"locked={arguments['locked']!r}")
     if arguments["tolerance"] is not None:
         words.append(f"tolerance={arguments['tolerance']!r}")
+    if arguments["zone_offset"]:
+        words.append(f"zone_offset={arguments['zone_offset']!r}")
     return [f"inspection = cmmsampling.inspect({', '.join(words)})",
             f"group = cmmsampling.add_inspection_to_document(inspection, {doc}, source={source})"]
 

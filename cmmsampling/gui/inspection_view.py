@@ -45,7 +45,8 @@ class ViewProviderMeasuredPoints(Stateless):
         self.redraw(vobj)
 
     def updateData(self, obj, prop):
-        if prop in ("Points", "Bands", "Deviation", "Tolerance", "Profile", "Verdict") and obj.ViewObject is not None:
+        if prop in ("Points", "Bands", "Deviation", "Tolerance", "ZoneOffset", "Profile", "Verdict") and \
+                obj.ViewObject is not None:
             self.redraw(obj.ViewObject)
 
     def onChanged(self, vobj, prop):
@@ -67,8 +68,10 @@ class ViewProviderMeasuredPoints(Stateless):
         tolerance = float(obj.Tolerance.Value)
         if tolerance > 0:
             rgb = np.array(BAND_COLOURS)[np.array(obj.Bands, dtype=int) + 2]
-            legend = colormap.band_legend(band_rows(tolerance), f"Profile {mm_text(obj.Profile.Value)}, "
-                                                                f"tolerance {tolerance:g} mm: {obj.Verdict}")
+            offset = float(obj.ZoneOffset.Value)
+            zone = f" (offset {offset:+g} mm)" if offset else ""
+            legend = colormap.band_legend(band_rows(tolerance, offset), f"Profile {mm_text(obj.Profile.Value)}, "
+                                                                        f"tolerance {tolerance:g} mm{zone}: {obj.Verdict}")
         else:
             largest = colormap.shown_maximum(np.abs(deviations).max())
             rgb = colormap.colours(np.abs(deviations), largest)
@@ -83,10 +86,10 @@ class ViewProviderMeasuredPoints(Stateless):
         return icon("Inspect.svg")
 
 
-def band_rows(tolerance):
-    """The legend's rows [(rgb, text)] of a tolerance t mm, top down: out above (> t/2), near
-    above, in, near below, out below, with their limits in mm."""
-    low, near_low, near_high, high = (f"{value:+.4f}" for value in band_limits(tolerance))
+def band_rows(tolerance, offset=0.0):
+    """The legend's rows [(rgb, text)] of a tolerance t mm centred at offset mm, top down: out
+    above (> offset + t/2), near above, in, near below, out below, with their limits in mm."""
+    low, near_low, near_high, high = (f"{value:+.4f}" for value in band_limits(tolerance, offset))
     texts = (f"out below: < {low} mm", f"near: {low} .. {near_low} mm", f"in: {near_low} .. {near_high} mm",
              f"near: {near_high} .. {high} mm", f"out above: > {high} mm")
     return list(zip(BAND_COLOURS, texts))[::-1]

@@ -1,10 +1,12 @@
 """Measured points back in: paired with the planned ones, aligned to the CAD model and judged
-against a profile tolerance (ISO 1101, form only: a zone of width t centred on the nominal).
+against a profile tolerance (ISO 1101, form only: a zone of width t centred on the nominal, or
+on a surface offset from it by o, ISO 1101's UZ: o = +-t/2 makes the zone unilateral).
 
 The deviation of an aligned measured point is its signed distance from the CAD face it was
 planned on, along the face's outward normal (+ out of the material). The profile is the width
-of the smallest zone centred on the nominal that holds every point: 2 max |d|. A point passes
-where |d| <= t / 2, the face (or part) where the profile is at most t.
+of the smallest zone centred where the tolerance's zone is that holds every point:
+2 max |d - o|. A point passes where |d - o| <= t / 2, a face (or the part) where its profile is
+at most t.
 """
 from __future__ import annotations
 
@@ -18,6 +20,7 @@ from ..formats.pointset import PointSet
 from ..geometry.freecad_env import import_part
 from ..geometry.surface import as_face
 from ..geometry.validation import InputError, InputTypeError, check_real
+from ..fitting.deviation import NUMERICAL_ZERO_MM
 from ..fitting.occ_surface import substitute_surface
 from ..measurement import closest_points, stated_radius
 from ..planning.part_plan import PartPlan
@@ -30,6 +33,9 @@ import FreeCAD  # noqa: E402  (importable once import_part() has set the path)
 
 # A point inside the zone is "near" its limit beyond this fraction of the half zone t / 2.
 NEAR_FRACTION = 0.8
+# A point within this much (mm) of the zone's limit is on it: finer than any CMM resolves, and
+# than the rounding of the closest points (a point placed on the limit lands 1e-14 mm either side).
+LIMIT_SLACK_MM = NUMERICAL_ZERO_MM
 BANDS = ("out below", "near below", "in", "near above", "out above")
 
 
@@ -42,7 +48,7 @@ class Inspection:
     deviations: (N,) mm, signed (+ out of the material); transform: (4, 4) measured -> CAD;
     alignment: the Alignment; tolerance: the profile tolerance t (mm) or None; faces: N names of
     the faces the points were judged on; notes: what the pairing found (points planned but not
-    measured); for a SamplingResult's points (the paper's step), substitute_poles: (n_u, n_v, 3)
+    measured); zone_offset: o, mm, the zone's centre from the nominal (+ out of the material); for a SamplingResult's points (the paper's step), substitute_poles: (n_u, n_v, 3)
     mm, the substitute fitted to the aligned measured points at their planned (u, v), and
     substitute_deviation: its DeviationStats against the CAD face (the deviation map); else None.
     """
@@ -61,6 +67,7 @@ class Inspection:
     substitute_deviation: object = None
     space: object = None
     measured_file: str = ""
+    zone_offset: float = 0.0
 
     @property
     def substitute(self):
@@ -74,16 +81,28 @@ class Inspection:
 
     @property
     def profile(self):
-        """The form profile, mm: the width of the zone centred on the nominal that holds every
-        point, 2 max |d|."""
-        return 2.0 * float(np.abs(self.deviations).max())
+        """The form profile, mm: the width of the zone centred on the nominal (offset by
+        zone_offset) that holds every point, 2 max |d - o|."""
+        return 2.0 * float(np.abs(self.deviations - self.zone_offset).max())
+
+    @property
+    def face_profiles(self):
+        """{face name: its profile, mm}, the faces in the order of their first point."""
+        names = list(dict.fromkeys(self.faces))
+        owner = np.array([names.index(name) for name in self.faces])
+        off = np.abs(self.deviations - self.zone_offset)
+        return {name: 2.0 * float(off[owner == index].max()) for index, name in enumerate(names)}
+
+    def face_passed(self, profile):
+        """Whether a profile (mm) is within the tolerance (None without one)."""
+        return None if self.tolerance is None else profile <= self.tolerance + 2 * LIMIT_SLACK_MM
 
     @property
     def within(self):
         """(N,) bool: the point lies inside the tolerance zone (all True without a tolerance)."""
         if self.tolerance is None:
             return np.ones(len(self.labels), dtype=bool)
-        return np.abs(self.deviations) <= self.tolerance / 2.0
+        return np.abs(self.deviations - self.zone_offset) <= self.tolerance / 2.0 + LIMIT_SLACK_MM
 
     @property
     def bands(self):
@@ -92,23 +111,29 @@ class Inspection:
         nominal (out of the material); all 0 without a tolerance."""
         if self.tolerance is None:
             return np.zeros(len(self.labels), dtype=int)
-        return tolerance_bands(self.deviations, self.tolerance)
+        return tolerance_bands(self.deviations, self.tolerance, self.zone_offset)
 
     @property
     def passed(self):
         """The profile is within the tolerance (None without one)."""
-        return None if self.tolerance is None else self.profile <= self.tolerance
+        return self.face_passed(self.profile)
 
     def summary(self):
         """The inspection in a few lines: points, alignment, profile, verdict."""
+        zone = f" (zone offset {self.zone_offset:+g} mm)" if self.zone_offset else ""
         lines = [f"{len(self.labels)} points, alignment {self.alignment.method} "
                  f"({self.alignment.iterations} steps, points moved up to {self.alignment.moved_mm:.4g} mm)",
                  f"deviation {self.deviations.min():+.4f} .. {self.deviations.max():+.4f} mm, "
-                 f"profile {self.profile:.4f} mm"]
+                 f"profile {self.profile:.4f} mm{zone}"]
         if self.tolerance is not None:
             outside = int((~self.within).sum())
             lines.append(f"tolerance {self.tolerance:g} mm: {'PASS' if self.passed else 'FAIL'}"
                          f"{f', {outside} points outside the zone' if outside else ''}")
+        faces = self.face_profiles
+        if len(faces) > 1:
+            lines += [f"{name}: profile {value:.4f} mm" + ("" if self.tolerance is None else
+                                                          f", {'PASS' if self.face_passed(value) else 'FAIL'}")
+                      for name, value in faces.items()]
         return "\n".join(lines + [f"note: {note}" for note in self.notes])
 
 
@@ -124,21 +149,24 @@ class Planned:
     owner: np.ndarray
 
 
-def tolerance_bands(deviations, tolerance):
-    """(N,) int in -2 .. 2 for deviations (N,) mm against a profile tolerance t mm: 0 where |d| <=
-    NEAR_FRACTION t / 2, +-1 up to t / 2, +-2 beyond, signed as d."""
+def tolerance_bands(deviations, tolerance, offset=0.0):
+    """(N,) int in -2 .. 2 for deviations (N,) mm against a profile tolerance t mm whose zone is
+    centred at offset o mm: 0 where |d - o| <= NEAR_FRACTION t / 2, +-1 up to t / 2, +-2 beyond,
+    signed as d - o (a point within LIMIT_SLACK_MM of the limit is on it)."""
+    half, away = tolerance / 2.0, np.asarray(deviations) - offset
+    size = np.where(np.abs(away) > half + LIMIT_SLACK_MM, 2, np.where(np.abs(away) > NEAR_FRACTION * half, 1, 0))
+    return (np.sign(away) * size).astype(int)
+
+
+def band_limits(tolerance, offset=0.0):
+    """The deviations (mm) where the bands meet for a tolerance t mm centred at offset o mm:
+    (o - t/2, o - 0.8 t/2, o + 0.8 t/2, o + t/2)."""
     half = tolerance / 2.0
-    size = np.where(np.abs(deviations) > half, 2, np.where(np.abs(deviations) > NEAR_FRACTION * half, 1, 0))
-    return (np.sign(deviations) * size).astype(int)
+    return (offset - half, offset - NEAR_FRACTION * half, offset + NEAR_FRACTION * half, offset + half)
 
 
-def band_limits(tolerance):
-    """The deviations (mm) where the bands meet for a tolerance t mm: (-t/2, -0.8 t/2, 0.8 t/2, t/2)."""
-    half = tolerance / 2.0
-    return (-half, -NEAR_FRACTION * half, NEAR_FRACTION * half, half)
-
-
-def inspect(source, measured, alignment="best_fit", tolerance=None, locked=(), part=None, probe_radius=None):
+def inspect(source, measured, alignment="best_fit", tolerance=None, locked=(), part=None, probe_radius=None,
+            zone_offset=0.0):
     """Judge measured points against the CAD model they were planned on.
 
     source: a Part.Face (the measured points are taken as they come), a SamplingResult, a
@@ -149,13 +177,16 @@ def inspect(source, measured, alignment="best_fit", tolerance=None, locked=(), p
     cmmsampling.inspection.measured) or a PointSet of contact points (a
     file's stated probe radius, or probe_radius mm, is taken off along its vectors).
     alignment: 'none', 'best_fit' or 'min_max' (cmmsampling.inspection.align); locked: degrees
-    of freedom held fixed (rx, ry, rz, x, y, z); tolerance: the profile tolerance t, mm.
+    of freedom held fixed (rx, ry, rz, x, y, z); tolerance: the profile tolerance t, mm;
+    zone_offset: o, mm, the zone's centre from the nominal (ISO 1101's UZ, + out of the material;
+    +-t/2 a unilateral zone outside or inside), which the profile and the verdict are taken from.
     One alignment for all the points (a plan: the whole part). Returns an Inspection.
     """
     if alignment not in ALIGNMENTS:
         raise InputError(f"alignment must be one of {', '.join(ALIGNMENTS)}, got {alignment!r}")
     locked = check_locked(locked)
     tolerance = None if tolerance is None else check_real("tolerance", tolerance, above=0.0)
+    zone_offset = check_real("zone_offset", zone_offset)
     planned = _planned(source, part)
     read = read_measured(measured) if isinstance(measured, (str, os.PathLike)) else as_point_set(measured)
     contact = _contact_points(read, probe_radius)
@@ -170,7 +201,8 @@ def inspect(source, measured, alignment="best_fit", tolerance=None, locked=(), p
     nominal = planned.points[order[1]] if planned.points is not None else np.full_like(points, np.nan)
     inspection = Inspection([read.labels[i] for i in order[0]], nominal, points, found.apply(points),
                             found.deviations, found.matrix, found, tolerance, [planned.names[i] for i in owner], notes,
-                            measured_file=os.fspath(measured) if isinstance(measured, (str, os.PathLike)) else "")
+                            measured_file=os.fspath(measured) if isinstance(measured, (str, os.PathLike)) else "",
+                            zone_offset=zone_offset)
     if isinstance(source, SamplingResult):
         rebuild(inspection, source, order[1])
     return inspection

@@ -182,6 +182,28 @@ def test_a_plan_is_inspected_with_one_alignment_for_the_part(tmp_path):
     assert sorted(set(found.faces)) == ["Face1", "Face3", "Face6"] and len(found.labels) == 48
     assert found.labels[0].startswith(found.faces[0] + "_P")
     assert np.linalg.norm(found.points - made.nominal, axis=1).max() < 1e-3 and found.passed
+    faces = found.face_profiles
+    assert list(faces) == ["Face1", "Face3", "Face6"] and max(faces.values()) == found.profile
+    assert all(f"{name}: profile {value:.4f} mm, PASS" in found.summary() for name, value in faces.items())
+
+
+def test_an_offset_zone_judges_from_its_own_centre(planned):
+    """ISO 1101's UZ: a face measured all out of the material (0.01 .. 0.03 mm) fails a centred
+    0.03 mm zone and passes the unilateral one outside (offset +t/2); bands follow the centre."""
+    from cmmsampling.inspection.judge import band_limits, tolerance_bands
+
+    away = np.linspace(0.01, 0.03, planned.n)
+    measured = cmmsampling.PointSet([f"P{i}" for i in range(1, planned.n + 1)],
+                                    planned.points + away[:, None] * planned.normals, planned.normals)
+    centred = cmmsampling.inspect(planned, measured, alignment="none", tolerance=0.03)
+    outside = cmmsampling.inspect(planned, measured, alignment="none", tolerance=0.03, zone_offset=0.015)
+    assert centred.profile == pytest.approx(0.06, abs=1e-6) and not centred.passed
+    assert outside.profile == pytest.approx(0.03, abs=1e-6) and outside.passed and outside.within.all()
+    assert "zone offset +0.015 mm" in outside.summary()
+    assert tolerance_bands(np.array([-0.001, 0.002, 0.005, 0.0299, 0.031]), 0.03, 0.015).tolist() == [-2, -1, 0, 1, 2]
+    assert band_limits(0.03, 0.015) == pytest.approx((0.0, 0.003, 0.027, 0.03))
+    with pytest.raises(InputError, match="zone_offset must be a finite number"):
+        cmmsampling.inspect(planned, measured, zone_offset=float("nan"))
 
 
 def test_the_substitute_is_rebuilt_from_the_measured_points(planned, tmp_path):
