@@ -147,3 +147,18 @@ def test_without_a_tolerance_the_points_take_the_deviation_colours(blade_points,
     assert set(measured_points.Bands) == {0}
     measured_points.ViewObject.ShowLabels = False
     assert measured_points.ViewObject.Proxy.annotation.getNumChildren() == 2, "dots and legend"
+
+
+def test_the_command_says_what_to_select_and_echoes_every_choice(blade_points):
+    doc, points = blade_points
+    FreeCADGui.Selection.clearSelection()
+    assert "Select the probe points" in commands.InspectMeasured().reason()
+    FreeCADGui.Selection.addSelection(points)
+    assert commands.InspectMeasured().reason() is None
+    judge, add = inspect_dialog.inspection_call(points, {"measured": "/data/m.dmi", "alignment": "min_max",
+                                                         "locked": ("z",), "tolerance": None, "zone_offset": 0.005})
+    source = f"App.getDocument({doc.Name!r}).getObject({points.Name!r})"
+    assert judge == (f"inspection = cmmsampling.inspect({source}, '/data/m.dmi', alignment='min_max', "
+                     "locked=('z',), zone_offset=0.005)")
+    assert add == f"group = cmmsampling.add_inspection_to_document(inspection, App.getDocument({doc.Name!r}), " \
+                  f"source={source})"
