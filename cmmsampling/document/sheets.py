@@ -44,19 +44,31 @@ def write_deviation_report(sheet, points):
     summary = summary_rows(points)
     notes = note_rows(points)
     rows = [row[:2] for row in summary] + parameter_rows(points) + notes + [()] + table_rows(points)
-    for row, values in enumerate(rows, start=1):
-        for column, value in zip(REPORT_COLUMNS, values):
-            sheet.set(f"{column}{row}", _cell_text(value))
-    for row, entry in enumerate(summary, start=1):
-        if len(entry) == 3:
-            sheet.setAlias(f"B{row}", entry[2])
-            if entry[2] in DEVIATION_ALIASES:
-                sheet.setDisplayUnit(f"B{row}", DEVIATION_DISPLAY_UNIT)
+    write_rows(sheet, rows)
+    name_figures(sheet, summary, DEVIATION_ALIASES)
     header = len(rows) - len(points.Labels)
     sheet.setStyle("A1", "bold")
     sheet.setStyle(f"A{header}:J{header}", "bold")
     sheet.setAlignment(f"B{header}:J{len(rows)}", "right")
     fit_columns(sheet, [row for row in rows if row not in notes])
+
+
+def write_rows(sheet, rows):
+    """Write rows (tuples of cell values, from column A) into the sheet from row 1 (see
+    :func:`_cell_text`)."""
+    for row, values in enumerate(rows, start=1):
+        for column, value in zip(REPORT_COLUMNS, values):
+            sheet.set(f"{column}{row}", _cell_text(value))
+
+
+def name_figures(sheet, summary, in_micrometres):
+    """Give the summary's figures (rows (name, value, alias) from row 1) their aliases in column
+    B, those named in in_micrometres shown in DEVIATION_DISPLAY_UNIT."""
+    for row, entry in enumerate(summary, start=1):
+        if len(entry) == 3:
+            sheet.setAlias(f"B{row}", entry[2])
+            if entry[2] in in_micrometres:
+                sheet.setDisplayUnit(f"B{row}", DEVIATION_DISPLAY_UNIT)
 
 
 def clear_cells(sheet):
@@ -151,9 +163,7 @@ def write_plan_report(sheet, plan, moves=None):
                  "", f"{len(plan.refused)} faces without points" if plan.refused else ""))
     table = range(len(head) + 1, len(rows) + 1)
     rows += _probe_rows(plan.probe, moves)
-    for row, values in enumerate(rows, start=1):
-        for column, value in zip(REPORT_COLUMNS, values):
-            sheet.set(f"{column}{row}", _cell_text(value))
+    write_rows(sheet, rows)
     for row in table:
         for column in "DE":
             sheet.setDisplayUnit(f"{column}{row}", DEVIATION_DISPLAY_UNIT)
@@ -199,14 +209,9 @@ def write_inspection_report(sheet, points):
         for label, face, nominal, measured, d, band in zip(points.Labels, points.Faces, points.Nominal,
                                                          points.Points, points.Deviation, bands)]
     rows = [row[:5] if len(row) == 5 else row[:2] for row in summary] + notes + [()] + table
-    for row, values in enumerate(rows, start=1):
-        for column, value in zip(REPORT_COLUMNS, values):
-            sheet.set(f"{column}{row}", _cell_text(value))
-    for row, entry in enumerate(summary, start=1):
-        if len(entry) == 3:
-            sheet.setAlias(f"B{row}", entry[2])
-            if entry[2].endswith("_mm") and not isinstance(entry[1], str):
-                sheet.setDisplayUnit(f"B{row}", DEVIATION_DISPLAY_UNIT)
+    write_rows(sheet, rows)
+    name_figures(sheet, summary, [entry[2] for entry in summary
+                                  if len(entry) == 3 and entry[2].endswith("_mm") and not isinstance(entry[1], str)])
     header = len(rows) - len(points.Labels)
     sheet.setStyle("A1", "bold")
     sheet.setStyle(f"A{header}:J{header}", "bold")

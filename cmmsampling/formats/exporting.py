@@ -76,8 +76,11 @@ class ExportReport:
         return self.length_before - self.length_after
 
     def __str__(self):
-        what = (f"ball centres, probe radius {self.probe_radius:g} mm" if self.probe_radius > 0 else
-                f"contact points, ball radius {self.ball_radius:g} mm stated" if self.ball_radius > 0 else "contact points")
+        what = "contact points"
+        if self.probe_radius > 0:
+            what = f"ball centres, probe radius {self.probe_radius:g} mm"
+        elif self.ball_radius > 0:
+            what = f"contact points, ball radius {self.ball_radius:g} mm stated"
         line = (f"Wrote {self.count} points to {self.path} ({FORMATS[self.format].title}, "
                 f"{self.frame} frame, {what}). ")
         if self.order == "probe_path":

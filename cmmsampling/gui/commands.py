@@ -171,13 +171,7 @@ class ExportProbePoints(GuardedCommand):
 
     def reason(self):
         """Why the command cannot act now, or None."""
-        points = selected_export_sources()
-        if not points:
-            return "Select the probe points (or their Sampling group, or a part plan's group) to export."
-        if len(points) > 1:
-            return (f"{len(points)} sets of probe points are selected: select one (or their part plan's group) "
-                    "to export.")
-        return None
+        return one_source_reason("to export", "select one (or their part plan's group) to export")
 
     def act(self):
         [points] = selected_export_sources()
@@ -209,12 +203,7 @@ class InspectMeasured(GuardedCommand):
 
     def reason(self):
         """Why the command cannot act now, or None."""
-        points = selected_export_sources()
-        if not points:
-            return "Select the probe points (or their Sampling group, or a part plan's group) that were measured."
-        if len(points) > 1:
-            return f"{len(points)} sets of probe points are selected: select the one that was measured."
-        return None
+        return one_source_reason("that were measured", "select the one that was measured")
 
     def act(self):
         from .inspect_dialog import ask_inspection, inspection_call, report_inspection
@@ -349,6 +338,17 @@ def choose_export_path(points):
 def selected_probe_points():
     """Probe-points objects among the selected objects and inside selected groups."""
     return document.probe_points_in(FreeCADGui.Selection.getSelection())
+
+
+def one_source_reason(purpose, choose):
+    """Why :func:`selected_export_sources` is not one set of points, or None: 'Select the probe
+    points (...) <purpose>.' when there is none, '<K> sets ...: <choose>.' when there are more."""
+    points = selected_export_sources()
+    if not points:
+        return f"Select the probe points (or their Sampling group, or a part plan's group) {purpose}."
+    if len(points) > 1:
+        return f"{len(points)} sets of probe points are selected: {choose}."
+    return None
 
 
 def selected_export_sources():

@@ -71,33 +71,22 @@ class InspectDialog(QtGui.QDialog):
             box = QtGui.QCheckBox(name, self)
             box.setObjectName(f"locked_{name}")
             box.setChecked(name in stored["InspectLocked"].split(","))
-            box.setToolTip(f"Hold {'the rotation about ' + name[1] if name.startswith('r') else 'the shift along ' + name}"
-                           " fixed (e.g. a part clamped on a datum plane)")
+            motion = f"the rotation about {name[1]}" if name.startswith("r") else f"the shift along {name}"
+            box.setToolTip(f"Hold {motion} fixed (e.g. a part clamped on a datum plane)")
             boxes.addWidget(box)
             self.locked[name] = box
         layout.addRow("Locked", boxes)
-        self.tolerance = QtGui.QDoubleSpinBox(self)
-        self.tolerance.setObjectName("tolerance")
-        self.tolerance.setRange(0.0, MAX_TOLERANCE_MM)
-        self.tolerance.setDecimals(4)
-        self.tolerance.setSingleStep(0.01)
-        self.tolerance.setSuffix(" mm")
+        self.tolerance = mm_box(self, "tolerance", (0.0, MAX_TOLERANCE_MM), stored["InspectTolerance"],
+                                "Profile tolerance t of the surface (ISO 1101, form only): a zone of width t "
+                                "centred on the nominal; a point passes where |deviation| <= t/2, the face where "
+                                "the profile 2 max |deviation| <= t. 'none': deviations only.")
         self.tolerance.setSpecialValueText("none")
-        self.tolerance.setValue(stored["InspectTolerance"])
-        self.tolerance.setToolTip("Profile tolerance t of the surface (ISO 1101, form only): a zone of width t "
-                                  "centred on the nominal; a point passes where |deviation| <= t/2, the face where "
-                                  "the profile 2 max |deviation| <= t. 'none': deviations only.")
         layout.addRow("Profile tolerance", self.tolerance)
-        self.zone_offset = QtGui.QDoubleSpinBox(self)
-        self.zone_offset.setObjectName("zone_offset")
-        self.zone_offset.setRange(-MAX_TOLERANCE_MM, MAX_TOLERANCE_MM)
-        self.zone_offset.setDecimals(4)
-        self.zone_offset.setSingleStep(0.01)
-        self.zone_offset.setSuffix(" mm")
-        self.zone_offset.setValue(stored["InspectZoneOffset"])
-        self.zone_offset.setToolTip("Where the tolerance zone's centre lies from the nominal surface (ISO 1101 UZ), + "
-                                    "out of the material: 0 a zone centred on the nominal, +t/2 a unilateral zone "
-                                    "outside the material, -t/2 inside.")
+        self.zone_offset = mm_box(self, "zone_offset", (-MAX_TOLERANCE_MM, MAX_TOLERANCE_MM),
+                                  stored["InspectZoneOffset"],
+                                  "Where the tolerance zone's centre lies from the nominal surface (ISO 1101 UZ), + "
+                                  "out of the material: 0 a zone centred on the nominal, +t/2 a unilateral zone "
+                                  "outside the material, -t/2 inside.")
         layout.addRow("Zone offset (UZ)", self.zone_offset)
         self.buttons = QtGui.QDialogButtonBox(QtGui.QDialogButtonBox.Ok | QtGui.QDialogButtonBox.Cancel, parent=self)
         self.buttons.accepted.connect(self.accept)
@@ -132,6 +121,19 @@ class InspectDialog(QtGui.QDialog):
         return {"InspectFile": chosen["measured"], "InspectAlignment": chosen["alignment"],
                 "InspectTolerance": self.tolerance.value(), "InspectLocked": ",".join(chosen["locked"]),
                 "InspectZoneOffset": chosen["zone_offset"]}
+
+
+def mm_box(parent, name, limits, value, tip):
+    """A spin box of mm (4 decimals, steps of 0.01 mm) named name, within limits (low, high)."""
+    box = QtGui.QDoubleSpinBox(parent)
+    box.setObjectName(name)
+    box.setRange(*limits)
+    box.setDecimals(4)
+    box.setSingleStep(0.01)
+    box.setSuffix(" mm")
+    box.setValue(value)
+    box.setToolTip(tip)
+    return box
 
 
 def ask_inspection(points):

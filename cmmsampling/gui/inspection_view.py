@@ -13,14 +13,14 @@ from ..document.object_types import is_measured_points
 from ..fitting.deviation import mm_text
 from ..inspection.judge import band_limits
 from . import colormap, icon
-from .view_providers import LABEL_COLOUR, Stateless, point_labels
+from .view_providers import LABEL_COLOUR, Annotated, point_labels
 
 # Band colours, -2 .. 2: out below, near below, in, near above, out above.
 BAND_COLOURS = ((0.0, 0.2, 1.0), (0.0, 0.8, 1.0), (0.0, 0.75, 0.0), (1.0, 0.7, 0.0), (1.0, 0.0, 0.0))
 MANY_LABELS = 60
 
 
-class ViewProviderMeasuredPoints(Stateless):
+class ViewProviderMeasuredPoints(Annotated):
     """Draws the measured points as dots over the part, coloured by their band in the tolerance
     zone (out below, near below, in, near above, out above, with their limits in mm in the
     legend) or, without a tolerance, by |deviation| from 0 to the largest (mm); their labels when
@@ -34,24 +34,14 @@ class ViewProviderMeasuredPoints(Stateless):
         vobj.PointSize = 4
         vobj.Proxy = self
 
-    def attach(self, vobj):
-        """Add the dots, labels and legend below the object's root node."""
-        self.Object = vobj.Object
-        self.switch = coin.SoSwitch()
-        self.annotation = coin.SoSeparator()
-        self.switch.addChild(self.annotation)
-        self.switch.whichChild = 0 if vobj.Visibility else -1
-        vobj.RootNode.addChild(self.switch)
-        self.redraw(vobj)
-
     def updateData(self, obj, prop):
         if prop in ("Points", "Bands", "Deviation", "Tolerance", "ZoneOffset", "Profile", "Verdict") and \
                 obj.ViewObject is not None:
             self.redraw(obj.ViewObject)
 
     def onChanged(self, vobj, prop):
-        if prop == "Visibility" and hasattr(self, "switch"):
-            self.switch.whichChild = 0 if vobj.Visibility else -1
+        if prop == "Visibility":
+            self.follow_visibility(vobj)
         elif prop in ("ShowLabels", "ShowLegend"):
             self.redraw(vobj)
 
@@ -70,8 +60,8 @@ class ViewProviderMeasuredPoints(Stateless):
             rgb = np.array(BAND_COLOURS)[np.array(obj.Bands, dtype=int) + 2]
             offset = float(obj.ZoneOffset.Value)
             zone = f" (offset {offset:+g} mm)" if offset else ""
-            legend = colormap.band_legend(band_rows(tolerance, offset), f"Profile {mm_text(obj.Profile.Value)}, "
-                                                                        f"tolerance {tolerance:g} mm{zone}: {obj.Verdict}")
+            title = f"Profile {mm_text(obj.Profile.Value)}, tolerance {tolerance:g} mm{zone}: {obj.Verdict}"
+            legend = colormap.band_legend(band_rows(tolerance, offset), title)
         else:
             largest = colormap.shown_maximum(np.abs(deviations).max())
             rgb = colormap.colours(np.abs(deviations), largest)

@@ -52,7 +52,31 @@ class Stateless:
         return None
 
 
-class ViewProviderProbePoints(Stateless):
+class Annotated(Stateless):
+    """A view provider that draws its own coin nodes (``self.annotation``) below the object's root
+    node, shown while the object is visible; subclasses give redraw(vobj)."""
+
+    def attach(self, vobj):
+        """Add the annotation below the object's root node and draw it."""
+        self.Object = vobj.Object
+        self.switch = coin.SoSwitch()
+        self.annotation = coin.SoSeparator()
+        self.switch.addChild(self.annotation)
+        self.switch.whichChild = 0 if vobj.Visibility else -1
+        vobj.RootNode.addChild(self.switch)
+        self.redraw(vobj)
+
+    def follow_visibility(self, vobj):
+        """Show or hide the annotation with the object (onChanged of Visibility)."""
+        if hasattr(self, "switch"):
+            self.switch.whichChild = 0 if vobj.Visibility else -1
+
+    def redraw(self, vobj):
+        """Rebuild the annotation from the object's data."""
+        raise NotImplementedError
+
+
+class ViewProviderProbePoints(Annotated):
     """Draws the probe points as vertices (the Part view), each with its approach vector (a line
     along the outward normal, ``ApproachLength`` mm long) and labels P1..PN. Labels are drawn
     over the surface (never hidden behind it) and thinned so that they do not collide: a label
@@ -81,23 +105,13 @@ class ViewProviderProbePoints(Stateless):
         vobj.PointColor = POINT_COLOUR
         vobj.Proxy = self
 
-    def attach(self, vobj):
-        """Add the annotation (labels, approach lines) below the object's root node."""
-        self.Object = vobj.Object
-        self.switch = coin.SoSwitch()
-        self.annotation = coin.SoSeparator()
-        self.switch.addChild(self.annotation)
-        self.switch.whichChild = 0 if vobj.Visibility else -1
-        vobj.RootNode.addChild(self.switch)
-        self.redraw(vobj)
-
     def updateData(self, obj, prop):
         if prop in ("Points", "Normals", "Labels", "Unreached", "UnreachedArea") and obj.ViewObject is not None:
             self.redraw(obj.ViewObject)
 
     def onChanged(self, vobj, prop):
-        if prop == "Visibility" and hasattr(self, "switch"):
-            self.switch.whichChild = 0 if vobj.Visibility else -1
+        if prop == "Visibility":
+            self.follow_visibility(vobj)
         elif prop in POINT_VIEW_PROPERTIES + ("LabelSpacing", "ShowUnreached"):
             self.redraw(vobj)
 

@@ -48,9 +48,11 @@ class Inspection:
     deviations: (N,) mm, signed (+ out of the material); transform: (4, 4) measured -> CAD;
     alignment: the Alignment; tolerance: the profile tolerance t (mm) or None; faces: N names of
     the faces the points were judged on; notes: what the pairing found (points planned but not
-    measured); zone_offset: o, mm, the zone's centre from the nominal (+ out of the material); for a SamplingResult's points (the paper's step), substitute_poles: (n_u, n_v, 3)
-    mm, the substitute fitted to the aligned measured points at their planned (u, v), and
-    substitute_deviation: its DeviationStats against the CAD face (the deviation map); else None.
+    measured); zone_offset: o, mm, the zone's centre from the nominal (+ out of the material);
+    for a SamplingResult's points (the paper's step), substitute_poles: (n_u, n_v, 3) mm, the
+    substitute fitted to the aligned measured points at their planned (u, v), and
+    substitute_deviation: its DeviationStats against the CAD face (the deviation map); else None;
+    measured_file: the file read ('' for a PointSet).
     """
 
     labels: list
@@ -172,9 +174,9 @@ def inspect(source, measured, alignment="best_fit", tolerance=None, locked=(), p
     source: a Part.Face (the measured points are taken as they come), a SamplingResult, a
     PartPlan (with part=, the shape the plan was made of: its faces by name), a Planned, or a
     document object whose Proxy has planned(obj) (the workbench's probe points and part plans);
-    the measured points pair with the planned ones by label, else by order when the counts agree. measured: a path (DMIS output
-    with FA(label) actuals, the project's CSV or XYZIJK, labelled x y z text:
-    cmmsampling.inspection.measured) or a PointSet of contact points (a
+    the measured points pair with the planned ones by label, else by order when the counts
+    agree. measured: a path (DMIS output with FA(label) actuals, the project's CSV or XYZIJK,
+    labelled x y z text: cmmsampling.inspection.measured) or a PointSet of contact points (a
     file's stated probe radius, or probe_radius mm, is taken off along its vectors).
     alignment: 'none', 'best_fit' or 'min_max' (cmmsampling.inspection.align); locked: degrees
     of freedom held fixed (rx, ry, rz, x, y, z); tolerance: the profile tolerance t, mm;

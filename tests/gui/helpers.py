@@ -110,6 +110,38 @@ def modal_message(action, timeout_s=10):
     return texts[0] if texts else None
 
 
+def handle_dialog(kind, action, handle, timeout_s=10):
+    """Run action(), which opens a modal dialog of class ``kind``; handle(dialog) is called with
+    it open and must close it (a dialog it leaves open is rejected, as is one still open after
+    timeout_s). Returns what action() returns."""
+    timer = QtCore.QTimer()
+    timer.setInterval(50)
+
+    def poll():
+        dialog = QtGui.QApplication.activeModalWidget()
+        if isinstance(dialog, kind):
+            timer.stop()
+            try:
+                handle(dialog)
+            finally:
+                if dialog.isVisible():
+                    dialog.reject()
+
+    def give_up():
+        timer.stop()
+        dialog = QtGui.QApplication.activeModalWidget()
+        if dialog is not None:
+            dialog.reject()
+
+    timer.timeout.connect(poll)
+    timer.start()
+    QtCore.QTimer.singleShot(int(timeout_s * 1000), give_up)
+    try:
+        return action()
+    finally:
+        timer.stop()
+
+
 def answer_dialog(action, button, timeout_s=10):
     """Run action(), which opens a modal dialog; once the dialog shows its text, press its button
     with text ``button`` and return the texts it showed."""

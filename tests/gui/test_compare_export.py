@@ -24,7 +24,8 @@ from cmmsampling.study import html as report_html
 from support.toy_strategy import TOY
 
 from .helpers import (
-    Hold, child, dock_text, main_window, open_panel, process_events, task_button, task_form, wait_until, widgets,
+    Hold, child, dock_text, handle_dialog, main_window, open_panel, process_events, task_button, task_form,
+    wait_until, widgets,
 )
 
 OK, CANCEL = QtGui.QDialogButtonBox.Ok, QtGui.QDialogButtonBox.Cancel
@@ -417,31 +418,8 @@ def test_open_comparison_report_shows_a_report_again(workbench, tmp_path, monkey
 
 
 def run_dialog(action, handle, timeout_s=10):
-    """Run action(), which opens the export options dialog modally; handle(dialog) is called with
-    it open and must close it. A dialog still open after timeout_s is rejected."""
-    timer = QtCore.QTimer()
-    timer.setInterval(50)
-
-    def poll():
-        dialog = QtGui.QApplication.activeModalWidget()
-        if isinstance(dialog, export_options.ExportOptionsDialog):
-            timer.stop()
-            try:
-                handle(dialog)
-            finally:
-                if dialog.isVisible():
-                    dialog.reject()
-
-    def give_up():
-        timer.stop()
-        dialog = QtGui.QApplication.activeModalWidget()
-        if dialog is not None:
-            dialog.reject()
-
-    timer.timeout.connect(poll)
-    timer.start()
-    QtCore.QTimer.singleShot(int(timeout_s * 1000), give_up)
-    return action()
+    """Run action(), which opens the export options dialog modally, answered by handle(dialog)."""
+    return handle_dialog(export_options.ExportOptionsDialog, action, handle, timeout_s)
 
 
 def probe_points(doc):

@@ -15,9 +15,9 @@ from cmmsampling.document.object_types import is_measured_points
 from cmmsampling.gui import commands, inspect_dialog, inspection_view
 from cmmsampling.inspection.judge import tolerance_bands
 
-from PySide import QtCore, QtGui
+from PySide import QtGui
 
-from .helpers import dock_text, document_with, main_window, modal_message, process_events, texts
+from .helpers import dock_text, document_with, handle_dialog, main_window, modal_message, process_events, texts
 
 BLADE = "Face176"
 MISPLACED = {"rx": 0.5, "ry": -0.4, "rz": 0.8, "x": 1.2, "y": -1.5, "z": 0.6}
@@ -40,24 +40,8 @@ def inspect_with(points, handle, timeout_s=20):
     """Select points, run the command and answer its dialog with handle(dialog), which must close it."""
     FreeCADGui.Selection.clearSelection()
     FreeCADGui.Selection.addSelection(points)
-    timer = QtCore.QTimer()
-    timer.setInterval(50)
-
-    def poll():
-        dialog = QtGui.QApplication.activeModalWidget()
-        if isinstance(dialog, inspect_dialog.InspectDialog):
-            timer.stop()
-            try:
-                handle(dialog)
-            finally:
-                if dialog.isVisible():
-                    dialog.reject()
-
-    timer.timeout.connect(poll)
-    timer.start()
-    QtCore.QTimer.singleShot(int(timeout_s * 1000), timer.stop)
-    FreeCADGui.runCommand(commands.InspectMeasured.NAME)
-    timer.stop()
+    handle_dialog(inspect_dialog.InspectDialog, lambda: FreeCADGui.runCommand(commands.InspectMeasured.NAME),
+                  handle, timeout_s)
 
 
 def test_inspect_measured_points_on_a_ventilator_blade(blade_points, tmp_path, artifacts):
