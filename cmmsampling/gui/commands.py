@@ -206,7 +206,7 @@ class InspectMeasured(GuardedCommand):
         return one_source_reason("that were measured", "select the one that was measured")
 
     def act(self):
-        from .inspect_dialog import ask_inspection, inspection_call, report_inspection
+        from .inspect_dialog import ask_inspection, inspection_call, report_inspection, show_busy
 
         [points] = selected_export_sources()
         arguments = ask_inspection(points)
@@ -215,6 +215,7 @@ class InspectMeasured(GuardedCommand):
         FreeCADGui.doCommand("import cmmsampling")
         judge, add = inspection_call(points, arguments)
         before = getattr(__main__, "inspection", None), getattr(__main__, "group", None)
+        show_busy(points)
         QtGui.QApplication.setOverrideCursor(QtCore.Qt.WaitCursor)
         try:
             FreeCADGui.doCommand(judge)

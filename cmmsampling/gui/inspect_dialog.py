@@ -5,6 +5,7 @@ calls (``inspection = cmmsampling.inspect(...)``, ``cmmsampling.add_inspection_t
 The values persist in the workbench's parameter group; the file starts in the folder of the last
 one read, else beside the document.
 """
+import math
 import os
 
 import FreeCAD
@@ -171,10 +172,28 @@ def inspection_call(points, arguments):
 
 
 def report_inspection(inspection):
-    """The inspection's summary in the Report view, its profile and verdict in the status bar."""
+    """The inspection's summary and its alignment in the Report view, its profile and verdict in
+    the status bar."""
     for line in inspection.summary().splitlines():
         FreeCAD.Console.PrintMessage(f"cmmsampling: {line}\n")
+    FreeCAD.Console.PrintMessage(f"cmmsampling: alignment (measured -> CAD, applied to the points; the part is "
+                                 f"not moved): {placement_text(inspection.placement)}\n")
     verdict = "" if inspection.passed is None else (
         f", tolerance {inspection.tolerance:g} mm: {'PASS' if inspection.passed else 'FAIL'}")
     FreeCADGui.getMainWindow().statusBar().showMessage(
         f"Inspection of {len(inspection.labels)} measured points: profile {inspection.profile:.4f} mm{verdict}", 20000)
+
+
+def placement_text(placement):
+    """A placement in words: 'shift (x, y, z) mm, turned <angle> deg about (i, j, k)'."""
+    shift, rotation = placement.Base, placement.Rotation
+    axis = rotation.Axis
+    return (f"shift ({shift.x:.4f}, {shift.y:.4f}, {shift.z:.4f}) mm, turned {math.degrees(rotation.Angle):.4f} "
+            f"deg about ({axis.x:.4f}, {axis.y:.4f}, {axis.z:.4f})")
+
+
+def show_busy(points):
+    """Say in the status bar which probe points' measurement is being inspected, before the work
+    holds the GUI."""
+    FreeCADGui.getMainWindow().statusBar().showMessage(f"Inspecting the measured points of {points.Label}...")
+    QtGui.QApplication.processEvents()

@@ -17,7 +17,8 @@ from cmmsampling.inspection.judge import tolerance_bands
 
 from PySide import QtGui
 
-from .helpers import dock_text, document_with, handle_dialog, main_window, modal_message, process_events, texts
+from .helpers import (dock_text, document_with, handle_dialog, main_window, modal_message, process_events, texts,
+                      wait_until)
 
 BLADE = "Face176"
 MISPLACED = {"rx": 0.5, "ry": -0.4, "rz": 0.8, "x": 1.2, "y": -1.5, "z": 0.6}
@@ -83,6 +84,8 @@ def test_inspect_measured_points_on_a_ventilator_blade(blade_points, tmp_path, a
             f"{measured!r}, tolerance=0.013)") in echoed
     assert "group = cmmsampling.add_inspection_to_document(inspection, " in echoed
     assert "profile" in main_window().statusBar().currentMessage()
+    assert wait_until(lambda: "cmmsampling: alignment (measured -> CAD, applied to the points; the part is not "
+                              "moved): shift (" in dock_text("Report view"), 2)
     assert not points.Visibility and measured_points.Visibility, "the inspection is shown alone"
 
     proxy = measured_points.ViewObject.Proxy
