@@ -42,8 +42,8 @@ def test_an_inspection_goes_in_as_one_step_and_undoes(doc, points, tmp_path):
     assert moved.distanceToPoint(FreeCAD.Vector(*found.points[3])) < 1e-9
     assert sheet.get("profile_mm") == pytest.approx(found.profile) and sheet.get("n") == 25
     assert sheet.get("outside") == int(np.count_nonzero(~found.within))
-    assert sheet.getContents("A16") == "Label" and sheet.getContents("A17") == found.labels[0]
-    assert sheet.getContents(f"J{16 + 25}") in ("in", "near above", "near below", "OUT above", "OUT below")
+    assert sheet.get("A16") == "Label" and sheet.get("A17") == found.labels[0]
+    assert sheet.get(f"J{16 + 25}") in ("in", "near above", "near below", "OUT above", "OUT below")
     doc.undo()
     assert [o.Name for o in doc.Objects] == before and points.Visibility
 

@@ -141,7 +141,9 @@ def test_the_panel_estimates_the_runs_time_before_it_starts(doc):
     # the time limit plus the time to build the problem (under a second quiet, more on a busy machine)
     assert wait_until(lambda: re.fullmatch(r"Time: about 3[0-5] s", line.text()), 5), line.text()
     fill(form, "halton")
-    assert wait_until(lambda: line.text() == "Time: under a second", 5), line.text()
+    # a blind layout takes milliseconds; on a busy machine (the estimate counts the processes sharing
+    # the cores) it may read a second or two
+    assert wait_until(lambda: re.fullmatch(r"Time: (under a second|about [12] s)", line.text()), 5), line.text()
     task_button(CANCEL).click()
 
 
