@@ -11,7 +11,7 @@ import numpy as np
 
 from ..geometry.freecad_env import import_part
 from ..geometry.validation import InputError, InputTypeError
-from ..inspection.judge import Inspection
+from ..inspection.judge import Inspection, verdict_text
 from .object_types import MEASURED_POINTS, in_document, is_measured_points
 from .objects import TypedProxy
 from .sheets import write_inspection_report
@@ -95,13 +95,13 @@ def write_inspection(points, inspection):
 def face_lines(inspection):
     """'Face3: 0.0123 mm PASS' for each face judged (the verdict left out without a tolerance)."""
     return [f"{name}: {value:.4f} mm" + ("" if inspection.tolerance is None else
-                                          f" {'PASS' if inspection.face_passed(value) else 'FAIL'}")
+                                          f" {verdict_text(inspection.face_passed(value))}")
             for name, value in inspection.face_profiles.items()]
 
 
 def verdict(inspection):
     """'PASS', 'FAIL' or NO_TOLERANCE."""
-    return NO_TOLERANCE if inspection.passed is None else "PASS" if inspection.passed else "FAIL"
+    return NO_TOLERANCE if inspection.passed is None else verdict_text(inspection.passed)
 
 
 class MeasuredPoints(TypedProxy):

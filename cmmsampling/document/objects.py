@@ -220,12 +220,8 @@ class ProbePoints(TypedProxy):
     def planned(self, obj):
         """What measured points are judged against (cmmsampling.inspect): the labels, the points
         and their source face as it is now; InputError where the face is gone."""
-        face, why = source_face(obj)
-        if face is None:
-            raise InputError(f"{obj.Label} cannot be inspected: {why}; measured points are judged on the face "
-                             "they were planned on")
         point_set = self.point_set(obj)
-        return Planned(point_set.labels, point_set.points, [face], [obj.SourceName or obj.Label],
+        return Planned(point_set.labels, point_set.points, [inspected_face(obj)], [obj.SourceName or obj.Label],
                        np.zeros(len(point_set), dtype=int))
 
     def probe_moves(self, obj, motion=None):
@@ -299,7 +295,7 @@ class PartPlanGroup(TypedProxy):
         (Face61_P1, as exported), points and faces; InputError where a face is gone."""
         members = plan_probe_points(obj)
         point_set = self.point_set(obj)
-        faces = [member.Proxy.planned(member).faces[0] for member in members]
+        faces = [inspected_face(member) for member in members]
         names = [member.SourceName or member.Label for member in members]
         counts = [len(member.Labels) for member in members]
         return Planned(point_set.labels, point_set.points, faces, names, np.repeat(np.arange(len(members)), counts))
@@ -383,6 +379,16 @@ def _view_provider_when_missing(obj):
         from ..gui import view_providers
 
         view_providers.attach_when_missing(obj)
+
+
+def inspected_face(points):
+    """The source face (Part.Face) measured points of probe points are judged on, as it is now;
+    InputError naming why where it is gone."""
+    face, why = source_face(points)
+    if face is None:
+        raise InputError(f"{points.Label} cannot be inspected: {why}; measured points are judged on the face "
+                         "they were planned on")
+    return face
 
 
 def passes_through(face, points):

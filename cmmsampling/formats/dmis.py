@@ -10,6 +10,7 @@ import numpy as np
 
 from ..access.probe import head_angles
 from ..geometry.validation import InputError
+from .frames import placement_from_metadata
 from .pointset import PointSet
 from .registry import FileFormat
 from .text import (COORDINATE_DECIMALS, VECTOR_DECIMALS, comment_entries, fixed, metadata_comment_lines, numbers,
@@ -77,27 +78,20 @@ def frame_statements(facts):
     as DMIS datum statements from the part's CAD (global) frame: D(name)=TRANS/XORIG,x,YORIG,y,
     ZORIG,z moves the origin to the frame's (mm, in the CAD frame), then D(name)=ROTAT/ZAXIS,a,
     ROTAT/YAXIS,b, ROTAT/XAXIS,c turn it about its own current axes (degrees, right-handed: the
-    frame's rotation is Rz(a) Ry(b) Rx(c)); rotations of 0 are left out. [] for global points."""
-    if facts.get("frame", "global") == "global":
+    frame's rotation is Rz(a) Ry(b) Rx(c), FreeCAD's yaw, pitch and roll); rotations of 0 are left
+    out. [] for global points."""
+    placement = placement_from_metadata(facts)
+    if placement is None:
         return []
     label = sanitise_labels([facts.get("frame_name") or "LOCAL"])[0]
-    rotation = np.column_stack([facts[f"frame_{axis}_axis"] for axis in "xyz"])
-    origin = fixed(np.asarray(facts["frame_origin_mm"], dtype=float), COORDINATE_DECIMALS).tolist()
+    origin = fixed(np.array(tuple(placement.Base)), COORDINATE_DECIMALS).tolist()
     lines = [f"{DMIS_COMMENT} the local frame, from the part's CAD frame: TRANS, then ROTAT about Z, Y, X",
              *dmis_statement([f"D({label})=TRANS/XORIG", origin[0], "YORIG", origin[1], "ZORIG", origin[2]])]
-    for axis, angle in zip(("ZAXIS", "YAXIS", "XAXIS"), zyx_angles(rotation)):
+    for axis, angle in zip(("ZAXIS", "YAXIS", "XAXIS"), placement.Rotation.getYawPitchRoll()):
         text = fixed(angle, ANGLE_DECIMALS).item()
         if float(text) != 0.0:
             lines.append(f"D({label})=ROTAT/{axis},{text}")
     return lines
-
-
-def zyx_angles(rotation):
-    """(a, b, c) degrees with rotation (3, 3) = Rz(a) Ry(b) Rx(c); c = 0 where b is +-90 deg."""
-    pitch = np.arcsin(np.clip(-rotation[2, 0], -1.0, 1.0))
-    if abs(np.cos(pitch)) < 1e-9:
-        return np.degrees([np.arctan2(-rotation[0, 1], rotation[1, 1]), pitch, 0.0])
-    return np.degrees([np.arctan2(rotation[1, 0], rotation[0, 0]), pitch, np.arctan2(rotation[2, 1], rotation[2, 2])])
 
 
 def without_repeated_gotos(lines):

@@ -13,6 +13,7 @@ import FreeCADGui
 from PySide import QtCore, QtGui
 
 from ..inspection.align import ALIGNMENTS, DEGREES_OF_FREEDOM
+from ..inspection.judge import verdict_text
 from . import icon, settings
 from .qt_compat import run_modal
 
@@ -179,7 +180,7 @@ def report_inspection(inspection):
     FreeCAD.Console.PrintMessage(f"cmmsampling: alignment (measured -> CAD, applied to the points; the part is "
                                  f"not moved): {placement_text(inspection.placement)}\n")
     verdict = "" if inspection.passed is None else (
-        f", tolerance {inspection.tolerance:g} mm: {'PASS' if inspection.passed else 'FAIL'}")
+        f", tolerance {inspection.tolerance:g} mm: {verdict_text(inspection.passed)}")
     FreeCADGui.getMainWindow().statusBar().showMessage(
         f"Inspection of {len(inspection.labels)} measured points: profile {inspection.profile:.4f} mm{verdict}", 20000)
 

@@ -129,12 +129,12 @@ class Inspection:
                  f"profile {self.profile:.4f} mm{zone}"]
         if self.tolerance is not None:
             outside = int((~self.within).sum())
-            lines.append(f"tolerance {self.tolerance:g} mm: {'PASS' if self.passed else 'FAIL'}"
+            lines.append(f"tolerance {self.tolerance:g} mm: {verdict_text(self.passed)}"
                          f"{f', {outside} points outside the zone' if outside else ''}")
         faces = self.face_profiles
         if len(faces) > 1:
             lines += [f"{name}: profile {value:.4f} mm" + ("" if self.tolerance is None else
-                                                          f", {'PASS' if self.face_passed(value) else 'FAIL'}")
+                                                          f", {verdict_text(self.face_passed(value))}")
                       for name, value in faces.items()]
         return "\n".join(lines + [f"note: {note}" for note in self.notes])
 
@@ -149,6 +149,11 @@ class Planned:
     faces: list
     names: list
     owner: np.ndarray
+
+
+def verdict_text(passed):
+    """'PASS' or 'FAIL' for a verdict (True or False)."""
+    return "PASS" if passed else "FAIL"
 
 
 def tolerance_bands(deviations, tolerance, offset=0.0):
