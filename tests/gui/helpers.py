@@ -135,11 +135,15 @@ def handle_dialog(kind, action, handle, timeout_s=10):
 
     timer.timeout.connect(poll)
     timer.start()
-    QtCore.QTimer.singleShot(int(timeout_s * 1000), give_up)
+    deadline = QtCore.QTimer()   # stopped when action() returns: a later test's dialog is not its to reject
+    deadline.setSingleShot(True)
+    deadline.timeout.connect(give_up)
+    deadline.start(int(timeout_s * 1000))
     try:
         return action()
     finally:
         timer.stop()
+        deadline.stop()
 
 
 def answer_dialog(action, button, timeout_s=10):
