@@ -27,6 +27,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ..geometry.bspline import design_matrices, kron_rows
+from .lattice import LATTICE_LIMIT_BYTES, LatticeFit
 from .nodes import DEFAULT_GRID, face_nodes, grid_size, length_raster
 
 # closest_squared compares all pairs of each point set up to this many pairs in all (32 MB of
@@ -79,6 +80,7 @@ class DeviationObjective:
         self.evaluations = 0
         self._scratch = None
         self._last = (None, None)
+        self._lattice = None
         halves, directions = principal_terms(curvature_matrices(
             self.model, nodes.uv.reshape(-1, 2), np.nan_to_num(nodes.normals.reshape(-1, 3))))
         shape = nodes.uv.shape[:2]
@@ -141,14 +143,27 @@ class DeviationObjective:
             self._scratch = Scratch(batch, np.float32, self.space.poles, self.grid.size)
         return self._single.field(poles, self._scratch.first(batch[0]))
 
+    @property
+    def lattice(self):
+        """The LatticeFit the swarm's fits are made with, built on first use; None for a face whose
+        tables would exceed LATTICE_LIMIT_BYTES (its fits evaluate the bases anew)."""
+        if self._lattice is None:
+            small = LatticeFit.table_bytes(self.model, self.space) <= LATTICE_LIMIT_BYTES
+            self._lattice = LatticeFit(self.model, self.space) if small else False
+        return self._lattice or None
+
     def __getstate__(self):
         state = dict(self.__dict__)
         state["_scratch"] = None
         state["_last"] = (None, None)
+        state["_lattice"] = None
         return state
 
     def __call__(self, uv, above=None):
         """Maximum expanded deviation of each point set's substitute: uv (P, N, 2) -> (P,) mm.
+
+        The substitutes are fitted at uv rounded to the lattice of :attr:`lattice` where the face
+        has one (cmmsampling.fitting.lattice).
 
         above: None, or (P,) mm, each point set's value to beat (a swarm's personal bests): a point
         set whose deviation at the nodes of :class:`NodeScreen` already exceeds it is not scored
@@ -157,9 +172,12 @@ class DeviationObjective:
         is the whole raster's.
         """
         given, uv = uv, np.asarray(uv, dtype=float)
-        points = self.points(uv)
-        poles = self._fit_points(uv, points)
-        self._last = (given, points)
+        if self.lattice is not None:
+            poles = self.lattice.points_and_poles(uv)[1]
+        else:
+            points = self.points(uv)
+            poles = self._fit_points(uv, points)
+            self._last = (given, points)
         self.evaluations += uv.shape[0]
         if above is None:
             return self._scored(poles)
@@ -193,7 +211,8 @@ class DeviationObjective:
     def spaced(self, uv, min_spacing, rows=None):
         """True for the point sets uv[rows] (uv: (P, N, 2)) whose points keep ``min_spacing`` mm:
         (len(rows),) bool, all of them when rows is None. When uv is the array of this objective's
-        last call, the face points of that call are reused rather than evaluated again."""
+        last call and that call evaluated the face at uv itself (no lattice), the face points of
+        that call are reused rather than evaluated again."""
         rows = slice(None) if rows is None else rows
         last_uv, last_points = self._last
         if uv is last_uv:

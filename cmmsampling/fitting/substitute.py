@@ -69,12 +69,18 @@ class SubstituteSpace:
         apart vanish, so only the band pairs (a, c) and (b, d) are formed, and one matrix
         product of the two pair-product arrays gives every non-zero entry.
         """
-        pairs = np.matmul(_band_products(along_u, self.degrees[0]),
-                          np.swapaxes(_band_products(along_v, self.degrees[1]), -1, -2))
+        pairs = np.matmul(band_products(along_u, self.degrees[0]),
+                          np.swapaxes(band_products(along_v, self.degrees[1]), -1, -2))
+        return self.gram_from_pairs(pairs, self.smoothing * along_u.shape[-1] / self.size)
+
+    def gram_from_pairs(self, pairs, weight):
+        """B^T B + weight R from the pair-product matrix: pairs (..., L_u, L_v), entry [row(a, c),
+        row(b, d)] the sum over the points of N_a N_c (u) N_b N_d (v) (rows as in
+        :func:`band_products`); weight: the smoothing's weight lam. Returns (..., M, M)."""
         flat = pairs.reshape(pairs.shape[:-2] + (-1,))
         padded = np.concatenate([flat, np.zeros(flat.shape[:-1] + (1,))], axis=-1)
         gram = np.take(padded, self._gram_index, axis=-1)
-        gram += (self.smoothing * along_u.shape[-1] / self.size) * self.regulariser
+        gram += weight * self.regulariser
         return gram
 
     def right_hand_side(self, along_u, along_v, points):
@@ -118,7 +124,7 @@ def _regulariser(poles):
     return r + RIDGE * np.eye(n_u * n_v)
 
 
-def _band_products(bases, degree):
+def band_products(bases, degree):
     """Products N_a N_c of the band pairs a <= c <= a + k: bases (..., n, N) -> (..., L, N).
 
     Rows run by offset c - a = 0..k, then by a; L = sum over the offsets of n - offset.
@@ -129,7 +135,7 @@ def _band_products(bases, degree):
 
 
 def _band_pair_rows(count, degree):
-    """(count, count) row of the pair (a, c) in :func:`_band_products`, -1 for pairs too far apart."""
+    """(count, count) row of the pair (a, c) in :func:`band_products`, -1 for pairs too far apart."""
     first = np.concatenate([np.arange(count - d) for d in range(degree + 1)])
     second = first + np.concatenate([np.full(count - d, d) for d in range(degree + 1)])
     rows = np.full((count, count), -1)

@@ -9,8 +9,9 @@ against measurement):
   (K = n_u n_v poles, about 4N/9 by default), a fixed part (the domain raster, the default
   grid), and about 8.5 KiB per node of a grid finer than the default;
 * each strategy adds its own (``Strategy.memory``): PSO fits its whole swarm at once, about
-  1.25 (P/W, K, K) float64 arrays in each of its W processes, plus a process; the optimal
-  strategy's linearisation, (N, K) and (G, K) arrays.
+  1.25 (P/W, K, K) float64 arrays and its fits' lattice tables (at most 16 MiB) in each of
+  its W processes, plus a process; the optimal strategy's linearisation, (N, K) and (G, K)
+  arrays.
 
 Pairs of points are found by neighbour searches, so nothing of size N^2 is left.
 """

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..fitting.lattice import LATTICE_LIMIT_BYTES
 from ..geometry.validation import InputError, check_int, check_real
 from . import memory
 from .registry import STRATEGIES, Setting, Strategy, StrategyOutcome, layouts
@@ -264,11 +265,13 @@ def _best_exact(problem, found, seeds):
 
 
 def _pso_memory(n, poles, nodes, options, workers):
-    """PSO fits its whole swarm at once: about 1.25 (P/W, K, K) float64 arrays in each of its W
-    processes, and each process beyond the first holds a copy of the problem (bytes)."""
+    """PSO fits its whole swarm at once: about 1.25 (P/W, K, K) float64 arrays and the fits'
+    lattice tables (at most LATTICE_LIMIT_BYTES) in each of its W processes, and each process
+    beyond the first holds a copy of the problem (bytes)."""
     count = poles[0] * poles[1]
     share = -(-options["population"] // workers)
-    return workers * 10 * share * count ** 2 + (workers - 1) * (memory.FIXED_BYTES + 16 * count ** 2)
+    return (workers * (10 * share * count ** 2 + LATTICE_LIMIT_BYTES)
+            + (workers - 1) * (memory.FIXED_BYTES + 16 * count ** 2))
 
 
 def _check_pso_options(options):

@@ -1,0 +1,82 @@
+"""The swarm's fits from lattice tables (cmmsampling.fitting.lattice) against fits from bases
+evaluated anew at the same rounded parameters, on a polynomial and a rational face, a strip and
+a face with a collapsed edge; and the fallback for faces whose tables would be too large."""
+import numpy as np
+import pytest
+
+from cmmsampling.fitting import deviation
+from cmmsampling.fitting.lattice import LATTICE_STEPS, LatticeFit
+from cmmsampling.strategies.sampling import make_problem
+from support.faces import collapsed_face, rational_patch_face, strip_face
+
+FACES = {"reference": None, "rational": rational_patch_face, "strip": strip_face, "collapsed": collapsed_face}
+
+
+@pytest.fixture(scope="module", params=sorted(FACES))
+def problem(request, reference):
+    face = reference if FACES[request.param] is None else FACES[request.param]()
+    return make_problem(face, 49, grid=30, workers=1)
+
+
+def swarm(problem, count=7, seed=2):
+    """Random point sets (count, N, 2) inside the problem's domain box."""
+    rng = np.random.default_rng(seed)
+    box = problem.domain
+    return box.lower + rng.random((count, problem.n, 2)) * (box.upper - box.lower)
+
+
+def test_the_lattice_fit_is_the_fit_at_the_rounded_parameters(problem):
+    objective = problem.objective
+    fit = objective.lattice
+    assert fit is not None and fit.model.rational == problem.model.patch().rational
+    uv = swarm(problem)
+    rounded = fit.rounded(uv)
+    span = np.array(objective.model.span)
+    assert (np.abs(rounded - uv).max(axis=(0, 1)) <= 0.5 * span / LATTICE_STEPS * (1 + 1e-9)).all()
+    assert np.abs(rounded - uv).max() > 0
+    points, poles = fit.points_and_poles(uv)
+    exact_points = objective.points(rounded)
+    size = np.abs(exact_points).max()
+    assert np.abs(points - exact_points).max() <= 1e-12 * size
+    assert np.abs(poles - objective.fit(rounded)).max() <= 1e-9 * size
+
+
+def whole_raster(objective, uv):
+    """The expanded deviation's maximum over every node of the substitutes fitted at uv: (P,) mm."""
+    poles = objective.fit(uv)
+    whole = np.abs(objective.expanded_field(poles)).reshape(len(uv), -1).max(axis=1)
+    if objective.nodes.edge_uv.size:
+        whole = np.maximum(whole, np.abs(objective.expanded_edges(poles)).max(axis=1))
+    return whole
+
+
+def test_the_swarm_objective_scores_the_rounded_point_sets(problem):
+    objective = problem.objective
+    uv = swarm(problem)
+    assert objective(uv) == pytest.approx(whole_raster(objective, objective.lattice.rounded(uv)), rel=1e-5)
+
+
+def test_tables_are_the_size_they_are_budgeted_at(problem):
+    fit = problem.objective.lattice
+    assert fit.u_table.nbytes + fit.v_table.nbytes == LatticeFit.table_bytes(fit.model, fit.space)
+
+
+def test_a_face_with_too_large_tables_is_fitted_from_its_bases(reference, monkeypatch):
+    monkeypatch.setattr(deviation, "LATTICE_LIMIT_BYTES", 1024)
+    problem = make_problem(reference, 49, grid=30, workers=1)
+    objective = problem.objective
+    assert objective.lattice is None
+    uv = swarm(problem)
+    assert objective(uv) == pytest.approx(whole_raster(objective, uv), rel=1e-5)
+    assert objective.spaced(uv, 0.1).shape == (len(uv),)
+
+
+def test_a_worker_builds_its_own_tables(problem):
+    import pickle
+
+    objective = problem.objective
+    uv = swarm(problem)
+    expected = objective(uv)
+    copy = pickle.loads(pickle.dumps(objective))
+    assert copy._lattice is None
+    assert np.array_equal(copy(uv), expected)
