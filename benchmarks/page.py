@@ -30,10 +30,13 @@ def machine():
 
 
 def versions():
-    """FreeCAD's, numpy's and scipy's versions as this Python imports them, one line."""
+    """FreeCAD's, numpy's and scipy's versions as this Python imports them, and the BLAS numpy
+    calls with the kernels it chose for this processor (OpenBLAS falls back to old generic ones
+    on a processor it does not know, which makes the many small solves of a swarm slower), one line."""
     probe = ("import sys; sys.path.insert(0, sys.argv[1]); import cmmsampling, FreeCAD, numpy, scipy; "
+             "from cmmsampling.strategies.threads import blas_description; "
              "print('FreeCAD ' + '.'.join(FreeCAD.Version()[:3]) + ', numpy ' + numpy.__version__ "
-             "+ ', scipy ' + scipy.__version__)")
+             "+ ', scipy ' + scipy.__version__ + '; BLAS ' + blas_description())")
     found = subprocess.run([sys.executable, "-c", probe, ROOT],
                            capture_output=True, text=True)
     return found.stdout.strip().splitlines()[-1] if found.returncode == 0 and found.stdout.strip() else "versions unknown"

@@ -9,6 +9,8 @@ made once per process.
 import contextlib
 import functools
 
+import numpy  # noqa: F401 (loads the BLAS before the controller looks for it)
+
 try:
     from threadpoolctl import ThreadpoolController
 except ImportError:
@@ -26,3 +28,16 @@ def blas_threads(count=1):
     if ThreadpoolController is None:
         return contextlib.nullcontext()
     return _controller().limit(limits=count, user_api="blas")
+
+
+def blas_description():
+    """The BLAS numpy calls, in words: library, version and the kernels it chose for this
+    processor (e.g. "openblas 0.3.21, Haswell kernels"); "unknown" without threadpoolctl."""
+    if ThreadpoolController is None:
+        return "unknown"
+    found = [info for info in _controller().info() if info.get("user_api") == "blas"]
+    if not found:
+        return "unknown"
+    info = found[0]
+    kernels = f", {info['architecture']} kernels" if info.get("architecture") else ""
+    return f"{info.get('internal_api', '?')} {info.get('version') or ''}".strip() + kernels

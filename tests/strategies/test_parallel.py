@@ -7,7 +7,7 @@ import pytest
 import cmmsampling
 from cmmsampling.strategies import parallel
 from cmmsampling.strategies.parallel import TwoProcessObjective
-from cmmsampling.strategies.threads import blas_threads
+from cmmsampling.strategies.threads import ThreadpoolController, blas_description, blas_threads
 
 
 @pytest.fixture(scope="module")
@@ -200,3 +200,13 @@ def test_a_worker_killed_while_a_measured_run_scores_alone_is_noticed(reference,
     os.kill(objective.worker.pid, signal.SIGKILL)
     objective.check_worker()
     assert not objective.parallel and "killed by signal 9" in objective.fallback
+
+
+@pytest.mark.skipif(ThreadpoolController is None, reason="threadpoolctl is not installed")
+def test_the_benchmarks_name_the_blas_and_its_kernels():
+    from threadpoolctl import threadpool_info
+
+    blas = next(info for info in threadpool_info() if info["user_api"] == "blas")
+    described = blas_description()
+    assert described.startswith(blas["internal_api"])
+    assert blas.get("architecture") is None or f"{blas['architecture']} kernels" in described
