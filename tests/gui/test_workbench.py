@@ -252,7 +252,15 @@ def test_short_pso_through_the_panel_then_one_undo(doc, artifacts):
     assert isinstance(points.ViewObject.Proxy, view_providers.ViewProviderProbePoints)
     assert surface.ViewObject.DisplayMode == "Deviation"
     assert drawn(points) == 3 and drawn(surface) == 4
-    assert texts(points.ViewObject.Proxy.annotation) == [f"P{i}" for i in range(1, 26)]
+    assert list(points.Labels) == [f"P{i}" for i in range(1, 26)]
+    # every label is drawn but those the view leaves out near a drawn one (LabelSpacing)
+    shown = points.ViewObject.Proxy.shown_labels
+    assert texts(points.ViewObject.Proxy.annotation) == [points.Labels[i] for i in shown]
+    tips = np.array([tuple(p) for p in points.Points]) + points.ViewObject.ApproachLength.Value * np.array(
+        [tuple(n) for n in points.Normals])
+    hidden = np.setdiff1d(np.arange(25), shown)
+    near = np.linalg.norm(tips[hidden][:, None] - tips[shown][None], axis=-1).min(axis=1, initial=np.inf)
+    assert len(shown) > 0 and (near < points.ViewObject.LabelSpacing.Value).all()
     assert texts(surface.ViewObject.Proxy.coloured) == colormap.tick_labels(surface.MaxDeviation.Value) + [
         "Deviation, Body.Face1", f"  max {surface.MaxDeviation.Value:.4g} mm"]
     assert doc.Body.Shape.Faces[0].distToShape(Part.Vertex(surface.MaxLocation))[0] < 1e-6
