@@ -206,7 +206,10 @@ def test_a_worker_killed_while_a_measured_run_scores_alone_is_noticed(reference,
 def test_the_benchmarks_name_the_blas_and_its_kernels():
     from threadpoolctl import threadpool_info
 
-    blas = next(info for info in threadpool_info() if info["user_api"] == "blas")
+    found = [info for info in threadpool_info() if info["user_api"] == "blas"]
     described = blas_description()
-    assert described.startswith(blas["internal_api"])
-    assert blas.get("architecture") is None or f"{blas['architecture']} kernels" in described
+    if not found:  # a BLAS threadpoolctl does not know (Debian sid's numpy 2.4)
+        assert described == "unknown"
+        return
+    assert described.startswith(found[0]["internal_api"])
+    assert found[0].get("architecture") is None or f"{found[0]['architecture']} kernels" in described
