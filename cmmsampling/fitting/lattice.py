@@ -2,7 +2,7 @@
 
 A swarm fits a substitute to every particle's point set at every iteration. Each fit needs the
 face's points and the substitute's basis values at the set's parameters; evaluated anew, the
-four bases (face and substitute, along u and v) cost about half of a swarm's iteration, in
+four bases (face and substitute, along u and v) cost about a third of a swarm's iteration, in
 numpy calls on small arrays. Along each direction everything a fit needs is a function of that
 one parameter: the face's poles contracted with its basis along u, its basis along v, the
 substitute's basis and the band products of its basis (cmmsampling.fitting.substitute). They are
