@@ -197,7 +197,9 @@ def closest_parameters(model, targets, uv):
     kept only where it brings the point closer. The damping (relative, between DAMPING_FLOOR and
     DAMPING_CEILING) falls where a step gains at least a quarter of what the local model
     promised and grows where it gains less: a step that overshoots on a curved surface, e.g.
-    along a bound, would otherwise zigzag for hundreds of iterations.
+    along a bound, would otherwise zigzag for hundreds of iterations. A target's search ends when
+    its step falls below FOOT_STEP_TOLERANCE of the box, kept or not (a step that short that
+    gains nothing meets the rounding of |r|^2), or when its damping reaches the ceiling.
     """
     u0, u1, v0, v1 = model.bounds
     low, high = np.array([u0, v0]), np.array([u1, v1])
@@ -220,7 +222,7 @@ def closest_parameters(model, targets, uv):
         uv[index[better]] = trial[better]
         squared[index[better]] = trial_squared[better]
         damping[index] = _next_damping(damping[index], gain, _promised_gain(gradient, normal, trial - start))
-        active[index] = (better & moved) | (~better & (damping[index] < DAMPING_CEILING))
+        active[index] = moved & (better | (damping[index] < DAMPING_CEILING))
     return uv
 
 

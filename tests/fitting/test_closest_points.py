@@ -49,6 +49,17 @@ def test_feet_on_the_concave_side_are_exact_within_a_few_dozen_iterations():
     assert counting.calls <= 40, f"{counting.calls} iterations (Gauss-Newton alone takes about 250)"
 
 
+def test_a_search_ends_once_its_steps_fall_below_the_tolerance():
+    """Started at the feet themselves, no step gains (the rounding of |r|^2 decides): the search
+    ends at once rather than growing its damping to the ceiling over a dozen iterations."""
+    model, targets, angle, height = _inside_cylinder()
+    feet = closest_parameters(model, targets, np.column_stack([angle + 0.6, height + 2.0]))
+    counting = CountingModel(model)
+    again = closest_parameters(counting, targets, feet)
+    assert np.abs(again - feet).max() < 1e-9
+    assert counting.calls <= 2, f"{counting.calls} iterations from the feet themselves"
+
+
 def test_feet_agree_with_occ_on_a_strip_from_far_starts():
     """A 2 mm strip, targets 1-3 mm off it, every search started from the strip's far corner."""
     face = strip_face()
