@@ -95,8 +95,7 @@ class LatticeFit:
         basis_v = rows_v[..., start_v:start_v + self.basis_v]
         pairs = np.matmul(np.swapaxes(rows_u[..., start_u + self.basis_u:], 1, 2),
                           rows_v[..., start_v + self.basis_v:])
-        gram = self.space.gram_from_pairs(pairs, self._gram_scale * count)
         weighted = (basis_v[..., :, None] * np.swapaxes(points, 1, 2)[..., None, :]).reshape(sets, count, -1)
         rhs = np.matmul(np.swapaxes(basis_u, 1, 2), weighted).reshape(sets, self.space.size, 3)
-        poles = np.linalg.solve(gram, rhs)
+        poles = self.space.solve_normal(pairs, self._gram_scale * count, rhs)
         return points, poles.reshape((sets,) + self.space.poles + (3,))

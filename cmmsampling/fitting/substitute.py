@@ -10,14 +10,28 @@ where R is the sum of squared second differences of the pole net along u and alo
 smaller ridge, so the fit is unique for every point set (clustered ones included). lam is
 ``smoothing`` times N / (n_u n_v): the data term per pole, so the weight of the smoothing does not
 depend on N. Many point sets are fitted in one call.
+
+The normal matrix is banded (poles more than a degree apart along both directions never meet),
+so the normal equations of a whole batch are solved as one block-diagonal banded system by one
+LAPACK call (Cholesky, ``?pbsv``). Up to BANDED_LIMIT sub-diagonals LAPACK factors the band
+column by column, so each point set's poles come out the same whatever else is in its batch;
+wider bands are solved densely, one LU factorisation per point set.
 """
 import numpy as np
+from scipy.linalg import lapack
 
 from ..geometry.bspline import KnotBasis, clamped_uniform_knots, design_matrices, kron_rows, second_difference_matrix
 
 DEFAULT_DEGREE = 3
 DEFAULT_SMOOTHING = 1e-8
 RIDGE = 1e-6
+# LAPACK's ?pbtrf factors bands up to 64 sub-diagonals unblocked (its ILAENV block size is 1
+# there), column by column: the poles of each point set of a batch do not depend on the others.
+BANDED_LIMIT = 64
+# Each set's banded system is padded to a multiple of this many unknowns (32 bytes), so that
+# every set's columns have the same alignment in any batch (OpenBLAS's dot kernels sum in an
+# order that depends on the alignment of their vectors).
+BLOCK_ALIGNMENT = 4
 
 
 def default_pole_count(n_points, degree=DEFAULT_DEGREE):
@@ -46,6 +60,11 @@ class SubstituteSpace:
         self.u_basis = KnotBasis(self.uknots, self.degrees[0])
         self.v_basis = KnotBasis(self.vknots, self.degrees[1])
         self._gram_index = _gram_index(self.poles, self.degrees)
+        pad = _pair_count(self.poles[0], self.degrees[0]) * _pair_count(self.poles[1], self.degrees[1])
+        self.bandwidth = _bandwidth(self._gram_index != pad, self.regulariser)
+        self._block = -(-(self.size + self.bandwidth) // BLOCK_ALIGNMENT) * BLOCK_ALIGNMENT
+        self._band_index = _padded_lower_band(self._gram_index, self.bandwidth, self._block, pad, pad + 1)
+        self._band_regulariser = _padded_lower_band(self.regulariser, self.bandwidth, self._block, 0.0, 0.0)
 
     @property
     def size(self):
@@ -83,6 +102,39 @@ class SubstituteSpace:
         gram += weight * self.regulariser
         return gram
 
+    def solve_normal(self, pairs, weight, rhs):
+        """Poles from the normal equations of point sets: pairs (..., L_u, L_v) as in
+        :meth:`gram_from_pairs`, weight the smoothing's lam, rhs B^T Q (..., M, 3) mm.
+
+        Returns (..., M, 3) mm. Up to BANDED_LIMIT sub-diagonals the batch is one block-diagonal
+        banded system (see :meth:`padded_band`; a point set whose block LAPACK finds not positive
+        definite in rounding is solved by LU instead); wider bands are solved densely per point set.
+        """
+        if self.bandwidth > BANDED_LIMIT:
+            return np.linalg.solve(self.gram_from_pairs(pairs, weight), rhs)
+        pairs = pairs.reshape((-1,) + pairs.shape[-2:])
+        flat_rhs = rhs.reshape((pairs.shape[0],) + rhs.shape[-2:])
+        padded_rhs = np.zeros((rhs.shape[-1], pairs.shape[0], self._block))
+        padded_rhs[:, :, :self.size] = np.moveaxis(flat_rhs, -1, 0)
+        poles = _banded_cholesky_solve(self.padded_band(pairs, weight), padded_rhs,
+                                       lambda index: self.gram_from_pairs(pairs[index], weight))
+        return np.moveaxis(poles[:, :, :self.size], 0, -1).reshape(rhs.shape)
+
+    def padded_band(self, pairs, weight):
+        """The lower bands of B^T B + weight R from pairs (P, L_u, L_v): (P, block, bandwidth + 1),
+        row j the entries [j + d, j], d = 0..bandwidth.
+
+        Each system is padded to ``block`` unknowns (at least M + bandwidth, a multiple of
+        BLOCK_ALIGNMENT) with an identity: every column's LAPACK dot products and updates run over
+        the same lengths and alignment whatever the set's place in a batch, so that each set's
+        poles come out bit for bit the same in any batch.
+        """
+        flat = pairs.reshape(pairs.shape[0], -1)
+        padded = np.concatenate([flat, np.broadcast_to([0.0, 1.0], (flat.shape[0], 2))], axis=-1)
+        band = np.take(padded, self._band_index, axis=-1)
+        band += weight * self._band_regulariser
+        return band
+
     def right_hand_side(self, along_u, along_v, points):
         """B^T Q from the bases (..., n_u, N), (..., n_v, N) and points (..., 3, N) mm -> (..., M, 3)."""
         weighted = along_v[..., :, None, :] * points[..., None, :, :]
@@ -93,8 +145,10 @@ class SubstituteSpace:
     def solve(self, along_u, along_v, points):
         """Least-squares poles from the bases along u and v, (..., n_u, N) and (..., n_v, N), and
         the points coordinate first, (..., 3, N) mm. Returns poles (..., n_u, n_v, 3) mm."""
-        poles = np.linalg.solve(self.normal_matrix(along_u, along_v),
-                                self.right_hand_side(along_u, along_v, points))
+        pairs = np.matmul(band_products(along_u, self.degrees[0]),
+                          np.swapaxes(band_products(along_v, self.degrees[1]), -1, -2))
+        poles = self.solve_normal(pairs, self.smoothing * along_u.shape[-1] / self.size,
+                                  self.right_hand_side(along_u, along_v, points))
         return poles.reshape(points.shape[:-2] + self.poles + (3,))
 
     def fit(self, uv, points):
@@ -122,6 +176,67 @@ def _regulariser(poles):
     dv = second_difference_matrix(n_v)
     r = np.kron(du.T @ du, np.eye(n_v)) + np.kron(np.eye(n_u), dv.T @ dv)
     return r + RIDGE * np.eye(n_u * n_v)
+
+
+def _pair_count(count, degree):
+    """Rows L of :func:`band_products` for ``count`` basis functions of ``degree``."""
+    return sum(count - d for d in range(degree + 1))
+
+
+def _bandwidth(paired, regulariser):
+    """Sub-diagonals of the normal matrix: the largest |i - j| of an entry that can be non-zero,
+    from paired (M, M) bool (a band pair's product) and the regulariser (M, M)."""
+    rows, columns = np.nonzero(paired | (regulariser != 0))
+    return int(np.abs(rows - columns).max())
+
+
+def _padded_lower_band(matrix, bandwidth, block, outside, identity):
+    """The lower band of a symmetric (M, M) matrix padded to (block, block) with an identity, as
+    (block, bandwidth + 1): row j holds the entries [j + d, j], d = 0..bandwidth; ``outside``
+    off the matrix and ``identity`` on the padding's diagonal."""
+    size = matrix.shape[0]
+    below = np.arange(block)[:, None] + np.arange(bandwidth + 1)[None, :]
+    inside = below < size
+    band = np.full((block, bandwidth + 1), outside, dtype=matrix.dtype)
+    band[inside] = matrix[below[inside], np.nonzero(inside)[0]]
+    band[size:, 0] = identity
+    return band
+
+
+def _banded_cholesky_solve(band, rhs, dense_gram):
+    """Solve P symmetric positive definite banded systems as one block-diagonal system.
+
+    band: (P, B, bandwidth + 1), each set's lower band (row j: entries [j + d, j]); rhs: (c, P,
+    B); dense_gram: a set's index -> its dense (M, M) matrix (M <= B: the rest is an identity),
+    for a set LAPACK finds not positive definite in rounding, which is solved by LU. Returns
+    (c, P, B).
+    """
+    sets, size = band.shape[:2]
+    lower = band.reshape(sets * size, -1).T
+    stacked = rhs.reshape(rhs.shape[0], -1).T
+    solution = np.empty_like(stacked)
+    start = 0
+    while start < sets:
+        rows = slice(start * size, None)
+        _, solved, info = _PBSV(lower[:, rows], stacked[rows], lower=1)
+        if info == 0:
+            solution[rows] = solved
+            break
+        if info < 0:
+            raise ValueError(f"LAPACK ?pbsv refused its argument {-int(info)}")
+        failed = start + (int(info) - 1) // size
+        if failed > start:
+            before = slice(start * size, failed * size)
+            solution[before] = _PBSV(lower[:, before], stacked[before], lower=1)[1]
+        gram = dense_gram(failed)
+        block = solution[failed * size:(failed + 1) * size]
+        block[:] = 0.0
+        block[:gram.shape[0]] = np.linalg.solve(gram, rhs[:, failed, :gram.shape[0]].T)
+        start = failed + 1
+    return solution.T.reshape(rhs.shape)
+
+
+_PBSV = lapack.get_lapack_funcs("pbsv", (np.zeros(1),))
 
 
 def band_products(bases, degree):

@@ -5,7 +5,7 @@ from support.faces import Part
 
 from cmmsampling.fitting.deviation import EvaluationGrid, deviation_objective
 from cmmsampling.fitting.exact import exact_deviation
-from cmmsampling.fitting.substitute import DEFAULT_SMOOTHING, SubstituteSpace, default_pole_count
+from cmmsampling.fitting.substitute import BANDED_LIMIT, DEFAULT_SMOOTHING, SubstituteSpace, band_products, default_pole_count
 from cmmsampling.fitting.occ_surface import substitute_surface
 from cmmsampling.geometry.surface import SurfaceModel, make_bspline_surface
 
@@ -112,3 +112,45 @@ def test_band_normal_matrix_equals_the_dense_one(degrees, poles):
     points = np.random.default_rng(4).normal(size=(4, 3, 40))
     assert np.allclose(space.right_hand_side(along_u, along_v, points),
                        np.matmul(rows, np.swapaxes(points, -1, -2)), rtol=0, atol=1e-12)
+
+
+def _normal_equations(space, sets=7, count=60, seed=3):
+    """Pair products (P, L_u, L_v), the smoothing's weight and B^T Q (P, M, 3) of random point sets."""
+    uv = np.random.default_rng(seed).random((sets, count, 2)) * [2.0, 2.0] - [0.0, 1.0]
+    along_u, along_v = space.u_basis.values(uv[..., 0]), space.v_basis.values(uv[..., 1])
+    pairs = np.matmul(band_products(along_u, space.degrees[0]),
+                      np.swapaxes(band_products(along_v, space.degrees[1]), -1, -2))
+    points = np.random.default_rng(seed + 1).normal(size=(sets, 3, count))
+    weight = space.smoothing * count / space.size
+    return pairs, weight, space.right_hand_side(along_u, along_v, points)
+
+
+@pytest.mark.parametrize("degrees, poles", [((3, 3), (6, 6)), ((3, 2), (13, 5)), ((5, 1), (6, 9)), ((2, 3), (3, 4)),
+                                            ((1, 1), (4, 7)), ((3, 3), (21, 21))])
+def test_banded_solve_equals_the_dense_one_and_each_set_is_alone_in_its_batch(degrees, poles):
+    """The batch's banded Cholesky solve against LU of the dense normal matrix, and each set's poles
+    bit for bit the same alone, in a batch of one, or in another split of the batch (as the two
+    processes of a swarm split it). 21 x 21 bicubic poles pass BANDED_LIMIT: solved densely."""
+    space = SubstituteSpace(degrees, poles, (0.0, 2.0, -1.0, 1.0))
+    assert (space.bandwidth > BANDED_LIMIT) == (poles == (21, 21))
+    pairs, weight, rhs = _normal_equations(space)
+    dense = np.linalg.solve(space.gram_from_pairs(pairs, weight), rhs)
+    solved = space.solve_normal(pairs, weight, rhs)
+    assert np.abs(solved - dense).max() < 1e-8 * np.abs(dense).max()
+    alone = np.stack([space.solve_normal(pairs[i], weight, rhs[i]) for i in range(len(pairs))])
+    split = np.concatenate([space.solve_normal(pairs[:3], weight, rhs[:3]), space.solve_normal(pairs[3:], weight, rhs[3:])])
+    assert np.array_equal(alone, solved) and np.array_equal(split, solved)
+
+
+def test_a_set_lapack_finds_indefinite_is_solved_by_lu_and_the_others_as_ever():
+    """A normal matrix made indefinite (a negative entry on its diagonal, as rounding can leave one
+    of a degenerate set): that set alone is solved by LU, whatever its place in the batch."""
+    space = SubstituteSpace((3, 3), (6, 6), (0.0, 2.0, -1.0, 1.0))
+    pairs, weight, rhs = _normal_equations(space)
+    pairs[2, 0, 0] = -pairs[2, 0, 0]
+    pairs[5, 0, 0] = -pairs[5, 0, 0]
+    solved = space.solve_normal(pairs, weight, rhs)
+    for index in (2, 5):
+        assert np.array_equal(solved[index], np.linalg.solve(space.gram_from_pairs(pairs[index], weight), rhs[index]))
+    healthy = [0, 1, 3, 4, 6]
+    assert np.array_equal(solved[healthy], space.solve_normal(pairs[healthy], weight, rhs[healthy]))
