@@ -79,7 +79,7 @@ class DeviationObjective:
         self.grid_v_t = design_matrices(space.vknots, space.degrees[1], v)[0].T.copy()
         self.evaluations = 0
         self._scratch = None
-        self._last = (None, None)
+        self._last = (None, None, 0.0)
         self._lattice = None
         halves, directions = principal_terms(curvature_matrices(
             self.model, nodes.uv.reshape(-1, 2), np.nan_to_num(nodes.normals.reshape(-1, 3))))
@@ -155,7 +155,7 @@ class DeviationObjective:
     def __getstate__(self):
         state = dict(self.__dict__)
         state["_scratch"] = None
-        state["_last"] = (None, None)
+        state["_last"] = (None, None, 0.0)
         state["_lattice"] = None
         return state
 
@@ -173,11 +173,12 @@ class DeviationObjective:
         """
         given, uv = uv, np.asarray(uv, dtype=float)
         if self.lattice is not None:
-            poles = self.lattice.points_and_poles(uv)[1]
+            points, poles = self.lattice.points_and_poles(uv)
+            self._last = (given, points, self.lattice.reach)
         else:
             points = self.points(uv)
             poles = self._fit_points(uv, points)
-            self._last = (given, points)
+            self._last = (given, points, 0.0)
         self.evaluations += uv.shape[0]
         if above is None:
             return self._scored(poles)
@@ -210,16 +211,29 @@ class DeviationObjective:
 
     def spaced(self, uv, min_spacing, rows=None):
         """True for the point sets uv[rows] (uv: (P, N, 2)) whose points keep ``min_spacing`` mm:
-        (len(rows),) bool, all of them when rows is None. When uv is the array of this objective's
-        last call and that call evaluated the face at uv itself (no lattice), the face points of
-        that call are reused rather than evaluated again."""
-        rows = slice(None) if rows is None else rows
-        last_uv, last_points = self._last
-        if uv is last_uv:
-            points = last_points[rows]
-        else:
-            points = self.points(np.asarray(uv, dtype=float)[rows])
-        return closest_squared(points) >= min_spacing ** 2
+        (len(rows),) bool, all of them when rows is None.
+
+        When uv is the array of this objective's last call, its face points are reused: exact
+        ones (no lattice) decide at once; those at the lattice's rounded parameters lie within
+        its reach of the exact ones, so a set whose closest pair is farther than 2 reach from
+        ``min_spacing`` either way is decided by them, and only the others are evaluated exactly.
+        """
+        rows = np.arange(np.shape(uv)[0]) if rows is None else np.asarray(rows)
+        last_uv, last_points, reach = self._last
+        if uv is not last_uv:
+            return self._exactly_spaced(uv, min_spacing, rows)
+        if reach == 0:
+            return closest_squared(last_points[rows]) >= min_spacing ** 2
+        distance = np.sqrt(closest_squared(last_points[rows]))
+        spaced = distance >= min_spacing + 2.0 * reach
+        unsure = np.flatnonzero(~spaced & (distance >= min_spacing - 2.0 * reach))
+        if unsure.size:
+            spaced[unsure] = self._exactly_spaced(uv, min_spacing, rows[unsure])
+        return spaced
+
+    def _exactly_spaced(self, uv, min_spacing, rows):
+        """:meth:`spaced` from the face points at uv[rows] evaluated anew."""
+        return closest_squared(self.points(np.asarray(uv, dtype=float)[rows])) >= min_spacing ** 2
 
     def reference_poles(self):
         """The substitute fitted to the face's points at every raster node: (n_u, n_v, 3) mm.

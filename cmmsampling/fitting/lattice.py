@@ -28,7 +28,8 @@ class LatticeFit:
     """Face points and substitute poles of whole swarms from per-direction tables.
 
     model: the face's NurbsPatch (its bounds are the lattice's range); space: SubstituteSpace
-    over the same range. Rows of the u table: the face's homogeneous (rational) or plain poles
+    over the same range. reach: mm, at least the distance from a face point to the one at its
+    rounded parameters (the face's speed bounds times a whole step, twice the rounding). Rows of the u table: the face's homogeneous (rational) or plain poles
     contracted with its u basis, (n_v, c) flattened; the substitute's u basis (n_u'); its band
     products (L_u). Rows of the v table: the face's v basis (n_v); the substitute's v basis
     (n_v'); its band products (L_v).
@@ -51,6 +52,7 @@ class LatticeFit:
         self.face_v = model.v_basis.count
         self.basis_u, self.basis_v = space.poles
         self._gram_scale = space.smoothing / space.size
+        self.reach = float(np.dot(model.speed_bounds(), 1.0 / self.scale))
 
     @staticmethod
     def _table(face, substitute, degree):

@@ -48,6 +48,29 @@ class NurbsPatch:
         u0, u1, v0, v1 = self.bounds
         return (u1 - u0, v1 - v0)
 
+    def speed_bounds(self):
+        """(L_u, L_v) mm per parameter unit: |F_u| <= L_u and |F_v| <= L_v over the knot range, so
+        |F(a) - F(b)| <= L_u |a_u - b_u| + L_v |a_v - b_v| for parameters a, b of the range.
+
+        A B-spline's derivative is a B-spline of one degree less whose poles are the scaled
+        differences of the poles, and lies in their convex hull. For a rational surface F = A / w
+        with A and w measured about the poles' centre c, F_u = (A_u - (F - c) w_u) / w, where
+        |F - c| is at most the poles' largest distance from c and w at least the smallest weight.
+        """
+        centre = self.poles.reshape(-1, 3).mean(axis=0)
+        reach = float(np.linalg.norm(self.poles - centre, axis=-1).max())
+        homogeneous = (self.poles - centre) * self.weights[..., None]
+        bounds = []
+        for axis, knots, degree in ((0, self.uknots, self.degrees[0]), (1, self.vknots, self.degrees[1])):
+            along = np.moveaxis(homogeneous, axis, 0)
+            weights = np.moveaxis(self.weights, axis, 0)
+            speed = float(np.linalg.norm(_derivative_poles(along, knots, degree), axis=-1).max(initial=0.0))
+            if self.rational:
+                spread = float(np.abs(_derivative_poles(weights, knots, degree)).max(initial=0.0))
+                speed = (speed + reach * spread) / float(self.weights.min())
+            bounds.append(speed)
+        return tuple(bounds)
+
     def _homogeneous_derivatives(self, uv, order):
         """Derivatives of the homogeneous surface A(u, v) = sum w P N, w(u, v) = sum w N.
 
@@ -174,6 +197,15 @@ class NurbsPatch:
         v = np.linspace(v0, v1, size[1])
         return np.stack(np.meshgrid(u, v, indexing="ij"), axis=-1)
 
+
+
+def _derivative_poles(poles, knots, degree):
+    """Poles of a B-spline's derivative along the first axis: poles (n, ...) with the full knot
+    vector ``knots`` -> (n - 1, ...), degree (P_{i+1} - P_i) / (t_{i+k+1} - t_{i+1}) (0 where the
+    knots coincide: that basis function is zero)."""
+    gaps = knots[degree + 1:degree + len(poles)] - knots[1:len(poles)]
+    scale = np.divide(degree, gaps, out=np.zeros_like(gaps), where=gaps > 0)
+    return np.diff(poles, axis=0) * scale.reshape((-1,) + (1,) * (poles.ndim - 1))
 
 
 def unit_normals(su, sv, reversed_face):

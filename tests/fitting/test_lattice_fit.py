@@ -80,3 +80,42 @@ def test_a_worker_builds_its_own_tables(problem):
     copy = pickle.loads(pickle.dumps(objective))
     assert copy._lattice is None
     assert np.array_equal(copy(uv), expected)
+
+
+def test_the_reach_bounds_how_far_rounding_moves_a_face_point(problem):
+    """The lattice's reach against the largest move of a face point to its rounded parameters,
+    over many points; the face's speed bounds against its sampled derivatives."""
+    objective = problem.objective
+    fit = objective.lattice
+    uv = swarm(problem, count=40, seed=5).reshape(-1, 2)
+    moved = np.linalg.norm(objective.model.points(uv) - objective.model.points(fit.rounded(uv)), axis=1)
+    assert moved.max() <= fit.reach
+    speeds = objective.model.derivatives(uv, 1)
+    bounds = objective.model.speed_bounds()
+    for key, bound in zip(((1, 0), (0, 1)), bounds):
+        assert np.linalg.norm(speeds[key], axis=1).max() <= bound * (1 + 1e-12)
+
+
+def test_the_spacing_decided_from_rounded_points_is_the_exact_one(problem):
+    """min_spacing right at each set's closest pair (the rounded points cannot decide that set) and
+    beyond every pair by more than the lattice's reach: the swarm's spacing check (rounded points,
+    exact ones where they cannot decide) says what the exact points say, and evaluates the face
+    anew only for the sets it cannot decide."""
+    objective = problem.objective
+    uv = swarm(problem, count=12, seed=6)
+    objective(uv)
+    squared = deviation.closest_squared(objective.points(uv))
+    exact = np.sqrt(squared)
+    calls = []
+    points = objective.points
+    objective.points = lambda at: calls.append(len(at)) or points(at)
+    try:
+        for level in exact:
+            calls.clear()
+            assert objective.spaced(uv, level).tolist() == (squared >= level ** 2).tolist()
+            assert 1 <= sum(calls) < len(uv)
+        calls.clear()
+        assert not objective.spaced(uv, exact.max() + 3 * objective.lattice.reach).any()
+        assert calls == []
+    finally:
+        del objective.points
