@@ -224,7 +224,7 @@ class DeviationObjective:
             return self._exactly_spaced(uv, min_spacing, rows)
         if reach == 0:
             return closest_squared(last_points[rows]) >= min_spacing ** 2
-        distance = np.sqrt(closest_squared(last_points[rows]))
+        distance = np.sqrt(np.maximum(closest_squared(last_points[rows]), 0.0))
         spaced = distance >= min_spacing + 2.0 * reach
         unsure = np.flatnonzero(~spaced & (distance >= min_spacing - 2.0 * reach))
         if unsure.size:

@@ -119,3 +119,14 @@ def test_the_spacing_decided_from_rounded_points_is_the_exact_one(problem):
         assert calls == []
     finally:
         del objective.points
+
+
+def test_a_set_with_two_points_at_one_place_is_not_spaced(problem):
+    """Two points at the same parameters: their squared distance, a difference of squares, can
+    round below zero; the check says 'not spaced' without a warning."""
+    objective = problem.objective
+    uv = swarm(problem, count=3, seed=7)
+    uv[:, 1] = uv[:, 0]
+    objective(uv)
+    with np.errstate(all="raise"):
+        assert not objective.spaced(uv, 0.01).any()
