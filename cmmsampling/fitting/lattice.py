@@ -29,10 +29,10 @@ class LatticeFit:
 
     model: the face's NurbsPatch (its bounds are the lattice's range); space: SubstituteSpace
     over the same range. reach: mm, at least the distance from a face point to the one at its
-    rounded parameters (the face's speed bounds times a whole step, twice the rounding). Rows of the u table: the face's homogeneous (rational) or plain poles
-    contracted with its u basis, (n_v, c) flattened; the substitute's u basis (n_u'); its band
-    products (L_u). Rows of the v table: the face's v basis (n_v); the substitute's v basis
-    (n_v'); its band products (L_v).
+    rounded parameters (the face's speed bounds times a whole step, twice the rounding). Rows of
+    the u table: the face's homogeneous (rational) or plain poles contracted with its u basis,
+    (n_v, c) flattened; the substitute's u basis (n_u'); its band products (L_u). Rows of the v
+    table: the face's v basis (n_v); the substitute's v basis (n_v'); its band products (L_v).
     """
 
     def __init__(self, model, space, steps=LATTICE_STEPS):

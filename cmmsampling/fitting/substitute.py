@@ -88,9 +88,14 @@ class SubstituteSpace:
         apart vanish, so only the band pairs (a, c) and (b, d) are formed, and one matrix
         product of the two pair-product arrays gives every non-zero entry.
         """
-        pairs = np.matmul(band_products(along_u, self.degrees[0]),
-                          np.swapaxes(band_products(along_v, self.degrees[1]), -1, -2))
-        return self.gram_from_pairs(pairs, self.smoothing * along_u.shape[-1] / self.size)
+        return self.gram_from_pairs(self.pair_products(along_u, along_v),
+                                    self.smoothing * along_u.shape[-1] / self.size)
+
+    def pair_products(self, along_u, along_v):
+        """The pair-product matrix of :meth:`gram_from_pairs` from the bases along u and v,
+        (..., n_u, N) and (..., n_v, N) -> (..., L_u, L_v)."""
+        return np.matmul(band_products(along_u, self.degrees[0]),
+                         np.swapaxes(band_products(along_v, self.degrees[1]), -1, -2))
 
     def gram_from_pairs(self, pairs, weight):
         """B^T B + weight R from the pair-product matrix: pairs (..., L_u, L_v), entry [row(a, c),
@@ -145,9 +150,7 @@ class SubstituteSpace:
     def solve(self, along_u, along_v, points):
         """Least-squares poles from the bases along u and v, (..., n_u, N) and (..., n_v, N), and
         the points coordinate first, (..., 3, N) mm. Returns poles (..., n_u, n_v, 3) mm."""
-        pairs = np.matmul(band_products(along_u, self.degrees[0]),
-                          np.swapaxes(band_products(along_v, self.degrees[1]), -1, -2))
-        poles = self.solve_normal(pairs, self.smoothing * along_u.shape[-1] / self.size,
+        poles = self.solve_normal(self.pair_products(along_u, along_v), self.smoothing * along_u.shape[-1] / self.size,
                                   self.right_hand_side(along_u, along_v, points))
         return poles.reshape(points.shape[:-2] + self.poles + (3,))
 

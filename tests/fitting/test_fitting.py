@@ -5,7 +5,7 @@ from support.faces import Part
 
 from cmmsampling.fitting.deviation import EvaluationGrid, deviation_objective
 from cmmsampling.fitting.exact import exact_deviation
-from cmmsampling.fitting.substitute import BANDED_LIMIT, DEFAULT_SMOOTHING, SubstituteSpace, band_products, default_pole_count
+from cmmsampling.fitting.substitute import BANDED_LIMIT, DEFAULT_SMOOTHING, SubstituteSpace, default_pole_count
 from cmmsampling.fitting.occ_surface import substitute_surface
 from cmmsampling.geometry.surface import SurfaceModel, make_bspline_surface
 
@@ -118,8 +118,7 @@ def _normal_equations(space, sets=7, count=60, seed=3):
     """Pair products (P, L_u, L_v), the smoothing's weight and B^T Q (P, M, 3) of random point sets."""
     uv = np.random.default_rng(seed).random((sets, count, 2)) * [2.0, 2.0] - [0.0, 1.0]
     along_u, along_v = space.u_basis.values(uv[..., 0]), space.v_basis.values(uv[..., 1])
-    pairs = np.matmul(band_products(along_u, space.degrees[0]),
-                      np.swapaxes(band_products(along_v, space.degrees[1]), -1, -2))
+    pairs = space.pair_products(along_u, along_v)
     points = np.random.default_rng(seed + 1).normal(size=(sets, 3, count))
     weight = space.smoothing * count / space.size
     return pairs, weight, space.right_hand_side(along_u, along_v, points)
