@@ -53,9 +53,10 @@ class NurbsPatch:
         |F(a) - F(b)| <= L_u |a_u - b_u| + L_v |a_v - b_v| for parameters a, b of the range.
 
         A B-spline's derivative is a B-spline of one degree less whose poles are the scaled
-        differences of the poles, and lies in their convex hull. For a rational surface F = A / w
-        with A and w measured about the poles' centre c, F_u = (A_u - (F - c) w_u) / w, where
-        |F - c| is at most the poles' largest distance from c and w at least the smallest weight.
+        differences of the poles, and lies in their convex hull. With A and w measured about the
+        poles' centre c, F = A / w and F_u = (A_u - (F - c) w_u) / w, where |F - c| is at most the
+        poles' largest distance from c and w at least the smallest weight (equal weights, of any
+        value, make w_u zero and the bound the plain one).
         """
         centre = self.poles.reshape(-1, 3).mean(axis=0)
         reach = float(np.linalg.norm(self.poles - centre, axis=-1).max())
@@ -65,10 +66,8 @@ class NurbsPatch:
             along = np.moveaxis(homogeneous, axis, 0)
             weights = np.moveaxis(self.weights, axis, 0)
             speed = float(np.linalg.norm(_derivative_poles(along, knots, degree), axis=-1).max(initial=0.0))
-            if self.rational:
-                spread = float(np.abs(_derivative_poles(weights, knots, degree)).max(initial=0.0))
-                speed = (speed + reach * spread) / float(self.weights.min())
-            bounds.append(speed)
+            spread = float(np.abs(_derivative_poles(weights, knots, degree)).max(initial=0.0))
+            bounds.append((speed + reach * spread) / float(self.weights.min()))
         return tuple(bounds)
 
     def _homogeneous_derivatives(self, uv, order):

@@ -130,3 +130,18 @@ def test_a_set_with_two_points_at_one_place_is_not_spaced(problem):
     objective(uv)
     with np.errstate(all="raise"):
         assert not objective.spaced(uv, 0.01).any()
+
+
+@pytest.mark.parametrize("weight", [1.0, 0.25])
+def test_speed_bounds_hold_for_equal_weights_of_any_value(weight):
+    """A polynomial patch whose poles all carry the same weight, 1 or not: its bounds are at least
+    its sampled derivatives (equal weights other than 1 once scaled the bound by the weight)."""
+    from cmmsampling.geometry.bspline import clamped_uniform_knots
+    from cmmsampling.geometry.nurbs import NurbsPatch
+
+    rng = np.random.default_rng(1)
+    knots = clamped_uniform_knots(3, 5)
+    patch = NurbsPatch((3, 3), 10.0 * rng.normal(size=(5, 5, 3)), np.full((5, 5), weight), knots, knots, (0, 1, 0, 1))
+    speeds = patch.derivatives(rng.random((20000, 2)), 1)
+    for key, bound in zip(((1, 0), (0, 1)), patch.speed_bounds()):
+        assert np.linalg.norm(speeds[key], axis=1).max() <= bound
