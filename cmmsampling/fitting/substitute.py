@@ -62,7 +62,8 @@ class SubstituteSpace:
         self._gram_index = _gram_index(self.poles, self.degrees)
         pad = _pair_count(self.poles[0], self.degrees[0]) * _pair_count(self.poles[1], self.degrees[1])
         self.bandwidth = _bandwidth(self._gram_index != pad, self.regulariser)
-        self._block = -(-(self.size + self.bandwidth) // BLOCK_ALIGNMENT) * BLOCK_ALIGNMENT
+        self._block = -(-self.size // BLOCK_ALIGNMENT) * BLOCK_ALIGNMENT
+        self._tail = -(-self.bandwidth // BLOCK_ALIGNMENT) * BLOCK_ALIGNMENT
         self._band_index = _padded_lower_band(self._gram_index, self.bandwidth, self._block, pad, pad + 1)
         self._band_regulariser = _padded_lower_band(self.regulariser, self.bandwidth, self._block, 0.0, 0.0)
 
@@ -118,26 +119,33 @@ class SubstituteSpace:
         if self.bandwidth > BANDED_LIMIT:
             return np.linalg.solve(self.gram_from_pairs(pairs, weight), rhs)
         pairs = pairs.reshape((-1,) + pairs.shape[-2:])
-        flat_rhs = rhs.reshape((pairs.shape[0],) + rhs.shape[-2:])
-        padded_rhs = np.zeros((rhs.shape[-1], pairs.shape[0], self._block))
-        padded_rhs[:, :, :self.size] = np.moveaxis(flat_rhs, -1, 0)
-        poles = _banded_cholesky_solve(self.padded_band(pairs, weight), padded_rhs,
+        sets, block = pairs.shape[0], self._block
+        flat_rhs = rhs.reshape((sets,) + rhs.shape[-2:])
+        padded_rhs = np.zeros((rhs.shape[-1], sets * block + self._tail))
+        padded_rhs[:, :sets * block].reshape(-1, sets, block)[:, :, :self.size] = np.moveaxis(flat_rhs, -1, 0)
+        poles = _banded_cholesky_solve(self.padded_band(pairs, weight), padded_rhs.T, sets, block,
                                        lambda index: self.gram_from_pairs(pairs[index], weight))
-        return np.moveaxis(poles[:, :, :self.size], 0, -1).reshape(rhs.shape)
+        poles = poles[:sets * block].T.reshape(-1, sets, block)[:, :, :self.size]
+        return np.moveaxis(poles, 0, -1).reshape(rhs.shape)
 
     def padded_band(self, pairs, weight):
-        """The lower bands of B^T B + weight R from pairs (P, L_u, L_v): (P, block, bandwidth + 1),
-        row j the entries [j + d, j], d = 0..bandwidth.
+        """The lower band of the batch's block-diagonal B^T B + weight R from pairs (P, L_u, L_v):
+        (P * block + tail, bandwidth + 1), row j the entries [j + d, j], d = 0..bandwidth.
 
-        Each system is padded to ``block`` unknowns (at least M + bandwidth, a multiple of
-        BLOCK_ALIGNMENT) with an identity: every column's LAPACK dot products and updates run over
-        the same lengths and alignment whatever the set's place in a batch, so that each set's
-        poles come out bit for bit the same in any batch.
+        Set p's system takes rows p * block to p * block + M; its entries [j + d, j] below the
+        system are zero (the sets do not meet). Its rows from M up to ``block`` (a multiple of
+        BLOCK_ALIGNMENT) and the ``tail`` rows after the last set (the bandwidth rounded up to a
+        multiple of BLOCK_ALIGNMENT) are an identity. So every set's columns have the same
+        alignment and run their LAPACK dot products and updates over the full band, whatever the
+        set's place in the batch: each set's poles come out bit for bit the same in any batch.
         """
         flat = pairs.reshape(pairs.shape[0], -1)
         padded = np.concatenate([flat, np.broadcast_to([0.0, 1.0], (flat.shape[0], 2))], axis=-1)
-        band = np.take(padded, self._band_index, axis=-1)
-        band += weight * self._band_regulariser
+        band = np.empty((pairs.shape[0] * self._block + self._tail, self.bandwidth + 1))
+        sets = band[:pairs.shape[0] * self._block].reshape((pairs.shape[0],) + self._band_index.shape)
+        np.take(padded, self._band_index, axis=-1, out=sets)
+        sets += weight * self._band_regulariser
+        band[sets.shape[0] * self._block:] = _identity_rows(self._tail, self.bandwidth)
         return band
 
     def right_hand_side(self, along_u, along_v, points):
@@ -206,37 +214,53 @@ def _padded_lower_band(matrix, bandwidth, block, outside, identity):
     return band
 
 
-def _banded_cholesky_solve(band, rhs, dense_gram):
-    """Solve P symmetric positive definite banded systems as one block-diagonal system.
+def _identity_rows(count, bandwidth):
+    """The lower band of a (count, count) identity: (count, bandwidth + 1)."""
+    rows = np.zeros((count, bandwidth + 1))
+    rows[:, 0] = 1.0
+    return rows
 
-    band: (P, B, bandwidth + 1), each set's lower band (row j: entries [j + d, j]); rhs: (c, P,
-    B); dense_gram: a set's index -> its dense (M, M) matrix (M <= B: the rest is an identity),
-    for a set LAPACK finds not positive definite in rounding, which is solved by LU. Returns
-    (c, P, B).
+
+def _banded_cholesky_solve(band, rhs, sets, size, dense_gram):
+    """Solve P symmetric positive definite banded systems, stacked as one block-diagonal system.
+
+    band: (P * size + tail, bandwidth + 1), the lower band (row j: entries [j + d, j]) of the
+    P systems of ``size`` unknowns each and a trailing identity of at least bandwidth unknowns
+    (see :meth:`SubstituteSpace.padded_band`); rhs: (P * size + tail, c); sets, size: P and the
+    unknowns of each set; dense_gram: a set's index -> its dense (M, M) matrix (M <= size: the
+    rest is an identity), for a set LAPACK finds not positive definite in rounding, which is
+    solved by LU (the sets before it are solved apart, with the same trailing identity).
+    Returns (P * size + tail, c).
     """
-    sets, size = band.shape[:2]
-    lower = band.reshape(sets * size, -1).T
-    stacked = rhs.reshape(rhs.shape[0], -1).T
-    solution = np.empty_like(stacked)
+    solution = np.zeros_like(rhs)
     start = 0
     while start < sets:
         rows = slice(start * size, None)
-        _, solved, info = _PBSV(lower[:, rows], stacked[rows], lower=1)
+        solved, info = _pbsv(band[rows], rhs[rows])
         if info == 0:
             solution[rows] = solved
             break
-        if info < 0:
-            raise ValueError(f"LAPACK ?pbsv refused its argument {-int(info)}")
-        failed = start + (int(info) - 1) // size
+        failed = start + (info - 1) // size
         if failed > start:
             before = slice(start * size, failed * size)
-            solution[before] = _PBSV(lower[:, before], stacked[before], lower=1)[1]
+            tail = band[sets * size:]
+            solution[before] = _pbsv(np.concatenate([band[before], tail]),
+                                     np.concatenate([rhs[before], np.zeros((len(tail), rhs.shape[1]))]))[0][:-len(tail)]
         gram = dense_gram(failed)
         block = solution[failed * size:(failed + 1) * size]
         block[:] = 0.0
-        block[:gram.shape[0]] = np.linalg.solve(gram, rhs[:, failed, :gram.shape[0]].T)
+        block[:gram.shape[0]] = np.linalg.solve(gram, rhs[failed * size:failed * size + gram.shape[0]])
         start = failed + 1
-    return solution.T.reshape(rhs.shape)
+    return solution
+
+
+def _pbsv(band, rhs):
+    """LAPACK ?pbsv on one lower band (R, bandwidth + 1) and rhs (R, c): (solution (R, c), info),
+    info > 0 the first row whose pivot was not positive."""
+    _, solved, info = _PBSV(band.T, rhs, lower=1)
+    if info < 0:
+        raise ValueError(f"LAPACK ?pbsv refused its argument {-int(info)}")
+    return solved, int(info)
 
 
 _PBSV = lapack.get_lapack_funcs("pbsv", (np.zeros(1),))
