@@ -108,12 +108,18 @@ def forward_side(surface, nodes):
 
 
 def reverse_side(surface, nodes, face, on_face):
-    """Side: from the substitute's point S(h) at each node's parameters back to the face."""
+    """Side: from the substitute's point S(h) at each node's parameters back to the face.
+
+    Each foot is searched from the node's own parameters h and, where another node lies nearer to
+    S(h), from that node's parameters too (the closer foot is kept); S(h) usually lies nearest its
+    own node, whose search would repeat the first."""
     at = node_parameters(nodes)
     points = surface.points(at)
     foot = closest_parameters(face, points, at)
     index = cKDTree(nodes.all_points()[:len(at)]).query(points)[1]
-    foot = _better(face, points, foot, closest_parameters(face, points, at[index]))
+    other = np.flatnonzero((at[index] != at).any(1))
+    again = closest_parameters(face, points[other], at[index[other]])
+    foot[other] = _better(face, points[other], foot[other], again)
     nearest = face.points(foot)
     normals = face.normals(foot)
     off = np.zeros(len(at), dtype=bool) if on_face is None else ~on_face(foot)

@@ -1,10 +1,15 @@
 """The closest-point search that both sides of the exact deviation stand on, against geometry
 whose answer is known and against OpenCASCADE."""
 import numpy as np
-from support.faces import Part, strip_face
+import pytest
+from scipy.spatial import cKDTree
+from support.faces import Part, collapsed_face, strip_face
 
-from cmmsampling.fitting.exact import closest_parameters
+import cmmsampling
+from cmmsampling.fitting.exact import _better, closest_parameters, node_parameters, reverse_side
+from cmmsampling.fitting.substitute import FittedSurface
 from cmmsampling.geometry.surface import SurfaceModel
+from cmmsampling.strategies.sampling import make_problem
 
 RADIUS = 10.0
 
@@ -73,3 +78,25 @@ def test_feet_agree_with_occ_on_a_strip_from_far_starts():
     ours = np.linalg.norm(model.points(feet) - targets, axis=1)
     occ = np.array([face.Surface.toShape(u0, u1, v0, v1).distToShape(Part.Vertex(*t))[0] for t in targets])
     assert np.abs(ours - occ).max() < 1e-7
+
+
+@pytest.mark.parametrize("make", [cmmsampling.reference_face, collapsed_face], ids=["reference", "collapsed_edge"])
+def test_the_reverse_side_searches_again_only_from_another_nearest_node(make):
+    """The reverse side searches each foot from the node's own parameters and, where another node
+    lies nearer to S(h), from that node's too: the same feet as searching from both starts at
+    every node (on a collapsed edge many nodes share one point, so the nearest is often another)."""
+    problem = make_problem(make(), 25, grid=30)
+    objective = problem.objective
+    surface = FittedSurface(problem.space, objective.fit(np.asarray(
+        cmmsampling.STRATEGIES["uniform_parametric"].run(problem, None).uv)[None])[0])
+    side = reverse_side(surface, objective.nodes, objective.model, problem.domain.on_face)
+    at = node_parameters(objective.nodes)
+    points = surface.points(at)
+    index = cKDTree(objective.nodes.all_points()[:len(at)]).query(points)[1]
+    both = _better(objective.model, points, closest_parameters(objective.model, points, at),
+                   closest_parameters(objective.model, points, at[index]))
+    distance = np.linalg.norm(points - objective.model.points(both), axis=1)
+    on_face = problem.domain.on_face(both)
+    assert np.abs(np.abs(side.values[on_face]) - distance[on_face]).max() < 1e-9
+    if make is collapsed_face:
+        assert (index != np.arange(len(at))).any()
