@@ -172,35 +172,41 @@ atexit.register(_close_shared_worker)
 class SplitChoice:
     """Whether the next swarm is split over the two processes, as measured on this very run.
 
-    At the start of every WINDOW calls, TRIALS calls run each way in turn (split, here alone),
-    timed per point set; the rest of the window runs the way whose median was faster. A second
-    process beside a CPU-bound one costs more in waiting than it gains (the paper's run took
-    1.5x as long split as here alone, measured), on a quiet machine it gains: the choice follows
-    the load as it changes, at the cost of a few calls the slower way per window.
+    At the start of every window, TRIALS calls run each way in turn (split, here alone), timed
+    per point set; the rest of the window runs the way whose median was faster. A second process
+    beside a CPU-bound one costs more in waiting than it gains (the paper's run took 1.5x as long
+    split as here alone, measured), on a quiet machine it can gain: the choice follows the load
+    as it changes. A window is WINDOW calls long at first; each time its trials pick the way the
+    last ones picked it doubles, up to MAX_WINDOW, and a change of way starts it at WINDOW again.
+    So a steady load pays for few trials (beside a busy process a split trial can wait
+    milliseconds for a core), and a change of load is followed within MAX_WINDOW calls.
     """
 
     WINDOW = 60
+    MAX_WINDOW = 960
     TRIALS = 3
 
     def __init__(self):
-        self.calls = 0
+        self.window = self.WINDOW
+        self.phase = 0
         self.split = True
         self._seconds = {True: [], False: []}
 
     def next_split(self):
         """True when the next call is to be split."""
-        phase = self.calls % self.WINDOW
-        return phase % 2 == 0 if phase < 2 * self.TRIALS else self.split
+        return self.phase % 2 == 0 if self.phase < 2 * self.TRIALS else self.split
 
     def record(self, split, seconds):
         """Count a call that ran ``split`` and took ``seconds`` per point set."""
-        phase = self.calls % self.WINDOW
-        self.calls += 1
+        phase = self.phase
+        self.phase = (phase + 1) % self.window
         if phase >= 2 * self.TRIALS:
             return
         self._seconds[split].append(seconds)
         if phase == 2 * self.TRIALS - 1:
-            self.split = bool(np.median(self._seconds[True]) < np.median(self._seconds[False]))
+            faster = bool(np.median(self._seconds[True]) < np.median(self._seconds[False]))
+            self.window = min(2 * self.window, self.MAX_WINDOW) if faster == self.split else self.WINDOW
+            self.split = faster
             self._seconds = {True: [], False: []}
 
 

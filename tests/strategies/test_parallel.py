@@ -160,6 +160,27 @@ def test_a_measured_split_follows_the_faster_way():
             choice.record(faster, 1.0)
 
 
+def _window(choice, faster):
+    """Run one window of ``choice`` whose trials find ``faster`` the faster way; returns its calls."""
+    calls = 0
+    while True:
+        split = choice.next_split()
+        choice.record(split, 0.5 if split == faster else 1.0)
+        calls += 1
+        if choice.phase == 0:
+            return calls
+
+
+def test_a_steady_choice_measures_ever_more_seldom_and_a_change_at_once():
+    """Each window whose trials confirm the last choice is twice as long, up to MAX_WINDOW; a
+    change of the faster way starts the next at WINDOW again."""
+    choice = parallel.SplitChoice()
+    lengths = [_window(choice, False) for _ in range(7)]
+    assert lengths == [60, 120, 240, 480, 960, 960, 960]
+    assert _window(choice, True) == choice.WINDOW and choice.split
+    assert _window(choice, True) == 2 * choice.WINDOW
+
+
 def test_the_default_processes_give_the_same_result_as_one():
     """workers left to the default: the swarm is split only where measured faster, and scored
     exactly as in one process either way."""
