@@ -134,10 +134,11 @@ class SubstituteSpace:
 
         Set p's system takes rows p * block to p * block + M; its entries [j + d, j] below the
         system are zero (the sets do not meet). Its rows from M up to ``block`` (a multiple of
-        BLOCK_ALIGNMENT) and the ``tail`` rows after the last set (the bandwidth rounded up to a
-        multiple of BLOCK_ALIGNMENT) are an identity. So every set's columns have the same
-        alignment and run their LAPACK dot products and updates over the full band, whatever the
-        set's place in the batch: each set's poles come out bit for bit the same in any batch.
+        BLOCK_ALIGNMENT) and the ``tail`` rows after the last set (the bandwidth, rounded up so
+        that the whole system's length, the stride between the columns of its right-hand sides,
+        is a multiple of BLOCK_ALIGNMENT too) are an identity. So every set's columns have the
+        same alignment and run their LAPACK dot products and updates over the full band, whatever
+        the set's place in the batch: each set's poles come out bit for bit the same in any batch.
         """
         flat = pairs.reshape(pairs.shape[0], -1)
         padded = np.concatenate([flat, np.broadcast_to([0.0, 1.0], (flat.shape[0], 2))], axis=-1)
@@ -158,7 +159,8 @@ class SubstituteSpace:
     def solve(self, along_u, along_v, points):
         """Least-squares poles from the bases along u and v, (..., n_u, N) and (..., n_v, N), and
         the points coordinate first, (..., 3, N) mm. Returns poles (..., n_u, n_v, 3) mm."""
-        poles = self.solve_normal(self.pair_products(along_u, along_v), self.smoothing * along_u.shape[-1] / self.size,
+        weight = self.smoothing * along_u.shape[-1] / self.size
+        poles = self.solve_normal(self.pair_products(along_u, along_v), weight,
                                   self.right_hand_side(along_u, along_v, points))
         return poles.reshape(points.shape[:-2] + self.poles + (3,))
 
@@ -242,10 +244,10 @@ def _banded_cholesky_solve(band, rhs, sets, size, dense_gram):
             break
         failed = start + (info - 1) // size
         if failed > start:
-            before = slice(start * size, failed * size)
-            tail = band[sets * size:]
-            solution[before] = _pbsv(np.concatenate([band[before], tail]),
-                                     np.concatenate([rhs[before], np.zeros((len(tail), rhs.shape[1]))]))[0][:-len(tail)]
+            before, tail = slice(start * size, failed * size), slice(sets * size, None)
+            lower = np.concatenate([band[before], band[tail]])
+            solved = _pbsv(lower, np.concatenate([rhs[before], rhs[tail]]))[0]
+            solution[before] = solved[:(failed - start) * size]
         gram = dense_gram(failed)
         block = solution[failed * size:(failed + 1) * size]
         block[:] = 0.0
