@@ -89,15 +89,16 @@ class LatticeFit:
         rows_v = self.v_table[indices[..., 1]]
         sets, count = uv.shape[:2]
         face = rows_u[..., :self.face_columns].reshape(sets, count, self.face_v, self.coordinates)
-        points = np.einsum("pnjc,pnj->pcn", face, rows_v[..., :self.face_v])
+        points = np.matmul(rows_v[..., None, :self.face_v], face)[..., 0, :]
+        points = np.ascontiguousarray(np.swapaxes(points, 1, 2))
         if self.model.rational:
             points = points[:, :3] / points[:, 3:]
         start_u, start_v = self.face_columns, self.face_v
         basis_u = rows_u[..., start_u:start_u + self.basis_u]
-        basis_v = rows_v[..., start_v:start_v + self.basis_v]
+        basis_v = np.swapaxes(rows_v[..., start_v:start_v + self.basis_v], 1, 2)
         pairs = np.matmul(np.swapaxes(rows_u[..., start_u + self.basis_u:], 1, 2),
                           rows_v[..., start_v + self.basis_v:])
-        weighted = (basis_v[..., :, None] * np.swapaxes(points, 1, 2)[..., None, :]).reshape(sets, count, -1)
-        rhs = np.matmul(np.swapaxes(basis_u, 1, 2), weighted).reshape(sets, self.space.size, 3)
+        weighted = (basis_v[:, :, None, :] * points[:, None, :, :]).reshape(sets, -1, count)
+        rhs = np.matmul(np.swapaxes(basis_u, 1, 2), np.swapaxes(weighted, 1, 2)).reshape(sets, self.space.size, 3)
         poles = self.space.solve_normal(pairs, self._gram_scale * count, rhs)
         return points, poles.reshape((sets,) + self.space.poles + (3,))
