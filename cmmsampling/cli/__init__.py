@@ -4,6 +4,7 @@ import argparse
 import os
 import re
 import sys
+import time
 import traceback
 
 from ..access.probe import PROBES
@@ -63,7 +64,7 @@ def build_parser():
                            "the colour map here (default out/inspection; 'none' skips it)")
     demo.add_argument("--report", metavar="FOLDER", default="out/report",
                       help="then compare every strategy over N = 25..144 and write the HTML report "
-                           "with its figures here (default out/report; 'none' skips it, ~3.5 min)")
+                           "with its figures here (default out/report; 'none' skips it; the demo's longest part)")
     faces = commands.add_parser("faces", help="list the faces of a STEP, IGES or BREP file")
     faces.add_argument("file", help="a .step/.stp, .iges/.igs or .brep/.brp file")
     one = commands.add_parser("sample", help="sample one face of a STEP, IGES or BREP file")
@@ -204,7 +205,11 @@ def finish_progress(options):
 
 
 def run_demo(args):
-    """Every strategy on the reference surface; PSO with the paper's parameters."""
+    """Every strategy on the reference surface; PSO with the paper's parameters. Ends with the
+    wall time it took."""
+    from ..planning.part_plan import duration_text
+
+    start = time.perf_counter()
     face = reference_face()
     print(f"Reference surface: degree 5 x 5, 9 x 9 poles, 100 x 100 mm; N = {args.points}, "
           "substitute: bicubic, default poles; grid 60 x 60")
@@ -218,8 +223,8 @@ def run_demo(args):
         _inspection_loop(face, min(results, key=lambda r: r.deviation.maximum), args.inspection)
     if args.report != "none":
         _study_report(face, args)
+    print(f"\nThe demo took {duration_text(time.perf_counter() - start)} on {os.cpu_count()} cores.")
     return 0
-
 
 def _inspection_loop(face, result, folder):
     """The paper's loop after the program: a virtual CMM measures the result's points on a part

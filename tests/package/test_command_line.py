@@ -1,6 +1,7 @@
-"""The command line on bad files, paths and values: exit code 2, one line naming the file and what
-to do, no traceback (unless --debug), outputs checked before any computation."""
+"""The command line: the demo, and bad files, paths and values: exit code 2, one line naming the
+file and what to do, no traceback (unless --debug), outputs checked before any computation."""
 import os
+import re
 
 import pytest
 from support.faces import Part
@@ -113,3 +114,12 @@ def test_refused_input_is_an_input_error_with_exit_code_2(part, capsys):
 def test_a_cad_file_read_by_part_gives_its_faces(part, capsys):
     assert cli_main(["faces", part]) == 0
     assert "Face1" in capsys.readouterr().out and len(Part.read(part).Faces) == 1
+
+
+def test_the_demo_runs_every_strategy_and_ends_with_the_time_it_took(capsys):
+    settings = ["--iterations", "5", "--population", "4", "--time-limit", "1"]
+    assert cli_main(["demo", "-n", "25", *settings, "--inspection", "none", "--report", "none"]) == 0
+    said = capsys.readouterr().out.splitlines()
+    rows = {line.split()[0] for line in said if line.split()[1:2] == ["25"]}
+    assert rows == set(cmmsampling.STRATEGIES)
+    assert re.fullmatch(rf"The demo took \d+ (s|min) on {os.cpu_count()} cores\.", said[-1]), said[-1]
