@@ -11,7 +11,9 @@ the tolerance while its local bound (the least maximum deviation reshaping that 
 reach, :meth:`SamplingResult.bounds`) is within it is tried once more at the most points of the
 step before the search moves on; the bound is worked out only there, and only as far as telling
 it from the tolerance needs (:meth:`SamplingResult.bound_exceeds`). The result of each N tried
-is kept in ``tried``.
+is kept in ``tried``. A strategy that can stop once its result is good enough (optimal's
+``stop_at``) is told the tolerance: a run that meets it needs to go no further to answer, and one
+that does not runs its whole course, so the search takes the same steps.
 """
 from __future__ import annotations
 
@@ -26,8 +28,8 @@ from ..access.reach import Reachability
 from ..fitting.substitute import DEFAULT_DEGREE, default_pole_count
 from ..geometry.validation import InputError, check_int, check_pair, check_real
 from ..strategies.face_setup import reused
-from ..strategies.sampling import (BEST_STRATEGY, MIN_POINTS, Part, check_arguments, measure_reach, probe_edge_offset,
-                                   sample)
+from ..strategies.sampling import (BEST_STRATEGY, MIN_POINTS, STRATEGIES, Part, check_arguments, measure_reach,
+                                   probe_edge_offset, sample)
 
 DEFAULT_MAX_POINTS = 400
 
@@ -125,12 +127,16 @@ def points_needed(face: Part.Face, tolerance: float, strategy: str = BEST_STRATE
     points of the result returned only);
     progress: callable(n, message) before each run (message "N = 16") and after each iteration of
     an optimiser's run (message None), returning True to stop the search (the best found so far
-    is returned). Returns a PointsNeeded; when no N up to n_max meets the tolerance,
-    ``met`` is False and ``reason`` names the best figure reached.
+    is returned). An optimiser that takes ``stop_at`` (optimal) stops each run once its maximum
+    meets the tolerance, unless the arguments give stop_at (None: each run to its end). Returns a
+    PointsNeeded; when no N up to n_max meets the tolerance, ``met`` is False and ``reason``
+    names the best figure reached.
     """
     tolerance = check_real("tolerance", tolerance, above=0.0)
     n_max = check_max_points(n_max, fit_degree)
     check_arguments(strategy, {**arguments, "fit_degree": fit_degree}, fewest_points(fit_degree))
+    if "stop_at" in STRATEGIES[strategy].options and "stop_at" not in arguments:
+        arguments["stop_at"] = tolerance
     if arguments.get("part") is not None and not isinstance(arguments["part"], Reachability):
         arguments["part"] = Reachability(arguments["part"], arguments.pop("probe", None))
     with reused():

@@ -139,7 +139,7 @@ class DescentResult:
 
 
 def descend(objective, start, lower, upper, judge, min_spacing=0.0, time_limit=None,
-            max_evaluations=None, progress=None, project=None, began=None):
+            max_evaluations=None, progress=None, project=None, began=None, stop_at=None):
     """Minimise the maximum deviation from the point set ``start`` (N, 2) inside the box.
 
     objective: DeviationObjective (its face model and substitute space);
@@ -148,8 +148,9 @@ def descend(objective, start, lower, upper, judge, min_spacing=0.0, time_limit=N
     lower, upper: (2,) parameter box; project: maps uv (N, 2) onto the feasible set (every
     iterate is evaluated there; default: the box itself); min_spacing: mm between points; time_limit: s
     from ``began`` (a time.perf_counter() value, default: now); max_evaluations: surrogate evaluations; progress: callable (evaluation, best_max_mm) returning
-    True to stop. Returns a DescentResult: the point set of smallest exact maximum seen among those
-    that keep min_spacing (the start if none is better).
+    True to stop; stop_at: mm, end the descent as soon as the best exact maximum is at most this
+    (None: never; the start itself may be enough). Returns a DescentResult: the point set of
+    smallest exact maximum seen among those that keep min_spacing (the start if none is better).
 
     The descent runs in chunks of L-BFGS-B iterations from the best point set so far, on the exact
     deviations linearised about its substitute (cmmsampling.fitting.deviation.Linearisation: exact there
@@ -177,7 +178,7 @@ def descend(objective, start, lower, upper, judge, min_spacing=0.0, time_limit=N
         stopped = progress is not None and progress(state["count"], best["max"])
         out_of_budget = (max_evaluations is not None and state["count"] >= max_evaluations) or (
             time_limit is not None and time.perf_counter() - began >= time_limit)
-        if stopped or out_of_budget:
+        if stopped or out_of_budget or _enough(best, stop_at):
             state["cancelled"] = bool(stopped)
             raise Stop
         return s.value, (s.gradient * scale).ravel()
@@ -196,11 +197,18 @@ def descend(objective, start, lower, upper, judge, min_spacing=0.0, time_limit=N
 
     try:
         for kappa in KAPPAS:
+            if _enough(best, stop_at):
+                break
             _stage(lambda length: run_chunk(kappa / max(best["max"], 1e-12), length))
     except Stop:
         pass
     return DescentResult(best["uv"], best["max"], np.array(state["history"]), state["count"],
                          state["cancelled"], best["closest"])
+
+
+def _enough(best, stop_at):
+    """True when the best point set's exact maximum (mm) is at most stop_at (mm, None: never)."""
+    return stop_at is not None and best["max"] <= stop_at
 
 
 def _stage(run_chunk):
@@ -234,18 +242,20 @@ def _take(best, uv, judged, objective, closest=None):
 
 
 # The strategy: the descent on a sampling problem, from the best blind layout.
-OPTIMAL_DEFAULTS = {"start": "best", "time_limit": None, "max_evaluations": None}
+OPTIMAL_DEFAULTS = {"start": "best", "time_limit": None, "max_evaluations": None, "stop_at": None}
 BEST_STARTS = ("uniform_parametric", "uniform_cartesian", "halton", "hammersley")
 OPTIMAL_SETTINGS = (Setting("time_limit", float, "seconds the optimal strategy may take (default: until it "
                                                  "converges)"),)
 
 
-def run_optimal(problem, progress, start, time_limit, max_evaluations):
+def run_optimal(problem, progress, start, time_limit, max_evaluations, stop_at):
     """Near-optimal points by gradient descent on a smoothed maximum (see cmmsampling.strategies.optimal).
 
     start: "best" (the best of BEST_STARTS by the exact deviation), a strategy name or an (N, 2)
     uv array; time_limit: s from the call, choosing the start included (the descent stops there;
-    the result is judged after it); max_evaluations: surrogate evaluations (None: no limit). Points keep
+    the result is judged after it); max_evaluations: surrogate evaluations (None: no limit);
+    stop_at: mm, stop as soon as the exact maximum is at most this (None: never; a search for
+    the fewest points that meet a tolerance needs no more, cmmsampling.points_needed). Points keep
     problem.min_spacing and the feasible domain: a start that does not is repaired first (its
     crowded points moved to free places). The result is never worse than the start; ``notes`` say
     what was done.
@@ -261,11 +271,13 @@ def run_optimal(problem, progress, start, time_limit, max_evaluations):
     objective = problem.objective
     result = descend(objective, start_uv, problem.domain.lower, problem.domain.upper,
                      problem.exact, problem.min_spacing, time_limit, max_evaluations,
-                     progress, problem.project, began)
+                     progress, problem.project, began, stop_at)
     if moved:
         notes.append(f"the start had points closer than min_spacing {problem.min_spacing:.3g} mm: "
                      f"{moved} of them were moved to free places before the descent")
-    if result.uv is start_uv and not result.cancelled:
+    if stop_at is not None and result.maximum <= stop_at:
+        notes.append(f"stopped once the maximum deviation was at most stop_at = {stop_at:g} mm")
+    elif result.uv is start_uv and not result.cancelled:
         notes.append("the descent found no point set better than its start; the start is returned")
     return StrategyOutcome(result.uv, result.history, result.evaluations, result.cancelled,
                            details={"closest": result.closest}, notes=notes)
@@ -294,6 +306,8 @@ def _check_optimal_options(options):
         clean["time_limit"] = check_real("time_limit", options["time_limit"], above=0.0)
     if options["max_evaluations"] is not None:
         clean["max_evaluations"] = check_int("max_evaluations", options["max_evaluations"], 1)
+    if options["stop_at"] is not None:
+        clean["stop_at"] = check_real("stop_at", options["stop_at"], minimum=0.0)
     if isinstance(options["start"], str):
         starts = ["best"] + [name for name, entry in STRATEGIES.items() if not entry.optimiser]
         check_choice("start", options["start"], starts)

@@ -55,6 +55,18 @@ def test_the_fewest_points_are_the_first_step_that_meets(reference):
     assert answer.bound == pytest.approx(answer.result.bounds()["grid"].lower)
 
 
+def test_an_optimal_search_stops_each_run_that_meets_and_takes_the_same_steps(reference):
+    """points_needed tells optimal the tolerance (stop_at): the run that meets it stops there, so
+    the search tries the same N and finds the same answer as with every run to its end."""
+    settings = dict(grid=20, max_evaluations=150)
+    told = cmmsampling.points_needed(reference, 1.9, "optimal", **settings)
+    whole = cmmsampling.points_needed(reference, 1.9, "optimal", stop_at=None, **settings)
+    assert [t.n for t in told.tried] == [t.n for t in whole.tried] and told.n == whole.n and told.met
+    assert whole.maximum <= told.maximum <= 1.9
+    assert told.result.evaluations < whole.result.evaluations == 150
+    assert told.result.settings["stop_at"] == 1.9 and whole.result.settings["stop_at"] is None
+
+
 def test_a_tolerance_no_n_meets_names_the_best_reached(reference):
     answer = cmmsampling.points_needed(reference, 1e-5, "uniform_parametric", n_max=60, **FAST)
     assert not answer.met and answer.result is not None

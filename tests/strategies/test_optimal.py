@@ -169,8 +169,26 @@ def test_optimal_can_be_cancelled(reference):
     assert result.deviation.maximum == pytest.approx(calls[-1])
 
 
+def test_optimal_stops_once_its_maximum_meets_stop_at(reference):
+    """A run told stop_at ends at the first judged maximum at or below it (a chunk's best accepted):
+    its history is the full run's up to there; a start that already meets it is returned at once."""
+    settings = dict(grid=20, max_evaluations=1500, occ_check=False)
+    full = cmmsampling.sample(reference, 46, "optimal", **settings)
+    start = full.history[0]
+    improved = np.flatnonzero(full.history < start)
+    assert improved.size
+    target = float(full.history[improved[0]])
+    stopped = cmmsampling.sample(reference, 46, "optimal", stop_at=target, **settings)
+    assert stopped.deviation.maximum == target and stopped.evaluations == improved[0] + 1 < full.evaluations
+    np.testing.assert_array_equal(stopped.history, full.history[:stopped.evaluations])
+    assert f"stopped once the maximum deviation was at most stop_at = {target:g} mm" in stopped.notes
+    at_once = cmmsampling.sample(reference, 46, "optimal", stop_at=start, **settings)
+    assert at_once.evaluations == 0 and at_once.deviation.maximum == start
+
+
 @pytest.mark.parametrize("options, message", [
     ({"min_spacing": -1.0}, "min_spacing must be at least 0"),
+    ({"stop_at": -0.1}, "stop_at must be at least 0"),
     ({"time_limit": 0}, "time_limit must be greater than 0"),
     ({"start": "optimal"}, "unknown start 'optimal'"),
     ({"start": np.zeros((3, 2))}, "expected 25 \\(u, v\\) pairs, got 3"),
