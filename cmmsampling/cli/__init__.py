@@ -226,6 +226,7 @@ def run_demo(args):
     print(f"\nThe demo took {duration_text(time.perf_counter() - start)} on {os.cpu_count()} cores.")
     return 0
 
+
 def _inspection_loop(face, result, folder):
     """The paper's loop after the program: a virtual CMM measures the result's points on a part
     with a form error, misplaced on the table (DEMO_MEASUREMENT); the measured points are read
