@@ -207,7 +207,7 @@ def finish_progress(options):
 def run_demo(args):
     """Every strategy on the reference surface; PSO with the paper's parameters. Ends with the
     wall time it took."""
-    from ..planning.part_plan import duration_text
+    from ..strategies.estimates import duration_text
 
     start = time.perf_counter()
     face = reference_face()

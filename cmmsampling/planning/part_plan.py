@@ -30,6 +30,7 @@ from ..geometry.surface import as_face
 from ..geometry.validation import InputError, InputTypeError, check_int, check_pair, check_real
 from ..strategies import handover
 from ..strategies.face_setup import reused
+from ..strategies.estimates import duration_text, time_left_text
 from ..strategies.sampling import BEST_STRATEGY, check_arguments, evaluate, probe_edge_offset, sample
 from ..strategies.threads import blas_threads
 from . import face_runs
@@ -454,21 +455,13 @@ class PlanTally:
         ran = self.done - self._before
         if ran and self.done < self.total:
             left = (time.perf_counter() - self._start) / ran * (self.total - self.done)
-            text += f", about {duration_text(left)} left"
+            text += f", {time_left_text(left)}"
         return text
 
     @property
     def elapsed(self):
         """e.g. "running for 35 s": the time since this run started."""
         return f"running for {duration_text(time.perf_counter() - self._start)}"
-
-
-def duration_text(seconds):
-    """A duration in words for a progress line: "40 s", "2 min", "1 h 5 min"."""
-    if seconds < 60:
-        return f"{max(1, round(seconds))} s"
-    minutes = round(seconds / 60)
-    return f"{minutes} min" if minutes < 60 else f"{minutes // 60} h {minutes % 60} min"
 
 
 def kept_faces(resume, named, tolerance, strategy):

@@ -1,4 +1,4 @@
-"""Estimates of a sample() run made before it starts: its peak memory and its time."""
+"""Estimates of a sample() run made before it starts: its peak memory and its time; durations in words."""
 from __future__ import annotations
 
 import os
@@ -111,3 +111,24 @@ def _one_step(problem, positions):
     problem.objective(positions)
     if problem.min_spacing > 0:
         problem.spaced(positions)
+
+
+def duration_text(seconds):
+    """A duration in seconds in words: "under a second", "40 s" (below 2 min), "3 min" (below an
+    hour), "1 h 5 min"."""
+    if seconds < 1:
+        return "under a second"
+    if seconds < 120:
+        return f"{round(seconds)} s"
+    minutes = round(seconds / 60)
+    return f"{minutes} min" if minutes < 60 else f"{minutes // 60} h {minutes % 60} min"
+
+
+def about_text(seconds):
+    """An estimated duration in seconds in words: "about 40 s", or "under a second"."""
+    return f"{'' if seconds < 1 else 'about '}{duration_text(seconds)}"
+
+
+def time_left_text(seconds):
+    """"about 40 s left", or "under a second left", for the time a run still needs (seconds)."""
+    return f"{about_text(seconds)} left"

@@ -14,6 +14,7 @@ import Part
 import pytest
 from support import dmis_syntax
 from support.faces import holed_face, rational_patch_face, rational_saddle, strip_face
+from support.wording import LEFT
 from PySide import QtGui
 
 from cmmsampling.document.object_types import is_part_plan, probe_points_in
@@ -161,7 +162,7 @@ def test_a_plan_runs_face_by_face_and_adds_a_group_per_face(part_doc, monkeypatc
     assert wait_until(hold.reached.is_set, 180), form.status.text()
     assert wait_until(lambda: form.faceLines.count() == 2, 2)
     assert form.progress.text() == "2 / 4 faces" and not task_button(OK).isEnabled()
-    assert re.fullmatch(r"2 of 4 faces, \d+ points so far, about \d+ (s|min) left", form.status.text())
+    assert re.fullmatch(rf"2 of 4 faces, \d+ points so far, {LEFT}", form.status.text())
     assert not form.strategy.isEnabled() and not form.tolerance.isEnabled()
     lines = [form.faceLines.item(k) for k in range(2)]
     assert all(line.text().startswith("Face") and line.toolTip() == line.text() for line in lines)

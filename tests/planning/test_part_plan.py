@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 from support.faces import FreeCAD, Part, closed, holed_face, rational_patch_face, rational_saddle, strip_face
 from support.paths import ROOT
+from support.wording import DURATION, LEFT
 
 import cmmsampling
 from cmmsampling import cli
@@ -171,11 +172,10 @@ def test_the_progress_tallies_faces_points_and_time_left(part, tolerance_plan):
     faces = [report for report in reports if report[2]]
     assert [line for _, _, line, _ in faces] == [face.line for face in plan.faces]
     for done, total, _, tally in faces[:-1]:
-        assert re.fullmatch(rf"{done} of {total} faces, \d+ points so far, about \d+ (s|min) left", tally)
+        assert re.fullmatch(rf"{done} of {total} faces, \d+ points so far, {LEFT}", tally)
     assert faces[-1][3] == f"4 of 4 faces, {plan.n_total} points so far"
     for done, total, _, tally in (report for report in reports if not report[2]):
-        assert re.fullmatch(rf"{done} of {total} faces, \d+ points so far(, about \d+ (s|min) left)?, running for \d+ "
-                            r"(s|min)", tally)
+        assert re.fullmatch(rf"{done} of {total} faces, \d+ points so far(, {LEFT})?, running for {DURATION}", tally)
     assert plan.n_total == tolerance_plan.n_total
 
 

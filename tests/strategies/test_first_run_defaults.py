@@ -7,7 +7,7 @@ from support.faces import Part, strip_face
 import cmmsampling
 from cmmsampling.cli import main as cli_main
 from cmmsampling.strategies import sampling
-from cmmsampling.strategies.estimates import JUDGINGS, sharing_processes
+from cmmsampling.strategies.estimates import JUDGINGS, duration_text, sharing_processes, time_left_text
 from cmmsampling.strategies.sampling import PROBE_EDGE_OFFSET_MM
 
 
@@ -103,6 +103,18 @@ def test_the_time_estimate_counts_the_judging_of_an_optimisers_result():
     estimate = cmmsampling.time_needed(face, 25, "optimal", time_limit=0.001)
     judged_s = cmmsampling.sample(face, 25, "uniform_parametric", occ_check=False).timings["evaluation_s"]
     assert estimate >= 0.5 * JUDGINGS * judged_s > 0
+
+
+@pytest.mark.parametrize("seconds, words, left", [
+    (0.4, "under a second", "under a second left"), (1.2, "1 s", "about 1 s left"),
+    (119.4, "119 s", "about 119 s left"), (150, "2 min", "about 2 min left"),
+    (3569, "59 min", "about 59 min left"), (3571, "1 h 0 min", "about 1 h 0 min left"),
+    (3900, "1 h 5 min", "about 1 h 5 min left"),
+])
+def test_durations_read_the_same_in_every_progress_line(seconds, words, left):
+    """One wording of a duration for the panels' estimates, a run's and a plan's time left and the
+    demo's time: seconds below 2 min, minutes below an hour, then hours and minutes."""
+    assert (duration_text(seconds), time_left_text(seconds)) == (words, left)
 
 
 def test_more_poles_than_points_is_said():

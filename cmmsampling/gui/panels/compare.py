@@ -16,13 +16,14 @@ from PySide import QtCore, QtGui
 
 from ...fitting.deviation import DEFAULT_GRID
 from ...geometry.validation import InputError
+from ...strategies.estimates import about_text
 from ...strategies.sampling import STRATEGIES
 from ...study import DEFAULT_NS, DEFAULT_SEEDS, compare, study_time, write_report
 from .. import settings
 from ..background import BackgroundTask
 from ..echo import echo_study, face_expression, source_text
 from .base import BackgroundRunPanel
-from .fields import AUTO, Fields, duration_text, edge_offset_argument, snap_to_auto, spacing_argument
+from .fields import AUTO, Fields, edge_offset_argument, snap_to_auto, spacing_argument
 
 # The panel's values are stored under these names with this prefix, apart from Sample face's.
 SETTINGS_PREFIX = "Compare_"
@@ -199,7 +200,7 @@ def study_time_text(estimate):
     they converge) for a StudyTime."""
     extra = "the local bounds" + "".join(f" and the {STRATEGIES[name].label} runs, which go on until they "
                                          "converge" for name in estimate.open_ended)
-    return f"{estimate.runs} runs; at least about {duration_text(estimate.seconds)}, plus {extra}"
+    return f"{estimate.runs} runs; at least {about_text(estimate.seconds)}, plus {extra}"
 
 
 class CompareTaskPanel(BackgroundRunPanel):

@@ -26,17 +26,6 @@ def detached(arguments):
     return {**arguments, **({"part": arguments["part"].copy()} if "part" in arguments else {})}
 
 
-def duration_text(seconds):
-    """'under a second', '12 s', '3 min' or '1.5 h' for a duration in seconds."""
-    if seconds < 1:
-        return "under a second"
-    if seconds < 120:
-        return f"{seconds:.0f} s"
-    if seconds < 7200:
-        return f"{seconds / 60:.0f} min"
-    return f"{seconds / 3600:.1f} h"
-
-
 def add_choice(choice, name, label, tip):
     """Add an entry showing ``label`` that holds ``name``, with the tooltip ``tip``."""
     choice.addItem(label, name)

@@ -25,8 +25,7 @@ from ..background import BackgroundSampling
 from ..selection import SelectionError, selected_face
 from .base import ERROR_STYLE, BackgroundRunPanel
 from .fields import (
-    AUTO, Fields, add_choice, detached, duration_text, edge_offset_argument, probe_choice, snap_to_auto,
-    spacing_argument,
+    AUTO, Fields, add_choice, detached, edge_offset_argument, probe_choice, snap_to_auto, spacing_argument,
 )
 
 CANCEL_WAIT_S = 1.0
@@ -297,7 +296,7 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
         """'Time: about 12 s', 'Time: under a second', or that the descent has no known end."""
         if seconds is None:
             return "Time: until the descent converges (set a time limit to bound it)"
-        return f"Time: {'' if seconds < 1 else 'about '}{duration_text(seconds)}"
+        return f"Time: {estimates.about_text(seconds)}"
 
     def show_edge_offset(self, *_):
         """Say under the edge offset what "auto" is on the chosen face."""
@@ -412,8 +411,7 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
         start, first = self.paced_from
         if not total or iteration - first < PACE_STEPS:
             return ""
-        words = duration_text((now - start) / (iteration - first) * (total - iteration))
-        return f", {'' if words.startswith('under') else 'about '}{words} left"
+        return f", {estimates.time_left_text((now - start) / (iteration - first) * (total - iteration))}"
 
     def failed(self, run):
         self.form.progress.setRange(0, 1)
