@@ -30,6 +30,10 @@ FOOT_STEP_TOLERANCE = 1e-10
 DAMPING_FLOOR = 1e-12
 DAMPING_CEILING = 1e12
 SEARCH_SAMPLES = 48
+# Edge segments tried first for a point's nearest edge point, and the (point, segment) pairs
+# compared at a time where every segment has to be tried.
+NEAREST_SEGMENTS = 8
+ALL_SEGMENTS_PAIRS = 1_000_000
 
 
 @dataclass
@@ -141,25 +145,48 @@ def _side(offsets, at, normals):
 
 def _nearest_on_edges(nodes, points):
     """The nearest point (M, 3) on the face's edge polygons to each point (M, 3), and the face's
-    normal at the nearest edge node (M, 3)."""
+    normal at the nearest edge node (M, 3).
+
+    The segments whose midpoints lie nearest are tried first; a segment left out lies at least its
+    midpoint's distance less half the longest segment away, so where that bound does not exceed
+    the nearest found, every segment is tried (edges of very different lengths meeting at a sharp
+    corner: the nearest midpoints may all be those of the short edge's segments)."""
+    first, second = _edge_segments(nodes)
+    a, b = nodes.edge_points[first], nodes.edge_points[second]
+    count = min(NEAREST_SEGMENTS, len(first))
+    spans, candidates = cKDTree(0.5 * (a + b)).query(points, k=count)
+    candidates, spans = candidates.reshape(len(points), count), spans.reshape(len(points), count)
+    nearest, segment, t = _closest_on_segments(points, a, b, candidates)
+    half = 0.5 * float(np.linalg.norm(b - a, axis=1).max(initial=0.0))
+    unsure = np.flatnonzero(np.linalg.norm(nearest - points, axis=1) > spans[:, -1] - half)
+    if count < len(first):
+        for rows in np.array_split(unsure, -(-len(unsure) * len(first) // ALL_SEGMENTS_PAIRS)):
+            everything = np.broadcast_to(np.arange(len(first)), (len(rows), len(first)))
+            nearest[rows], segment[rows], t[rows] = _closest_on_segments(points[rows], a, b, everything)
+    node = np.where(t < 0.5, first[segment], second[segment])
+    return nearest, nodes.edge_normals[node]
+
+
+def _edge_segments(nodes):
+    """(first, second) edge node indices (S,) of every segment of the face's closed edge polygons."""
     starts, ends = [], []
     for start, stop in nodes.loops:
         index = np.arange(start, stop)
         starts.append(index)
         ends.append(np.roll(index, -1))
-    first, second = np.concatenate(starts), np.concatenate(ends)
-    a, b = nodes.edge_points[first], nodes.edge_points[second]
-    middle = cKDTree(0.5 * (a + b))
-    count = min(8, len(first))
-    _, candidates = middle.query(points, k=count)
-    candidates = candidates.reshape(len(points), count)
-    ab = (b - a)[candidates]
-    t = np.clip(((points[:, None, :] - a[candidates]) * ab).sum(-1) / np.maximum((ab * ab).sum(-1), 1e-300), 0, 1)
-    on_segment = a[candidates] + t[..., None] * ab
+    return np.concatenate(starts), np.concatenate(ends)
+
+
+def _closest_on_segments(points, a, b, candidates):
+    """Per point (M, 3), the closest point on the segments a[c] to b[c] (a, b: (S, 3)) of its
+    candidates c (M, K) int: (closest points (M, 3), the segment's index (M,), its fraction along
+    the segment (M,) in [0, 1])."""
+    start, along = a[candidates], (b - a)[candidates]
+    t = np.clip(((points[:, None, :] - start) * along).sum(-1) / np.maximum((along * along).sum(-1), 1e-300), 0, 1)
+    on_segment = start + t[..., None] * along
     best = np.argmin(((on_segment - points[:, None, :]) ** 2).sum(-1), axis=1)
     rows = np.arange(len(points))
-    node = np.where(t[rows, best] < 0.5, first[candidates[rows, best]], second[candidates[rows, best]])
-    return on_segment[rows, best], nodes.edge_normals[node]
+    return on_segment[rows, best], candidates[rows, best], t[rows, best]
 
 
 def _better(model, targets, first, second):

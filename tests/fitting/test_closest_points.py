@@ -1,12 +1,14 @@
 """The closest-point search that both sides of the exact deviation stand on, against geometry
 whose answer is known and against OpenCASCADE."""
+from types import SimpleNamespace
+
 import numpy as np
 import pytest
 from scipy.spatial import cKDTree
 from support.faces import Part, collapsed_face, strip_face
 
 import cmmsampling
-from cmmsampling.fitting.exact import _better, closest_parameters, node_parameters, reverse_side
+from cmmsampling.fitting.exact import _better, _nearest_on_edges, closest_parameters, node_parameters, reverse_side
 from cmmsampling.fitting.substitute import FittedSurface
 from cmmsampling.geometry.surface import SurfaceModel
 from cmmsampling.strategies.sampling import make_problem
@@ -100,3 +102,25 @@ def test_the_reverse_side_searches_again_only_from_another_nearest_node(make):
     assert np.abs(np.abs(side.values[on_face]) - distance[on_face]).max() < 1e-9
     if make is collapsed_face:
         assert (index != np.arange(len(at))).any()
+
+
+def sharp_corner_nodes():
+    """Edge nodes of a thin triangle in z = 0: two 100 mm edges of 10 segments each meeting a
+    1 mm edge of 200 tiny segments at sharp corners (as a trimmed face's edges are noded)."""
+    long_edge = np.linspace([0.0, 0.0, 0.0], [100.0, 0.0, 0.0], 10, endpoint=False)
+    short_edge = np.linspace([100.0, 0.0, 0.0], [100.0, 1.0, 0.0], 200, endpoint=False)
+    back = np.linspace([100.0, 1.0, 0.0], [0.0, 0.0, 0.0], 10, endpoint=False)
+    points = np.concatenate([long_edge, short_edge, back])
+    return SimpleNamespace(loops=[(0, len(points))], edge_points=points,
+                           edge_normals=np.tile([0.0, 0.0, 1.0], (len(points), 1)))
+
+
+def test_the_nearest_edge_point_is_found_beside_a_sharp_corner():
+    """Points just off a long edge near a corner, where the nearest segment midpoints are all the
+    short edge's: the nearest point is the one on the long edge, as a search of every segment
+    finds (the first 8 midpoints alone gave a point on the short edge, overstating the distance)."""
+    nodes = sharp_corner_nodes()
+    points = np.column_stack([np.linspace(99.0, 99.95, 20), np.full(20, -0.02), np.zeros(20)])
+    nearest, normals = _nearest_on_edges(nodes, points)
+    assert np.allclose(nearest, points * [1.0, 0.0, 1.0], atol=1e-12)
+    assert np.allclose(normals, [0.0, 0.0, 1.0])
