@@ -159,8 +159,8 @@ def _nearest_on_edges(nodes, points):
     nearest, segment, t = _closest_on_segments(points, a, b, candidates)
     half = 0.5 * float(np.linalg.norm(b - a, axis=1).max(initial=0.0))
     unsure = np.flatnonzero(np.linalg.norm(nearest - points, axis=1) > spans[:, -1] - half)
-    if count < len(first):
-        for rows in np.array_split(unsure, -(-len(unsure) * len(first) // ALL_SEGMENTS_PAIRS)):
+    if count < len(first) and unsure.size:
+        for rows in np.array_split(unsure, -(-unsure.size * len(first) // ALL_SEGMENTS_PAIRS)):
             everything = np.broadcast_to(np.arange(len(first)), (len(rows), len(first)))
             nearest[rows], segment[rows], t[rows] = _closest_on_segments(points[rows], a, b, everything)
     node = np.where(t < 0.5, first[segment], second[segment])

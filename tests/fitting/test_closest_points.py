@@ -124,3 +124,5 @@ def test_the_nearest_edge_point_is_found_beside_a_sharp_corner():
     nearest, normals = _nearest_on_edges(nodes, points)
     assert np.allclose(nearest, points * [1.0, 0.0, 1.0], atol=1e-12)
     assert np.allclose(normals, [0.0, 0.0, 1.0])
+    middle = np.array([[50.0, -0.5, 0.0], [30.0, 0.3, 0.0]])
+    assert np.allclose(_nearest_on_edges(nodes, middle)[0], [[50.0, 0.0, 0.0], [30.0, 0.3, 0.0]], atol=1e-12)
