@@ -30,10 +30,12 @@ FOOT_STEP_TOLERANCE = 1e-10
 DAMPING_FLOOR = 1e-12
 DAMPING_CEILING = 1e12
 SEARCH_SAMPLES = 48
-# Edge segments tried first for a point's nearest edge point, and the (point, segment) pairs
-# compared at a time where every segment has to be tried.
+# Edge pieces tried first for a point's nearest edge point, and the (point, piece) pairs compared
+# at a time where more have to be tried.
 NEAREST_SEGMENTS = 8
-ALL_SEGMENTS_PAIRS = 1_000_000
+SEGMENT_PAIRS = 1_000_000
+# The longest edge piece searched for the nearest edge point, in median segments.
+PIECE_MEDIANS = 2.0
 
 
 @dataclass
@@ -147,23 +149,32 @@ def _nearest_on_edges(nodes, points):
     """The nearest point (M, 3) on the face's edge polygons to each point (M, 3), and the face's
     normal at the nearest edge node (M, 3).
 
-    The segments whose midpoints lie nearest are tried first; a segment left out lies at least its
-    midpoint's distance less half the longest segment away, so where that bound does not exceed
-    the nearest found, every segment is tried (edges of very different lengths meeting at a sharp
-    corner: the nearest midpoints may all be those of the short edge's segments)."""
+    The edge segments are cut into pieces (:func:`_edge_pieces`), and the NEAREST_SEGMENTS pieces
+    whose midpoints lie nearest are tried. A piece left out lies at least its midpoint's distance
+    less half the longest piece away, so a point whose nearest found is farther than that bound
+    (far from the face, or beside a sharp corner where the nearest midpoints are all those of a
+    short edge's pieces) is tried again with every piece whose midpoint lies within the nearest
+    found plus half the longest piece (counted first, then fetched as that many nearest)."""
     first, second = _edge_segments(nodes)
-    a, b = nodes.edge_points[first], nodes.edge_points[second]
-    count = min(NEAREST_SEGMENTS, len(first))
-    spans, candidates = cKDTree(0.5 * (a + b)).query(points, k=count)
-    candidates, spans = candidates.reshape(len(points), count), spans.reshape(len(points), count)
-    nearest, segment, t = _closest_on_segments(points, a, b, candidates)
+    a, b, segment_of, fractions = _edge_pieces(nodes.edge_points[first], nodes.edge_points[second])
+    middles = cKDTree(0.5 * (a + b))
     half = 0.5 * float(np.linalg.norm(b - a, axis=1).max(initial=0.0))
-    unsure = np.flatnonzero(np.linalg.norm(nearest - points, axis=1) > spans[:, -1] - half)
-    if count < len(first) and unsure.size:
-        for rows in np.array_split(unsure, -(-unsure.size * len(first) // ALL_SEGMENTS_PAIRS)):
-            everything = np.broadcast_to(np.arange(len(first)), (len(rows), len(first)))
-            nearest[rows], segment[rows], t[rows] = _closest_on_segments(points[rows], a, b, everything)
-    node = np.where(t < 0.5, first[segment], second[segment])
+    count = min(NEAREST_SEGMENTS, len(a))
+    spans, candidates = middles.query(points, k=count)
+    candidates, spans = candidates.reshape(len(points), count), spans.reshape(len(points), count)
+    nearest, piece, t = _closest_on_segments(points, a, b, candidates)
+    found = np.linalg.norm(nearest - points, axis=1)
+    unsure = np.flatnonzero(found > spans[:, -1] - half)
+    if unsure.size and count < len(a):
+        within = middles.query_ball_point(points[unsure], found[unsure] + half, return_length=True)
+        needed = np.minimum(2 ** np.ceil(np.log2(np.maximum(within, count))).astype(int), len(a))
+        for k in np.unique(needed):
+            rows = unsure[needed == k]
+            for chunk in np.array_split(rows, -(-rows.size * k // SEGMENT_PAIRS)):
+                candidates = middles.query(points[chunk], k=k)[1].reshape(len(chunk), k)
+                nearest[chunk], piece[chunk], t[chunk] = _closest_on_segments(points[chunk], a, b, candidates)
+    along = fractions[piece, 0] + t * (fractions[piece, 1] - fractions[piece, 0])
+    node = np.where(along < 0.5, first[segment_of[piece]], second[segment_of[piece]])
     return nearest, nodes.edge_normals[node]
 
 
@@ -175,6 +186,23 @@ def _edge_segments(nodes):
         starts.append(index)
         ends.append(np.roll(index, -1))
     return np.concatenate(starts), np.concatenate(ends)
+
+
+def _edge_pieces(starts, ends):
+    """Segments from starts to ends (S, 3) mm cut into equal pieces no longer than PIECE_MEDIANS
+    times the median segment, so that a few long segments among many short ones (a long straight
+    edge beside finely noded short ones) do not loosen the bound of :func:`_nearest_on_edges`.
+    Returns the pieces' starts and ends (P, 3) mm, the segment each piece is part of (P,) and
+    where it starts and ends along it (P, 2), fractions in [0, 1]."""
+    lengths = np.linalg.norm(ends - starts, axis=1)
+    longest = PIECE_MEDIANS * float(np.median(lengths)) if lengths.size else 0.0
+    cuts = np.ones(len(lengths), dtype=int) if longest <= 0 else np.maximum(1, np.ceil(lengths / longest).astype(int))
+    segment_of = np.repeat(np.arange(len(lengths)), cuts)
+    offset = np.arange(len(segment_of)) - np.repeat(np.cumsum(cuts) - cuts, cuts)
+    fractions = np.column_stack([offset, offset + 1]) / cuts[segment_of, None]
+    along = ends - starts
+    return (starts[segment_of] + fractions[:, :1] * along[segment_of],
+            starts[segment_of] + fractions[:, 1:] * along[segment_of], segment_of, fractions)
 
 
 def _closest_on_segments(points, a, b, candidates):
