@@ -20,6 +20,12 @@ COVERAGE = 1.6
 # The largest layout a strategy grows before it gives up placing N points (a thin feasible strip
 # can keep almost none of a layout's points).
 MAX_LAYOUT = 250_000
+# ... and it gives up sooner once STALL_ROUNDS layouts in a row, together STALL_GROWTH times the
+# size of the last one that added a feasible, spaced point, added none: the points it finds crowd
+# onto the same few places, which finer layouts find again (a sliver of a face left by the edge
+# offset, seen along a steep axis).
+STALL_ROUNDS = 3
+STALL_GROWTH = 256
 
 
 def grid_shape(n, aspect=1.0):
@@ -130,7 +136,9 @@ def _dense_enough(make_candidates, problem, start, keep_first=False, with_layout
 
     make_candidates(m) -> (M, 2) uv for a layout of about m points; start: first m to try;
     keep_first: keep the first N (for a sequence) instead of N spread evenly over the layout.
-    Gives up (ValueError) past MAX_LAYOUT candidates.
+    Gives up (ValueError) past MAX_LAYOUT candidates, or once STALL_ROUNDS layouts in a row, the
+    last of them at least STALL_GROWTH times the size of the last layout that held more feasible,
+    spaced points (at least one), held no more.
     Feasible: on the face and at least edge_offset from its edges; spaced: greedily, in the
     layout's order, at least problem.min_spacing mm apart, and never coincident (closer than
     COINCIDENT times the face's size: several (u, v) of a degenerate edge, e.g. a sphere's pole).
@@ -139,6 +147,7 @@ def _dense_enough(make_candidates, problem, start, keep_first=False, with_layout
     n = problem.n
     m = start
     spacing = max(problem.min_spacing, COINCIDENT * problem.model.diagonal)
+    most, grown_from, stalled = 0, m, 0
     while m <= MAX_LAYOUT:
         uv = make_candidates(m)
         inside = uv[problem.domain.contains(uv)]
@@ -146,6 +155,11 @@ def _dense_enough(make_candidates, problem, start, keep_first=False, with_layout
         if len(inside) >= n:
             chosen = inside[:n] if keep_first else thin_evenly(inside, n)
             return (chosen, inside) if with_layout else chosen
+        stalled = 0 if len(inside) > most else stalled + 1
+        if len(inside) > most:
+            most, grown_from = len(inside), m
+        if most and stalled >= STALL_ROUNDS and m >= STALL_GROWTH * grown_from:
+            break
         m = int(np.ceil(m * max(1.1, n / max(len(inside), 1))))
     raise InputError(
         f"could not place {n} points on the face at least {problem.min_spacing:g} mm apart and "

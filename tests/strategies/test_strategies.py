@@ -4,7 +4,10 @@ import pytest
 from support.faces import Part, cartesian_refuses, rational_patch_face
 
 import cmmsampling
+from cmmsampling.geometry.validation import InputError
+from cmmsampling.strategies import blind
 from cmmsampling.strategies.blind import allocate, grid_shape, thin_evenly
+from cmmsampling.strategies.sampling import make_problem
 
 BLIND = [name for name, s in cmmsampling.STRATEGIES.items() if not s.optimiser]
 FACES = {
@@ -68,6 +71,50 @@ def test_curvature_strategy_puts_more_points_where_the_face_bends():
         result = cmmsampling.sample(face, 64, strategy, occ_check=False)
         wavy = np.count_nonzero(result.points[:, 0] > 55)
         assert wavy > 0.6 * 64, strategy
+
+
+def places_layout(problem, places_in_round):
+    """A make_candidates for blind._dense_enough whose k-th layout (of any size m) holds only
+    places_in_round(k) distinct points of the face, repeated; it records the sizes asked for."""
+    asked = []
+    spots = problem.domain.from_unit(np.column_stack([np.linspace(0.1, 0.9, 40), np.full(40, 0.5)]))
+
+    def candidates(m):
+        asked.append(m)
+        return spots[np.arange(m) % min(places_in_round(len(asked)), len(spots))]
+
+    return candidates, asked
+
+
+def test_a_layout_that_keeps_finding_the_same_few_places_is_given_up_early(reference):
+    """Points that crowd onto the same 4 places however fine the layout (a sliver of a face seen
+    along a steep axis): the growth stops STALL_GROWTH times over the layout that last gained a
+    place, far short of MAX_LAYOUT, with the refusal that says what to change."""
+    problem = make_problem(reference, 9, workers=1)
+    candidates, asked = places_layout(problem, lambda k: 4)
+    with pytest.raises(InputError, match="could not place 9 points on the face"):
+        blind._dense_enough(candidates, problem, 9)
+    assert asked[-2] < blind.STALL_GROWTH * asked[0] <= asked[-1] and len(asked) > blind.STALL_ROUNDS
+    assert max(asked) < blind.MAX_LAYOUT / 50
+
+
+def test_a_layout_that_gains_places_as_it_grows_goes_on_past_the_stall_growth(reference):
+    """One more place with every layout: the layout keeps growing, well past STALL_GROWTH times
+    its start, until it holds N places."""
+    problem = make_problem(reference, 9, workers=1)
+    candidates, asked = places_layout(problem, lambda k: k)
+    assert len(blind._dense_enough(candidates, problem, 9)) == 9
+    assert max(asked) > blind.STALL_GROWTH * asked[0] and len(asked) == 9
+
+
+def test_a_few_coarse_layouts_that_hit_a_thin_face_once_do_not_stop_a_large_n(reference):
+    """N = 20: the first layouts find one place each (a thin strip between their nodes), each
+    20 times the last, so the third is 400 times the first; the fourth finds all 20. Growth alone
+    is no stall: STALL_ROUNDS layouts in a row must find nothing new as well."""
+    problem = make_problem(reference, 20, workers=1)
+    candidates, asked = places_layout(problem, lambda k: 1 if k < 4 else 20)
+    assert len(blind._dense_enough(candidates, problem, 20)) == 20
+    assert asked[2] > blind.STALL_GROWTH * asked[0] and len(asked) == 4
 
 
 def test_helpers():
