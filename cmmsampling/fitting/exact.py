@@ -157,12 +157,13 @@ def _nearest_on_edges(nodes, points):
     found plus half the longest piece (counted first, then fetched as that many nearest)."""
     first, second = _edge_segments(nodes)
     a, b, segment_of, fractions = _edge_pieces(nodes.edge_points[first], nodes.edge_points[second])
+    along = b - a
     middles = cKDTree(0.5 * (a + b))
-    half = 0.5 * float(np.linalg.norm(b - a, axis=1).max(initial=0.0))
+    half = 0.5 * float(np.linalg.norm(along, axis=1).max(initial=0.0))
     count = min(NEAREST_SEGMENTS, len(a))
     spans, candidates = middles.query(points, k=count)
     candidates, spans = candidates.reshape(len(points), count), spans.reshape(len(points), count)
-    nearest, piece, t = _closest_on_segments(points, a, b, candidates)
+    nearest, piece, t = _closest_on_segments(points, a, along, candidates)
     found = np.linalg.norm(nearest - points, axis=1)
     unsure = np.flatnonzero(found > spans[:, -1] - half)
     if unsure.size and count < len(a):
@@ -172,7 +173,7 @@ def _nearest_on_edges(nodes, points):
             rows = unsure[needed == k]
             for chunk in np.array_split(rows, -(-rows.size * k // SEGMENT_PAIRS)):
                 candidates = middles.query(points[chunk], k=k)[1].reshape(len(chunk), k)
-                nearest[chunk], piece[chunk], t[chunk] = _closest_on_segments(points[chunk], a, b, candidates)
+                nearest[chunk], piece[chunk], t[chunk] = _closest_on_segments(points[chunk], a, along, candidates)
     along = fractions[piece, 0] + t * (fractions[piece, 1] - fractions[piece, 0])
     node = np.where(along < 0.5, first[segment_of[piece]], second[segment_of[piece]])
     return nearest, nodes.edge_normals[node]
@@ -205,11 +206,11 @@ def _edge_pieces(starts, ends):
             starts[segment_of] + fractions[:, 1:] * along[segment_of], segment_of, fractions)
 
 
-def _closest_on_segments(points, a, b, candidates):
-    """Per point (M, 3), the closest point on the segments a[c] to b[c] (a, b: (S, 3)) of its
-    candidates c (M, K) int: (closest points (M, 3), the segment's index (M,), its fraction along
-    the segment (M,) in [0, 1])."""
-    start, along = a[candidates], (b - a)[candidates]
+def _closest_on_segments(points, starts, alongs, candidates):
+    """Per point (M, 3), the closest point on the segments from starts[c] to starts[c] + alongs[c]
+    (starts, alongs: (S, 3) mm) of its candidates c (M, K) int: (closest points (M, 3), the
+    segment's index (M,), its fraction along the segment (M,) in [0, 1])."""
+    start, along = starts[candidates], alongs[candidates]
     t = np.clip(((points[:, None, :] - start) * along).sum(-1) / np.maximum((along * along).sum(-1), 1e-300), 0, 1)
     on_segment = start + t[..., None] * along
     best = np.argmin(((on_segment - points[:, None, :]) ** 2).sum(-1), axis=1)

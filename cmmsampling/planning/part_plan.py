@@ -29,8 +29,8 @@ from ..geometry.freecad_env import import_part
 from ..geometry.surface import as_face
 from ..geometry.validation import InputError, InputTypeError, check_int, check_pair, check_real
 from ..strategies import handover
-from ..strategies.face_setup import reused
 from ..strategies.estimates import duration_text, time_left_text
+from ..strategies.face_setup import reused
 from ..strategies.sampling import BEST_STRATEGY, check_arguments, evaluate, probe_edge_offset, sample
 from ..strategies.threads import blas_threads
 from . import face_runs

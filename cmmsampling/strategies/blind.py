@@ -155,9 +155,10 @@ def _dense_enough(make_candidates, problem, start, keep_first=False, with_layout
         if len(inside) >= n:
             chosen = inside[:n] if keep_first else thin_evenly(inside, n)
             return (chosen, inside) if with_layout else chosen
-        stalled = 0 if len(inside) > most else stalled + 1
         if len(inside) > most:
-            most, grown_from = len(inside), m
+            most, grown_from, stalled = len(inside), m, 0
+        else:
+            stalled += 1
         if most and stalled >= STALL_ROUNDS and m >= STALL_GROWTH * grown_from:
             break
         m = int(np.ceil(m * max(1.1, n / max(len(inside), 1))))
