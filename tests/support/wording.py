@@ -1,3 +1,4 @@
 """Patterns of the words the progress lines use for durations (cmmsampling.strategies.estimates)."""
-DURATION = r"(\d+ (s|min)|\d+ h \d+ min|under a second)"
-LEFT = rf"(about {DURATION}|under a second) left"
+AMOUNT = r"(\d+ (s|min)|\d+ h \d+ min)"
+DURATION = rf"({AMOUNT}|under a second)"
+LEFT = rf"(about {AMOUNT}|under a second) left"
