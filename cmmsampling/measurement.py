@@ -12,6 +12,7 @@ from .formats.frames import placement_from_metadata, resolve_frame, to_global
 from .formats.pointfiles import read_points
 from .formats.pointset import PointSet
 from .geometry.freecad_env import import_part
+from .geometry.occ_distance import distances_to_face
 from .geometry.surface import as_face
 from .geometry.validation import InputError, check_real
 
@@ -54,7 +55,7 @@ class MeasuredDeviation:
                 "lowest_mm": float(self.distances.min()), "highest_mm": float(self.distances.max())}
 
 
-def measured_deviation(face: Part.Face, points: PointSet | str | os.PathLike | np.ndarray, *, frame: object = None,
+def measured_deviation(face: Part.Face, points: PointSet | str | os.PathLike, *, frame: object = None,
                        probe_radius: float | None = None) -> MeasuredDeviation:
     """How far measured points lie from the CAD face: OCC closest-point distances, signed.
 
@@ -109,12 +110,8 @@ def _check_extent(positions, labels):
 
 def closest_points(face, points):
     """For points (N, 3) mm: the closest points on face (N, 3) mm, the face's outward unit normals
-    there (N, 3) and the distances (N,) mm, by OCC (``face.distToShape``)."""
-    rows = []
-    for point in points:
-        distance, pairs, _ = face.distToShape(Part.Vertex(FreeCAD.Vector(*point)))
-        foot = pairs[0][0]
-        u, v = face.Surface.parameter(foot)
-        rows.append((*foot, *face.normalAt(u, v), distance))
-    data = np.array(rows, dtype=float)
-    return data[:, :3], data[:, 3:6], data[:, 6]
+    there (N, 3) and the distances (N,) mm, by OCC
+    (:func:`cmmsampling.geometry.occ_distance.distances_to_face`)."""
+    distances, feet = distances_to_face(face, points)
+    normals = [tuple(face.normalAt(*face.Surface.parameter(FreeCAD.Vector(*foot)))) for foot in feet]
+    return feet, np.array(normals, dtype=float).reshape(-1, 3), distances

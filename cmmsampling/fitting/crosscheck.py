@@ -3,9 +3,7 @@ deviation (cmmsampling.fitting.exact): from the face's nodes to the substitute s
 the substitute's points at the nodes' parameters back to the face."""
 import numpy as np
 
-from ..geometry.freecad_env import import_part
-
-Part = import_part()
+from ..geometry.occ_distance import distances_to_face
 
 OCC_DISTANCE_NODES = 25
 
@@ -27,6 +25,6 @@ def occ_cross_check(stats, exact, substitute, face):
     return stats
 
 
-def _largest_distance(shape, points):
-    """The largest OCC distance (mm) from the points (M, 3) to a shape."""
-    return float(max((shape.distToShape(Part.Vertex(*map(float, p)))[0] for p in points), default=0.0))
+def _largest_distance(face, points):
+    """The largest OCC distance (mm) from the points (M, 3) to a face (a Part.Face)."""
+    return float(distances_to_face(face, points)[0].max(initial=0.0))

@@ -14,6 +14,7 @@ import numpy as np
 from .bspline import clamped_uniform_knots, full_knots
 from .freecad_env import import_part
 from .nurbs import NurbsPatch
+from .occ_distance import distances_to_face
 from .validation import InputError, InputTypeError
 
 Part = import_part()
@@ -93,12 +94,19 @@ class SurfaceModel(NurbsPatch):
                 or len(self.face.Wires) > 1)
 
     def trim_loops(self, step):
-        """The face's boundary loops as (u, v) polygons: list of (K, 2) arrays, one per wire.
+        """The face's boundary loops as (u, v) polygons: list of (K, 2) arrays, one per wire,
+        each its edges' samples (:meth:`trim_edges`) end to end."""
+        return [np.concatenate(edges) for edges in self.trim_edges(step) if edges]
 
-        Each edge's curve on the surface is sampled at least LOOP_SAMPLES_PER_EDGE times and at
-        most ``step`` mm apart along the edge (3D), so the samples serve the edge clearance too.
+    def trim_edges(self, step):
+        """The samples of the face's edges in (u, v), wire by wire: a list per wire of (K, 2)
+        arrays, one per edge in the wire's order, each running the way the wire does.
+
+        Each edge's curve on the surface is sampled at least LOOP_SAMPLES_PER_EDGE times, at equal
+        steps of its parameter and at most ``step`` mm apart along the edge (3D), so the samples
+        serve the edge clearance too.
         """
-        loops = []
+        wires = []
         for wire in self.face.Wires:
             pieces = []
             for edge in wire.OrderedEdges or wire.Edges:
@@ -106,17 +114,14 @@ class SurfaceModel(NurbsPatch):
                 count = max(LOOP_SAMPLES_PER_EDGE, int(np.ceil(edge.Length / step)) + 1)
                 piece = np.array([(p.x, p.y) for p in map(curve.value, np.linspace(first, last, count))])
                 pieces.append(piece[::-1] if edge.Orientation == "Reversed" else piece)
-            if pieces:
-                loops.append(np.concatenate(pieces))
-        return loops
+            wires.append(pieces)
+        return wires
 
     def distance_to_face(self, uv):
         """OCC's distance (mm) from the model's points at uv (N, 2) to the face, and the nearest
-        points on it: ((N,) mm, (N, 3) mm). One OCC query per point: a final check, not for
-        optimiser loops."""
-        found = [self.face.distToShape(Part.Vertex(*point)) for point in self.points(uv)]
-        return (np.array([d[0] for d in found]),
-                np.array([tuple(d[1][0][0]) for d in found]).reshape(-1, 3))
+        points on it: ((N,) mm, (N, 3) mm), by :func:`cmmsampling.geometry.occ_distance.distances_to_face`.
+        OCC queries per point: a final check, not for optimiser loops."""
+        return distances_to_face(self.face, self.points(uv))
 
     def on_face(self, uv):
         """(N,) True where the points at uv (N, 2) lie on the face by OCC: inside its boundary by

@@ -97,6 +97,26 @@ def _spaced_among(points, min_spacing):
     return np.flatnonzero(kept)
 
 
+def onto_face(problem, uv):
+    """uv (N, 2) with the points OCC finds off the face moved onto it, and notes (list of str)
+    saying what was moved (none where nothing was).
+
+    Points moved onto the same stretch of boundary (two grid points past a trimmed corner) can
+    land closer than min_spacing: those are moved to free places (:func:`respace`), and checked
+    on the face again."""
+    uv, moved, off = problem.model.onto_face(uv)
+    if not moved.any():
+        return uv, []
+    notes = [f"{moved.sum()} point(s) lay up to {off[moved].max():.2g} mm off the face at its boundary "
+             "and were moved onto it"]
+    uv, crowded = respace(problem, uv)
+    if crowded:
+        uv = problem.model.onto_face(uv)[0]
+        notes.append(f"{crowded} point(s) then lay closer than min_spacing to others and were moved to "
+                     "free places")
+    return uv, notes
+
+
 def respace(problem, uv):
     """Move the points of uv (N, 2) that crowd others (closer than problem.min_spacing) to free places.
 

@@ -20,7 +20,7 @@ import numpy as np
 
 from ..fitting.lattice import LATTICE_LIMIT_BYTES
 from ..geometry.validation import InputError, check_int, check_real
-from . import memory
+from . import blind, memory
 from .registry import STRATEGIES, Setting, Strategy, StrategyOutcome, layouts
 
 
@@ -177,11 +177,12 @@ def run_pso(problem, progress, population, iterations, w1, w2, c1, c2, velocity_
     """
     settings = SwarmSettings(population, iterations, w1, w2, c1, c2, velocity_limit, problem.seed)
     seeds = _uniform_seeds(problem) if start_from_uniform else {}
+    starts = [uv for uv, _ in seeds.values()]
     objective = problem.swarm_objective()
-    watched = None if progress is None else ExactProgress(problem, progress, list(seeds.values()), iterations)
+    watched = None if progress is None else ExactProgress(problem, progress, starts, iterations)
     swarm = particle_swarm(
         objective, problem.domain.lower, problem.domain.upper, problem.n, settings,
-        seeds=list(seeds.values()), project=problem.project, progress=watched,
+        seeds=starts, project=problem.project, progress=watched,
         admissible=problem.spaced if problem.min_spacing > 0 else None,
     )
     if not np.isfinite(swarm.best_value):
@@ -244,24 +245,30 @@ def _process_notes(problem, objective):
 
 
 def _uniform_seeds(problem):
-    """{label: uv (N, 2)} of the uniform layouts that fit the face (uniform Cartesian may refuse)."""
+    """{label: (uv (N, 2), notes)} of the uniform layouts that fit the face (uniform Cartesian
+    may refuse), as their strategies deliver them: with the points OCC finds off the face moved
+    onto it and notes saying so (blind.onto_face)."""
     found = layouts(problem, required=("uniform_parametric",), optional=("uniform_cartesian",))
-    return {STRATEGIES[name].label: uv for name, uv in found.items()}
+    return {STRATEGIES[name].label: blind.onto_face(problem, uv) for name, uv in found.items()}
 
 
 def _best_exact(problem, found, seeds):
-    """The swarm's best point set, or a seed layout where that is better by the exact deviation.
+    """The swarm's best point set, or a seed layout where that is better by the exact deviation,
+    each as it is delivered (the swarm's best with the points OCC finds off the face moved onto
+    it, blind.onto_face), so that the figures a note quotes are the result's.
 
-    found: (N, 2); seeds: {name: (N, 2)} the uniform layouts it started from (or none).
+    found: (N, 2); seeds: {name: (uv (N, 2), notes)} the uniform layouts it started from (or none).
     Returns (uv (N, 2), notes).
     """
     names = list(seeds)
-    maxima = [problem.exact_maximum(uv) for uv in [found, *seeds.values()]]
+    delivered = [blind.onto_face(problem, found), *seeds.values()]
+    maxima = [problem.exact_maximum(uv) for uv, _ in delivered]
     best = int(np.argmin(maxima))
     if maxima[best] >= maxima[0] - SIGNIFICANT_MM:
-        return found, []
-    return seeds[names[best - 1]], [f"the swarm ended no better than its {names[best - 1]} start "
-                                    f"({maxima[best]:.4g} mm against {maxima[0]:.4g} mm); that layout is returned"]
+        return delivered[0]
+    uv, notes = delivered[best]
+    return uv, [f"the swarm ended no better than its {names[best - 1]} start ({maxima[best]:.4g} mm "
+                f"against {maxima[0]:.4g} mm); that layout is returned", *notes]
 
 
 def _pso_memory(n, poles, nodes, options, workers):

@@ -322,22 +322,10 @@ def probe_edge_offset(face: Part.Face, cap: float | None = None) -> float:
 
 
 def _move_onto_face(problem, outcome):
-    """Move the outcome's points that lie off the face (OCC) onto it, with a note saying so.
-
-    Points moved onto the same stretch of boundary (two grid points past a trimmed corner) can
-    land closer than min_spacing: those are moved to free places (blind.respace), and checked
-    on the face again."""
-    outcome.uv, moved, off = problem.model.onto_face(outcome.uv)
-    if not moved.any():
-        return
-    outcome.notes.append(
-        f"{moved.sum()} point(s) lay up to {off[moved].max():.2g} mm off the face at its boundary "
-        "and were moved onto it")
-    outcome.uv, crowded = blind.respace(problem, outcome.uv)
-    if crowded:
-        outcome.uv = problem.model.onto_face(outcome.uv)[0]
-        outcome.notes.append(f"{crowded} point(s) then lay closer than min_spacing to others and "
-                             "were moved to free places")
+    """Move the outcome's points that lie off the face (OCC) onto it (blind.onto_face), with
+    notes saying so."""
+    outcome.uv, notes = blind.onto_face(problem, outcome.uv)
+    outcome.notes += notes
 
 
 def _fit_notes(problem):

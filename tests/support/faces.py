@@ -50,6 +50,20 @@ def rational_saddle(seed=1):
                                 weights=rng.uniform(0.4, 2.5, x.shape)).toShape()
 
 
+def clustered_reversed_face():
+    """A rational, reversed 40 x 40 mm patch (degrees 2 x 3, knots clustered near u = 0, a
+    v range of [2, 50]) where OCC's distToShape puts a point of the face itself 6.07 mm off it
+    (at u, v = 0.799, 2.056)."""
+    x, y = np.meshgrid(np.linspace(0, 40, 6), np.linspace(0, 40, 6), indexing="ij")
+    poles = [[FreeCAD.Vector(a, b, 5 * np.cos(a / 9) * np.sin(b / 8)) for a, b in zip(row_x, row_y)]
+             for row_x, row_y in zip(x, y)]
+    surface = Part.BSplineSurface()
+    surface.buildFromPolesMultsKnots(poles, [3, 1, 1, 1, 3], [4, 1, 1, 4], [0, 0.01, 0.03, 0.9, 1],
+                                     [2, 2.1, 2.2, 50], False, False, 2, 3,
+                                     (1 + 2 * (x / 40) ** 2).tolist())
+    return surface.toShape().reversed()
+
+
 def strip_face():
     """A curved strip 60 mm long and 2 mm wide (a blade-like face)."""
     x, y = np.meshgrid(np.linspace(0, 60, 7), np.linspace(0, 2, 4), indexing="ij")
