@@ -36,6 +36,8 @@ NEAREST_SEGMENTS = 8
 SEGMENT_PAIRS = 1_000_000
 # The longest edge piece searched for the nearest edge point, in median segments.
 PIECE_MEDIANS = 2.0
+# Golden sections refining the nearest edge point on the edge's curve (0.618^32 = 2e-7 of two segments).
+GOLDEN_STEPS = 32
 
 
 @dataclass
@@ -130,7 +132,7 @@ def reverse_side(surface, nodes, face, on_face):
     normals = face.normals(foot)
     off = np.zeros(len(at), dtype=bool) if on_face is None else ~on_face(foot)
     if off.any():
-        nearest[off], normals[off] = _nearest_on_edges(nodes, points[off])
+        nearest[off], normals[off] = _nearest_on_edge_curves(face, nodes, points[off])
     normals = np.where(np.isfinite(normals).all(1, keepdims=True), normals, node_normals(nodes))
     return _side(points - nearest, at, normals)
 
@@ -145,9 +147,71 @@ def _side(offsets, at, normals):
     return Side(side * length, at, directions)
 
 
+def _nearest_on_edge_curves(face, nodes, points):
+    """The nearest point (M, 3) mm on the face's edges to each point (M, 3) mm, and the face's
+    unit normal there (M, 3; NaN where the face has none).
+
+    The nearest point on the edge polygons (:func:`_nearest_on_edges`) is refined on the edge
+    itself: the face's point F(c(t)) of the edge's curve on the surface c, interpolated by cubics
+    through the run's samples (equal parameter steps), searched by golden sections within a
+    segment either side. The refined point is kept where it is nearer than the curve's point
+    where the search started, so it is a point of the edge never farther than that."""
+    spot = _nearest_on_edges(nodes, points)
+    runs = nodes.edge_runs[spot.astype(int)]
+    low, high = np.maximum(runs[:, 0], spot - 1.0), np.minimum(runs[:, 1] - 1.0, spot + 1.0)
+    start = _edge_curve_uv(nodes, spot, runs)
+    found = _golden_section(lambda place: _squared_gap(face, nodes, points, place, runs), low, high)
+    found_uv = _edge_curve_uv(nodes, found, runs)
+    nearer = _squared_gap(face, nodes, points, found, runs) < ((face.points(start) - points) ** 2).sum(1)
+    uv = np.where(nearer[:, None], found_uv, start)
+    return face.points(uv), face.normals(uv)
+
+
+def _squared_gap(face, nodes, points, place, runs):
+    """|F(c(place)) - point|^2 (M,) mm^2 at the edge places (M,) (see _edge_curve_uv)."""
+    return ((face.points(_edge_curve_uv(nodes, place, runs)) - points) ** 2).sum(1)
+
+
+def _edge_curve_uv(nodes, place, runs):
+    """(M, 2) the edge's curve on the surface at ``place`` (M,), a fractional edge node index
+    within its run runs (M, 2) [start, stop): the cubic through the 4 run samples around it
+    (equal parameter steps), or the chord where the run has fewer than 4."""
+    stencil = np.clip(np.floor(place).astype(int) - 1, runs[:, 0], np.maximum(runs[:, 1] - 4, runs[:, 0]))
+    s = place - stencil
+    cubic = runs[:, 1] - runs[:, 0] >= 4
+    weights = np.where(cubic[:, None], np.column_stack([
+        -(s - 1) * (s - 2) * (s - 3) / 6, s * (s - 2) * (s - 3) / 2,
+        -s * (s - 1) * (s - 3) / 2, s * (s - 1) * (s - 2) / 6]), 0.0)
+    near = np.clip(np.floor(place).astype(int), runs[:, 0], runs[:, 1] - 1)
+    ahead = np.minimum(near + 1, runs[:, 1] - 1)
+    fraction = np.clip(place - near, 0.0, 1.0)
+    chord = (1 - fraction)[:, None] * nodes.edge_uv[near] + fraction[:, None] * nodes.edge_uv[ahead]
+    rows = np.minimum(stencil[:, None] + np.arange(4), len(nodes.edge_uv) - 1)
+    return np.where(cubic[:, None], np.einsum("mk,mkj->mj", weights, nodes.edge_uv[rows]), chord)
+
+
+def _golden_section(function, low, high):
+    """(M,) the place in [low, high] (M,) where function (M,) -> (M,) is least, by GOLDEN_STEPS
+    golden sections of every interval at once (a local least where it has several)."""
+    ratio = 0.5 * (np.sqrt(5.0) - 1.0)
+    low, high = low.astype(float), high.astype(float)
+    left, right = high - ratio * (high - low), low + ratio * (high - low)
+    left_value, right_value = function(left), function(right)
+    for _ in range(GOLDEN_STEPS):
+        keep_left = left_value <= right_value
+        high = np.where(keep_left, right, high)
+        low = np.where(keep_left, low, left)
+        left, right = np.where(keep_left, high - ratio * (high - low), right), np.where(keep_left, left, low + ratio * (high - low))
+        fresh = function(np.where(keep_left, left, right))
+        left_value, right_value = (np.where(keep_left, fresh, right_value),
+                                   np.where(keep_left, left_value, fresh))
+    return np.where(left_value <= right_value, left, right)
+
+
 def _nearest_on_edges(nodes, points):
-    """The nearest point (M, 3) on the face's edge polygons to each point (M, 3), and the face's
-    normal at the nearest edge node (M, 3).
+    """Where on the face's edge polygons the nearest point to each point (M, 3) mm lies: (M,) a
+    fractional edge node index within the run of the node it is nearest to (a segment between
+    two runs, at a corner or where a loop closes, gives its nearer end).
 
     The edge segments are cut into pieces (:func:`_edge_pieces`), and the NEAREST_SEGMENTS pieces
     whose midpoints lie nearest are tried. A piece left out lies at least its midpoint's distance
@@ -175,8 +239,9 @@ def _nearest_on_edges(nodes, points):
                 candidates = middles.query(points[chunk], k=k)[1].reshape(len(chunk), k)
                 nearest[chunk], piece[chunk], t[chunk] = _closest_on_segments(points[chunk], a, along, candidates)
     along = fractions[piece, 0] + t * (fractions[piece, 1] - fractions[piece, 0])
-    node = np.where(along < 0.5, first[segment_of[piece]], second[segment_of[piece]])
-    return nearest, nodes.edge_normals[node]
+    start, end = first[segment_of[piece]], second[segment_of[piece]]
+    within = (end == start + 1) & (nodes.edge_runs[start, 1] > end)
+    return np.where(within, start + along, np.where(along < 0.5, start, end)).astype(float)
 
 
 def _edge_segments(nodes):

@@ -35,7 +35,9 @@ class FaceNodes:
     edge_uv: (E, 2); edge_points: (E, 3) mm; edge_normals: (E, 3) unit; edge_across: (E, 2, 3) the
     directions an edge node's offset is measured along besides the normal (rows of zeros where
     unused); loops: list of (start, stop) index ranges of edge_uv, one closed polygon each;
-    spacing: mm, the largest raster cell diagonal.
+    edge_runs: (E, 2) int, the [start, stop) index range of the run each edge node is in: samples
+    of one edge's curve on the surface at equal parameter steps; spacing: mm, the largest raster
+    cell diagonal.
     """
 
     uv: np.ndarray
@@ -47,6 +49,7 @@ class FaceNodes:
     edge_normals: np.ndarray
     edge_across: np.ndarray
     loops: list
+    edge_runs: np.ndarray
     spacing: float
 
     @property
@@ -62,8 +65,8 @@ class FaceNodes:
 def face_nodes(model, size=DEFAULT_GRID, on_face=None):
     """The FaceNodes of a face.
 
-    model: SurfaceModel (its ``trim_loops`` give the edges) or, for tests, anything with
-    ``bounds``, ``points``, ``normals`` and ``trim_loops``; size: int or (g_u, g_v); on_face:
+    model: SurfaceModel (its ``trim_edges`` give the edges) or, for tests, anything with
+    ``bounds``, ``points``, ``normals`` and ``trim_edges``; size: int or (g_u, g_v); on_face:
     uv (..., 2) -> (...) bool, the face's trim test (None: the whole parameter rectangle).
     """
     size = grid_size(size)
@@ -74,15 +77,16 @@ def face_nodes(model, size=DEFAULT_GRID, on_face=None):
         counted &= on_face(uv)
     spacing = _largest_cell_diagonal(points)
     step = max(spacing / EDGE_NODES_PER_STEP, 1e-9 * max(spacing, 1.0))
-    loops = model.trim_loops(step)
-    edge_uv = np.concatenate(loops) if loops else np.zeros((0, 2))
-    bounds = np.cumsum([0] + [len(loop) for loop in loops])
+    wires = [edges for edges in model.trim_edges(step) if edges]
+    sizes = [len(edge) for edges in wires for edge in edges]
+    edge_uv = np.concatenate([edge for edges in wires for edge in edges]) if sizes else np.zeros((0, 2))
+    bounds = np.cumsum([0] + [sum(len(edge) for edge in edges) for edges in wires])
     edge_points, edge_normals = model.points(edge_uv), model.normals(edge_uv)
     across = edge_directions(edge_points, edge_normals, list(zip(bounds[:-1], bounds[1:])))
     keep = np.isfinite(edge_points).all(-1)
     edge_normals = np.where(np.isfinite(edge_normals).all(-1, keepdims=True), edge_normals, [0.0, 0.0, 1.0])
     return FaceNodes(uv, points, normals, counted, edge_uv[keep], edge_points[keep], edge_normals[keep],
-                     across[keep], _ranges(bounds, keep), spacing)
+                     across[keep], _ranges(bounds, keep), _runs(sizes, keep), spacing)
 
 
 def grid_size(size):
@@ -172,3 +176,14 @@ def _ranges(bounds, keep):
     kept = np.concatenate([[0], np.cumsum(keep)])
     return [(int(kept[start]), int(kept[stop])) for start, stop in zip(bounds[:-1], bounds[1:])
             if kept[stop] > kept[start]]
+
+
+def _runs(sizes, keep):
+    """(E, 2) int: for each kept edge node, the [start, stop) range (among the kept nodes) of its
+    run: the kept samples of one edge with no dropped sample between them. sizes: samples per
+    edge, in order; keep: (sum(sizes),) bool."""
+    edge = np.repeat(np.arange(len(sizes)), sizes)
+    begins = np.ones(len(edge), dtype=bool)
+    begins[1:] = (edge[1:] != edge[:-1]) | ~keep[:-1]
+    run = np.cumsum(begins)[keep]
+    return np.column_stack([np.searchsorted(run, run, "left"), np.searchsorted(run, run, "right")])

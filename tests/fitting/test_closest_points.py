@@ -8,7 +8,7 @@ from scipy.spatial import cKDTree
 from support.faces import Part, collapsed_face, strip_face
 
 import cmmsampling
-from cmmsampling.fitting.exact import _better, _nearest_on_edges, closest_parameters, node_parameters, reverse_side
+from cmmsampling.fitting.exact import _better, _nearest_on_edge_curves, closest_parameters, node_parameters, reverse_side
 from cmmsampling.fitting.substitute import FittedSurface
 from cmmsampling.geometry.surface import SurfaceModel
 from cmmsampling.strategies.sampling import make_problem
@@ -105,14 +105,22 @@ def test_the_reverse_side_searches_again_only_from_another_nearest_node(make):
 
 
 def sharp_corner_nodes():
-    """Edge nodes of a thin triangle in z = 0: two 100 mm edges of 10 segments each meeting a
-    1 mm edge of 200 tiny segments at sharp corners (as a trimmed face's edges are noded)."""
-    long_edge = np.linspace([0.0, 0.0, 0.0], [100.0, 0.0, 0.0], 10, endpoint=False)
-    short_edge = np.linspace([100.0, 0.0, 0.0], [100.0, 1.0, 0.0], 200, endpoint=False)
-    back = np.linspace([100.0, 1.0, 0.0], [0.0, 0.0, 0.0], 10, endpoint=False)
-    points = np.concatenate([long_edge, short_edge, back])
-    return SimpleNamespace(loops=[(0, len(points))], edge_points=points,
-                           edge_normals=np.tile([0.0, 0.0, 1.0], (len(points), 1)))
+    """Edge nodes of a thin triangle in the plane z = 0 (u, v = x, y): two 100 mm edges of 10
+    segments each meeting a 1 mm edge of 200 tiny segments at sharp corners, each edge's samples
+    from its start to its end (as SurfaceModel.trim_edges gives them)."""
+    edges = [np.linspace([0.0, 0.0], [100.0, 0.0], 11), np.linspace([100.0, 0.0], [100.0, 1.0], 201),
+             np.linspace([100.0, 1.0], [0.0, 0.0], 11)]
+    uv = np.concatenate(edges)
+    plane = flat_plane()
+    runs = np.repeat([[0, 11], [11, 212], [212, 223]], [11, 201, 11], axis=0)
+    return SimpleNamespace(loops=[(0, len(uv))], edge_uv=uv, edge_points=plane.points(uv),
+                           edge_normals=plane.normals(uv), edge_runs=runs)
+
+
+def flat_plane():
+    """The plane z = 0 as a face model: F(u, v) = (u, v, 0) mm, normal +z."""
+    return SimpleNamespace(points=lambda uv: np.column_stack([uv, np.zeros(len(uv))]),
+                           normals=lambda uv: np.tile([0.0, 0.0, 1.0], (len(uv), 1)))
 
 
 def test_the_nearest_edge_point_is_found_beside_a_sharp_corner():
@@ -121,8 +129,9 @@ def test_the_nearest_edge_point_is_found_beside_a_sharp_corner():
     finds (the first 8 midpoints alone gave a point on the short edge, overstating the distance)."""
     nodes = sharp_corner_nodes()
     points = np.column_stack([np.linspace(99.0, 99.95, 20), np.full(20, -0.02), np.zeros(20)])
-    nearest, normals = _nearest_on_edges(nodes, points)
-    assert np.allclose(nearest, points * [1.0, 0.0, 1.0], atol=1e-12)
+    nearest, normals = _nearest_on_edge_curves(flat_plane(), nodes, points)
+    assert np.allclose(nearest, points * [1.0, 0.0, 1.0], atol=1e-9)
     assert np.allclose(normals, [0.0, 0.0, 1.0])
     middle = np.array([[50.0, -0.5, 0.0], [30.0, 0.3, 0.0]])
-    assert np.allclose(_nearest_on_edges(nodes, middle)[0], [[50.0, 0.0, 0.0], [30.0, 0.3, 0.0]], atol=1e-12)
+    assert np.allclose(_nearest_on_edge_curves(flat_plane(), nodes, middle)[0],
+                       [[50.0, 0.0, 0.0], [30.0, 0.3, 0.0]], atol=1e-9)
