@@ -98,13 +98,25 @@ def tolerant_face():
     return face
 
 
-def holed_face():
-    """A wavy 100 x 100 mm B-spline plate with a 16 mm hole cut through it (trimmed)."""
+def wavy_plate():
+    """A wavy 100 x 100 mm bicubic B-spline plate as a Part.Face."""
     x, y = np.meshgrid(np.linspace(0, 100, 6), np.linspace(0, 100, 6), indexing="ij")
     z = 8 * np.sin(x / 30) * np.cos(y / 25)
-    plate = make_bspline_surface(np.stack([x, y, z], -1), (3, 3)).toShape()
-    hole = Part.makeCylinder(8, 100, FreeCAD.Vector(40, 55, -50))
-    return plate.cut(hole).Faces[0]
+    return make_bspline_surface(np.stack([x, y, z], -1), (3, 3)).toShape()
+
+
+def holed_face(diameter=16.0):
+    """The wavy plate with a hole of that diameter (mm) cut through it (trimmed)."""
+    hole = Part.makeCylinder(0.5 * diameter, 100, FreeCAD.Vector(40, 55, -50))
+    return wavy_plate().cut(hole).Faces[0]
+
+
+def diagonal_band():
+    """A 6 mm wide band of the wavy plate, trimmed diagonally across it (curved trim curves)."""
+    box = Part.makeBox(6, 200, 100, FreeCAD.Vector(-3, -100, -50))
+    box.rotate(FreeCAD.Vector(0, 0, 0), FreeCAD.Vector(0, 0, 1), -45)
+    box.translate(FreeCAD.Vector(50, 50, 0))
+    return wavy_plate().common(box).Faces[0]
 
 
 def cartesian_refuses(strategy, closed, run):
