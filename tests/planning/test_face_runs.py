@@ -30,7 +30,7 @@ def test_processes_that_cannot_import_a_job_leave_the_jobs_to_this_process(tmp_p
     seen = []
     # a busy machine may beat (message None) while the processes start and die: not counted here
     outcomes, notes = face_runs.run_all(module.square, [1, 2, 3], processes=2,
-                                        progress=lambda done, total, message: message is None or seen.append(done))
+                                        progress=lambda done, total, message: None if message is None else seen.append(done))
     assert outcomes == [1, 4, 9]
     assert seen == [1, 2, 3]
     [note] = notes
