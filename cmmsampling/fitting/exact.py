@@ -36,8 +36,10 @@ NEAREST_SEGMENTS = 8
 SEGMENT_PAIRS = 1_000_000
 # The longest edge piece searched for the nearest edge point, in median segments.
 PIECE_MEDIANS = 2.0
-# Golden sections refining the nearest edge point on the edge's curve (0.618^32 = 2e-7 of two segments).
-GOLDEN_STEPS = 32
+# Newton steps refining the nearest edge point on the edge's curve, and the step (in edge node
+# steps) below which it is done.
+EDGE_NEWTON_STEPS = 12
+EDGE_STEP_TOLERANCE = 1e-9
 
 
 @dataclass
@@ -153,59 +155,57 @@ def _nearest_on_edge_curves(face, nodes, points):
 
     The nearest point on the edge polygons (:func:`_nearest_on_edges`) is refined on the edge
     itself: the face's point F(c(t)) of the edge's curve on the surface c, interpolated by cubics
-    through the run's samples (equal parameter steps), searched by golden sections within a
-    segment either side. The refined point is kept where it is nearer than the curve's point
-    where the search started, so it is a point of the edge never farther than that."""
-    spot = _nearest_on_edges(nodes, points)
-    runs = nodes.edge_runs[spot.astype(int)]
-    low, high = np.maximum(runs[:, 0], spot - 1.0), np.minimum(runs[:, 1] - 1.0, spot + 1.0)
-    start = _edge_curve_uv(nodes, spot, runs)
-    found = _golden_section(lambda place: _squared_gap(face, nodes, points, place, runs), low, high)
-    found_uv = _edge_curve_uv(nodes, found, runs)
-    nearer = _squared_gap(face, nodes, points, found, runs) < ((face.points(start) - points) ** 2).sum(1)
-    uv = np.where(nearer[:, None], found_uv, start)
+    through the run's samples (equal parameter steps), by Gauss-Newton steps along the run
+    (at most a segment each, halved where a step gains nothing, at most EDGE_NEWTON_STEPS). Only
+    steps that bring the point nearer are kept, so the result is a point of the edge never
+    farther than the curve's point where the search began."""
+    place = _nearest_on_edges(nodes, points)
+    runs = nodes.edge_runs[place.astype(int)]
+    uv = _edge_curve_uv(nodes, place, runs)[0]
+    gap = ((face.points(uv) - points) ** 2).sum(1)
+    scale = np.ones(len(place))
+    active = np.flatnonzero(runs[:, 1] - runs[:, 0] > 1)
+    for _ in range(EDGE_NEWTON_STEPS):
+        if not active.size:
+            break
+        at, slope = _edge_curve_uv(nodes, place[active], runs[active])
+        derivatives = face.derivatives(at, 1)
+        offset = derivatives[(0, 0)] - points[active]
+        tangent = derivatives[(1, 0)] * slope[:, :1] + derivatives[(0, 1)] * slope[:, 1:]
+        step = -(offset * tangent).sum(1) / np.maximum((tangent * tangent).sum(1), 1e-300)
+        step = scale[active] * np.clip(step, -1.0, 1.0)
+        trial = np.clip(place[active] + step, runs[active, 0], runs[active, 1] - 1.0)
+        trial_gap = ((face.points(_edge_curve_uv(nodes, trial, runs[active])[0]) - points[active]) ** 2).sum(1)
+        better = trial_gap < gap[active]
+        place[active[better]], gap[active[better]] = trial[better], trial_gap[better]
+        scale[active[~better]] *= 0.5
+        active = active[np.abs(step) > EDGE_STEP_TOLERANCE]
+    uv = _edge_curve_uv(nodes, place, runs)[0]
     return face.points(uv), face.normals(uv)
 
 
-def _squared_gap(face, nodes, points, place, runs):
-    """|F(c(place)) - point|^2 (M,) mm^2 at the edge places (M,) (see _edge_curve_uv)."""
-    return ((face.points(_edge_curve_uv(nodes, place, runs)) - points) ** 2).sum(1)
-
-
 def _edge_curve_uv(nodes, place, runs):
-    """(M, 2) the edge's curve on the surface at ``place`` (M,), a fractional edge node index
-    within its run runs (M, 2) [start, stop): the cubic through the 4 run samples around it
-    (equal parameter steps), or the chord where the run has fewer than 4."""
+    """The edge's curve on the surface at ``place`` (M,), a fractional edge node index within its
+    run runs (M, 2) [start, stop): the cubic through the 4 run samples around it (equal parameter
+    steps), or the chord where the run has fewer than 4. Returns ((M, 2) uv, (M, 2) its
+    derivative per edge node step)."""
     stencil = np.clip(np.floor(place).astype(int) - 1, runs[:, 0], np.maximum(runs[:, 1] - 4, runs[:, 0]))
     s = place - stencil
     cubic = runs[:, 1] - runs[:, 0] >= 4
-    weights = np.where(cubic[:, None], np.column_stack([
-        -(s - 1) * (s - 2) * (s - 3) / 6, s * (s - 2) * (s - 3) / 2,
-        -s * (s - 1) * (s - 3) / 2, s * (s - 1) * (s - 2) / 6]), 0.0)
+    weights = np.column_stack([-(s - 1) * (s - 2) * (s - 3) / 6, s * (s - 2) * (s - 3) / 2,
+                               -s * (s - 1) * (s - 3) / 2, s * (s - 1) * (s - 2) / 6])
+    slopes = np.column_stack([-((s - 2) * (s - 3) + (s - 1) * (s - 3) + (s - 1) * (s - 2)) / 6,
+                              ((s - 2) * (s - 3) + s * (s - 3) + s * (s - 2)) / 2,
+                              -((s - 1) * (s - 3) + s * (s - 3) + s * (s - 1)) / 2,
+                              ((s - 1) * (s - 2) + s * (s - 2) + s * (s - 1)) / 6])
+    rows = nodes.edge_uv[np.minimum(stencil[:, None] + np.arange(4), len(nodes.edge_uv) - 1)]
     near = np.clip(np.floor(place).astype(int), runs[:, 0], runs[:, 1] - 1)
     ahead = np.minimum(near + 1, runs[:, 1] - 1)
-    fraction = np.clip(place - near, 0.0, 1.0)
-    chord = (1 - fraction)[:, None] * nodes.edge_uv[near] + fraction[:, None] * nodes.edge_uv[ahead]
-    rows = np.minimum(stencil[:, None] + np.arange(4), len(nodes.edge_uv) - 1)
-    return np.where(cubic[:, None], np.einsum("mk,mkj->mj", weights, nodes.edge_uv[rows]), chord)
-
-
-def _golden_section(function, low, high):
-    """(M,) the place in [low, high] (M,) where function (M,) -> (M,) is least, by GOLDEN_STEPS
-    golden sections of every interval at once (a local least where it has several)."""
-    ratio = 0.5 * (np.sqrt(5.0) - 1.0)
-    low, high = low.astype(float), high.astype(float)
-    left, right = high - ratio * (high - low), low + ratio * (high - low)
-    left_value, right_value = function(left), function(right)
-    for _ in range(GOLDEN_STEPS):
-        keep_left = left_value <= right_value
-        high = np.where(keep_left, right, high)
-        low = np.where(keep_left, low, left)
-        left, right = np.where(keep_left, high - ratio * (high - low), right), np.where(keep_left, left, low + ratio * (high - low))
-        fresh = function(np.where(keep_left, left, right))
-        left_value, right_value = (np.where(keep_left, fresh, right_value),
-                                   np.where(keep_left, left_value, fresh))
-    return np.where(left_value <= right_value, left, right)
+    fraction = np.clip(place - near, 0.0, 1.0)[:, None]
+    chord = (1 - fraction) * nodes.edge_uv[near] + fraction * nodes.edge_uv[ahead]
+    curve = np.where(cubic[:, None], np.einsum("mk,mkj->mj", weights, rows), chord)
+    slope = np.where(cubic[:, None], np.einsum("mk,mkj->mj", slopes, rows), nodes.edge_uv[ahead] - nodes.edge_uv[near])
+    return curve, slope
 
 
 def _nearest_on_edges(nodes, points):

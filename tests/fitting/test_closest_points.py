@@ -119,7 +119,14 @@ def sharp_corner_nodes():
 
 def flat_plane():
     """The plane z = 0 as a face model: F(u, v) = (u, v, 0) mm, normal +z."""
-    return SimpleNamespace(points=lambda uv: np.column_stack([uv, np.zeros(len(uv))]),
+    def points(uv):
+        return np.column_stack([uv, np.zeros(len(uv))])
+
+    def derivatives(uv, order):
+        return {(0, 0): points(uv), (1, 0): np.tile([1.0, 0.0, 0.0], (len(uv), 1)),
+                (0, 1): np.tile([0.0, 1.0, 0.0], (len(uv), 1))}
+
+    return SimpleNamespace(points=points, derivatives=derivatives,
                            normals=lambda uv: np.tile([0.0, 0.0, 1.0], (len(uv), 1)))
 
 
