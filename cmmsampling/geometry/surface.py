@@ -14,7 +14,6 @@ import numpy as np
 from .bspline import clamped_uniform_knots, full_knots
 from .freecad_env import import_part
 from .nurbs import NurbsPatch
-from .occ_distance import distances_to_face
 from .validation import InputError, InputTypeError
 
 Part = import_part()
@@ -119,9 +118,13 @@ class SurfaceModel(NurbsPatch):
 
     def distance_to_face(self, uv):
         """OCC's distance (mm) from the model's points at uv (N, 2) to the face, and the nearest
-        points on it: ((N,) mm, (N, 3) mm), by :func:`cmmsampling.geometry.occ_distance.distances_to_face`.
-        OCC queries per point: a final check, not for optimiser loops."""
-        return distances_to_face(self.face, self.points(uv))
+        points on it: ((N,) mm, (N, 3) mm), by BRepExtrema (``distToShape``) alone: a probe point
+        counts as on the face only where that finds it so too, although it may put a point of the
+        face off it (cmmsampling.geometry.occ_distance). One OCC query per point: a final check,
+        not for optimiser loops."""
+        found = [self.face.distToShape(Part.Vertex(*point)) for point in self.points(uv)]
+        return (np.array([d[0] for d in found]),
+                np.array([tuple(d[1][0][0]) for d in found]).reshape(-1, 3))
 
     def on_face(self, uv):
         """(N,) True where the points at uv (N, 2) lie on the face by OCC: inside its boundary by
