@@ -34,6 +34,20 @@ def test_points_off_the_face_keep_their_distance():
     assert distance[1] <= beyond.distanceToPoint(corner) + 1e-9
 
 
+def test_a_point_beyond_a_corner_is_as_far_as_the_corner():
+    """Beyond the reference face's corner the surface projection lands a hair past the parameter
+    range, where the classifier still says inside: held to the range, the distance is the
+    corner's (unheld, the extrapolated point was 1.1e-7 mm nearer)."""
+    face = cmmsampling.reference_face()
+    u, v = face.ParameterRange[1], face.ParameterRange[3]
+    corner = face.Surface.value(u, v)
+    outward = (corner - face.Surface.value(u - 1e-6, v)) + (corner - face.Surface.value(u, v - 1e-6))
+    for scale in (1e2, 1e1, 1.0):
+        point = corner + outward * scale
+        distance = distances_to_face(face, [tuple(point)])[0][0]
+        assert distance == pytest.approx(point.distanceToPoint(corner), rel=1e-9)
+
+
 def test_the_inspection_measures_the_face_points_distToShape_misses_as_on_it():
     face = clustered_reversed_face()
     places = [MISSED_UV, (0.5, 20.0), (0.2, 40.0)]
