@@ -18,7 +18,7 @@ def occ_cross_check(stats, exact, substitute, face):
     """
     forward = np.argsort(np.abs(exact.forward.values))[-OCC_DISTANCE_NODES:]
     reverse = np.argsort(np.abs(exact.reverse.values))[-OCC_DISTANCE_NODES:]
-    node_points = exact.nodes.all_points()[forward]
+    node_points = exact.points()[forward]
     substitute_points = np.array([substitute.value(*map(float, uv)) for uv in exact.reverse.at[reverse]])
     shape = substitute.toShape()
     stats.occ_maximum = max(_largest_distance(shape, node_points), _largest_distance(face, substitute_points))

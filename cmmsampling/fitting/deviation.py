@@ -476,12 +476,14 @@ def mm_text(value):
 class DeviationStats:
     """Deviation of a delivered substitute from the CAD face, all in mm (cmmsampling.fitting.exact).
 
-    maximum, mean, rms, std: of |d| over the counted raster nodes and the edge nodes, d the
-    two-sided exact deviation; field: (g_u, g_v) |d| per raster node (NaN where a node does not
-    count); signed: (g_u, g_v) d; grid_uv: (g_u, g_v, 2) the raster h; nodes: (g_u, g_v, 3) F(h)
-    mm; edge_signed: (E,) d at the edge nodes; edge_nodes: (E, 3) mm; spacing: mm, every point of
-    the face lies within it of a node; occ_maximum: OpenCASCADE's distances, both ways, at the
-    nodes of largest deviation (see cmmsampling.fitting.crosscheck).
+    maximum: the largest |d| over the counted raster nodes, the edge nodes and the peaks found
+    between them (cmmsampling.fitting.peaks), d the two-sided exact deviation; mean, rms, std: of
+    |d| over the counted raster nodes and the edge nodes; field: (g_u, g_v) |d| per raster node
+    (NaN where a node does not count); signed: (g_u, g_v) d; grid_uv: (g_u, g_v, 2) the raster h;
+    nodes: (g_u, g_v, 3) F(h) mm; edge_signed: (E,) d at the edge nodes; edge_nodes: (E, 3) mm;
+    peak_signed: (P,) d at the peaks; peak_nodes: (P, 3) mm; spacing: mm, every point of the face
+    lies within it of a node; occ_maximum: OpenCASCADE's distances, both ways, at the nodes of
+    largest deviation (see cmmsampling.fitting.crosscheck).
     """
 
     maximum: float
@@ -496,15 +498,18 @@ class DeviationStats:
     edge_nodes: np.ndarray = None
     spacing: float = float("nan")
     occ_maximum: float = float("nan")
+    peak_signed: np.ndarray = None
+    peak_nodes: np.ndarray = None
 
     def max_location(self):
-        """(3,) mm: the face's point at the node of largest deviation, a raster or an edge node."""
+        """(3,) mm: the face's point of largest deviation, a raster, edge or peak node."""
         field = np.nan_to_num(self.field, nan=-1.0)
         raster = np.unravel_index(int(np.argmax(field)), field.shape)
-        edges = np.abs(self.edge_signed) if self.edge_signed is not None else np.zeros(0)
-        if len(edges) and edges.max() > field[raster]:
-            return np.asarray(self.edge_nodes[int(np.argmax(edges))], dtype=float)
-        return np.asarray(self.nodes[raster], dtype=float)
+        places = [(field[raster], self.nodes[raster])]
+        for values, points in ((self.edge_signed, self.edge_nodes), (self.peak_signed, self.peak_nodes)):
+            if values is not None and len(values):
+                places.append((np.abs(values).max(), points[int(np.argmax(np.abs(values)))]))
+        return np.asarray(max(places, key=lambda place: place[0])[1], dtype=float)
 
     def figures(self):
         """The summary figures by their keys in reports and point files, mm: max_mm, mean_mm,
@@ -514,13 +519,13 @@ class DeviationStats:
 
     @classmethod
     def from_exact(cls, exact):
-        """Statistics of an ExactDeviation (cmmsampling.fitting.exact) at its nodes."""
-        values = exact.signed
+        """Statistics of an ExactDeviation (cmmsampling.fitting.exact) at its nodes and peaks."""
+        values = exact.node_signed()
         magnitude = np.abs(values)
         nodes = exact.nodes
         grid = exact.grid_signed()
         return cls(
-            maximum=float(magnitude.max()),
+            maximum=exact.maximum,
             mean=float(magnitude.mean()),
             rms=float(np.sqrt(np.mean(values ** 2))),
             std=float(magnitude.std()),
@@ -531,4 +536,6 @@ class DeviationStats:
             edge_signed=exact.edge_signed(),
             edge_nodes=nodes.edge_points,
             spacing=nodes.spacing,
+            peak_signed=exact.peak_signed(),
+            peak_nodes=exact.peak_points,
         )

@@ -9,7 +9,9 @@ the face's domain and points along its edges), at parameters h with F(h) the nod
   on the face's edges where that foot lies outside the face's trimming loops.
 
 Each is signed by the face's normal there (+ out of the material); a node's deviation is the one
-of larger magnitude, and the maximum over all nodes is the figure reported. OpenCASCADE's
+of larger magnitude. Where the deviation peaks between nodes, the places found by searches about
+the largest nodes (cmmsampling.fitting.peaks) join them, and the maximum over all of them is the
+figure reported. OpenCASCADE's
 distances from the nodes to ``r.substitute.toShape()`` and from S(h) to the face agree with both
 sides (cmmsampling.fitting.crosscheck, and the tests).
 
@@ -17,12 +19,14 @@ To first order in a change dS of the substitute, each side changes by w . dS(at)
 direction it is measured along and ``at`` the parameters on S (p forward, h reverse): exact there
 in value and gradient, which :class:`Linearisation` hands to the descent and the local bound.
 """
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.spatial import cKDTree
 
 from ..geometry.bspline import kron_rows
+from .nodes import edge_curve_uv
+from .peaks import peak_search
 from .substitute import FittedSurface
 
 FOOT_ITERATIONS = 400
@@ -30,12 +34,12 @@ FOOT_STEP_TOLERANCE = 1e-10
 DAMPING_FLOOR = 1e-12
 DAMPING_CEILING = 1e12
 SEARCH_SAMPLES = 48
+# More starts for the feet at the peaks found between the nodes.
+SETTLE_STARTS = 8
 # Edge pieces tried first for a point's nearest edge point, and the (point, piece) pairs compared
 # at a time where more have to be tried.
 NEAREST_SEGMENTS = 8
 SEGMENT_PAIRS = 1_000_000
-# The longest edge piece searched for the nearest edge point, in median segments.
-PIECE_MEDIANS = 2.0
 # Newton steps refining the nearest edge point on the edge's curve, and the step (in edge node
 # steps) below which it is done.
 EDGE_NEWTON_STEPS = 12
@@ -58,24 +62,38 @@ class ExactDeviation:
     """The two-sided deviation of one substitute at the nodes (see the module docstring).
 
     poles: (n_u, n_v, 3) mm; nodes: FaceNodes; forward, reverse: Side over the K = counted
-    raster nodes (in raster order) then the edge nodes.
+    raster nodes (in raster order), the edge nodes, then the P peak nodes found between them
+    (cmmsampling.fitting.peaks); peak_points: (P, 3) mm, the face's points at the peak nodes.
     """
 
     poles: np.ndarray
     nodes: object
     forward: Side
     reverse: Side
+    peak_points: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
 
     @property
     def signed(self):
-        """(K,) the larger side at each node, signed, mm."""
+        """(K + P,) the larger side at each node, signed, mm."""
         take_reverse = np.abs(self.reverse.values) > np.abs(self.forward.values)
         return np.where(take_reverse, self.reverse.values, self.forward.values)
 
     @property
     def maximum(self):
-        """The largest |deviation| over the nodes, mm."""
+        """The largest |deviation| over the nodes and the peak nodes, mm."""
         return float(np.abs(self.signed).max(initial=0.0))
+
+    def points(self):
+        """(K + P, 3) mm: the face's points at the nodes, then at the peak nodes."""
+        return np.concatenate([self.nodes.all_points(), self.peak_points])
+
+    def node_signed(self):
+        """(K,) signed deviations at the nodes (the peak nodes left out), mm."""
+        return self.signed[:len(self.signed) - len(self.peak_points)]
+
+    def peak_signed(self):
+        """(P,) signed deviations at the peak nodes, mm."""
+        return self.signed[len(self.signed) - len(self.peak_points):]
 
     def grid_signed(self):
         """(g_u, g_v) signed deviations at the raster, NaN where a node does not count."""
@@ -85,7 +103,8 @@ class ExactDeviation:
 
     def edge_signed(self):
         """(E,) signed deviations at the edge nodes, mm."""
-        return self.signed[int(self.nodes.counted.sum()):]
+        counted = int(self.nodes.counted.sum())
+        return self.signed[counted:counted + len(self.nodes.edge_uv)]
 
 
 def node_parameters(nodes):
@@ -99,14 +118,80 @@ def node_normals(nodes):
 
 
 def exact_deviation(space, poles, nodes, face, on_face=None):
-    """The ExactDeviation of the substitute with ``poles`` (n_u, n_v, 3) mm in ``space``.
+    """The ExactDeviation of the substitute with ``poles`` (n_u, n_v, 3) mm in ``space``, at the
+    nodes and at the peaks searched between them (cmmsampling.fitting.peaks).
 
     nodes: FaceNodes; face: the face's NurbsPatch (bounds, points, normals, derivatives); on_face:
     uv (..., 2) -> (...) bool, the face's trim test (None: the whole rectangle).
     """
     surface = FittedSurface(space, poles)
-    return ExactDeviation(np.asarray(poles, dtype=float), nodes, forward_side(surface, nodes),
-                          reverse_side(surface, nodes, face, on_face))
+    forward, reverse = forward_side(surface, nodes), reverse_side(surface, nodes, face, on_face)
+    fallback = node_normals(nodes)
+
+    def sides_at(h, origin, start):
+        return _sides_at(surface, nodes, face, on_face, h, start, fallback[origin])
+
+    sizes = np.maximum(np.abs(forward.values), np.abs(reverse.values))
+    peaks = peak_search(nodes, sizes, forward.at, sides_at, on_face)
+    ahead, back = _settled_sides(surface, nodes, face, on_face, peaks)
+    return ExactDeviation(np.asarray(poles, dtype=float), nodes, _joined(forward, ahead), _joined(reverse, back),
+                          face.points(peaks.uv))
+
+
+def _joined(first, second):
+    """One Side of first's entries then second's."""
+    return Side(*(np.concatenate([getattr(first, name), getattr(second, name)])
+                  for name in ("values", "at", "directions")))
+
+
+def _sides_at(surface, nodes, face, on_face, h, start, fallback):
+    """(forward, reverse) Sides at the face's points F(h), h (M, 2) its parameters: forward
+    searched from ``start`` (M, 2) on the substitute, reverse from h; each searched again from the
+    nearest sample of the substitute or node of the face where that lies nearer than the foot found
+    (a search that maximises the deviation would otherwise find where a foot search got stuck);
+    fallback (M, 3) unit, the normals where the face has none at h (a collapsed edge)."""
+    normals = face.normals(h)
+    normals = np.where(np.isfinite(normals).all(1, keepdims=True), normals, fallback)
+    targets = face.points(h)
+    at = closest_parameters(surface, targets, start)
+    at = _restart_stuck(surface, targets, at, _nearest_samples(surface, targets))
+    points = surface.points(h)
+    feet = closest_parameters(face, points, h)
+    distance, index = nodes.point_tree.query(points)
+    feet = _restart_stuck(face, points, feet, (node_parameters(nodes)[index], distance))
+    return (_side(surface.points(at) - targets, at, normals),
+            _reverse_from_feet(face, nodes, on_face, points, h, feet, normals))
+
+
+def _settled_sides(surface, nodes, face, on_face, peaks):
+    """(forward, reverse) Sides at the peaks (cmmsampling.fitting.peaks.Peaks), each foot the
+    nearest of searches from where the peak search left it and from SETTLE_STARTS more starts: the
+    nearest samples of the substitute (forward) and the nearest nodes of the face (reverse). A
+    search for the largest deviation finds first where a foot search stops short of the closest
+    point (a flat valley of the distance, an end of a thin strip), so its feet are settled wider."""
+    h = peaks.uv
+    if not len(h):
+        return Side(*peaks.forward), Side(*peaks.reverse)
+    targets, points = face.points(h), surface.points(h)
+    grid, samples = _sample_raster(surface)
+    near_samples = samples.query(targets, k=SETTLE_STARTS)[1]
+    ahead = _nearest_of(surface, targets, np.concatenate([peaks.forward[1][:, None], grid[near_samples]], 1))
+    near_nodes = nodes.point_tree.query(points, k=min(SETTLE_STARTS, nodes.point_tree.n))[1].reshape(len(h), -1)
+    feet = _nearest_of(face, points, np.concatenate([h[:, None], node_parameters(nodes)[near_nodes]], 1))
+    normals = face.normals(h)
+    fallback = node_normals(nodes)[nodes.point_tree.query(targets)[1]]
+    normals = np.where(np.isfinite(normals).all(1, keepdims=True), normals, fallback)
+    return (_side(surface.points(ahead) - targets, ahead, normals),
+            _reverse_from_feet(face, nodes, on_face, points, h, feet, normals))
+
+
+def _nearest_of(model, targets, starts):
+    """(M, 2) the parameters of the nearest of the closest points to targets (M, 3) searched on the
+    model from each of starts (M, k, 2)."""
+    count, k = starts.shape[:2]
+    found = closest_parameters(model, np.repeat(targets, k, axis=0), starts.reshape(-1, 2)).reshape(count, k, 2)
+    gap = ((model.points(found.reshape(-1, 2)).reshape(count, k, 3) - targets[:, None]) ** 2).sum(-1)
+    return found[np.arange(count), np.argmin(gap, axis=1)]
 
 
 def forward_side(surface, nodes):
@@ -126,16 +211,22 @@ def reverse_side(surface, nodes, face, on_face):
     at = node_parameters(nodes)
     points = surface.points(at)
     foot = closest_parameters(face, points, at)
-    index = cKDTree(nodes.all_points()[:len(at)]).query(points)[1]
+    index = nodes.point_tree.query(points)[1]
     other = np.flatnonzero((at[index] != at).any(1))
     again = closest_parameters(face, points[other], at[index[other]])
     foot[other] = _better(face, points[other], foot[other], again)
-    nearest = face.points(foot)
-    normals = face.normals(foot)
-    off = np.zeros(len(at), dtype=bool) if on_face is None else ~on_face(foot)
+    return _reverse_from_feet(face, nodes, on_face, points, at, foot, node_normals(nodes))
+
+
+def _reverse_from_feet(face, nodes, on_face, points, at, feet, fallback):
+    """The reverse Side of the substitute's points (M, 3) mm at ``at`` (M, 2), their closest
+    points on the face's surface at ``feet`` (M, 2): measured there where the foot is on the
+    face, else to the nearest edge point; fallback (M, 3) the normals where the face has none."""
+    nearest, normals = face.points(feet), face.normals(feet)
+    off = np.zeros(len(at), dtype=bool) if on_face is None else ~on_face(feet)
     if off.any():
         nearest[off], normals[off] = _nearest_on_edge_curves(face, nodes, points[off])
-    normals = np.where(np.isfinite(normals).all(1, keepdims=True), normals, node_normals(nodes))
+    normals = np.where(np.isfinite(normals).all(1, keepdims=True), normals, fallback)
     return _side(points - nearest, at, normals)
 
 
@@ -161,51 +252,27 @@ def _nearest_on_edge_curves(face, nodes, points):
     farther than the curve's point where the search began."""
     place = _nearest_on_edges(nodes, points)
     runs = nodes.edge_runs[place.astype(int)]
-    uv = _edge_curve_uv(nodes, place, runs)[0]
+    uv = edge_curve_uv(nodes, place, runs)[0]
     gap = ((face.points(uv) - points) ** 2).sum(1)
     scale = np.ones(len(place))
     active = np.flatnonzero(runs[:, 1] - runs[:, 0] > 1)
     for _ in range(EDGE_NEWTON_STEPS):
         if not active.size:
             break
-        at, slope = _edge_curve_uv(nodes, place[active], runs[active])
+        at, slope = edge_curve_uv(nodes, place[active], runs[active])
         derivatives = face.derivatives(at, 1)
         offset = derivatives[(0, 0)] - points[active]
         tangent = derivatives[(1, 0)] * slope[:, :1] + derivatives[(0, 1)] * slope[:, 1:]
         step = -(offset * tangent).sum(1) / np.maximum((tangent * tangent).sum(1), 1e-300)
         step = scale[active] * np.clip(step, -1.0, 1.0)
         trial = np.clip(place[active] + step, runs[active, 0], runs[active, 1] - 1.0)
-        trial_gap = ((face.points(_edge_curve_uv(nodes, trial, runs[active])[0]) - points[active]) ** 2).sum(1)
+        trial_gap = ((face.points(edge_curve_uv(nodes, trial, runs[active])[0]) - points[active]) ** 2).sum(1)
         better = trial_gap < gap[active]
         place[active[better]], gap[active[better]] = trial[better], trial_gap[better]
         scale[active[~better]] *= 0.5
         active = active[np.abs(step) > EDGE_STEP_TOLERANCE]
-    uv = _edge_curve_uv(nodes, place, runs)[0]
+    uv = edge_curve_uv(nodes, place, runs)[0]
     return face.points(uv), face.normals(uv)
-
-
-def _edge_curve_uv(nodes, place, runs):
-    """The edge's curve on the surface at ``place`` (M,), a fractional edge node index within its
-    run runs (M, 2) [start, stop): the cubic through the 4 run samples around it (equal parameter
-    steps), or the chord where the run has fewer than 4. Returns ((M, 2) uv, (M, 2) its
-    derivative per edge node step)."""
-    stencil = np.clip(np.floor(place).astype(int) - 1, runs[:, 0], np.maximum(runs[:, 1] - 4, runs[:, 0]))
-    s = place - stencil
-    cubic = runs[:, 1] - runs[:, 0] >= 4
-    weights = np.column_stack([-(s - 1) * (s - 2) * (s - 3) / 6, s * (s - 2) * (s - 3) / 2,
-                               -s * (s - 1) * (s - 3) / 2, s * (s - 1) * (s - 2) / 6])
-    slopes = np.column_stack([-((s - 2) * (s - 3) + (s - 1) * (s - 3) + (s - 1) * (s - 2)) / 6,
-                              ((s - 2) * (s - 3) + s * (s - 3) + s * (s - 2)) / 2,
-                              -((s - 1) * (s - 3) + s * (s - 3) + s * (s - 1)) / 2,
-                              ((s - 1) * (s - 2) + s * (s - 2) + s * (s - 1)) / 6])
-    rows = nodes.edge_uv[np.minimum(stencil[:, None] + np.arange(4), len(nodes.edge_uv) - 1)]
-    near = np.clip(np.floor(place).astype(int), runs[:, 0], runs[:, 1] - 1)
-    ahead = np.minimum(near + 1, runs[:, 1] - 1)
-    fraction = np.clip(place - near, 0.0, 1.0)[:, None]
-    chord = (1 - fraction) * nodes.edge_uv[near] + fraction * nodes.edge_uv[ahead]
-    curve = np.where(cubic[:, None], np.einsum("mk,mkj->mj", weights, rows), chord)
-    slope = np.where(cubic[:, None], np.einsum("mk,mkj->mj", slopes, rows), nodes.edge_uv[ahead] - nodes.edge_uv[near])
-    return curve, slope
 
 
 def _nearest_on_edges(nodes, points):
@@ -213,17 +280,15 @@ def _nearest_on_edges(nodes, points):
     fractional edge node index within the run of the node it is nearest to (a segment between
     two runs, at a corner or where a loop closes, gives its nearer end).
 
-    The edge segments are cut into pieces (:func:`_edge_pieces`), and the NEAREST_SEGMENTS pieces
+    The edge segments are cut into pieces (FaceNodes.edge_pieces), and the NEAREST_SEGMENTS pieces
     whose midpoints lie nearest are tried. A piece left out lies at least its midpoint's distance
     less half the longest piece away, so a point whose nearest found is farther than that bound
     (far from the face, or beside a sharp corner where the nearest midpoints are all those of a
     short edge's pieces) is tried again with every piece whose midpoint lies within the nearest
     found plus half the longest piece (counted first, then fetched as that many nearest)."""
-    first, second = _edge_segments(nodes)
-    a, b, segment_of, fractions = _edge_pieces(nodes.edge_points[first], nodes.edge_points[second])
-    along = b - a
-    middles = cKDTree(0.5 * (a + b))
-    half = 0.5 * float(np.linalg.norm(along, axis=1).max(initial=0.0))
+    pieces = nodes.edge_pieces
+    first, second, a, along = pieces.first, pieces.second, pieces.starts, pieces.alongs
+    middles, half, segment_of, fractions = pieces.middles, pieces.half, pieces.segment_of, pieces.fractions
     count = min(NEAREST_SEGMENTS, len(a))
     spans, candidates = middles.query(points, k=count)
     candidates, spans = candidates.reshape(len(points), count), spans.reshape(len(points), count)
@@ -242,33 +307,6 @@ def _nearest_on_edges(nodes, points):
     start, end = first[segment_of[piece]], second[segment_of[piece]]
     within = (end == start + 1) & (nodes.edge_runs[start, 1] > end)
     return np.where(within, start + along, np.where(along < 0.5, start, end)).astype(float)
-
-
-def _edge_segments(nodes):
-    """(first, second) edge node indices (S,) of every segment of the face's closed edge polygons."""
-    starts, ends = [], []
-    for start, stop in nodes.loops:
-        index = np.arange(start, stop)
-        starts.append(index)
-        ends.append(np.roll(index, -1))
-    return np.concatenate(starts), np.concatenate(ends)
-
-
-def _edge_pieces(starts, ends):
-    """Segments from starts to ends (S, 3) mm cut into equal pieces no longer than PIECE_MEDIANS
-    times the median segment, so that a few long segments among many short ones (a long straight
-    edge beside finely noded short ones) do not loosen the bound of :func:`_nearest_on_edges`.
-    Returns the pieces' starts and ends (P, 3) mm, the segment each piece is part of (P,) and
-    where it starts and ends along it (P, 2), fractions in [0, 1]."""
-    lengths = np.linalg.norm(ends - starts, axis=1)
-    longest = PIECE_MEDIANS * float(np.median(lengths)) if lengths.size else 0.0
-    cuts = np.ones(len(lengths), dtype=int) if longest <= 0 else np.maximum(1, np.ceil(lengths / longest).astype(int))
-    segment_of = np.repeat(np.arange(len(lengths)), cuts)
-    offset = np.arange(len(segment_of)) - np.repeat(np.cumsum(cuts) - cuts, cuts)
-    fractions = np.column_stack([offset, offset + 1]) / cuts[segment_of, None]
-    along = ends - starts
-    return (starts[segment_of] + fractions[:, :1] * along[segment_of],
-            starts[segment_of] + fractions[:, 1:] * along[segment_of], segment_of, fractions)
 
 
 def _closest_on_segments(points, starts, alongs, candidates):
@@ -309,11 +347,18 @@ def _restart_stuck(model, targets, uv, samples):
 def _nearest_samples(surface, targets):
     """The nearest of a SEARCH_SAMPLES^2 raster of the surface's rectangle to each target (K, 3):
     (parameters (K, 2), distance (K,) mm)."""
+    grid, tree = _sample_raster(surface)
+    distance, index = tree.query(targets)
+    return grid[index], distance
+
+
+def _sample_raster(surface):
+    """A SEARCH_SAMPLES^2 raster of the surface's rectangle: (parameters (S, 2), a k-d tree of
+    its points)."""
     u0, u1, v0, v1 = surface.bounds
     grid = np.stack(np.meshgrid(np.linspace(u0, u1, SEARCH_SAMPLES), np.linspace(v0, v1, SEARCH_SAMPLES),
                                 indexing="ij"), -1).reshape(-1, 2)
-    distance, index = cKDTree(surface.points(grid)).query(targets)
-    return grid[index], distance
+    return grid, cKDTree(surface.points(grid))
 
 
 def closest_parameters(model, targets, uv):

@@ -16,14 +16,19 @@ inside the face (leaving the face's edge uncovered) or beyond it (reaching past 
 at a collapsed edge, where the conormal is undefined, the whole offset counts.
 """
 from dataclasses import dataclass
+from functools import cached_property
+from types import SimpleNamespace
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 DEFAULT_GRID = 60
 # Samples per raster step when the raster's parameter values are placed (their lengths are summed).
 LENGTH_SAMPLES = 4
 # Edge nodes per raster step (3D) along every edge.
 EDGE_NODES_PER_STEP = 2
+# The longest edge piece searched for the nearest edge point, in median segments.
+PIECE_MEDIANS = 2.0
 
 
 @dataclass
@@ -60,6 +65,17 @@ class FaceNodes:
     def all_points(self):
         """The counted raster nodes then the edge nodes: (K, 3) mm."""
         return np.concatenate([self.points[self.counted], self.edge_points])
+
+    @cached_property
+    def point_tree(self):
+        """A k-d tree of :meth:`all_points`, built once per face and kept."""
+        return cKDTree(self.all_points())
+
+    @cached_property
+    def edge_pieces(self):
+        """The edge polygons' segments cut into pieces for the nearest edge point, built once
+        per face and kept: see :func:`edge_pieces`."""
+        return edge_pieces(self)
 
 
 def face_nodes(model, size=DEFAULT_GRID, on_face=None):
@@ -187,3 +203,62 @@ def _runs(sizes, keep):
     begins[1:] = (edge[1:] != edge[:-1]) | ~keep[:-1]
     run = np.cumsum(begins)[keep]
     return np.column_stack([np.searchsorted(run, run, "left"), np.searchsorted(run, run, "right")])
+
+
+def edge_curve_uv(nodes, place, runs):
+    """The edge's curve on the surface at ``place`` (M,), a fractional edge node index within its
+    run runs (M, 2) [start, stop): the cubic through the 4 run samples around it (equal parameter
+    steps), or the chord where the run has fewer than 4. Returns ((M, 2) uv, (M, 2) its
+    derivative per edge node step)."""
+    stencil = np.clip(np.floor(place).astype(int) - 1, runs[:, 0], np.maximum(runs[:, 1] - 4, runs[:, 0]))
+    s = place - stencil
+    cubic = runs[:, 1] - runs[:, 0] >= 4
+    weights = np.column_stack([-(s - 1) * (s - 2) * (s - 3) / 6, s * (s - 2) * (s - 3) / 2,
+                               -s * (s - 1) * (s - 3) / 2, s * (s - 1) * (s - 2) / 6])
+    slopes = np.column_stack([-((s - 2) * (s - 3) + (s - 1) * (s - 3) + (s - 1) * (s - 2)) / 6,
+                              ((s - 2) * (s - 3) + s * (s - 3) + s * (s - 2)) / 2,
+                              -((s - 1) * (s - 3) + s * (s - 3) + s * (s - 1)) / 2,
+                              ((s - 1) * (s - 2) + s * (s - 2) + s * (s - 1)) / 6])
+    rows = nodes.edge_uv[np.minimum(stencil[:, None] + np.arange(4), len(nodes.edge_uv) - 1)]
+    near = np.clip(np.floor(place).astype(int), runs[:, 0], runs[:, 1] - 1)
+    ahead = np.minimum(near + 1, runs[:, 1] - 1)
+    fraction = np.clip(place - near, 0.0, 1.0)[:, None]
+    chord = (1 - fraction) * nodes.edge_uv[near] + fraction * nodes.edge_uv[ahead]
+    curve = np.where(cubic[:, None], np.einsum("mk,mkj->mj", weights, rows), chord)
+    slope = np.where(cubic[:, None], np.einsum("mk,mkj->mj", slopes, rows), nodes.edge_uv[ahead] - nodes.edge_uv[near])
+    return curve, slope
+
+
+def edge_pieces(nodes):
+    """The segments of the face's closed edge polygons (nodes: FaceNodes, or anything with
+    ``loops`` and ``edge_points``) cut into equal pieces no longer than PIECE_MEDIANS times the
+    median segment, so that a few long segments among many short ones (a long straight edge beside
+    finely noded short ones) do not loosen the bound of the nearest edge point's search
+    (cmmsampling.fitting.exact). A namespace of: first, second (S,) the segments' edge node
+    indices; starts, alongs (P, 3) mm each piece's start and extent; segment_of (P,) the segment
+    each piece is part of; fractions (P, 2) where it starts and ends along it, in [0, 1]; middles
+    a k-d tree of the pieces' midpoints; half: mm, half the longest piece."""
+    first, second = _edge_segments(nodes)
+    starts, ends = nodes.edge_points[first], nodes.edge_points[second]
+    lengths = np.linalg.norm(ends - starts, axis=1)
+    longest = PIECE_MEDIANS * float(np.median(lengths)) if lengths.size else 0.0
+    cuts = np.ones(len(lengths), dtype=int) if longest <= 0 else np.maximum(1, np.ceil(lengths / longest).astype(int))
+    segment_of = np.repeat(np.arange(len(lengths)), cuts)
+    offset = np.arange(len(segment_of)) - np.repeat(np.cumsum(cuts) - cuts, cuts)
+    fractions = np.column_stack([offset, offset + 1]) / cuts[segment_of, None]
+    along = ends - starts
+    a = starts[segment_of] + fractions[:, :1] * along[segment_of]
+    b = starts[segment_of] + fractions[:, 1:] * along[segment_of]
+    return SimpleNamespace(first=first, second=second, starts=a, alongs=b - a, segment_of=segment_of,
+                           fractions=fractions, middles=cKDTree(0.5 * (a + b)),
+                           half=0.5 * float(np.linalg.norm(b - a, axis=1).max(initial=0.0)))
+
+
+def _edge_segments(nodes):
+    """(first, second) edge node indices (S,) of every segment of the face's closed edge polygons."""
+    starts, ends = [], []
+    for start, stop in nodes.loops:
+        index = np.arange(start, stop)
+        starts.append(index)
+        ends.append(np.roll(index, -1))
+    return np.concatenate(starts), np.concatenate(ends)

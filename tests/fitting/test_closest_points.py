@@ -9,6 +9,7 @@ from support.faces import Part, collapsed_face, strip_face
 
 import cmmsampling
 from cmmsampling.fitting.exact import _better, _nearest_on_edge_curves, closest_parameters, node_parameters, reverse_side
+from cmmsampling.fitting.nodes import edge_pieces
 from cmmsampling.fitting.substitute import FittedSurface
 from cmmsampling.geometry.surface import SurfaceModel
 from cmmsampling.strategies.sampling import make_problem
@@ -113,8 +114,10 @@ def sharp_corner_nodes():
     uv = np.concatenate(edges)
     plane = flat_plane()
     runs = np.repeat([[0, 11], [11, 212], [212, 223]], [11, 201, 11], axis=0)
-    return SimpleNamespace(loops=[(0, len(uv))], edge_uv=uv, edge_points=plane.points(uv),
-                           edge_normals=plane.normals(uv), edge_runs=runs)
+    nodes = SimpleNamespace(loops=[(0, len(uv))], edge_uv=uv, edge_points=plane.points(uv),
+                            edge_normals=plane.normals(uv), edge_runs=runs)
+    nodes.edge_pieces = edge_pieces(nodes)
+    return nodes
 
 
 def flat_plane():

@@ -85,7 +85,7 @@ def test_exact_distances_agree_with_occ_and_the_expansion_is_close(reference):
     assert maxima[1] == pytest.approx(exact.maximum, rel=0.02)
     part = substitute_surface(space, poles)
     forward = np.argsort(np.abs(exact.forward.values))[-20:]
-    nodes = objective.nodes.all_points()[forward]
+    nodes = exact.points()[forward]
     occ = np.array([part.toShape().distToShape(Part.Vertex(*map(float, p)))[0] for p in nodes])
     assert np.abs(occ - np.abs(exact.forward.values[forward])).max() < 1e-6 * occ.max()
     reverse = np.argsort(np.abs(exact.reverse.values))[-20:]

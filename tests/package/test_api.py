@@ -45,8 +45,9 @@ def test_speed_ups_kept_the_paper_run_result(paper_runs):
 
 def test_uniform_figures_are_geometric(paper_runs):
     """The two-sided maxima of the uniform layouts on the delivered substitute (0.9796 and 0.9234 mm
-    from the feet of a reference fit to the extended substitute before issue 31)."""
-    assert paper_runs["uniform_parametric"].deviation.maximum == pytest.approx(0.9848, abs=1e-4)
+    from the feet of a reference fit to the extended substitute before issue 31; 0.9848 mm at the
+    nodes alone, before the peaks between them were searched)."""
+    assert paper_runs["uniform_parametric"].deviation.maximum == pytest.approx(0.98716, abs=1e-4)
     assert paper_runs["uniform_cartesian"].deviation.maximum == pytest.approx(
         paper_runs["uniform_cartesian"].deviation.occ_maximum, rel=1e-6)
 
@@ -66,7 +67,8 @@ def test_result_contents(paper_runs):
     assert r.settings["fit_poles"] == [6, 6] and r.settings["grid"] == [60, 60]
     d = r.deviation
     assert d.mean <= d.rms <= d.maximum and math.isclose(d.rms ** 2, d.mean ** 2 + d.std ** 2, rel_tol=1e-9)
-    assert np.nanmax(d.field) == pytest.approx(d.maximum)
+    largest = max(np.nanmax(d.field), np.abs(d.edge_signed).max(), np.abs(d.peak_signed).max(initial=0.0))
+    assert largest == d.maximum and np.nanmax(d.field) <= d.maximum
     row = r.point_table()[0]
     assert row[0] == "P1" and len(row) == 9
     summary = r.summary()

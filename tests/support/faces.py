@@ -64,6 +64,16 @@ def clustered_reversed_face():
     return surface.toShape().reversed()
 
 
+def creased_face():
+    """A degree-1 patch of 3 x 3 flat quads, 45 x 45 mm, heights 0, 2 or 4 mm: only C0 across its
+    knot lines u, v = 1 and 2 (creases), its largest kinks where those lines cross."""
+    poles = [[FreeCAD.Vector(15 * i, 15 * j, ((i * j) % 3) * 2) for j in range(4)] for i in range(4)]
+    surface = Part.BSplineSurface()
+    surface.buildFromPolesMultsKnots(poles, [2, 1, 1, 2], [2, 1, 1, 2], [0, 1, 2, 3], [0, 1, 2, 3],
+                                     False, False, 1, 1)
+    return surface.toShape()
+
+
 def strip_face():
     """A curved strip 60 mm long and 2 mm wide (a blade-like face)."""
     x, y = np.meshgrid(np.linspace(0, 60, 7), np.linspace(0, 2, 4), indexing="ij")

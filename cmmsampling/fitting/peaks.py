@@ -1,0 +1,186 @@
+"""Where the deviation peaks between the nodes: local searches about the nodes of largest deviation.
+
+The nodes (cmmsampling.fitting.nodes) sample the face; between them the two-sided deviation can
+be larger than at any node: on a crease of the face (a knot line where it is only C0), beside a
+trimmed edge, or on a large face whose raster is coarse. Each node that is a local maximum of the
+nodes within PEAK_SHARE of the largest (at most PEAK_NODES of them, largest first) starts a search
+for the local maximum beside it, all of them at once: ZOOM_ROUNDS rounds of a grid of ZOOM_STEPS
+steps either side of the best place so far, over the raster cells about it (both parameters) or
+along its edge's curve a segment either side, each round's grid as wide as the last one's step.
+The places where a search found more than its node join the nodes (cmmsampling.fitting.exact), so
+that the figure reported is the local maximum found, not the value at the node beside it.
+"""
+from dataclasses import dataclass
+
+import numpy as np
+
+from .nodes import edge_curve_uv
+
+PEAK_SHARE = 0.8
+PEAK_NODES = 12
+ZOOM_ROUNDS = 4
+ZOOM_STEPS = 4
+_NEIGHBOURS = np.array([(1, 0), (-1, 0), (0, 1), (0, -1), (1, 1), (1, -1), (-1, 1), (-1, -1)])
+_LINE = np.concatenate([np.arange(-ZOOM_STEPS, 0), np.arange(1, ZOOM_STEPS + 1)]) / ZOOM_STEPS
+_PLANE = np.array([(a, b) for a in range(-ZOOM_STEPS, ZOOM_STEPS + 1) for b in range(-ZOOM_STEPS, ZOOM_STEPS + 1)
+                   if a or b], dtype=float) / ZOOM_STEPS
+
+
+@dataclass
+class Peaks:
+    """The peaks found: uv (P, 2) their parameters on the face; forward, reverse: (values (P,),
+    at (P, 2), directions (P, 3)) of the Sides there (cmmsampling.fitting.exact.Side)."""
+
+    uv: np.ndarray
+    forward: tuple
+    reverse: tuple
+
+
+def peak_search(nodes, sizes, start, sides_at, on_face):
+    """The Peaks found about the largest nodes: the places where a search found more than its node.
+
+    nodes: FaceNodes; sizes: (K,) |d| mm at the counted raster nodes then the edge nodes; start:
+    (K, 2) the forward sides' parameters on the substitute at the nodes; sides_at: (h (M, 2),
+    origin (M,) node index, start (M, 2)) -> (forward, reverse) Sides at the face's points F(h),
+    the forward foot searched from ``start``; on_face: h (M, 2) -> (M,) bool (None: the whole
+    rectangle).
+    """
+    top = largest_nodes(sizes, local_maxima(nodes, sizes))
+    counted = int(nodes.counted.sum())
+    origin = np.concatenate([top[top < counted], top[top >= counted]])
+    raster = _RasterZoom(nodes, top[top < counted], on_face)
+    edge = _EdgeZoom(nodes, top[top >= counted] - counted)
+    split = len(raster.centre)
+    per = np.repeat([len(_PLANE), len(_LINE)], [split, len(edge.place)])
+    first = np.cumsum(per) - per
+    whole = split * len(_PLANE)
+    best, foot = sizes[origin].astype(float), start[origin]
+    rows = _Rows(len(origin))
+    for _ in range(ZOOM_ROUNDS if len(origin) else 0):
+        uv_raster, keep = raster.trials()
+        uv = np.concatenate([uv_raster.reshape(-1, 2), edge.trials().reshape(-1, 2)])
+        forward, reverse = sides_at(uv, np.repeat(origin, per), np.repeat(foot, per, axis=0))
+        size = np.maximum(np.abs(forward.values), np.abs(reverse.values))
+        size[:keep.size][~keep.ravel()] = -np.inf
+        pick = first + np.concatenate([np.argmax(size[:whole].reshape(split, len(_PLANE)), axis=1),
+                                       np.argmax(size[whole:].reshape(-1, len(_LINE)), axis=1)])
+        gain = size[pick] > best
+        best[gain], foot[gain] = size[pick[gain]], forward.at[pick[gain]]
+        rows.take(gain, pick, uv, forward, reverse)
+        raster.move(gain[:split], (pick - first)[:split])
+        edge.move(gain[split:], (pick - first)[split:])
+    return rows.peaks()
+
+
+def largest_nodes(sizes, peaked):
+    """Indices of the nodes ``peaked`` marks (K,) bool whose sizes (K,) lie within PEAK_SHARE of
+    the largest size, at most PEAK_NODES of them, largest first (none where every size is 0)."""
+    largest = sizes.max(initial=0.0)
+    order = np.argsort(-np.where(peaked, sizes, -np.inf), kind="stable")[:PEAK_NODES]
+    return order[peaked[order] & (sizes[order] >= PEAK_SHARE * largest) & (largest > 0)]
+
+
+def local_maxima(nodes, sizes):
+    """(K,) True at the nodes whose size is no less than their neighbours': a raster node's 8
+    counted raster neighbours, an edge node's neighbours along its run."""
+    counted = int(nodes.counted.sum())
+    grid = np.full(np.add(nodes.size, 2), -np.inf)
+    grid[1:-1, 1:-1][nodes.counted] = sizes[:counted]
+    centre = grid[1:-1, 1:-1]
+    raster = np.ones(nodes.size, dtype=bool)
+    for du, dv in _NEIGHBOURS:
+        raster &= centre >= grid[1 + du:grid.shape[0] - 1 + du, 1 + dv:grid.shape[1] - 1 + dv]
+    edge = sizes[counted:]
+    index = np.arange(len(edge))
+    runs = nodes.edge_runs
+    before = np.where(index > runs[:, 0], edge[np.maximum(index - 1, 0)], -np.inf)
+    after = np.where(index < runs[:, 1] - 1, edge[np.minimum(index + 1, max(len(edge) - 1, 0))], -np.inf)
+    return np.concatenate([raster[nodes.counted], (edge >= before) & (edge >= after)])
+
+
+class _Rows:
+    """The Side rows at each search's best place found so far (none until it gains)."""
+
+    def __init__(self, count):
+        self.gained = np.zeros(count, dtype=bool)
+        self.uv = np.zeros((count, 2))
+        self.forward = (np.zeros(count), np.zeros((count, 2)), np.zeros((count, 3)))
+        self.reverse = (np.zeros(count), np.zeros((count, 2)), np.zeros((count, 3)))
+
+    def take(self, gain, pick, uv, forward, reverse):
+        """Keep the trials' rows ``pick`` (S,) where ``gain`` (S,) bool; uv (M, 2) the trials."""
+        chosen = pick[gain]
+        self.gained |= gain
+        self.uv[gain] = uv[chosen]
+        for kept, side in ((self.forward, forward), (self.reverse, reverse)):
+            for array, values in zip(kept, (side.values, side.at, side.directions)):
+                array[gain] = values[chosen]
+
+    def peaks(self):
+        """The Peaks of the searches that gained."""
+        gained = self.gained
+        return Peaks(self.uv[gained], tuple(a[gained] for a in self.forward),
+                     tuple(a[gained] for a in self.reverse))
+
+
+class _RasterZoom:
+    """Searches over the face's parameters about raster nodes (origin: indices among the counted
+    ones): centre (R, 2) the best place so far; half (R, 2) the next grid's half-widths, the
+    larger raster step either side of the node at first."""
+
+    def __init__(self, nodes, origin, on_face):
+        cells = np.argwhere(nodes.counted)[origin]
+        self.centre = nodes.uv[nodes.counted][origin]
+        self.half = np.column_stack([_cell_steps(nodes.uv[:, 0, 0], cells[:, 0]),
+                                     _cell_steps(nodes.uv[0, :, 1], cells[:, 1])])
+        self.low, self.high = nodes.uv[0, 0], nodes.uv[-1, -1]
+        self.on_face = on_face
+        self.grid = np.zeros((len(origin), len(_PLANE), 2))
+
+    def trials(self):
+        """(R, T, 2) the grid's places, within the face's rectangle, and (R, T) bool: on the face."""
+        self.grid = np.clip(self.centre[:, None, :] + _PLANE * self.half[:, None, :], self.low, self.high)
+        keep = np.ones(self.grid.shape[:2], dtype=bool)
+        if self.on_face is not None and self.grid.size:
+            keep = self.on_face(self.grid.reshape(-1, 2)).reshape(keep.shape)
+        return self.grid, keep
+
+    def move(self, gain, index):
+        """Centre the next grid on trial ``index`` (R,) where ``gain`` (R,) bool; narrow it."""
+        rows = np.flatnonzero(gain)
+        self.centre[rows] = self.grid[rows, index[rows]]
+        self.half /= ZOOM_STEPS
+
+
+class _EdgeZoom:
+    """Searches along the edges' curves about edge nodes (origin: edge node indices): place (E,)
+    the best place so far, a fractional edge node index within its run; half (E,) the next grid's
+    half-width, in edge node steps."""
+
+    def __init__(self, nodes, origin):
+        self.nodes = nodes
+        self.place = origin.astype(float)
+        self.runs = nodes.edge_runs[origin]
+        self.half = np.ones(len(origin))
+        self.grid = np.zeros((len(origin), len(_LINE)))
+
+    def trials(self):
+        """(E, T, 2) the grid's places on the face, along the edges' curves within their runs."""
+        self.grid = np.clip(self.place[:, None] + _LINE * self.half[:, None],
+                            self.runs[:, :1], self.runs[:, 1:] - 1.0)
+        runs = np.repeat(self.runs, len(_LINE), axis=0)
+        return edge_curve_uv(self.nodes, self.grid.ravel(), runs)[0].reshape(len(self.place), len(_LINE), 2)
+
+    def move(self, gain, index):
+        """Centre the next grid on trial ``index`` (E,) where ``gain`` (E,) bool; narrow it."""
+        rows = np.flatnonzero(gain)
+        self.place[rows] = self.grid[rows, index[rows]]
+        self.half /= ZOOM_STEPS
+
+
+def _cell_steps(values, index):
+    """The larger of the raster steps either side of raster value ``index`` (M,) in values (g,)."""
+    steps = np.diff(values)
+    before = steps[np.maximum(index - 1, 0)]
+    after = steps[np.minimum(index, len(steps) - 1)]
+    return np.maximum(before, after)

@@ -1,0 +1,93 @@
+"""The deviation's peaks between the nodes (cmmsampling.fitting.peaks): on a creased face the
+largest deviation lies where two creases cross, between the raster's nodes; the figure reported
+is OCC's distance there, not the smaller one at the node beside it."""
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+from support.faces import creased_face
+
+import cmmsampling
+from cmmsampling.fitting import peaks
+from cmmsampling.fitting.exact import exact_deviation
+from cmmsampling.geometry.occ_distance import distances_to_face
+
+# Parameters along every crease of creased_face() (its inner knot lines u, v = 1 and 2).
+CREASE_SAMPLES = 61
+
+
+@pytest.fixture(scope="module")
+def creased_run():
+    return cmmsampling.sample(creased_face(), n=9, strategy="uniform_parametric")
+
+
+def crease_parameters(count=CREASE_SAMPLES):
+    """(4 count, 2) parameters along the creased face's inner knot lines."""
+    t = np.linspace(0.0, 3.0, count)
+    return np.concatenate([np.column_stack([np.full_like(t, k), t]) for k in (1.0, 2.0)]
+                          + [np.column_stack([t, np.full_like(t, k)]) for k in (1.0, 2.0)])
+
+
+def occ_on_creases(result):
+    """The largest of OCC's distances, both ways, at the crease parameters: from the face's points
+    to the substitute and from the substitute's points back to the face, mm."""
+    uv = crease_parameters()
+    face, substitute = result.face, result.substitute
+    on_face = [tuple(face.Surface.value(*map(float, h))) for h in uv]
+    on_substitute = [tuple(substitute.value(*map(float, h))) for h in uv]
+    return max(distances_to_face(substitute.toShape(), on_face)[0].max(),
+               distances_to_face(face, on_substitute)[0].max())
+
+
+def test_the_peak_where_creases_cross_is_reported(creased_run):
+    deviation = creased_run.deviation
+    assert deviation.maximum == pytest.approx(occ_on_creases(creased_run), rel=1e-5)
+    assert deviation.occ_maximum == pytest.approx(deviation.maximum, rel=1e-6)
+    crossing = creased_run.face.Surface.value(1.0, 2.0)
+    assert np.linalg.norm(deviation.max_location() - np.array(tuple(crossing))) < 0.01
+
+
+def test_the_nodes_alone_miss_it(creased_run, monkeypatch):
+    """Without the searches the same substitute reads over 1 % lower: the crossing lies between
+    nodes."""
+    problem = creased_run.problem
+    monkeypatch.setattr(peaks, "ZOOM_ROUNDS", 0)
+    at_nodes = exact_deviation(problem.space, creased_run.poles, problem.objective.nodes,
+                               problem.objective.model, problem.domain.on_face).maximum
+    assert at_nodes < 0.99 * creased_run.deviation.maximum
+
+
+def tent(apex):
+    """A sides_at for peak_search whose deviation is a tent over the parameters, largest (1 mm)
+    at ``apex`` (2,) and falling by 1 mm per unit of parameter (both sides alike)."""
+    def sides_at(h, origin, start):
+        values = 1.0 - np.abs(h - apex).sum(1)
+        side = SimpleNamespace(values=values, at=np.array(h), directions=np.tile([0.0, 0.0, 1.0], (len(h), 1)))
+        return side, side
+    return sides_at
+
+
+def test_a_raster_search_finds_a_tent_apex_between_nodes(creased_run):
+    nodes = creased_run.problem.objective.nodes
+    uv = nodes.uv[nodes.counted]
+    apex = 0.37 * nodes.uv[1, 1] + 0.63 * nodes.uv[2, 2] + [0.0, 0.01 * (nodes.uv[1, 1, 1] - nodes.uv[0, 0, 1])]
+    sizes = np.concatenate([1.0 - np.abs(uv - apex).sum(1), np.zeros(len(nodes.edge_uv))])
+    found = peaks.peak_search(nodes, sizes, np.zeros((len(sizes), 2)), tent(apex), None)
+    step = nodes.uv[1, 1] - nodes.uv[0, 0]
+    assert len(found.uv) == 1 and np.abs(found.uv - apex).max() < step.max() / peaks.ZOOM_STEPS ** peaks.ZOOM_ROUNDS
+    assert found.forward[0].max() > sizes.max()
+
+
+def test_an_edge_search_finds_a_peak_between_edge_nodes(creased_run):
+    """The tent's apex on the edge v = 0, a third of the way between two edge nodes; the raster
+    nodes all lower."""
+    nodes = creased_run.problem.objective.nodes
+    bottom = np.flatnonzero(np.abs(nodes.edge_uv[:, 1]) < 1e-12)
+    a, b = bottom[len(bottom) // 2], bottom[len(bottom) // 2] + 1
+    apex = nodes.edge_uv[a] + (nodes.edge_uv[b] - nodes.edge_uv[a]) / 3.0
+    counted = int(nodes.counted.sum())
+    sizes = np.concatenate([np.full(counted, 0.5), 1.0 - np.abs(nodes.edge_uv - apex).sum(1)])
+    found = peaks.peak_search(nodes, sizes, np.zeros((len(sizes), 2)), tent(apex), None)
+    spacing = np.abs(nodes.edge_uv[b] - nodes.edge_uv[a]).max()
+    best = found.uv[np.argmax(found.forward[0])]
+    assert np.abs(best - apex).max() < 2 * spacing / peaks.ZOOM_STEPS ** peaks.ZOOM_ROUNDS
