@@ -6,8 +6,9 @@ trimmed edge, or on a large face whose raster is coarse. Each node that is a loc
 nodes within PEAK_SHARE of the largest (at most PEAK_NODES of them, largest first) starts a search
 for the local maximum beside it, all of them at once: ZOOM_ROUNDS rounds of a grid of ZOOM_STEPS
 steps either side of the best place so far, over the raster cells about it (both parameters) or
-along its edge's curve a segment either side, each round's grid as wide as the last one's step.
-The places where a search found more than its node join the nodes (cmmsampling.fitting.exact), so
+along its edge's curve a segment either side, each round's grid as wide as the last one's step,
+until a round raises the largest deviation by no more than ZOOM_GAIN of it. Trials off the face
+are not measured. The places where a search found more than its node join the nodes (cmmsampling.fitting.exact), so
 that the figure reported is the local maximum found, not the value at the node beside it.
 """
 from dataclasses import dataclass
@@ -20,6 +21,8 @@ PEAK_SHARE = 0.8
 PEAK_NODES = 12
 ZOOM_ROUNDS = 4
 ZOOM_STEPS = 4
+# A round that raises no search by more than this share of the largest deviation is the last.
+ZOOM_GAIN = 1e-5
 _NEIGHBOURS = np.array([(1, 0), (-1, 0), (0, 1), (0, -1), (1, 1), (1, -1), (-1, 1), (-1, -1)])
 _LINE = np.concatenate([np.arange(-ZOOM_STEPS, 0), np.arange(1, ZOOM_STEPS + 1)]) / ZOOM_STEPS
 _PLANE = np.array([(a, b) for a in range(-ZOOM_STEPS, ZOOM_STEPS + 1) for b in range(-ZOOM_STEPS, ZOOM_STEPS + 1)
@@ -59,17 +62,43 @@ def peak_search(nodes, sizes, start, sides_at, on_face):
     for _ in range(ZOOM_ROUNDS if len(origin) else 0):
         uv_raster, keep = raster.trials()
         uv = np.concatenate([uv_raster.reshape(-1, 2), edge.trials().reshape(-1, 2)])
-        forward, reverse = sides_at(uv, np.repeat(origin, per), np.repeat(foot, per, axis=0))
-        size = np.maximum(np.abs(forward.values), np.abs(reverse.values))
-        size[:keep.size][~keep.ravel()] = -np.inf
+        keep = np.concatenate([keep.ravel(), np.ones(len(uv) - keep.size, dtype=bool)])
+        forward, reverse, size = _measured(sides_at, uv, keep, np.repeat(origin, per), np.repeat(foot, per, axis=0))
         pick = first + np.concatenate([np.argmax(size[:whole].reshape(split, len(_PLANE)), axis=1),
                                        np.argmax(size[whole:].reshape(-1, len(_LINE)), axis=1)])
         gain = size[pick] > best
+        before = best.max()
         best[gain], foot[gain] = size[pick[gain]], forward.at[pick[gain]]
         rows.take(gain, pick, uv, forward, reverse)
+        if best.max() - before <= ZOOM_GAIN * before:
+            break
         raster.move(gain[:split], (pick - first)[:split])
         edge.move(gain[split:], (pick - first)[split:])
     return rows.peaks()
+
+
+def _measured(sides_at, uv, keep, origin, start):
+    """(forward, reverse, size): the Sides' values, at and directions (M entries each, zero where
+    ``keep`` (M,) is False) and |d| (M,) mm (-inf there) at the trials uv (M, 2), measured (by
+    sides_at) only where keep says they are on the face."""
+    count = len(uv)
+    forward, reverse = (_Side(np.zeros(count), np.zeros((count, 2)), np.zeros((count, 3))) for _ in range(2))
+    size = np.full(count, -np.inf)
+    if keep.any():
+        ahead, back = sides_at(uv[keep], origin[keep], start[keep])
+        for kept, side in ((forward, ahead), (reverse, back)):
+            kept.values[keep], kept.at[keep], kept.directions[keep] = side.values, side.at, side.directions
+        size[keep] = np.maximum(np.abs(ahead.values), np.abs(back.values))
+    return forward, reverse, size
+
+
+@dataclass
+class _Side:
+    """A Side's arrays (cmmsampling.fitting.exact.Side): values (M,), at (M, 2), directions (M, 3)."""
+
+    values: np.ndarray
+    at: np.ndarray
+    directions: np.ndarray
 
 
 def largest_nodes(sizes, peaked):
