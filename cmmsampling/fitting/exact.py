@@ -11,9 +11,8 @@ the face's domain and points along its edges), at parameters h with F(h) the nod
 Each is signed by the face's normal there (+ out of the material); a node's deviation is the one
 of larger magnitude. Where the deviation peaks between nodes, the places found by searches about
 the largest nodes (cmmsampling.fitting.peaks) join them, and the maximum over all of them is the
-figure reported. OpenCASCADE's
-distances from the nodes to ``r.substitute.toShape()`` and from S(h) to the face agree with both
-sides (cmmsampling.fitting.crosscheck, and the tests).
+figure reported. OpenCASCADE's distances from the nodes to ``r.substitute.toShape()`` and from
+S(h) to the face agree with both sides (cmmsampling.fitting.crosscheck, and the tests).
 
 To first order in a change dS of the substitute, each side changes by w . dS(at) with w the unit
 direction it is measured along and ``at`` the parameters on S (p forward, h reverse): exact there
