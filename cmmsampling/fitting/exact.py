@@ -33,8 +33,13 @@ FOOT_STEP_TOLERANCE = 1e-10
 DAMPING_FLOOR = 1e-12
 DAMPING_CEILING = 1e12
 SEARCH_SAMPLES = 48
-# More starts for the feet at the peaks found between the nodes.
-SETTLE_STARTS = 8
+# More starts for the feet at the largest nodes and at the peaks found between them: the nearest
+# samples of a denser raster of the substitute, the nearest nodes of the face.
+SETTLE_SAMPLE_STARTS = 24
+SETTLE_NODE_STARTS = 8
+SETTLE_SAMPLES = 2 * SEARCH_SAMPLES
+SETTLE_NODES = 32
+SETTLE_PASSES = 3
 # Edge pieces tried first for a point's nearest edge point, and the (point, piece) pairs compared
 # at a time where more have to be tried.
 NEAREST_SEGMENTS = 8
@@ -126,13 +131,18 @@ def exact_deviation(space, poles, nodes, face, on_face=None):
     surface = FittedSurface(space, poles)
     forward, reverse = forward_side(surface, nodes), reverse_side(surface, nodes, face, on_face)
     fallback = node_normals(nodes)
+    raster = _sample_raster(surface, SETTLE_SAMPLES)
+
+    def settled(h, start):
+        return _settled_sides(surface, nodes, face, on_face, h, start, raster)
 
     def sides_at(h, origin, start):
         return _sides_at(surface, nodes, face, on_face, h, start, fallback[origin])
 
+    forward, reverse = _settle_largest(node_parameters(nodes), forward, reverse, settled)
     sizes = np.maximum(np.abs(forward.values), np.abs(reverse.values))
     peaks = peak_search(nodes, sizes, forward.at, sides_at, on_face)
-    ahead, back = _settled_sides(surface, nodes, face, on_face, peaks)
+    ahead, back = settled(peaks.uv, peaks.forward[1]) if len(peaks.uv) else (Side(*peaks.forward), Side(*peaks.reverse))
     return ExactDeviation(np.asarray(poles, dtype=float), nodes, _joined(forward, ahead), _joined(reverse, back),
                           face.points(peaks.uv))
 
@@ -162,26 +172,50 @@ def _sides_at(surface, nodes, face, on_face, h, start, fallback):
             _reverse_from_feet(face, nodes, on_face, points, h, feet, normals))
 
 
-def _settled_sides(surface, nodes, face, on_face, peaks):
-    """(forward, reverse) Sides at the peaks (cmmsampling.fitting.peaks.Peaks), each foot the
-    nearest of searches from where the peak search left it and from SETTLE_STARTS more starts: the
-    nearest samples of the substitute (forward) and the nearest nodes of the face (reverse). A
-    search for the largest deviation finds first where a foot search stops short of the closest
-    point (a flat valley of the distance, an end of a thin strip), so its feet are settled wider."""
-    h = peaks.uv
-    if not len(h):
-        return Side(*peaks.forward), Side(*peaks.reverse)
+def _settled_sides(surface, nodes, face, on_face, h, start, raster):
+    """(forward, reverse) Sides at the face's points F(h), h (M, 2) its parameters, each foot the
+    nearest of searches from more starts than a node's: forward from ``start`` (M, 2) and the
+    SETTLE_SAMPLE_STARTS nearest samples of ``raster`` ((parameters, k-d tree) of the substitute),
+    reverse from h and the SETTLE_NODE_STARTS nearest nodes. A foot search can stop short of the closest point
+    (a flat valley of the distance; across a thin strip, at the wrong one of its two long edges),
+    and a search for the largest deviation finds first where it did; these feet are settled wider."""
     targets, points = face.points(h), surface.points(h)
-    grid, samples = _sample_raster(surface)
-    near_samples = samples.query(targets, k=SETTLE_STARTS)[1]
-    ahead = _nearest_of(surface, targets, np.concatenate([peaks.forward[1][:, None], grid[near_samples]], 1))
-    near_nodes = nodes.point_tree.query(points, k=min(SETTLE_STARTS, nodes.point_tree.n))[1].reshape(len(h), -1)
+    grid, samples = raster
+    near_samples = samples.query(targets, k=SETTLE_SAMPLE_STARTS)[1]
+    ahead = _nearest_of(surface, targets, np.concatenate([start[:, None], grid[near_samples]], 1))
+    near_nodes = nodes.point_tree.query(points, k=min(SETTLE_NODE_STARTS, nodes.point_tree.n))[1].reshape(len(h), -1)
     feet = _nearest_of(face, points, np.concatenate([h[:, None], node_parameters(nodes)[near_nodes]], 1))
     normals = face.normals(h)
     fallback = node_normals(nodes)[nodes.point_tree.query(targets)[1]]
     normals = np.where(np.isfinite(normals).all(1, keepdims=True), normals, fallback)
     return (_side(surface.points(ahead) - targets, ahead, normals),
             _reverse_from_feet(face, nodes, on_face, points, h, feet, normals))
+
+
+def _settle_largest(h, forward, reverse, settled):
+    """The nodes' Sides with the feet of the SETTLE_NODES largest nodes settled (``settled``: (h,
+    start) -> Sides, see :func:`_settled_sides`), each side kept where it was nearer; again for
+    the largest not yet settled, until the SETTLE_NODES largest all are (at most SETTLE_PASSES
+    times). h: (K, 2) the nodes' parameters."""
+    done = np.zeros(len(h), dtype=bool)
+    for _ in range(SETTLE_PASSES):
+        top = np.argsort(-np.maximum(np.abs(forward.values), np.abs(reverse.values)))[:SETTLE_NODES]
+        top = top[~done[top]]
+        if not top.size:
+            break
+        ahead, back = settled(h[top], forward.at[top])
+        forward, reverse = _nearer(forward, top, ahead), _nearer(reverse, top, back)
+        done[top] = True
+    return forward, reverse
+
+
+def _nearer(side, rows, other):
+    """side with its entries ``rows`` (M,) replaced by other's (M entries) where those are nearer."""
+    nearer = np.abs(other.values) < np.abs(side.values[rows])
+    values, at, directions = side.values.copy(), side.at.copy(), side.directions.copy()
+    values[rows[nearer]], at[rows[nearer]], directions[rows[nearer]] = (
+        other.values[nearer], other.at[nearer], other.directions[nearer])
+    return Side(values, at, directions)
 
 
 def _nearest_of(model, targets, starts):
@@ -351,11 +385,11 @@ def _nearest_samples(surface, targets):
     return grid[index], distance
 
 
-def _sample_raster(surface):
-    """A SEARCH_SAMPLES^2 raster of the surface's rectangle: (parameters (S, 2), a k-d tree of
-    its points)."""
+def _sample_raster(surface, count=SEARCH_SAMPLES):
+    """A count x count raster of the surface's rectangle: (parameters (count^2, 2), a k-d tree
+    of its points)."""
     u0, u1, v0, v1 = surface.bounds
-    grid = np.stack(np.meshgrid(np.linspace(u0, u1, SEARCH_SAMPLES), np.linspace(v0, v1, SEARCH_SAMPLES),
+    grid = np.stack(np.meshgrid(np.linspace(u0, u1, count), np.linspace(v0, v1, count),
                                 indexing="ij"), -1).reshape(-1, 2)
     return grid, cKDTree(surface.points(grid))
 
