@@ -129,7 +129,8 @@ def exact_deviation(space, poles, nodes, face, on_face=None):
     uv (..., 2) -> (...) bool, the face's trim test (None: the whole rectangle).
     """
     surface = FittedSurface(space, poles)
-    forward, reverse = forward_side(surface, nodes), reverse_side(surface, nodes, face, on_face)
+    samples = _sample_raster(surface)
+    forward, reverse = forward_side(surface, nodes, samples), reverse_side(surface, nodes, face, on_face)
     fallback = node_normals(nodes)
     raster = _sample_raster(surface, SETTLE_SAMPLES)
 
@@ -137,7 +138,7 @@ def exact_deviation(space, poles, nodes, face, on_face=None):
         return _settled_sides(surface, nodes, face, on_face, h, start, raster)
 
     def sides_at(h, origin, start):
-        return _sides_at(surface, nodes, face, on_face, h, start, fallback[origin])
+        return _sides_at(surface, nodes, face, on_face, h, start, fallback[origin], samples)
 
     forward, reverse = _settle_largest(node_parameters(nodes), forward, reverse, settled)
     sizes = np.maximum(np.abs(forward.values), np.abs(reverse.values))
@@ -153,17 +154,18 @@ def _joined(first, second):
                   for name in ("values", "at", "directions")))
 
 
-def _sides_at(surface, nodes, face, on_face, h, start, fallback):
+def _sides_at(surface, nodes, face, on_face, h, start, fallback, samples):
     """(forward, reverse) Sides at the face's points F(h), h (M, 2) its parameters: forward
     searched from ``start`` (M, 2) on the substitute, reverse from h; each searched again from the
     nearest sample of the substitute or node of the face where that lies nearer than the foot found
     (a search that maximises the deviation would otherwise find where a foot search got stuck);
-    fallback (M, 3) unit, the normals where the face has none at h (a collapsed edge)."""
+    fallback (M, 3) unit, the normals where the face has none at h (a collapsed edge); samples:
+    :func:`_sample_raster` of the substitute."""
     normals = face.normals(h)
     normals = np.where(np.isfinite(normals).all(1, keepdims=True), normals, fallback)
     targets = face.points(h)
     at = closest_parameters(surface, targets, start)
-    at = _restart_stuck(surface, targets, at, _nearest_samples(surface, targets))
+    at = _restart_stuck(surface, targets, at, _nearest_samples(samples, targets))
     points = surface.points(h)
     feet = closest_parameters(face, points, h)
     distance, index = nodes.point_tree.query(points)
@@ -227,11 +229,12 @@ def _nearest_of(model, targets, starts):
     return found[np.arange(count), np.argmin(gap, axis=1)]
 
 
-def forward_side(surface, nodes):
-    """Side: from each node F(h) to its closest point on the substitute's rectangle."""
+def forward_side(surface, nodes, samples=None):
+    """Side: from each node F(h) to its closest point on the substitute's rectangle; samples:
+    :func:`_sample_raster` of the substitute where it is already built."""
     targets, start = nodes.all_points(), node_parameters(nodes)
     at = closest_parameters(surface, targets, start)
-    at = _restart_stuck(surface, targets, at, _nearest_samples(surface, targets))
+    at = _restart_stuck(surface, targets, at, _nearest_samples(samples or _sample_raster(surface), targets))
     return _side(surface.points(at) - targets, at, node_normals(nodes))
 
 
@@ -377,10 +380,10 @@ def _restart_stuck(model, targets, uv, samples):
     return uv
 
 
-def _nearest_samples(surface, targets):
-    """The nearest of a SEARCH_SAMPLES^2 raster of the surface's rectangle to each target (K, 3):
-    (parameters (K, 2), distance (K,) mm)."""
-    grid, tree = _sample_raster(surface)
+def _nearest_samples(samples, targets):
+    """The nearest of the samples ((parameters, k-d tree of their points): :func:`_sample_raster`)
+    to each target (K, 3): (parameters (K, 2), distance (K,) mm)."""
+    grid, tree = samples
     distance, index = tree.query(targets)
     return grid[index], distance
 
