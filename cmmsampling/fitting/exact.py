@@ -26,6 +26,7 @@ from scipy.spatial import cKDTree
 from ..geometry.bspline import kron_rows
 from .nodes import edge_curve_uv
 from .peaks import peak_search
+from .sides import Side, normals_or
 from .substitute import FittedSurface
 
 FOOT_ITERATIONS = 400
@@ -48,17 +49,6 @@ SEGMENT_PAIRS = 1_000_000
 # steps) below which it is done.
 EDGE_NEWTON_STEPS = 12
 EDGE_STEP_TOLERANCE = 1e-9
-
-
-@dataclass
-class Side:
-    """One side of the measure at K nodes: values (K,) signed mm; at (K, 2) the parameters on the
-    substitute it depends on; directions (K, 3) unit, the gradient of the signed value with respect
-    to the substitute's point there (the offset's direction times its sign)."""
-
-    values: np.ndarray
-    at: np.ndarray
-    directions: np.ndarray
 
 
 @dataclass
@@ -134,8 +124,8 @@ def exact_deviation(space, poles, nodes, face, on_face=None):
     fallback = node_normals(nodes)
     raster = _sample_raster(surface, SETTLE_SAMPLES)
 
-    def settled(h, start):
-        return _settled_sides(surface, nodes, face, on_face, h, start, raster)
+    def settled(h, origin, start):
+        return _settled_sides(surface, nodes, face, on_face, h, start, raster, fallback[origin])
 
     def sides_at(h, origin, start):
         return _sides_at(surface, nodes, face, on_face, h, start, fallback[origin], samples)
@@ -143,15 +133,10 @@ def exact_deviation(space, poles, nodes, face, on_face=None):
     forward, reverse = _settle_largest(node_parameters(nodes), forward, reverse, settled)
     sizes = np.maximum(np.abs(forward.values), np.abs(reverse.values))
     peaks = peak_search(nodes, sizes, forward.at, sides_at, on_face)
-    ahead, back = settled(peaks.uv, peaks.forward[1]) if len(peaks.uv) else (Side(*peaks.forward), Side(*peaks.reverse))
-    return ExactDeviation(np.asarray(poles, dtype=float), nodes, _joined(forward, ahead), _joined(reverse, back),
+    ahead, back = (settled(peaks.uv, peaks.origin, peaks.forward.at) if len(peaks.uv)
+                   else (peaks.forward, peaks.reverse))
+    return ExactDeviation(np.asarray(poles, dtype=float), nodes, forward.joined(ahead), reverse.joined(back),
                           face.points(peaks.uv))
-
-
-def _joined(first, second):
-    """One Side of first's entries then second's."""
-    return Side(*(np.concatenate([getattr(first, name), getattr(second, name)])
-                  for name in ("values", "at", "directions")))
 
 
 def _sides_at(surface, nodes, face, on_face, h, start, fallback, samples):
@@ -161,8 +146,7 @@ def _sides_at(surface, nodes, face, on_face, h, start, fallback, samples):
     (a search that maximises the deviation would otherwise find where a foot search got stuck);
     fallback (M, 3) unit, the normals where the face has none at h (a collapsed edge); samples:
     :func:`_sample_raster` of the substitute."""
-    normals = face.normals(h)
-    normals = np.where(np.isfinite(normals).all(1, keepdims=True), normals, fallback)
+    normals = normals_or(face.normals(h), fallback)
     targets = face.points(h)
     at = closest_parameters(surface, targets, start)
     at = _restart_stuck(surface, targets, at, _nearest_samples(samples, targets))
@@ -174,29 +158,28 @@ def _sides_at(surface, nodes, face, on_face, h, start, fallback, samples):
             _reverse_from_feet(face, nodes, on_face, points, h, feet, normals))
 
 
-def _settled_sides(surface, nodes, face, on_face, h, start, raster):
+def _settled_sides(surface, nodes, face, on_face, h, start, raster, fallback):
     """(forward, reverse) Sides at the face's points F(h), h (M, 2) its parameters, each foot the
     nearest of searches from more starts than a node's: forward from ``start`` (M, 2) and the
     SETTLE_SAMPLE_STARTS nearest samples of ``raster`` ((parameters, k-d tree) of the substitute),
     reverse from h and the SETTLE_NODE_STARTS nearest nodes. A foot search can stop short of the closest point
     (a flat valley of the distance; across a thin strip, at the wrong one of its two long edges),
-    and a search for the largest deviation finds first where it did; these feet are settled wider."""
+    and a search for the largest deviation finds first where it did; these feet are settled wider.
+    fallback (M, 3) unit: the normals where the face has none at h."""
     targets, points = face.points(h), surface.points(h)
     grid, samples = raster
     near_samples = samples.query(targets, k=SETTLE_SAMPLE_STARTS)[1]
     ahead = _nearest_of(surface, targets, np.concatenate([start[:, None], grid[near_samples]], 1))
     near_nodes = nodes.point_tree.query(points, k=min(SETTLE_NODE_STARTS, nodes.point_tree.n))[1].reshape(len(h), -1)
     feet = _nearest_of(face, points, np.concatenate([h[:, None], node_parameters(nodes)[near_nodes]], 1))
-    normals = face.normals(h)
-    fallback = node_normals(nodes)[nodes.point_tree.query(targets)[1]]
-    normals = np.where(np.isfinite(normals).all(1, keepdims=True), normals, fallback)
+    normals = normals_or(face.normals(h), fallback)
     return (_side(surface.points(ahead) - targets, ahead, normals),
             _reverse_from_feet(face, nodes, on_face, points, h, feet, normals))
 
 
 def _settle_largest(h, forward, reverse, settled):
     """The nodes' Sides with the feet of the SETTLE_NODES largest nodes settled (``settled``: (h,
-    start) -> Sides, see :func:`_settled_sides`), each side kept where it was nearer; again for
+    node index, start) -> Sides, see :func:`_settled_sides`), each side kept where it was nearer; again for
     the largest not yet settled, until the SETTLE_NODES largest all are (at most SETTLE_PASSES
     times). h: (K, 2) the nodes' parameters."""
     done = np.zeros(len(h), dtype=bool)
@@ -205,7 +188,7 @@ def _settle_largest(h, forward, reverse, settled):
         top = top[~done[top]]
         if not top.size:
             break
-        ahead, back = settled(h[top], forward.at[top])
+        ahead, back = settled(h[top], top, forward.at[top])
         forward, reverse = _nearer(forward, top, ahead), _nearer(reverse, top, back)
         done[top] = True
     return forward, reverse
@@ -214,10 +197,9 @@ def _settle_largest(h, forward, reverse, settled):
 def _nearer(side, rows, other):
     """side with its entries ``rows`` (M,) replaced by other's (M entries) where those are nearer."""
     nearer = np.abs(other.values) < np.abs(side.values[rows])
-    values, at, directions = side.values.copy(), side.at.copy(), side.directions.copy()
-    values[rows[nearer]], at[rows[nearer]], directions[rows[nearer]] = (
-        other.values[nearer], other.at[nearer], other.directions[nearer])
-    return Side(values, at, directions)
+    kept = side.copy()
+    kept.put(rows[nearer], other.rows(nearer))
+    return kept
 
 
 def _nearest_of(model, targets, starts):
@@ -262,8 +244,7 @@ def _reverse_from_feet(face, nodes, on_face, points, at, feet, fallback):
     off = np.zeros(len(at), dtype=bool) if on_face is None else ~on_face(feet)
     if off.any():
         nearest[off], normals[off] = _nearest_on_edge_curves(face, nodes, points[off])
-    normals = np.where(np.isfinite(normals).all(1, keepdims=True), normals, fallback)
-    return _side(points - nearest, at, normals)
+    return _side(points - nearest, at, normals_or(normals, fallback))
 
 
 def _side(offsets, at, normals):

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .nodes import edge_curve_uv
+from .sides import Side
 
 PEAK_SHARE = 0.8
 PEAK_NODES = 12
@@ -31,12 +32,13 @@ _PLANE = np.array([(a, b) for a in range(-ZOOM_STEPS, ZOOM_STEPS + 1) for b in r
 
 @dataclass
 class Peaks:
-    """The peaks found: uv (P, 2) their parameters on the face; forward, reverse: (values (P,),
-    at (P, 2), directions (P, 3)) of the Sides there (cmmsampling.fitting.exact.Side)."""
+    """The peaks found: uv (P, 2) their parameters on the face; origin (P,) the index of the node
+    each search started from; forward, reverse: the Sides there."""
 
     uv: np.ndarray
-    forward: tuple
-    reverse: tuple
+    origin: np.ndarray
+    forward: Side
+    reverse: Side
 
 
 def peak_search(nodes, sizes, start, sides_at, on_face):
@@ -58,7 +60,7 @@ def peak_search(nodes, sizes, start, sides_at, on_face):
     first = np.cumsum(per) - per
     whole = split * len(_PLANE)
     best, foot = sizes[origin].astype(float), start[origin]
-    rows = _Rows(len(origin))
+    rows = _Rows(origin)
     for _ in range(ZOOM_ROUNDS if len(origin) else 0):
         uv_raster, keep = raster.trials()
         uv = np.concatenate([uv_raster.reshape(-1, 2), edge.trials().reshape(-1, 2)])
@@ -81,24 +83,14 @@ def _measured(sides_at, uv, keep, origin, start):
     """(forward, reverse, size): the Sides' values, at and directions (M entries each, zero where
     ``keep`` (M,) is False) and |d| (M,) mm (-inf there) at the trials uv (M, 2), measured (by
     sides_at) only where keep says they are on the face."""
-    count = len(uv)
-    forward, reverse = (_Side(np.zeros(count), np.zeros((count, 2)), np.zeros((count, 3))) for _ in range(2))
-    size = np.full(count, -np.inf)
+    forward, reverse = Side.zeros(len(uv)), Side.zeros(len(uv))
+    size = np.full(len(uv), -np.inf)
     if keep.any():
         ahead, back = sides_at(uv[keep], origin[keep], start[keep])
-        for kept, side in ((forward, ahead), (reverse, back)):
-            kept.values[keep], kept.at[keep], kept.directions[keep] = side.values, side.at, side.directions
+        forward.put(keep, ahead)
+        reverse.put(keep, back)
         size[keep] = np.maximum(np.abs(ahead.values), np.abs(back.values))
     return forward, reverse, size
-
-
-@dataclass
-class _Side:
-    """A Side's arrays (cmmsampling.fitting.exact.Side): values (M,), at (M, 2), directions (M, 3)."""
-
-    values: np.ndarray
-    at: np.ndarray
-    directions: np.ndarray
 
 
 def largest_nodes(sizes, peaked):
@@ -128,28 +120,27 @@ def local_maxima(nodes, sizes):
 
 
 class _Rows:
-    """The Side rows at each search's best place found so far (none until it gains)."""
+    """The Side rows at each search's best place found so far (none until it gains); origin (S,)
+    the node each search started from."""
 
-    def __init__(self, count):
-        self.gained = np.zeros(count, dtype=bool)
-        self.uv = np.zeros((count, 2))
-        self.forward = (np.zeros(count), np.zeros((count, 2)), np.zeros((count, 3)))
-        self.reverse = (np.zeros(count), np.zeros((count, 2)), np.zeros((count, 3)))
+    def __init__(self, origin):
+        self.origin = origin
+        self.gained = np.zeros(len(origin), dtype=bool)
+        self.uv = np.zeros((len(origin), 2))
+        self.forward, self.reverse = Side.zeros(len(origin)), Side.zeros(len(origin))
 
     def take(self, gain, pick, uv, forward, reverse):
         """Keep the trials' rows ``pick`` (S,) where ``gain`` (S,) bool; uv (M, 2) the trials."""
         chosen = pick[gain]
         self.gained |= gain
         self.uv[gain] = uv[chosen]
-        for kept, side in ((self.forward, forward), (self.reverse, reverse)):
-            for array, values in zip(kept, (side.values, side.at, side.directions)):
-                array[gain] = values[chosen]
+        self.forward.put(gain, forward.rows(chosen))
+        self.reverse.put(gain, reverse.rows(chosen))
 
     def peaks(self):
         """The Peaks of the searches that gained."""
         gained = self.gained
-        return Peaks(self.uv[gained], tuple(a[gained] for a in self.forward),
-                     tuple(a[gained] for a in self.reverse))
+        return Peaks(self.uv[gained], self.origin[gained], self.forward.rows(gained), self.reverse.rows(gained))
 
 
 class _RasterZoom:

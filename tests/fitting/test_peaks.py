@@ -78,7 +78,7 @@ def test_a_raster_search_finds_a_tent_apex_between_nodes(creased_run):
     found = peaks.peak_search(nodes, sizes, np.zeros((len(sizes), 2)), tent(apex), None)
     step = nodes.uv[1, 1] - nodes.uv[0, 0]
     assert len(found.uv) == 1 and np.abs(found.uv - apex).max() < step.max() / peaks.ZOOM_STEPS ** peaks.ZOOM_ROUNDS
-    assert found.forward[0].max() > sizes.max()
+    assert found.forward.values.max() > sizes.max()
 
 
 def test_an_edge_search_finds_a_peak_between_edge_nodes(creased_run):
@@ -92,7 +92,7 @@ def test_an_edge_search_finds_a_peak_between_edge_nodes(creased_run):
     sizes = np.concatenate([np.full(counted, 0.5), 1.0 - np.abs(nodes.edge_uv - apex).sum(1)])
     found = peaks.peak_search(nodes, sizes, np.zeros((len(sizes), 2)), tent(apex), None)
     spacing = np.abs(nodes.edge_uv[b] - nodes.edge_uv[a]).max()
-    best = found.uv[np.argmax(found.forward[0])]
+    best = found.uv[np.argmax(found.forward.values)]
     assert np.abs(best - apex).max() < 2 * spacing / peaks.ZOOM_STEPS ** peaks.ZOOM_ROUNDS
 
 
@@ -114,8 +114,9 @@ def test_settling_finds_the_feet_a_search_missed(creased_run):
     raster = exact._sample_raster(surface, exact.SETTLE_SAMPLES)
     reverse = exact.reverse_side(surface, nodes, model, problem.domain.on_face)
 
-    def settled(h, start):
-        return exact._settled_sides(surface, nodes, model, problem.domain.on_face, h, start, raster)
+    def settled(h, origin, start):
+        return exact._settled_sides(surface, nodes, model, problem.domain.on_face, h, start, raster,
+                                    exact.node_normals(nodes)[origin])
 
     assert np.abs(forward.values[top]).min() > np.abs(true.forward.values[top]).max()
     fixed, _ = exact._settle_largest(exact.node_parameters(nodes), forward, reverse, settled)
