@@ -19,7 +19,7 @@ from .nodes import edge_curve_uv
 from .sides import Side
 
 PEAK_SHARE = 0.8
-PEAK_NODES = 12
+PEAK_NODES = 64
 ZOOM_ROUNDS = 4
 ZOOM_STEPS = 4
 # A round that raises no search by more than this share of the largest deviation is the last.

@@ -81,6 +81,33 @@ def test_a_raster_search_finds_a_tent_apex_between_nodes(creased_run):
     assert found.forward.values.max() > sizes.max()
 
 
+def test_the_highest_of_many_peaks_is_searched_from_a_lower_node(creased_run):
+    """An optimal layout leaves dozens of near-equal peaks, and the highest between the nodes
+    need not lie beside the highest node: 30 tents (each 1 mm and a little more, its apex a tenth
+    of a cell from its node) and a higher one (1.05 mm) whose apex lies 0.45 of a cell from its
+    node, so that its node is the lowest of the 31. Every one of them is searched, so the highest
+    apex is found (it was missed while only the 12 largest nodes were)."""
+    nodes = creased_run.problem.objective.nodes
+    step = nodes.uv[1, 1] - nodes.uv[0, 0]
+    cells = [(i, j) for i in range(2, 58, 3) for j in range(2, 58, 3)][:31]
+    offsets = np.array([0.1] * 30 + [0.45])[:, None] * step
+    apices = np.array([nodes.uv[i, j] for i, j in cells]) + offsets
+    heights = np.concatenate([1.0 + 0.001 * np.arange(30), [1.05]])
+
+    def field(h):
+        return (heights - 0.1 * (np.abs(h[:, None, :] - apices) / step).sum(-1)).max(1)
+
+    def sides_at(h, origin, start):
+        side = SimpleNamespace(values=field(h), at=np.array(h), directions=np.tile([0.0, 0.0, 1.0], (len(h), 1)))
+        return side, side
+
+    sizes = field(np.concatenate([nodes.uv[nodes.counted], nodes.edge_uv]))
+    highest_node = sizes[np.ravel_multi_index(cells[-1], nodes.size)]
+    assert (sizes > highest_node).sum() >= 30
+    found = peaks.peak_search(nodes, sizes, np.zeros((len(sizes), 2)), sides_at, None)
+    assert found.forward.values.max() == pytest.approx(1.05, abs=1e-3)
+
+
 def test_an_edge_search_finds_a_peak_between_edge_nodes(creased_run):
     """The tent's apex on the edge v = 0, a third of the way between two edge nodes; the raster
     nodes all lower."""
