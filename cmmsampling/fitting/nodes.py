@@ -6,8 +6,9 @@ Two kinds of node, both points of the face F at known parameters:
   steps of the face's longest iso-parametric length (so a rational or unevenly parametrised face
   gets nodes evenly spread in space, not in parameters), counted where the raster point lies on
   the face (inside its trimming loops);
-* points along every edge of the face, trim loops and collapsed edges included, about half a
-  raster step apart, with the corners.
+* points along every edge of the face, trim loops and collapsed edges included, at most half a
+  raster step apart, with the corners, and close enough that the cubic through them follows the
+  edge's curve (:func:`edge_node_uv`).
 
 ``spacing`` (mm) is the largest 3D diagonal of a raster cell: every point of the face lies within
 it of a node. Each edge node also carries the in-surface directions its deviation is measured along
@@ -27,6 +28,15 @@ DEFAULT_GRID = 60
 LENGTH_SAMPLES = 4
 # Edge nodes per raster step (3D) along every edge.
 EDGE_NODES_PER_STEP = 2
+# Edge nodes per edge span (cmmsampling.geometry.surface.SurfaceModel.edge_spans): at least
+# EDGE_NODES_LEAST and what the spacing and raster ask for (span_needs), doubled until the cubic
+# through them (edge_curve_uv), which the edge searches follow, keeps within EDGE_CURVE_MM (3D) of
+# the span halfway between nodes, but not beyond EDGE_NODES_MOST or what span_needs asks for.
+EDGE_NODES_LEAST = 5
+EDGE_NODES_MOST = 257
+EDGE_CURVE_MM = 1e-7
+# Points of each edge span its length and raster steps are measured along.
+SPAN_PROBES = 33
 # The longest edge piece searched for the nearest edge point, in median segments.
 PIECE_MEDIANS = 2.0
 
@@ -41,7 +51,7 @@ class FaceNodes:
     directions an edge node's offset is measured along besides the normal (rows of zeros where
     unused); loops: list of (start, stop) index ranges of edge_uv, one closed polygon each;
     edge_runs: (E, 2) int, the [start, stop) index range of the run each edge node is in: samples
-    of one edge's curve on the surface at equal parameter steps; spacing: mm, the largest raster
+    of one edge span's curve on the surface at equal parameter steps; spacing: mm, the largest raster
     cell diagonal.
     """
 
@@ -81,8 +91,9 @@ class FaceNodes:
 def face_nodes(model, size=DEFAULT_GRID, on_face=None):
     """The FaceNodes of a face.
 
-    model: SurfaceModel (its ``trim_edges`` give the edges) or, for tests, anything with
-    ``bounds``, ``points``, ``normals`` and ``trim_edges``; size: int or (g_u, g_v); on_face:
+    model: SurfaceModel (its ``edge_spans`` and ``span_samples`` give the edges) or, for
+    tests, anything with ``bounds``, ``points``, ``normals``, ``edge_spans`` and
+    ``span_samples``; size: int or (g_u, g_v); on_face:
     uv (..., 2) -> (...) bool, the face's trim test (None: the whole parameter rectangle).
     """
     size = grid_size(size)
@@ -93,7 +104,7 @@ def face_nodes(model, size=DEFAULT_GRID, on_face=None):
         counted &= on_face(uv)
     spacing = _largest_cell_diagonal(points)
     step = max(spacing / EDGE_NODES_PER_STEP, 1e-9 * max(spacing, 1.0))
-    wires = [edges for edges in model.trim_edges(step) if edges]
+    wires = [edges for edges in edge_node_uv(model, step, uv) if edges]
     sizes = [len(edge) for edges in wires for edge in edges]
     edge_uv = np.concatenate([edge for edges in wires for edge in edges]) if sizes else np.zeros((0, 2))
     bounds = np.cumsum([0] + [sum(len(edge) for edge in edges) for edges in wires])
@@ -103,6 +114,67 @@ def face_nodes(model, size=DEFAULT_GRID, on_face=None):
     edge_normals = np.where(np.isfinite(edge_normals).all(-1, keepdims=True), edge_normals, [0.0, 0.0, 1.0])
     return FaceNodes(uv, points, normals, counted, edge_uv[keep], edge_points[keep], edge_normals[keep],
                      across[keep], _ranges(bounds, keep), _runs(sizes, keep), spacing)
+
+
+def edge_node_uv(model, step, raster):
+    """The edge nodes' (u, v), a list per wire of (K, 2) arrays, one per edge span
+    (``model.edge_spans``) in the wire's order. A span's nodes are at least as many as
+    :func:`span_needs` asks for and EDGE_NODES_LEAST, doubled until the cubic through them
+    follows the span within EDGE_CURVE_MM, and never more than the larger of what it asks for and
+    EDGE_NODES_MOST. step: mm; raster: the (g_u, g_v, 2) raster of the face's nodes."""
+    sizes = [len(spans) for spans in model.edge_spans]
+    probes = _flat(model.span_samples([[SPAN_PROBES] * size for size in sizes]))
+    needs = np.array([span_needs(model, uv, step, raster) for uv in probes], dtype=int)
+    most = np.maximum(needs, EDGE_NODES_MOST)
+    counts = np.maximum(needs, EDGE_NODES_LEAST)
+    spans = _flat(model.span_samples(_nested(counts, sizes)))
+    pending = counts < most
+    while pending.any():
+        finer = np.where(pending, np.minimum(2 * counts - 1, most), 0)
+        fine = _flat(model.span_samples(_nested(finer, sizes)))
+        for k in np.flatnonzero(pending):
+            halved = finer[k] == 2 * counts[k] - 1
+            if halved and _strays(model, spans[k], fine[k][1::2]) <= EDGE_CURVE_MM:
+                pending[k] = False
+            else:
+                spans[k], counts[k], pending[k] = fine[k], finer[k], finer[k] < most[k]
+    return _nested(spans, sizes)
+
+
+def span_needs(model, uv, step, raster):
+    """The nodes an edge span needs, from its points uv (P, 2) in order: enough that they are at
+    most ``step`` mm apart along it (3D), and EDGE_NODES_PER_STEP per raster step it crosses in
+    either parameter (raster (g_u, g_v, 2)), so that along an edge the nodes are as dense as the
+    raster is across it (on a narrow strip the raster's steps across it are far shorter than the
+    cell diagonals that set ``step``)."""
+    length = np.nan_to_num(np.linalg.norm(np.diff(model.points(uv), axis=0), axis=1)).sum()
+    cells_u = np.interp(uv[:, 0], raster[:, 0, 0], np.arange(raster.shape[0]))
+    cells_v = np.interp(uv[:, 1], raster[0, :, 1], np.arange(raster.shape[1]))
+    crossed = np.abs(np.diff(cells_u)).sum() + np.abs(np.diff(cells_v)).sum()
+    return int(np.ceil(max(length / step, EDGE_NODES_PER_STEP * crossed))) + 1
+
+
+def _flat(wires):
+    """A list per wire of per-edge items as one list of the items."""
+    return [item for wire in wires for item in wire]
+
+
+def _nested(items, sizes):
+    """The per-edge items (E,) back as a list per wire of ``sizes`` (number of edges per wire)."""
+    bounds = np.cumsum([0] + list(sizes))
+    return [list(items[start:stop]) for start, stop in zip(bounds[:-1], bounds[1:])]
+
+
+def _strays(model, uv, halfway):
+    """mm, the largest 3D distance between the cubic through an edge's samples uv (K, 2)
+    (edge_curve_uv) and the edge's true points halfway between them, halfway (K - 1, 2)."""
+    if len(uv) < 2:
+        return 0.0
+    nodes = SimpleNamespace(edge_uv=uv)
+    runs = np.tile([0, len(uv)], (len(uv) - 1, 1))
+    cubic = edge_curve_uv(nodes, np.arange(len(uv) - 1) + 0.5, runs)[0]
+    gap = np.linalg.norm(model.points(cubic) - model.points(halfway), axis=1)
+    return float(np.nanmax(gap, initial=0.0))
 
 
 def grid_size(size):

@@ -23,7 +23,7 @@ PEAK_NODES = 64
 ZOOM_ROUNDS = 4
 ZOOM_STEPS = 4
 # A round that raises no search by more than this share of the largest deviation is the last.
-ZOOM_GAIN = 1e-5
+ZOOM_GAIN = 1e-6
 _NEIGHBOURS = np.array([(1, 0), (-1, 0), (0, 1), (0, -1), (1, 1), (1, -1), (-1, 1), (-1, -1)])
 _LINE = np.concatenate([np.arange(-ZOOM_STEPS, 0), np.arange(1, ZOOM_STEPS + 1)]) / ZOOM_STEPS
 _PLANE = np.array([(a, b) for a in range(-ZOOM_STEPS, ZOOM_STEPS + 1) for b in range(-ZOOM_STEPS, ZOOM_STEPS + 1)

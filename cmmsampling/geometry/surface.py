@@ -25,6 +25,8 @@ import FreeCAD  # noqa: E402  (importable once import_part() has set the path)
 ON_FACE_MM = 1e-5
 # Samples per edge of a trimming loop at least; relative area difference that makes a face trimmed.
 LOOP_SAMPLES_PER_EDGE = 200
+# Edge spans: cut where an edge's curve on the surface is less than C^2 smooth.
+SPAN_CONTINUITY = 2
 TRIM_AREA_TOLERANCE = 1e-7
 INWARD_STEP = 1e-7
 INWARD_DOUBLINGS = 40
@@ -111,10 +113,35 @@ class SurfaceModel(NurbsPatch):
             for edge in wire.OrderedEdges or wire.Edges:
                 curve, first, last = self.face.curveOnSurface(edge)[:3]
                 count = max(LOOP_SAMPLES_PER_EDGE, int(np.ceil(edge.Length / step)) + 1)
-                piece = np.array([(p.x, p.y) for p in map(curve.value, np.linspace(first, last, count))])
+                piece = _curve_uv(curve, first, last, count)
                 pieces.append(piece[::-1] if edge.Orientation == "Reversed" else piece)
             wires.append(pieces)
         return wires
+
+    @cached_property
+    def edge_spans(self):
+        """The face's edges cut where their curve on the surface is less than C^SPAN_CONTINUITY
+        smooth (at such knots of a B-spline curve), so that a cubic through the samples of one
+        span follows it closely: a list per wire of (curve, start, end) in the wire's order, the
+        parameters running the way the wire does (start > end on a reversed edge)."""
+        wires = []
+        for wire in self.face.Wires:
+            spans = []
+            for edge in wire.OrderedEdges or wire.Edges:
+                curve, first, last = self.face.curveOnSurface(edge)[:3]
+                cuts = np.concatenate([[first], _breaks(curve, first, last), [last]])
+                pieces = list(zip(cuts[:-1], cuts[1:]))
+                if edge.Orientation == "Reversed":
+                    pieces = [(end, start) for start, end in reversed(pieces)]
+                spans.extend((curve, start, end) for start, end in pieces)
+            wires.append(spans)
+        return wires
+
+    def span_samples(self, counts):
+        """Each edge span (:attr:`edge_spans`) at ``counts`` (a list per wire of ints) equal steps
+        of its parameter, from its start to its end: a list per wire of (count, 2) uv arrays."""
+        return [[_curve_uv(*span, count) for span, count in zip(spans, wire_counts)]
+                for spans, wire_counts in zip(self.edge_spans, counts)]
 
     def distance_to_face(self, uv):
         """OCC's distance (mm) from the model's points at uv (N, 2) to the face, and the nearest
@@ -266,3 +293,21 @@ def reference_face() -> Part.Face:
     Clamped uniform knots, all weights 1; see :func:`reference_poles` for the pole heights.
     """
     return make_bspline_surface(reference_poles(), (5, 5)).toShape()
+
+
+def _curve_uv(curve, start, end, count):
+    """(count, 2) points of a 2D curve at equal parameter steps from start to end (count may
+    be 0)."""
+    return np.array([(p.x, p.y) for p in map(curve.value, np.linspace(start, end, count))]).reshape(-1, 2)
+
+
+def _breaks(curve, first, last):
+    """The parameters strictly between first and last where a 2D curve is less than
+    C^SPAN_CONTINUITY smooth: a B-spline's knots of multiplicity above degree - SPAN_CONTINUITY;
+    none for other curves."""
+    if not hasattr(curve, "getMultiplicities"):
+        return np.zeros(0)
+    knots, multiplicities = np.array(curve.getKnots()), np.array(curve.getMultiplicities())
+    rough = knots[multiplicities > curve.Degree - SPAN_CONTINUITY]
+    return rough[(rough > min(first, last)) & (rough < max(first, last))]
+
