@@ -310,4 +310,3 @@ def _breaks(curve, first, last):
     knots, multiplicities = np.array(curve.getKnots()), np.array(curve.getMultiplicities())
     rough = knots[multiplicities > curve.Degree - SPAN_CONTINUITY]
     return rough[(rough > min(first, last)) & (rough < max(first, last))]
-

@@ -1,6 +1,7 @@
 """The nodes along a face's edges (cmmsampling.fitting.nodes.edge_node_uv): as few as the raster
 spacing asks for where the edge's curve on the surface is a straight line in (u, v), and, where it
-bends, enough that the cubic the edge searches follow through them stays on OCC's edge."""
+bends, enough that the cubic the edge searches follow through them stays on the face's boundary
+as OCC's curves on the surface define it."""
 import numpy as np
 import pytest
 from support.boundary import boundary_distances
