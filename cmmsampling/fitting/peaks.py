@@ -7,14 +7,8 @@ nodes within PEAK_SHARE of the largest (at most PEAK_NODES of them, largest firs
 for the local maximum beside it, all of them at once: ZOOM_ROUNDS rounds of a grid of ZOOM_STEPS
 steps either side of the best place so far, over the raster cells about it (both parameters) or
 along its edge's curve a segment either side, each round's grid as wide as the last one's step,
-until a round raises the largest deviation by no more than ZOOM_GAIN of it. Then, up to
-ZOOM_ROUNDS_MOST rounds in all, go on only the searches that could still pass the largest by more
-than that share: those whose last round raised them, or whose opposite trials next to their centre
-differ by more than twice their gap to the largest. A peak on a ridge (where the closest point
-jumps, as beside a collapsed edge) falls off steeply, more on one side than the other, and a grid
-misses its top by up to half that difference; at a smooth peak the difference shrinks with the
-square of the step and these rounds end soon. Trials off the face are not measured. The places
-where a search found more than its node join the nodes (cmmsampling.fitting.exact), so
+until a round raises the largest deviation by no more than ZOOM_GAIN of it. Trials off the face
+are not measured. The places where a search found more than its node join the nodes (cmmsampling.fitting.exact), so
 that the figure reported is the local maximum found, not the value at the node beside it.
 """
 from dataclasses import dataclass
@@ -27,28 +21,13 @@ from .sides import Side
 PEAK_SHARE = 0.8
 PEAK_NODES = 64
 ZOOM_ROUNDS = 4
-ZOOM_ROUNDS_MOST = 12
 ZOOM_STEPS = 4
-# A round that raises the largest deviation by no more than this share of it ends the searches,
-# but for those that could still pass it by more than this share.
+# A round that raises no search by more than this share of the largest deviation is the last.
 ZOOM_GAIN = 1e-6
 _NEIGHBOURS = np.array([(1, 0), (-1, 0), (0, 1), (0, -1), (1, 1), (1, -1), (-1, 1), (-1, -1)])
 _LINE = np.concatenate([np.arange(-ZOOM_STEPS, 0), np.arange(1, ZOOM_STEPS + 1)]) / ZOOM_STEPS
 _PLANE = np.array([(a, b) for a in range(-ZOOM_STEPS, ZOOM_STEPS + 1) for b in range(-ZOOM_STEPS, ZOOM_STEPS + 1)
                    if a or b], dtype=float) / ZOOM_STEPS
-
-
-def _opposite_pairs(trials):
-    """(2, P) indices into trials (T, d) of the pairs a step from the centre, opposite each other."""
-    steps = np.round(trials.reshape(len(trials), -1) * ZOOM_STEPS).astype(int)
-    near = np.flatnonzero(np.abs(steps).max(1) == 1)
-    near = near[[tuple(steps[i]) > tuple(-steps[i]) for i in near]]
-    opposite = [int(np.flatnonzero((steps == -steps[i]).all(1))[0]) for i in near]
-    return np.array([near, opposite])
-
-
-_LINE_PAIRS = _opposite_pairs(_LINE)
-_PLANE_PAIRS = _opposite_pairs(_PLANE)
 
 
 @dataclass
@@ -82,48 +61,22 @@ def peak_search(nodes, sizes, start, sides_at, on_face):
     whole = split * len(_PLANE)
     best, foot = sizes[origin].astype(float), start[origin]
     rows = _Rows(origin)
-    active = np.ones(len(origin), dtype=bool)
-    for round_ in range(ZOOM_ROUNDS_MOST if len(origin) else 0):
+    for _ in range(ZOOM_ROUNDS if len(origin) else 0):
         uv_raster, keep = raster.trials()
         uv = np.concatenate([uv_raster.reshape(-1, 2), edge.trials().reshape(-1, 2)])
-        keep = np.concatenate([keep.ravel(), np.ones(len(uv) - keep.size, dtype=bool)]) & np.repeat(active, per)
+        keep = np.concatenate([keep.ravel(), np.ones(len(uv) - keep.size, dtype=bool)])
         forward, reverse, size = _measured(sides_at, uv, keep, np.repeat(origin, per), np.repeat(foot, per, axis=0))
         pick = first + np.concatenate([np.argmax(size[:whole].reshape(split, len(_PLANE)), axis=1),
                                        np.argmax(size[whole:].reshape(-1, len(_LINE)), axis=1)])
-        clipped = np.concatenate([raster.clipped.ravel(), edge.clipped.ravel()])
-        lopsided = _lopsidedness(np.where(clipped, -np.inf, size), split)
         gain = size[pick] > best
         before = best.max()
-        rise = np.where(gain, size[pick] - best, 0.0)
         best[gain], foot[gain] = size[pick[gain]], forward.at[pick[gain]]
         rows.take(gain, pick, uv, forward, reverse)
-        if round_ + 1 >= ZOOM_ROUNDS or best.max() - before <= ZOOM_GAIN * before:
-            active &= best + np.maximum(rise, lopsided) > (1.0 + ZOOM_GAIN) * best.max()
-        if not active.any():
+        if best.max() - before <= ZOOM_GAIN * before:
             break
         raster.move(gain[:split], (pick - first)[:split])
         edge.move(gain[split:], (pick - first)[split:])
     return rows.peaks()
-
-
-def _lopsidedness(size, split):
-    """(S,) for each search, half the largest difference in |d| (mm) between two opposite trials
-    next to its centre (a step either way; pairs with a trial off the face left out): what the
-    top between them may lie above the centre where |d| falls from it no more steeply than it was
-    seen to (the exact gain on a tent whose sides fall alike). size: the round's |d| at every
-    trial (-inf where a trial is off the face or was moved onto its rectangle or edge), the
-    ``split`` raster searches' first."""
-    plane = size[:split * len(_PLANE)].reshape(split, len(_PLANE))
-    line = size[split * len(_PLANE):].reshape(-1, len(_LINE))
-    return np.concatenate([_half_gap(plane[:, _PLANE_PAIRS[0]], plane[:, _PLANE_PAIRS[1]]),
-                           _half_gap(line[:, _LINE_PAIRS[0]], line[:, _LINE_PAIRS[1]])])
-
-
-def _half_gap(one, other):
-    """(S,) the largest |one - other| / 2 over each row of the trials one, other (S, T) where both
-    are finite (0 where none is)."""
-    both = np.isfinite(one) & np.isfinite(other)
-    return 0.5 * np.abs(np.where(both, one, 0.0) - np.where(both, other, 0.0)).max(1, initial=0.0)
 
 
 def _measured(sides_at, uv, keep, origin, start):
@@ -193,8 +146,7 @@ class _Rows:
 class _RasterZoom:
     """Searches over the face's parameters about raster nodes (origin: indices among the counted
     ones): centre (R, 2) the best place so far; half (R, 2) the next grid's half-widths, the
-    larger raster step either side of the node at first; grid (R, T, 2) the last trials; clipped
-    (R, T) True where a trial was moved onto the rectangle."""
+    larger raster step either side of the node at first."""
 
     def __init__(self, nodes, origin, on_face):
         cells = np.argwhere(nodes.counted)[origin]
@@ -204,13 +156,10 @@ class _RasterZoom:
         self.low, self.high = nodes.uv[0, 0], nodes.uv[-1, -1]
         self.on_face = on_face
         self.grid = np.zeros((len(origin), len(_PLANE), 2))
-        self.clipped = np.zeros((len(origin), len(_PLANE)), dtype=bool)
 
     def trials(self):
         """(R, T, 2) the grid's places, within the face's rectangle, and (R, T) bool: on the face."""
-        wanted = self.centre[:, None, :] + _PLANE * self.half[:, None, :]
-        self.grid = np.clip(wanted, self.low, self.high)
-        self.clipped = np.any(self.grid != wanted, axis=-1)
+        self.grid = np.clip(self.centre[:, None, :] + _PLANE * self.half[:, None, :], self.low, self.high)
         keep = np.ones(self.grid.shape[:2], dtype=bool)
         if self.on_face is not None and self.grid.size:
             keep = self.on_face(self.grid.reshape(-1, 2)).reshape(keep.shape)
@@ -226,8 +175,7 @@ class _RasterZoom:
 class _EdgeZoom:
     """Searches along the edges' curves about edge nodes (origin: edge node indices): place (E,)
     the best place so far, a fractional edge node index within its run; half (E,) the next grid's
-    half-width, in edge node steps; grid (E, T) the last trials; clipped (E, T) True where a
-    trial was moved back within its run."""
+    half-width, in edge node steps."""
 
     def __init__(self, nodes, origin):
         self.nodes = nodes
@@ -235,13 +183,11 @@ class _EdgeZoom:
         self.runs = nodes.edge_runs[origin]
         self.half = np.ones(len(origin))
         self.grid = np.zeros((len(origin), len(_LINE)))
-        self.clipped = np.zeros((len(origin), len(_LINE)), dtype=bool)
 
     def trials(self):
         """(E, T, 2) the grid's places on the face, along the edges' curves within their runs."""
-        wanted = self.place[:, None] + _LINE * self.half[:, None]
-        self.grid = np.clip(wanted, self.runs[:, :1], self.runs[:, 1:] - 1.0)
-        self.clipped = self.grid != wanted
+        self.grid = np.clip(self.place[:, None] + _LINE * self.half[:, None],
+                            self.runs[:, :1], self.runs[:, 1:] - 1.0)
         runs = np.repeat(self.runs, len(_LINE), axis=0)
         return edge_curve_uv(self.nodes, self.grid.ravel(), runs)[0].reshape(len(self.place), len(_LINE), 2)
 

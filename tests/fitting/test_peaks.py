@@ -54,7 +54,7 @@ def test_the_nodes_alone_miss_it(creased_run, monkeypatch):
     """Without the searches the same substitute reads over 1 % lower: the crossing lies between
     nodes."""
     problem = creased_run.problem
-    monkeypatch.setattr(peaks, "ZOOM_ROUNDS_MOST", 0)
+    monkeypatch.setattr(peaks, "ZOOM_ROUNDS", 0)
     at_nodes = exact_deviation(problem.space, creased_run.poles, problem.objective.nodes,
                                problem.objective.model, problem.domain.on_face).maximum
     assert at_nodes < 0.99 * creased_run.deviation.maximum
