@@ -37,8 +37,7 @@ NEAR_CELLS = 5
 REACH_CELLS = 32 * 32
 # Bands of v a point-in-loops test sorts the loops' segments into (LoopCrossings).
 BANDS = 128
-# How far inside its cell (a fraction of the cell) a clamped point stays, so that rounding puts it in
-# that cell.
+# How far inside its cell (a fraction of the cell) a clamped point stays, so that it is in that cell.
 CLAMP_INSET = 1e-6
 # The 3 x 3 cells around a cell (index offsets) among which a clamped point goes to the nearest.
 NEIGHBOURS = np.array([(i, j) for i in (-1, 0, 1) for j in (-1, 0, 1)])
@@ -163,8 +162,7 @@ class FaceDomain:
         cells = np.clip(cells, 0, self.shape - 1)
         usable &= self._feasible[cells[..., 0], cells[..., 1]]
         corner = low + cells * cell
-        inset = cell * CLAMP_INSET
-        nearest = np.minimum(np.maximum(clipped[..., None, :], corner + inset), corner + cell - inset)
+        nearest = np.minimum(np.maximum(clipped[..., None, :], corner), corner + cell * (1.0 - CLAMP_INSET))
         gap = np.where(usable, (((nearest - clipped[..., None, :]) / cell) ** 2).sum(-1), np.inf)
         chosen = np.take_along_axis(nearest, gap.argmin(-1)[..., None, None], axis=-2)[..., 0, :]
         return np.where(ok[..., None], clipped, chosen)
