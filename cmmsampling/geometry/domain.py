@@ -22,8 +22,7 @@ Given where a probe reaches the part (``reachable``), the cells it cannot reach 
 asked once per face on a coarser raster of about REACH_CELLS cells, and a cell counts only when
 its coarse cell and their eight neighbours are reached (so a corner far from a centre is judged).
 
-Points outside the feasible cells are moved to the nearest feasible cell: to its centre
-(:meth:`FaceDomain.project`), or to its nearest point (:meth:`FaceDomain.clamp`, for a descent).
+Points outside the feasible cells are moved to the nearest feasible cell centre.
 """
 import numpy as np
 from scipy.ndimage import distance_transform_edt, maximum_filter, minimum_filter
@@ -37,10 +36,6 @@ NEAR_CELLS = 5
 REACH_CELLS = 32 * 32
 # Bands of v a point-in-loops test sorts the loops' segments into (LoopCrossings).
 BANDS = 128
-# How far inside its cell (a fraction of the cell) a clamped point stays, so that it is in that cell.
-CLAMP_INSET = 1e-6
-# The 3 x 3 cells around a cell (index offsets) among which a clamped point goes to the nearest.
-NEIGHBOURS = np.array([(i, j) for i in (-1, 0, 1) for j in (-1, 0, 1)])
 
 
 class FaceDomain:
@@ -142,40 +137,12 @@ class FaceDomain:
         return feasible
 
     def project(self, uv):
-        """Nearest feasible point for each uv: (..., 2) -> (..., 2); feasible points stay put,
-        others go to the centre of the nearest feasible cell."""
-        clipped, ok, low, cell, target = self._nearest_cells(uv)
-        if ok is None:
-            return clipped
-        return np.where(ok[..., None], clipped, low + (target + 0.5) * cell)
-
-    def clamp(self, uv):
-        """Like :meth:`project`, but a point outside goes to the nearest point of the feasible
-        cells around the nearest one (its 3 x 3 neighbourhood), on the feasible region's border:
-        (..., 2) -> (..., 2). Next to the border the map is continuous, so a descent's line search
-        meets a kink there, not a jump."""
-        clipped, ok, low, cell, target = self._nearest_cells(uv)
-        if ok is None:
-            return clipped
-        cells = target[..., None, :] + NEIGHBOURS
-        usable = np.all((cells >= 0) & (cells < self.shape), axis=-1)
-        cells = np.clip(cells, 0, self.shape - 1)
-        usable &= self._feasible[cells[..., 0], cells[..., 1]]
-        corner = low + cells * cell
-        nearest = np.minimum(np.maximum(clipped[..., None, :], corner), corner + cell * (1.0 - CLAMP_INSET))
-        gap = np.where(usable, (((nearest - clipped[..., None, :]) / cell) ** 2).sum(-1), np.inf)
-        chosen = np.take_along_axis(nearest, gap.argmin(-1)[..., None, None], axis=-2)[..., 0, :]
-        return np.where(ok[..., None], clipped, chosen)
-
-    def _nearest_cells(self, uv):
-        """uv (..., 2) clipped to the rectangle; where there is a raster (else None for the rest):
-        (...,) True where the clipped point is in a feasible cell, the rectangle's (2,) lower
-        corner, the (2,) cell size and (..., 2) the indices of the nearest feasible cell."""
+        """Nearest feasible point for each uv: (..., 2) -> (..., 2); feasible points stay put."""
         uv = np.asarray(uv, dtype=float)
         low, high = np.array(self.bounds[0::2]), np.array(self.bounds[1::2])
         clipped = np.minimum(np.maximum(uv, low), high)
         if self._feasible is None:
-            return clipped, None, low, None, None
+            return clipped
         if self._nearest is None:
             self._nearest = distance_transform_edt(~self._feasible, return_distances=False,
                                                    return_indices=True)
@@ -183,7 +150,8 @@ class FaceDomain:
         ok = self._feasible[cells[..., 0], cells[..., 1]]
         target = np.stack([self._nearest[0][cells[..., 0], cells[..., 1]],
                            self._nearest[1][cells[..., 0], cells[..., 1]]], axis=-1)
-        return clipped, ok, low, (high - low) / self.shape, target
+        centres = low + (target + 0.5) * (high - low) / self.shape
+        return np.where(ok[..., None], clipped, centres)
 
     def unreached_rectangles(self):
         """(K, 4) rectangles (u0, u1, v0, v1) covering the unreached cells (see

@@ -146,8 +146,7 @@ def descend(objective, start, lower, upper, judge, min_spacing=0.0, time_limit=N
     judge: uv (N, 2) -> the ExactDeviation (cmmsampling.fitting.exact) of its substitute at the
     objective's nodes;
     lower, upper: (2,) parameter box; project: maps uv (N, 2) onto the feasible set (every
-    iterate is evaluated there; default: the box itself; best continuous at the set's border, as
-    FaceDomain.clamp); min_spacing: mm between points; time_limit: s
+    iterate is evaluated there; default: the box itself); min_spacing: mm between points; time_limit: s
     from ``began`` (a time.perf_counter() value, default: now); max_evaluations: surrogate evaluations; progress: callable (evaluation, best_max_mm) returning
     True to stop; stop_at: mm, end the descent as soon as the best exact maximum is at most this
     (None: never; the start itself may be enough). Returns a DescentResult: the point set of
@@ -272,7 +271,7 @@ def run_optimal(problem, progress, start, time_limit, max_evaluations, stop_at):
     objective = problem.objective
     result = descend(objective, start_uv, problem.domain.lower, problem.domain.upper,
                      problem.exact, problem.min_spacing, time_limit, max_evaluations,
-                     progress, problem.domain.clamp, began, stop_at)
+                     progress, problem.project, began, stop_at)
     if moved:
         notes.append(f"the start had points closer than min_spacing {problem.min_spacing:.3g} mm: "
                      f"{moved} of them were moved to free places before the descent")
