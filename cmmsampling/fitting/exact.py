@@ -161,20 +161,36 @@ def _sides_at(surface, nodes, face, on_face, h, start, fallback, samples):
 def _settled_sides(surface, nodes, face, on_face, h, start, raster, fallback):
     """(forward, reverse) Sides at the face's points F(h), h (M, 2) its parameters, each foot the
     nearest of searches from more starts than a node's: forward from ``start`` (M, 2) and the
-    SETTLE_SAMPLE_STARTS nearest samples of ``raster`` ((parameters, k-d tree) of the substitute),
-    reverse from h and the SETTLE_NODE_STARTS nearest nodes. A foot search can stop short of the closest point
-    (a flat valley of the distance; across a thin strip, at the wrong one of its two long edges),
-    and a search for the largest deviation finds first where it did; these feet are settled wider.
+    SETTLE_SAMPLE_STARTS nearest samples of ``raster`` ((parameters, k-d tree) of the substitute)
+    and its nearest sample on each side of the rectangle, reverse from h and the SETTLE_NODE_STARTS
+    nearest nodes. A foot search can stop short of the closest point (a flat valley of the
+    distance; across a thin strip, in a hollow of its middle or at the wrong one of its two long
+    edges, where all the nearest samples lie in the middle), and a search for the largest
+    deviation finds first where it did; these feet are settled wider.
     fallback (M, 3) unit: the normals where the face has none at h."""
     targets, points = face.points(h), surface.points(h)
     grid, samples = raster
     near_samples = samples.query(targets, k=SETTLE_SAMPLE_STARTS)[1]
-    ahead = _nearest_of(surface, targets, np.concatenate([start[:, None], grid[near_samples]], 1))
+    ahead = _nearest_of(surface, targets, np.concatenate(
+        [start[:, None], grid[near_samples], _nearest_on_sides(raster, targets)], 1))
     near_nodes = nodes.point_tree.query(points, k=min(SETTLE_NODE_STARTS, nodes.point_tree.n))[1].reshape(len(h), -1)
     feet = _nearest_of(face, points, np.concatenate([h[:, None], node_parameters(nodes)[near_nodes]], 1))
     normals = normals_or(face.normals(h), fallback)
     return (_side(surface.points(ahead) - targets, ahead, normals),
             _reverse_from_feet(face, nodes, on_face, points, h, feet, normals))
+
+
+def _nearest_on_sides(raster, targets):
+    """(M, 4, 2) for each target (M, 3) mm the parameters of its nearest sample of ``raster`` (a
+    count x count raster of the rectangle: :func:`_sample_raster`) on each side of the rectangle,
+    u = u0, u = u1, v = v0 and v = v1: from there a foot search follows that side where the
+    closest point lies on it."""
+    grid, tree = raster
+    count = int(round(np.sqrt(len(grid))))
+    index = np.arange(len(grid)).reshape(count, count)
+    sides = np.stack([index[0], index[-1], index[:, 0], index[:, -1]])
+    gap = ((tree.data[sides][None] - targets[:, None, None]) ** 2).sum(-1)
+    return grid[sides[np.arange(4), gap.argmin(-1)]]
 
 
 def _settle_largest(h, forward, reverse, settled):

@@ -13,6 +13,7 @@ import cmmsampling
 from cmmsampling.fitting import exact, peaks
 from cmmsampling.fitting.exact import exact_deviation
 from cmmsampling.fitting.substitute import FittedSurface
+from cmmsampling.geometry.surface import SurfaceModel
 from cmmsampling.geometry.occ_distance import distances_to_face
 
 # Parameters along every crease of creased_face() (its inner knot lines u, v = 1 and 2).
@@ -158,3 +159,18 @@ def test_the_largest_nodes_feet_are_settled_on_a_real_face():
     face = Part.read(os.path.join(TESTDATA, "Ventilator.stp")).Faces[270]
     result = cmmsampling.sample(face, n=16, strategy="uniform_parametric", grid=30)
     assert result.deviation.maximum == pytest.approx(result.deviation.occ_maximum, rel=1e-6)
+
+
+def test_settling_also_starts_from_the_nearest_sample_on_each_side(reference):
+    """The settling's extra starts: for every target, the nearest raster sample on each of the four
+    sides of the rectangle (where the closest point of a thin strip can lie on a long edge that
+    all the nearest samples, in the middle, miss: Ventilator face 270 below)."""
+    model = SurfaceModel.from_face(reference)
+    grid, tree = raster = exact._sample_raster(model, 12)
+    u0, u1, v0, v1 = model.bounds
+    targets = np.random.default_rng(3).uniform(-20.0, 60.0, (7, 3))
+    starts = exact._nearest_on_sides(raster, targets)
+    for side, on_it in enumerate((grid[:, 0] == u0, grid[:, 0] == u1, grid[:, 1] == v0, grid[:, 1] == v1)):
+        candidates = grid[on_it]
+        nearest = np.linalg.norm(tree.data[on_it][None] - targets[:, None], axis=2).argmin(1)
+        np.testing.assert_array_equal(starts[:, side], candidates[nearest])

@@ -1,12 +1,17 @@
-"""The point files byte for byte: export() of a fixed point set against files in tests/data/golden that
+"""The point files line for line: export() of a fixed point set against files in tests/data/golden that
 were read by eye when they were made (DMIS, XYZIJK, CSV; global, and a turned local frame with a
-probe radius along a short path: CSV ball centres, DMIS contact points with the radius stated). A change in any writer shows here as a diff of the file.
+probe radius along a short path: CSV ball centres, DMIS contact points with the radius stated). A
+change in any writer shows here as a differing line. The words, labels and statements must be the
+same character for character; the numbers in them equal to 1e-9 (relative, 1e-9 mm near zero), so
+that the last digits another processor's rounding gives do not count. The fixed points are placed
+so that no two of their distances tie: the short path's order is unique by construction.
 
 After a deliberate change of a format, write the files again with
 ``CMMSAMPLING_WRITE_GOLDEN=1 /usr/bin/python3 -m pytest tests/formats/test_golden_files.py``, read the
 diff and commit it with the change.
 """
 import os
+import re
 
 import numpy as np
 import pytest
@@ -26,13 +31,14 @@ CASES = {
     "local_probe_radius_short_path.dmi": {"probe_radius": 1.5, "order": "short_path", "name": "FIXTURE A"},
     "local_probe_radius_short_path.csv": {"probe_radius": 1.5, "order": "short_path"},
 }
+NUMBER = re.compile(r"[-+]?(?:\d+\.\d*|\.\d+|\d+)(?:[eE][-+]?\d+)?")
 FRAME = FreeCAD.Placement(FreeCAD.Vector(100.0, -20.0, 5.0), FreeCAD.Rotation(30.0, 10.0, 5.0))
 
 
 def point_set():
     """Five points on a saddle-like patch with tilted normals, face parameters, deviations and
     the facts a run would state (a fixed set: no FreeCAD geometry, no optimiser)."""
-    uv = np.array([[0.0, 0.0], [1.0, 0.0], [0.5, 0.5], [0.0, 1.0], [1.0, 1.0]])
+    uv = np.array([[0.0, 0.0], [1.0, 0.15], [0.35, 0.55], [0.05, 1.0], [0.9, 0.85]])
     points = np.column_stack([40.0 * uv, 2.5 * (uv[:, 0] - 0.5) * (uv[:, 1] - 0.5)])
     normals = np.column_stack([-0.1 * (uv[:, 1] - 0.5), -0.1 * (uv[:, 0] - 0.5), np.ones(5)])
     normals /= np.linalg.norm(normals, axis=1)[:, None]
@@ -53,10 +59,40 @@ def test_the_written_file_is_the_golden_one(name, tmp_path):
     if os.environ.get("CMMSAMPLING_WRITE_GOLDEN"):
         with open(golden, "wb") as stream:
             stream.write(written.read_bytes())
-    with open(golden, "rb") as stream:
-        assert written.read_bytes() == stream.read(), f"{name} differs from tests/data/golden/{name}"
+    with open(golden, encoding="utf-8") as stream:
+        expected = stream.read().splitlines()
+    lines = written.read_text(encoding="utf-8").splitlines()
+    assert len(lines) == len(expected), f"{name}: {len(lines)} lines, tests/data/golden/{name} has {len(expected)}"
+    for number, (line, wanted) in enumerate(zip(lines, expected), 1):
+        assert _same_line(line, wanted), f"{name} line {number}: {line!r}, golden {wanted!r}"
     if name.endswith(".dmi"):
         assert dmis_syntax.check(written.read_text()) == []
+
+
+def _same_line(line, wanted):
+    """The same text between the numbers, character for character, and the same numbers to 1e-9."""
+    if NUMBER.split(line) != NUMBER.split(wanted):
+        return False
+    found = np.array([float(x) for x in NUMBER.findall(line)])
+    expected = np.array([float(x) for x in NUMBER.findall(wanted)])
+    return found.shape == expected.shape and bool(np.all(np.abs(found - expected) <= 1e-9 * np.maximum(1.0, np.abs(expected))))
+
+
+def test_the_fixed_points_have_no_tied_distances():
+    """Which point the short path visits next is decided by distances at least 0.1 mm apart, not by
+    rounding (the five points of a square and its centre tied, and the order differed between an
+    Intel and an AMD processor)."""
+    points = point_set().points
+    distances = np.linalg.norm(points[:, None] - points[None], axis=2)[np.triu_indices(len(points), 1)]
+    assert np.diff(np.sort(distances)).min() > 0.1
+
+
+def test_a_last_digit_does_not_count_but_a_word_or_a_number_does():
+    assert _same_line("P3,-47.9255589,1.0000000000e+02", "P3,-47.9255589,1.0000000000000001e+02")
+    assert not _same_line("P3,-47.9255589", "P4,-47.9255589")
+    assert not _same_line("P3,-47.9255589", "P3,-47.9255599")
+    assert not _same_line("FEAT/POINT,CART", "FEAT/PLANE,CART")
+    assert not _same_line("1,2", "1,2,3")
 
 
 @pytest.mark.parametrize("name", sorted(CASES))
