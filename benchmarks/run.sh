@@ -37,11 +37,13 @@ run_one() {
                         "$PY" benchmarks/part_plan.py points ;;
     probe-path) page probe-path "A part plan with the probe's reach and path (Ventilator.stp)" "$PY" benchmarks/probe_path.py ;;
     long-runs) page long-runs "Big and long runs: time and memory" "$PY" benchmarks/long_runs.py ;;
+    paper-run-spread) page paper-run-spread "The paper's run over 12 seeds: the spread a test must allow" \
+                        "$PY" benchmarks/paper_run_spread.py 12 ;;
     memory) page memory "Peak memory against sample()'s estimate" "$PY" benchmarks/memory.py --quick ;;
     *) echo "unknown benchmark '$1'; choose from: $ALL" >&2; return 2 ;;
   esac
 }
-ALL="speed part-plan-speed part-plan-ventilator part-plan-ventilator-optimal speed-busy long-runs memory near-optimal probe-path part-plan-points delivered-deviation"
+ALL="speed part-plan-speed part-plan-ventilator part-plan-ventilator-optimal speed-busy long-runs memory near-optimal probe-path part-plan-points delivered-deviation paper-run-spread"
 status=0
 for name in ${@:-$ALL}; do
   echo "== $name"
