@@ -71,12 +71,14 @@ def saddle_runs():
                                   ("optimal", {}))}
 
 
+@pytest.mark.quality
 def test_equal_parameters_overstate_the_rational_face(saddle_runs):
     """Equal parameters measure the parametrisation, not the form: several times the distance."""
     uniform = saddle_runs["uniform_parametric"]
     assert equal_parameter_maximum(uniform) > 3 * uniform.deviation.maximum
 
 
+@pytest.mark.quality
 def test_optimisers_beat_uniform_in_space_on_the_rational_face(saddle_runs):
     uniform = saddle_runs["uniform_parametric"].deviation.maximum
     assert saddle_runs["pso"].deviation.maximum < uniform
@@ -84,6 +86,7 @@ def test_optimisers_beat_uniform_in_space_on_the_rational_face(saddle_runs):
     assert saddle_runs["optimal"].check.maximum * 2 < saddle_runs["uniform_parametric"].check.maximum
 
 
+@pytest.mark.quality
 @pytest.mark.parametrize("n", [49, 81, 144])
 def test_optimal_ends_near_its_local_bound_on_the_rational_face(n, saddle_runs):
     result = saddle_runs["optimal"] if n == 81 else cmmsampling.sample(rational_saddle(), n, "optimal",
@@ -91,6 +94,7 @@ def test_optimal_ends_near_its_local_bound_on_the_rational_face(n, saddle_runs):
     assert result.multiple_of_bound() <= 1.1
 
 
+@pytest.mark.quality
 def test_optimal_on_a_strip():
     result = cmmsampling.sample(strip_face(), 49, "optimal", occ_check=False)
     uniform = cmmsampling.sample(strip_face(), 49, "uniform_parametric", occ_check=False)

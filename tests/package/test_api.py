@@ -17,6 +17,7 @@ def paper_runs():
             for name in ("uniform_parametric", "uniform_cartesian", "pso")}
 
 
+@pytest.mark.quality
 def test_pso_with_the_paper_parameters_is_never_worse_than_its_uniform_starts(paper_runs):
     """What the method guarantees on any processor: the swarm starts from both uniform layouts and
     its best is judged against them by the exact deviation, so the result is never worse than
@@ -36,6 +37,7 @@ def test_pso_with_the_paper_parameters_is_never_worse_than_its_uniform_starts(pa
 SEED_SPREAD = (0.6427, 0.9091)
 
 
+@pytest.mark.quality
 def test_speed_ups_kept_the_paper_run_result(paper_runs):
     """The best maximum of the paper's run (seed 0) on the delivered substitute lies within the
     spread the seeds show, widened by 5 % (the swarm's path follows the last digits of its
@@ -46,6 +48,7 @@ def test_speed_ups_kept_the_paper_run_result(paper_runs):
     assert 0.95 * SEED_SPREAD[0] <= best <= 1.05 * SEED_SPREAD[1]
 
 
+@pytest.mark.quality
 def test_uniform_figures_are_geometric(paper_runs):
     """The two-sided maxima of the uniform layouts on the delivered substitute (0.9796 and 0.9234 mm
     from the feet of a reference fit to the extended substitute before issue 31; 0.9848 mm at the
@@ -55,12 +58,14 @@ def test_uniform_figures_are_geometric(paper_runs):
         paper_runs["uniform_cartesian"].deviation.occ_maximum, rel=1e-6)
 
 
+@pytest.mark.quality
 @pytest.mark.parametrize("name", ["uniform_parametric", "uniform_cartesian", "pso"])
 def test_occ_cross_check(paper_runs, name):
     d = paper_runs[name].deviation
     assert d.occ_maximum == pytest.approx(d.maximum, rel=1e-6)
 
 
+@pytest.mark.quality
 def test_result_contents(paper_runs):
     r = paper_runs["pso"]
     assert r.n == 81 and r.labels[0] == "P1" and r.labels[-1] == "P81"
@@ -78,6 +83,7 @@ def test_result_contents(paper_runs):
     assert summary["max_mm"] == d.maximum and summary["strategy"] == "pso"
 
 
+@pytest.mark.quality
 def test_evaluate_reproduces_a_sampled_result(paper_runs):
     again = cmmsampling.evaluate(cmmsampling.reference_face(), paper_runs["pso"].uv, occ_check=False)
     assert again.deviation.maximum == pytest.approx(paper_runs["pso"].deviation.maximum, rel=1e-12)

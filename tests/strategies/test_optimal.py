@@ -110,6 +110,7 @@ def test_surrogate_tends_to_the_true_maximum(small):
     assert coarse.value > sharp.value
 
 
+@pytest.mark.quality
 def test_optimal_beats_uniform_by_half_again_on_the_reference_surface():
     """N = 81, default fit and grid, on the delivered substitute: at least 1.5x below uniform
     parametric sampling (measured 2.4x), near a local optimum of its substitute's shape (within 10%
