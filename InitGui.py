@@ -25,7 +25,9 @@ class CMMSamplingWorkbench(FreeCADGui.Workbench):
         import os
 
         from cmmsampling.gui import commands, resource
+        from cmmsampling.strategies.parallel import ignore_broken_pipes
 
+        ignore_broken_pipes()   # FreeCAD 1.0 and 1.1 would end on a write to a stopped process's pipe
         toolbar, menu = commands.register()
         FreeCADGui.addIconPath(os.path.dirname(self.Icon))   # the preferences group's icon
         FreeCADGui.addPreferencePage(resource("preferences.ui"), "CMM sampling")

@@ -14,6 +14,8 @@ import concurrent.futures
 import contextvars
 import ctypes
 import multiprocessing
+import multiprocessing.context
+import multiprocessing.spawn
 import os
 import tempfile
 import threading
@@ -23,7 +25,7 @@ from concurrent.futures.process import BrokenProcessPool
 
 from ..geometry.validation import check_int
 from ..strategies.memory import free_bytes, gib
-from ..strategies.parallel import package_parent, python_executable
+from ..strategies.parallel import ignore_broken_pipes, package_parent, python_executable
 
 # Memory one local process takes for a face (FreeCAD, numpy, scipy and a face's arrays), bytes:
 # a Ventilator face's process peaked at about 180 MB; this leaves room for larger grids.
@@ -31,6 +33,58 @@ PROCESS_BYTES = 400 * 2**20
 PARENT_CHECK_SECONDS = 1.0
 # How often a run reports that jobs are still under way (and can be cancelled), s.
 BEAT_SECONDS = 0.5
+
+
+# Local processes that import the package alone: spawn's children normally run the parent's
+# __main__ again (as __mp_main__), which re-runs a script without an ``if __name__ ==
+# "__main__":`` guard (its plan() call then starts processes inside the child, which dies) and
+# fails for stdin or a FreeCAD macro. The processes of this module are named with PROCESS_PREFIX
+# and their preparation data lose the main module's path and name; the jobs' functions and data
+# come from the package, found on the sys.path the data keep.
+PROCESS_PREFIX = "cmmsampling-"
+_MAIN_KEYS = ("init_main_from_path", "init_main_from_name")
+
+
+def _package_only(prepare):
+    """multiprocessing.spawn.get_preparation_data, without the main module for this module's
+    processes (named PROCESS_PREFIX...), as it was for any other."""
+
+    def prepared(name):
+        data = prepare(name)
+        if name.startswith(PROCESS_PREFIX):
+            for key in _MAIN_KEYS:
+                data.pop(key, None)
+        return data
+
+    prepared.package_only = True
+    return prepared
+
+
+class _PackageProcess(multiprocessing.context.SpawnProcess):
+    """A spawned process that runs none of the parent's __main__ (see PROCESS_PREFIX)."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self.name = PROCESS_PREFIX + self.name
+
+
+class _PackageContext(multiprocessing.context.SpawnContext):
+    """The spawn start method with :class:`_PackageProcess` processes."""
+
+    Process = _PackageProcess
+
+
+def package_context():
+    """A spawn context whose processes import the package alone, never the parent's __main__,
+    started with this Python (python_executable: also from inside FreeCAD)."""
+    ignore_broken_pipes()
+    if not getattr(multiprocessing.spawn.get_preparation_data, "package_only", False):
+        multiprocessing.spawn.get_preparation_data = _package_only(multiprocessing.spawn.get_preparation_data)
+    context = _PackageContext()
+    executable = python_executable()
+    if executable is not None:
+        context.set_executable(executable)
+    return context
 
 
 class WorkersFailed(RuntimeError):
@@ -146,11 +200,7 @@ def _local_processes(function, jobs, count):
     """The jobs on ``count`` local processes as they end: (index, outcome); closing the
     generator early stops the processes. WorkersFailed when a process dies (or cannot import
     the package). Each process ends itself when this one dies (:func:`follow_parent`)."""
-    context = multiprocessing.get_context("spawn")
-    executable = python_executable()
-    if executable is not None:
-        context.set_executable(executable)
-    pool = concurrent.futures.ProcessPoolExecutor(count, mp_context=context, initializer=follow_parent,
+    pool = concurrent.futures.ProcessPoolExecutor(count, mp_context=package_context(), initializer=follow_parent,
                                                   initargs=(os.getpid(),))
     futures = {pool.submit(function, job): index for index, job in enumerate(jobs)}
     pending = set(futures)

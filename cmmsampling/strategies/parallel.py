@@ -19,10 +19,12 @@ result is the same either way; :attr:`TwoProcessObjective.fallback` says why one
 import atexit
 import itertools
 import os
+import signal
 import socket
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 
 import numpy as np
@@ -46,6 +48,17 @@ def python_executable():
     return candidate if os.path.exists(candidate) else None
 
 
+def ignore_broken_pipes():
+    """Let a write to a pipe whose reader has died raise BrokenPipeError instead of ending this
+    process. Python's own start-up sets that; FreeCAD 1.0 and 1.1 leave SIGPIPE at its default,
+    and a local process ended on Cancel while a pool's thread wrote to it then ended FreeCAD
+    (exit 141). Only the main thread may set a handler: called where the workbench starts and
+    where local processes or the swarm's worker start; a handler of the host's own is kept."""
+    if hasattr(signal, "SIGPIPE") and threading.current_thread() is threading.main_thread() \
+            and signal.getsignal(signal.SIGPIPE) == signal.SIG_DFL:
+        signal.signal(signal.SIGPIPE, signal.SIG_IGN)
+
+
 def package_parent():
     """The folder (or zip file) that holds the imported ``cmmsampling`` package: what a worker
     process puts first on its sys.path."""
@@ -67,6 +80,7 @@ class Worker:
     """One worker process and the channel to it; WorkerUnavailable when it does not start."""
 
     def __init__(self, executable, start_seconds=START_SECONDS):
+        ignore_broken_pipes()
         ours, theirs = socket.socketpair()
         self.errors = tempfile.TemporaryFile()
         try:

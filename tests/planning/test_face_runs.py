@@ -37,6 +37,56 @@ def test_processes_that_cannot_import_a_job_leave_the_jobs_to_this_process(tmp_p
     assert note.startswith("a local process ended abruptly") and note.endswith("ran in this process")
 
 
+UNGUARDED = """import sys
+sys.path.insert(0, {root!r})
+with open({marker!r}, "a") as marker:
+    marker.write(__name__ + "\\n")
+import cmmsampling
+import Part
+made = cmmsampling.plan(Part.makeBox(20, 30, 10), n_total=48, strategy="uniform_parametric", processes=2,
+                        faces=[1, 2, 3])
+print("notes", made.notes, "points", made.n_total)
+"""
+
+
+@pytest.mark.parametrize("given_as", ["file", "stdin"])
+def test_a_script_without_a_main_guard_plans_on_two_processes_and_ends(tmp_path, given_as):
+    """A plain script (no ``if __name__ == "__main__":``), as a file or on standard input: the
+    local processes import the package alone and never run the script again (before, each ran it
+    as __mp_main__, started processes of its own and died, and the faces fell back to one process
+    with the note "a local process ended abruptly")."""
+    marker = tmp_path / "runs.txt"
+    script = UNGUARDED.format(root=ROOT, marker=str(marker))
+    (tmp_path / "plan_box.py").write_text(script)
+    command = [PYTHON, "plan_box.py"] if given_as == "file" else [PYTHON, "-"]
+    started = time.perf_counter()
+    done = subprocess.run(command, input=None if given_as == "file" else script, capture_output=True, text=True,
+                          cwd=str(tmp_path), timeout=120)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert "notes [] points 48" in done.stdout, done.stdout + done.stderr[-2000:]
+    assert marker.read_text().split() == ["__main__"]
+    assert time.perf_counter() - started < 60
+
+
+def test_starting_local_processes_turns_a_closed_pipe_into_an_error_not_an_exit(tmp_path):
+    """SIGPIPE at its default, as FreeCAD 1.0 and 1.1 leave it (a Cancel that stopped a local
+    process while the pool wrote to it ended FreeCAD with exit 141): once local processes can
+    start, a write to a pipe with no reader raises BrokenPipeError and the process goes on."""
+    script = ("import os, signal, sys\n"
+              f"sys.path.insert(0, {ROOT!r})\n"
+              "signal.signal(signal.SIGPIPE, signal.SIG_DFL)\n"
+              "from cmmsampling.planning import face_runs\n"
+              "face_runs.package_context()\n"
+              "reader, writer = os.pipe()\n"
+              "os.close(reader)\n"
+              "try:\n"
+              "    os.write(writer, b'x')\n"
+              "except BrokenPipeError:\n"
+              "    print('still here')\n")
+    done = subprocess.run([PYTHON, "-c", script], capture_output=True, text=True, timeout=60)
+    assert (done.returncode, done.stdout.strip()) == (0, "still here"), (done.returncode, done.stderr[-2000:])
+
+
 def test_more_processes_than_cores_are_capped_and_said():
     notes = []
     count = face_runs.process_count(1000, 500, notes)
