@@ -75,7 +75,7 @@ def measured_deviation(face: Part.Face, points: PointSet | str | os.PathLike, *,
     positions = measured.points
     if placement is not None:
         positions = to_global(measured.points, measured.normals, placement)[0]
-    _check_extent(positions, measured.labels)
+    check_extent(positions, measured.labels)
     closest, normals, distances = closest_points(face, positions)
     side = np.sign(np.einsum("ij,ij->i", positions - closest, normals))
     return MeasuredDeviation(measured.labels, side * distances - radius, closest, radius)
@@ -99,7 +99,7 @@ def stated_radius(point_set):
     return check_real(f"{where}: the stated probe_radius_mm", value, minimum=0.0)
 
 
-def _check_extent(positions, labels):
+def check_extent(positions, labels):
     """InputError naming the first point farther than MAX_COORDINATE_MM from the origin.
     positions: (N, 3) mm in the part's frame; labels: N names."""
     far = np.flatnonzero(np.abs(positions).max(axis=1) > MAX_COORDINATE_MM)

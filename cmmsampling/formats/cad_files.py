@@ -3,6 +3,7 @@ that ``python -m cmmsampling faces`` prints."""
 import os
 
 from ..geometry.validation import InputError
+from .files import check_readable
 
 
 # The CAD file types read_shape reads: {extension: FreeCAD's name for the format}
@@ -17,12 +18,7 @@ def read_shape(path):
     extension = os.path.splitext(path)[1].lower()
     if extension not in CAD_TYPES:
         raise InputError(f"{path}: unknown file type {extension!r}; use a STEP, IGES or BREP file")
-    if os.path.isdir(path):
-        raise InputError(f"{path}: is a folder, not a CAD file; give the file's path")
-    if not os.path.isfile(path):
-        raise InputError(f"{path}: no such file")
-    if not os.access(path, os.R_OK):
-        raise InputError(f"{path}: no permission to read it")
+    path = check_readable(path, "CAD file")
     kind = CAD_TYPES[extension]
     try:
         shape = Part.read(path)

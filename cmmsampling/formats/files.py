@@ -1,8 +1,11 @@
 """Writing a point file so that it is whole or not there: a temporary file beside the target,
 fsync, then a rename; the temporary files of writes killed midway are removed later."""
+import errno
 import os
 import re
 import tempfile
+
+from ..geometry.validation import InputError, InputTypeError
 
 class ExportError(OSError):
     """A point file could not be written; the message names the path and the reason."""
@@ -25,6 +28,37 @@ def check_writable(path):
     os.close(descriptor)
     os.unlink(temporary)
     return target
+
+
+def path_of(path, kind):
+    """The path as a str; InputTypeError naming the type given when it is no str or os.PathLike
+    of a str (a list, an array, bytes). kind: what the file should be ("point file")."""
+    if not isinstance(path, (str, os.PathLike)) or isinstance(os.fspath(path), bytes):
+        raise InputTypeError(f"a {kind} is given by its path, a str or pathlib.Path, got {type(path).__name__}")
+    return os.fspath(path)
+
+
+def check_readable(path, kind):
+    """The path as a str when it names a file this process can read; else InputError in one line
+    that names the path, the problem and what to give: a folder, a missing file, a loop of
+    symbolic links (or one that leads nowhere), no permission. kind: what the file should be
+    ("point file", "CAD file"); a path of another type: see :func:`path_of`."""
+    path = path_of(path, kind)
+    try:
+        os.stat(path)
+    except OSError as exc:
+        if exc.errno == errno.ELOOP:
+            raise InputError(f"{path}: its symbolic links lead round in a loop; give the {kind}'s real path") from exc
+        if os.path.islink(path):
+            raise InputError(f"{path}: a symbolic link to nothing ({os.readlink(path)}); give the {kind}'s real path") from exc
+        if exc.errno in (errno.EACCES, errno.EPERM):
+            raise InputError(f"{path}: no permission to reach it; give a {kind} you may read") from exc
+        raise InputError(f"{path}: no such file") from exc
+    if os.path.isdir(path):
+        raise InputError(f"{path}: is a folder, not a {kind}; give the file's path")
+    if not os.access(path, os.R_OK):
+        raise InputError(f"{path}: no permission to read it; give a {kind} you may read (or change its permissions)")
+    return path
 
 
 def _temporary_file(target):

@@ -13,6 +13,7 @@ import os
 
 from ..geometry.validation import InputError, check_choice
 from . import csv_points, dmis, xyzijk
+from .files import check_readable, path_of
 from .pointset import PointSet
 from .registry import FORMATS, FileFormat, export_filter, extensions, register_format, unregister_format
 
@@ -53,11 +54,8 @@ def read_points(path: str | os.PathLike, format: str | None = None) -> PointSet:
     ``frame_origin_mm``, ... where stated), plus ``format`` and ``path``.
     Returns a PointSet; ValueError naming the file and line for what cannot be read.
     """
-    fmt = resolve_format(path, format)
-    if os.path.isdir(path):
-        raise InputError(f"{path}: is a folder, not a point file; give the file's path")
-    if not os.path.isfile(path):
-        raise InputError(f"{path}: no such file")
+    fmt = resolve_format(path_of(path, "point file"), format)
+    path = check_readable(path, "point file")
     with open(path, encoding="utf-8-sig", errors="replace", newline="") as stream:
         text = stream.read()
     point_set = FORMATS[fmt].read(text, os.fspath(path))

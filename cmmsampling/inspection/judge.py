@@ -22,7 +22,7 @@ from ..geometry.surface import as_face
 from ..geometry.validation import InputError, InputTypeError, check_real
 from ..fitting.deviation import NUMERICAL_ZERO_MM
 from ..fitting.occ_surface import substitute_surface
-from ..measurement import closest_points, stated_radius
+from ..measurement import check_extent, closest_points, stated_radius
 from ..planning.part_plan import PartPlan
 from ..strategies.result import SamplingResult
 from .align import ALIGNMENTS, Alignment, align, check_locked
@@ -195,7 +195,7 @@ def inspect(source, measured, alignment="best_fit", tolerance=None, locked=(), p
     tolerance = None if tolerance is None else check_real("tolerance", tolerance, above=0.0)
     zone_offset = check_real("zone_offset", zone_offset)
     planned = _planned(source, part)
-    read = read_measured(measured) if isinstance(measured, (str, os.PathLike)) else as_point_set(measured)
+    read = _measured_point_set(measured)
     contact = _contact_points(read, probe_radius)
     order, notes = pair(planned, read)
     points = contact[order[0]]
@@ -257,6 +257,18 @@ def _face_of(part, name):
         raise InputError(f"the part given has no {name}: give part= the shape the plan was made of") from None
 
 
+def _measured_point_set(measured):
+    """The PointSet of ``measured``: a file's path (str, pathlib.Path) read by read_measured, or
+    points already in hand (a PointSet); InputTypeError naming what was given otherwise."""
+    if isinstance(measured, (str, bytes, os.PathLike)):
+        return read_measured(measured)
+    try:
+        return as_point_set(measured)
+    except InputTypeError:
+        raise InputTypeError(f"measured= takes the path of a measured-points file (a str or pathlib.Path) or a "
+                             f"PointSet, got {type(measured).__name__}") from None
+
+
 def _contact_points(point_set, probe_radius):
     """The measured contact points (N, 3) mm: ball centres moved back by the probe radius along
     their vectors (probe_radius mm, else the radius the file states, except for DMIS actuals,
@@ -275,6 +287,7 @@ def _contact_points(point_set, probe_radius):
         row = int(np.flatnonzero(~np.isfinite(points).all(axis=1))[0])
         raise InputError(f"measured point {point_set.labels[row]} has no finite coordinates; measure it again or "
                          "leave it out of the file")
+    check_extent(points, point_set.labels)
     return points - radius * np.nan_to_num(normals)
 
 

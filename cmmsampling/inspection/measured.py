@@ -12,6 +12,7 @@ import re
 import numpy as np
 
 from ..formats.csv_points import CSV_COLUMNS
+from ..formats.files import check_readable
 from ..formats.pointfiles import read_points, resolve_format
 from ..formats.pointset import PointSet
 from ..formats.text import number
@@ -27,8 +28,7 @@ def read_measured(path):
     where the file gives no vectors). DMIS and XYZIJK files and CSV files with the project's
     header go through :func:`cmmsampling.read_points`; any other text is read as labelled x, y, z
     lines (:func:`read_labelled_text`)."""
-    if not os.path.isfile(path):
-        raise InputError(f"{path}: no such file")
+    path = check_readable(path, "measured-points file")
     if _project_file(path):
         return read_points(path)
     with open(path, encoding="utf-8-sig", errors="replace") as stream:

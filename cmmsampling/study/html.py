@@ -9,9 +9,14 @@ import numpy as np
 
 from ..geometry.surface import SurfaceModel
 from ..strategies import handover
-from ..strategies.sampling import strategy_label as label
+from ..strategies.sampling import strategy_label
 from .compare import Study
 from .figures import write_figures
+
+
+def label(strategy):
+    """A strategy's label, escaped for HTML (a registered strategy's label is not ours)."""
+    return html.escape(strategy_label(strategy))
 
 
 def write_report(study: Study, folder: str | os.PathLike) -> str:
@@ -64,7 +69,7 @@ def report_html(study, figures):
     if study.cancelled:
         parts.append("<p class='warning'>The study was cancelled: only the runs completed are shown.</p>")
     for (strategy, n), message in study.refused.items():
-        parts.append(f"<p class='warning'>{html.escape(label(strategy))} at N = {n} was refused: "
+        parts.append(f"<p class='warning'>{label(strategy)} at N = {n} was refused: "
                      f"{html.escape(message)}</p>")
     parts += ["<h2>Table 1: maximum deviation (mm) per strategy and number of probe points</h2>",
               _matrix_html(study),
@@ -122,7 +127,7 @@ def _settings_html(study):
 def _options_html(strategy, options):
     """'Label: option value, ...' of one strategy's options, escaped for HTML."""
     listed = ", ".join(f"{key} {value}" for key, value in options.items())
-    return html.escape(f"{label(strategy)}: {listed}")
+    return f"{label(strategy)}: {html.escape(listed)}"
 
 
 def _pair(value):
@@ -145,7 +150,7 @@ def _matrix_html(study):
             if text and seeded:
                 text += f" ± {std[i, j]:.4f}"
             cells.append(f"<td{' class=best' if mean[i, j] == best[j] else ''}>{text}</td>")
-        rows.append(f"<tr><td>{html.escape(label(strategy))}</td>{''.join(cells)}</tr>")
+        rows.append(f"<tr><td>{label(strategy)}</td>{''.join(cells)}</tr>")
     for name, kind in (("local bound about the best", "grid"), ("local bound, check grid", "check")):
         cells = "".join(f"<td>{getattr(study.bounds[n], kind):.4f}</td>" if n in study.bounds else "<td></td>"
                         for n in study.ns)
@@ -182,7 +187,7 @@ def _summary_html(study):
             cells.append(f"<td>{text}</td>")
         group = " class='group'" if a.n != previous else ""
         previous = a.n
-        rows.append(f"<tr{group}><td>{html.escape(label(a.strategy))}</td><td>{a.n}</td>"
+        rows.append(f"<tr{group}><td>{label(a.strategy)}</td><td>{a.n}</td>"
                     f"<td>{len(a.seeds)}</td>{''.join(cells)}</tr>")
     return (f"<table><thead><tr><th>strategy</th><th>N</th><th>runs</th>{head}</tr></thead>"
             f"<tbody>{''.join(rows)}</tbody></table>")
