@@ -5,6 +5,7 @@ from ..geometry.freecad_env import import_part
 from ..geometry.surface import make_bspline_surface
 
 Part = import_part()
+from FreeCAD import Base  # noqa: E402  (importable once import_part() has set the path)
 
 
 def substitute_surface(space, poles):
@@ -35,10 +36,32 @@ def trimmed_like(face, surface):
 
 
 def _wire_on(face, wire, surface):
-    """A wire of ``face`` laid on ``surface``: each edge's curve on the face's surface, as an edge of
-    the substitute over the same parameter interval."""
-    edges = []
-    for edge in wire.OrderedEdges or wire.Edges:
-        curve, first, last = face.curveOnSurface(edge)[:3]
-        edges.append(curve.toShape(surface, first, last))
-    return Part.Wire(edges)
+    """A wire of ``face`` laid on ``surface``: each edge's curve on the face's surface, run in the
+    wire's direction, as an edge of the substitute over the same parameter interval. A STEP
+    file's curves on the surface often leave gaps at the corners (1e-4 of a parameter on
+    Ventilator faces, within the edges' tolerance), which OCC's wire does not bridge: each gap
+    is closed at its middle first (:func:`_close_gaps`)."""
+    curves = [_directed_curve(face, edge) for edge in wire.OrderedEdges or wire.Edges]
+    _close_gaps(curves)
+    return Part.Wire([curve.toShape(surface, curve.FirstParameter, curve.LastParameter) for curve in curves])
+
+
+def _directed_curve(face, edge):
+    """The edge's curve on the face's surface as a 2D B-spline (Part.Geom2d.BSplineCurve2d) that
+    runs the way the edge is used in its wire (reversed for a reversed edge)."""
+    curve, first, last = face.curveOnSurface(edge)[:3]
+    spline = curve.toBSpline(first, last)
+    if edge.Orientation == "Reversed":
+        spline.reverse()
+    return spline
+
+
+def _close_gaps(curves):
+    """Make each 2D B-spline of a closed chain (a list, in order) end where the next one starts:
+    the last pole of one and the first pole of the next (a clamped spline's end points) both
+    moved to the middle of the gap between them."""
+    for current, following in zip(curves, curves[1:] + curves[:1]):
+        end, start = current.value(current.LastParameter), following.value(following.FirstParameter)
+        middle = Base.Vector2d((end.x + start.x) / 2, (end.y + start.y) / 2)
+        current.setPole(current.NbPoles, middle)
+        following.setPole(1, middle)
