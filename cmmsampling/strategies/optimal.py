@@ -35,7 +35,9 @@ STAGE_ITERATIONS = 800
 CHUNK_ITERATIONS = 400
 MIN_CHUNK_ITERATIONS = 5
 SPACING_FRACTION = 0.1
-MIN_SPACING_FLOOR = 0.005
+# Points nearer than this measure one spot twice with a CMM's ball: the default spacing keeps it
+# wherever the face has room, mm.
+BALL_SEPARATION_MM = 0.1
 PACKING = np.sqrt(3) / 2
 
 
@@ -47,10 +49,11 @@ def default_min_spacing(area, n, feasible_area=None):
     """The default distance every strategy keeps between points, mm.
 
     A tenth of the spacing of N points spread evenly over a face of ``area`` mm^2, at least
-    MIN_SPACING_FLOOR (5 um); where the feasible part of the face (``feasible_area`` mm^2, after
-    the edge offset) cannot hold N points that far apart, half the spacing that fits there.
+    BALL_SEPARATION_MM (0.1 mm: nearer points measure one spot twice with a ball); where the
+    feasible part of the face (``feasible_area`` mm^2, after the edge offset) cannot hold N
+    points that far apart, half the spacing that fits there.
     """
-    spacing = max(SPACING_FRACTION * float(np.sqrt(area / n)), MIN_SPACING_FLOOR)
+    spacing = max(SPACING_FRACTION * float(np.sqrt(area / n)), BALL_SEPARATION_MM)
     if feasible_area is not None:
         spacing = min(spacing, 0.5 * float(np.sqrt(feasible_area / (PACKING * n))))
     return spacing

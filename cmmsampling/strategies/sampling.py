@@ -23,7 +23,7 @@ from ..geometry.surface import lies_on
 from ..geometry.validation import InputError, InputTypeError, check_choice, check_int, check_pair, check_real, check_uv
 from . import blind, handover, memory, optimal, pso
 from .face_setup import setup_of
-from .optimal import default_min_spacing
+from .optimal import BALL_SEPARATION_MM, default_min_spacing
 from .problem import SamplingProblem, resolve_fit_poles
 from .registry import (STRATEGIES, Setting, Strategy, StrategyOutcome, baseline, register_strategy,
                        strategy_label, strategy_options, unregister_strategy)
@@ -249,7 +249,7 @@ def sample(face: Part.Face, n: int = 81, strategy: str = DEFAULT_STRATEGY, *, fi
     workers: processes the optimisers spread each swarm over (1 or 2; None: 2 on a multi-core
     machine where they are faster, measured as the run goes, else 1; the results are identical); edge_offset: mm every point keeps from the face's edges
     (3D; 0, the paper's setting, allows points on the edges); min_spacing: mm between any two
-    points (None: a tenth of the even spacing sqrt(area / n), at least 5 um, lowered where the
+    points (None: a tenth of the even spacing sqrt(area / n), at least 0.1 mm, lowered where the
     face cannot hold N points that far apart; 0 allows any); part: the Part.Shape the face
     belongs to (a solid), or a cmmsampling.access.reach.Reachability of it (kept for many runs),
     whose other faces may block the probe: the face's points the probe
@@ -275,7 +275,7 @@ def sample(face: Part.Face, n: int = 81, strategy: str = DEFAULT_STRATEGY, *, fi
     with blas_threads(1):
         outcome = _exact_outcome(problem, strategy) or STRATEGIES[strategy].run(problem, progress, **options)
     _move_onto_face(problem, outcome)
-    outcome.notes += _fit_notes(problem)
+    outcome.notes += _fit_notes(problem) + _spacing_notes(problem)
     strategy_s = time.perf_counter() - start
     settings = {"strategy": strategy, "n": problem.n, **_common_settings(problem),
                 **_json_friendly({**options, **outcome.details})}
@@ -338,6 +338,15 @@ def _fit_notes(problem):
     return [f"the substitute has {poles[0]} x {poles[1]} poles for {problem.n} points: between the "
             f"points its shape comes from the smoothing, not from the measurement (the default for "
             f"{problem.n} points is {usual[0]} x {usual[1]})"]
+
+
+def _spacing_notes(problem):
+    """A sentence where the default spacing had to go below BALL_SEPARATION_MM: the face has no
+    room for N points that far apart, and a ball may then touch one spot twice."""
+    if not problem.spacing_by_default or problem.min_spacing >= BALL_SEPARATION_MM:
+        return []
+    return [f"the face has no room for {problem.n} points {BALL_SEPARATION_MM:g} mm apart: they keep "
+            f"{problem.min_spacing:.3g} mm, and a probe ball may touch nearly one spot twice; lower n to keep them apart"]
 
 
 def _json_friendly(options):
