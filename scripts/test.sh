@@ -5,6 +5,7 @@
 # processes, the GUI's timers), so on two cores together they take about as long as the longer one.
 #   bash scripts/test.sh                 # every test but those marked quality or slow (pytest.ini)
 #   bash scripts/test.sh --quality       # the quality layer too: what CI runs on the host
+#   bash scripts/test.sh --quick         # the quick layer alone, headless (seconds): while editing
 #   bash scripts/test.sh -k export       # other arguments go to the headless pytest run
 # Exit code: non-zero if either run fails.
 set -euo pipefail
@@ -14,6 +15,9 @@ layers=(-m "not slow and not quality")
 if [ "${1:-}" = "--quality" ]; then
   layers=(-m "not slow")
   shift
+elif [ "${1:-}" = "--quick" ]; then
+  shift
+  exec /usr/bin/python3 -m pytest -q -p no:cacheprovider tests -m quick "$@"
 fi
 gui_log="$(mktemp)"
 trap 'rm -f "$gui_log"' EXIT
