@@ -5,7 +5,7 @@ domain and points along every edge and trim loop, measured with OCC alone."""
 import numpy as np
 import pytest
 from scipy.spatial import cKDTree
-from support.boundary import boundary_distances
+from support.boundary import boundary_distances, domain_parameters
 from support.faces import Part, collapsed_face, diagonal_band, holed_face, rational_saddle, strip_face
 
 import cmmsampling
@@ -19,24 +19,11 @@ RASTER = 30
 PER_EDGE = 200
 
 
-def occ_parameters(face):
-    """(u, v) of a RASTER x RASTER raster of the face's domain (points inside its boundary by OCC's
-    classifier) and of PER_EDGE points along each of its edges, corners included."""
-    u0, u1, v0, v1 = face.ParameterRange
-    inside = [(u, v) for u in np.linspace(u0, u1, RASTER) for v in np.linspace(v0, v1, RASTER)
-              if face.isPartOfDomain(u, v)]
-    along = []
-    for edge in face.Edges:
-        curve, first, last = face.curveOnSurface(edge)[:3]
-        along += [(curve.value(t).x, curve.value(t).y) for t in np.linspace(first, last, PER_EDGE)]
-    return inside + along
-
-
 def occ_deviation(face, substitute):
     """OCC's largest distance, mm: from the face's points to the delivered substitute's shape, and
     from the substitute's points over the face's domain back to the face."""
     shape = substitute.toShape()
-    parameters = occ_parameters(face)
+    parameters = domain_parameters(face, RASTER, PER_EDGE)
     forward = max(shape.distToShape(Part.Vertex(face.valueAt(u, v)))[0] for u, v in parameters)
     reverse = max(face.distToShape(Part.Vertex(substitute.value(u, v)))[0] for u, v in parameters)
     return max(forward, reverse)
@@ -80,7 +67,7 @@ def test_the_nodes_cover_the_face_within_their_spacing():
     result = cmmsampling.sample(face, 25, "uniform_parametric", grid=30, occ_check=False)
     stats = result.deviation
     nodes = np.concatenate([stats.nodes[np.isfinite(stats.field)], stats.edge_nodes])
-    points = np.array([tuple(face.valueAt(u, v)) for u, v in occ_parameters(face)])
+    points = np.array([tuple(face.valueAt(u, v)) for u, v in domain_parameters(face, RASTER, PER_EDGE)])
 
     assert cKDTree(nodes).query(points)[0].max() <= stats.spacing
     corners = np.array([tuple(v.Point) for v in face.Vertexes])

@@ -9,6 +9,19 @@ from scipy.spatial import cKDTree
 BOUNDARY_SAMPLES = 2001
 
 
+def domain_parameters(face, raster=30, per_edge=200):
+    """(u, v) of a raster x raster raster of the face's domain (the points inside its boundary by
+    OCC's classifier) and of per_edge points along each of its edges, corners included."""
+    u0, u1, v0, v1 = face.ParameterRange
+    inside = [(u, v) for u in np.linspace(u0, u1, raster) for v in np.linspace(v0, v1, raster)
+              if face.isPartOfDomain(u, v)]
+    along = []
+    for edge in face.Edges:
+        curve, first, last = face.curveOnSurface(edge)[:3]
+        along += [(curve.value(t).x, curve.value(t).y) for t in np.linspace(first, last, per_edge)]
+    return inside + along
+
+
 def boundary_distances(face, points):
     """mm (M,) from each point (M, 3) to the face's boundary as its curves on the surface define
     it: OCC's surface at OCC's curve on the surface, from the nearest of BOUNDARY_SAMPLES points an
