@@ -1,11 +1,14 @@
 """Writing a point file so that it is whole or not there: a temporary file beside the target,
-fsync, then a rename; the temporary files of writes killed midway are removed later."""
+fsync, then a rename; the temporary files of writes killed midway are removed later. And the
+checks of a path before a file is written there or read from it."""
 import errno
 import os
 import re
+import stat
 import tempfile
 
 from ..geometry.validation import InputError, InputTypeError
+
 
 class ExportError(OSError):
     """A point file could not be written; the message names the path and the reason."""
@@ -45,7 +48,7 @@ def check_readable(path, kind):
     ("point file", "CAD file"); a path of another type: see :func:`path_of`."""
     path = path_of(path, kind)
     try:
-        os.stat(path)
+        mode = os.stat(path).st_mode
     except OSError as exc:
         if exc.errno == errno.ELOOP:
             raise InputError(f"{path}: its symbolic links lead round in a loop; give the {kind}'s real path") from exc
@@ -54,7 +57,7 @@ def check_readable(path, kind):
         if exc.errno in (errno.EACCES, errno.EPERM):
             raise InputError(f"{path}: no permission to reach it; give a {kind} you may read") from exc
         raise InputError(f"{path}: no such file") from exc
-    if os.path.isdir(path):
+    if stat.S_ISDIR(mode):
         raise InputError(f"{path}: is a folder, not a {kind}; give the file's path")
     if not os.access(path, os.R_OK):
         raise InputError(f"{path}: no permission to read it; give a {kind} you may read (or change its permissions)")
