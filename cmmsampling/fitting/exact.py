@@ -9,9 +9,10 @@ the face's domain and points along its edges), at parameters h with F(h) the nod
   on the face's edges where that foot lies outside the face's trimming loops.
 
 Each is signed by the face's normal there (+ out of the material); a node's deviation is the one
-of larger magnitude. Where the deviation peaks between nodes, the places found by searches about
-the largest nodes (cmmsampling.fitting.peaks) join them, and the maximum over all of them is the
-figure reported. OpenCASCADE's distances from the nodes to ``r.substitute.toShape()`` and from
+of larger magnitude. Where the substitute is stretched against the face, places inside those
+raster cells (cmmsampling.fitting.stretch) join the nodes; where the deviation peaks between them,
+the places found by searches about the largest (cmmsampling.fitting.peaks) join them too, and the
+maximum over all of them is the figure reported. OpenCASCADE's distances from the nodes to ``r.substitute.toShape()`` and from
 S(h) to the face agree with both sides (cmmsampling.fitting.crosscheck, and the tests).
 
 To first order in a change dS of the substitute, each side changes by w . dS(at) with w the unit
@@ -25,8 +26,9 @@ from scipy.spatial import cKDTree
 
 from ..geometry.bspline import kron_rows
 from .nodes import edge_curve_uv
-from .peaks import peak_search
+from .peaks import FineStarts, peak_search
 from .sides import Side, normals_or
+from .stretch import stretched_places
 from .substitute import FittedSurface
 
 FOOT_ITERATIONS = 400
@@ -57,7 +59,8 @@ class ExactDeviation:
 
     poles: (n_u, n_v, 3) mm; nodes: FaceNodes; forward, reverse: Side over the K = counted
     raster nodes (in raster order), the edge nodes, then the P peak nodes found between them
-    (cmmsampling.fitting.peaks); peak_points: (P, 3) mm, the face's points at the peak nodes.
+    (cmmsampling.fitting.peaks); peak_points: (P, 3) mm, the face's points at the peak nodes: the
+    places in stretched cells (cmmsampling.fitting.stretch), then the peaks.
     """
 
     poles: np.ndarray
@@ -132,11 +135,24 @@ def exact_deviation(space, poles, nodes, face, on_face=None):
 
     forward, reverse = _settle_largest(node_parameters(nodes), forward, reverse, settled)
     sizes = np.maximum(np.abs(forward.values), np.abs(reverse.values))
-    peaks = peak_search(nodes, sizes, forward.at, sides_at, on_face)
+    fine = _fine_starts(stretched_places(nodes, surface, on_face), settled, sides_at)
+    peaks = peak_search(nodes, sizes, forward.at, sides_at, on_face, fine)
     ahead, back = (settled(peaks.uv, peaks.origin, peaks.forward.at) if len(peaks.uv)
                    else (peaks.forward, peaks.reverse))
-    return ExactDeviation(np.asarray(poles, dtype=float), nodes, forward.joined(ahead), reverse.joined(back),
-                          face.points(peaks.uv))
+    between = np.concatenate([fine.places.uv, peaks.uv])
+    return ExactDeviation(np.asarray(poles, dtype=float), nodes, forward.joined(fine.forward).joined(ahead),
+                          reverse.joined(fine.reverse).joined(back), face.points(between))
+
+
+def _fine_starts(places, settled, sides_at):
+    """FineStarts (cmmsampling.fitting.peaks) at the FinePlaces ``places``: their Sides measured by
+    ``sides_at`` and settled (``settled``) at the SETTLE_NODES largest, as the nodes' are."""
+    if not len(places.uv):
+        return FineStarts.none()
+    forward, reverse = sides_at(places.uv, places.origin, places.uv)
+    forward, reverse = _settle_largest(places.uv, forward, reverse,
+                                       lambda h, rows, start: settled(h, places.origin[rows], start))
+    return FineStarts(places, forward, reverse)
 
 
 def _sides_at(surface, nodes, face, on_face, h, start, fallback, samples):

@@ -8,8 +8,11 @@ for the local maximum beside it, all of them at once: ZOOM_ROUNDS rounds of a gr
 steps either side of the best place so far, over the raster cells about it (both parameters) or
 along its edge's curve a segment either side, each round's grid as wide as the last one's step,
 until a round raises the largest deviation by no more than ZOOM_GAIN of it. Trials off the face
-are not measured. The places where a search found more than its node join the nodes (cmmsampling.fitting.exact), so
-that the figure reported is the local maximum found, not the value at the node beside it.
+are not measured. The places measured inside raster cells where the substitute is stretched
+(cmmsampling.fitting.stretch) start searches too, the largest of them (at most PEAK_NODES, none
+within a place's step of a larger one), over that place's step either side. The places where a
+search found more than its start join the nodes (cmmsampling.fitting.exact), so that the figure
+reported is the local maximum found, not the value at the node beside it.
 """
 from dataclasses import dataclass
 
@@ -17,6 +20,7 @@ import numpy as np
 
 from .nodes import edge_curve_uv
 from .sides import Side
+from .stretch import FinePlaces
 
 PEAK_SHARE = 0.8
 PEAK_NODES = 64
@@ -31,6 +35,45 @@ _PLANE = np.array([(a, b) for a in range(-ZOOM_STEPS, ZOOM_STEPS + 1) for b in r
 
 
 @dataclass
+class FineStarts:
+    """Places measured inside stretched raster cells: places, FinePlaces (cmmsampling.fitting.stretch);
+    forward, reverse: the Sides there."""
+
+    places: FinePlaces
+    forward: Side
+    reverse: Side
+
+    @classmethod
+    def none(cls):
+        """No places."""
+        return cls(FinePlaces.none(), Side.zeros(0), Side.zeros(0))
+
+    @property
+    def sizes(self):
+        """(M,) |d| mm, the larger side at each place."""
+        return np.maximum(np.abs(self.forward.values), np.abs(self.reverse.values))
+
+    @property
+    def start(self):
+        """(M, 2) the forward sides' parameters on the substitute."""
+        return self.forward.at
+
+    def largest(self, largest):
+        """Indices of at most PEAK_NODES places whose sizes lie within PEAK_SHARE of ``largest``
+        mm, largest first, none within a step (FinePlaces.half) of one taken before: a search
+        starts from each."""
+        sizes = self.sizes
+        order = np.argsort(-sizes, kind="stable")
+        left = order[(sizes[order] >= PEAK_SHARE * largest) & (largest > 0)]
+        taken = []
+        while left.size and len(taken) < PEAK_NODES:
+            taken.append(left[0])
+            uv, half = self.places.uv, self.places.half[left[0]]
+            left = left[(np.abs(uv[left] - uv[left[0]]) > 1.01 * half).any(1)]
+        return np.array(taken, dtype=int)
+
+
+@dataclass
 class Peaks:
     """The peaks found: uv (P, 2) their parameters on the face; origin (P,) the index of the node
     each search started from; forward, reverse: the Sides there."""
@@ -41,25 +84,34 @@ class Peaks:
     reverse: Side
 
 
-def peak_search(nodes, sizes, start, sides_at, on_face):
+def peak_search(nodes, sizes, start, sides_at, on_face, fine=None):
     """The Peaks found about the largest nodes: the places where a search found more than its node.
 
     nodes: FaceNodes; sizes: (K,) |d| mm at the counted raster nodes then the edge nodes; start:
     (K, 2) the forward sides' parameters on the substitute at the nodes; sides_at: (h (M, 2),
     origin (M,) node index, start (M, 2)) -> (forward, reverse) Sides at the face's points F(h),
     the forward foot searched from ``start``; on_face: h (M, 2) -> (M,) bool (None: the whole
-    rectangle).
+    rectangle); fine: FineStarts, places measured inside stretched raster cells
+    (cmmsampling.fitting.stretch), whose largest start searches too (None: none).
     """
-    top = largest_nodes(sizes, local_maxima(nodes, sizes))
+    fine = fine or FineStarts.none()
+    fine_sizes = fine.sizes
+    largest = max(sizes.max(initial=0.0), fine_sizes.max(initial=0.0))
+    top = largest_nodes(sizes, local_maxima(nodes, sizes), largest)
     counted = int(nodes.counted.sum())
-    origin = np.concatenate([top[top < counted], top[top >= counted]])
-    raster = _RasterZoom(nodes, top[top < counted], on_face)
-    edge = _EdgeZoom(nodes, top[top >= counted] - counted)
+    picked = fine.largest(largest)
+    on_raster, on_edges = top[top < counted], top[top >= counted]
+    origin = np.concatenate([on_raster, fine.places.origin[picked], on_edges])
+    centre, half = _raster_cells(nodes, on_raster)
+    raster = _RasterZoom(np.concatenate([centre, fine.places.uv[picked]]),
+                         np.concatenate([half, fine.places.half[picked]]), nodes.uv[0, 0], nodes.uv[-1, -1], on_face)
+    edge = _EdgeZoom(nodes, on_edges - counted)
     split = len(raster.centre)
     per = np.repeat([len(_PLANE), len(_LINE)], [split, len(edge.place)])
     first = np.cumsum(per) - per
     whole = split * len(_PLANE)
-    best, foot = sizes[origin].astype(float), start[origin]
+    best = np.concatenate([sizes[on_raster], fine_sizes[picked], sizes[on_edges]]).astype(float)
+    foot = np.concatenate([start[on_raster], fine.start[picked], start[on_edges]])
     rows = _Rows(origin)
     for _ in range(ZOOM_ROUNDS if len(origin) else 0):
         uv_raster, keep = raster.trials()
@@ -93,10 +145,11 @@ def _measured(sides_at, uv, keep, origin, start):
     return forward, reverse, size
 
 
-def largest_nodes(sizes, peaked):
+def largest_nodes(sizes, peaked, largest=None):
     """Indices of the nodes ``peaked`` marks (K,) bool whose sizes (K,) lie within PEAK_SHARE of
-    the largest size, at most PEAK_NODES of them, largest first (none where every size is 0)."""
-    largest = sizes.max(initial=0.0)
+    ``largest`` (mm; None: the largest size), at most PEAK_NODES of them, largest first (none
+    where that is 0)."""
+    largest = sizes.max(initial=0.0) if largest is None else largest
     order = np.argsort(-np.where(peaked, sizes, -np.inf), kind="stable")[:PEAK_NODES]
     return order[peaked[order] & (sizes[order] >= PEAK_SHARE * largest) & (largest > 0)]
 
@@ -144,18 +197,14 @@ class _Rows:
 
 
 class _RasterZoom:
-    """Searches over the face's parameters about raster nodes (origin: indices among the counted
-    ones): centre (R, 2) the best place so far; half (R, 2) the next grid's half-widths, the
-    larger raster step either side of the node at first."""
+    """Searches over the face's parameters about places on it: centre (R, 2) the best place so
+    far; half (R, 2) the next grid's half-widths; low, high (2,) the face's parameter rectangle."""
 
-    def __init__(self, nodes, origin, on_face):
-        cells = np.argwhere(nodes.counted)[origin]
-        self.centre = nodes.uv[nodes.counted][origin]
-        self.half = np.column_stack([_cell_steps(nodes.uv[:, 0, 0], cells[:, 0]),
-                                     _cell_steps(nodes.uv[0, :, 1], cells[:, 1])])
-        self.low, self.high = nodes.uv[0, 0], nodes.uv[-1, -1]
+    def __init__(self, centre, half, low, high, on_face):
+        self.centre, self.half = centre, half
+        self.low, self.high = low, high
         self.on_face = on_face
-        self.grid = np.zeros((len(origin), len(_PLANE), 2))
+        self.grid = np.zeros((len(centre), len(_PLANE), 2))
 
     def trials(self):
         """(R, T, 2) the grid's places, within the face's rectangle, and (R, T) bool: on the face."""
@@ -196,6 +245,14 @@ class _EdgeZoom:
         rows = np.flatnonzero(gain)
         self.place[rows] = self.grid[rows, index[rows]]
         self.half /= ZOOM_STEPS
+
+
+def _raster_cells(nodes, origin):
+    """(centre (R, 2), half (R, 2)) of searches about the counted raster nodes ``origin`` (R,):
+    the node, and the larger raster step either side of it in u and in v."""
+    cells = np.argwhere(nodes.counted)[origin]
+    half = np.column_stack([_cell_steps(nodes.uv[:, 0, 0], cells[:, 0]), _cell_steps(nodes.uv[0, :, 1], cells[:, 1])])
+    return nodes.uv[nodes.counted][origin], half.reshape(-1, 2)
 
 
 def _cell_steps(values, index):
