@@ -14,7 +14,9 @@ Lengths are in mm, times in s.
 
 The room's modules: objects (the proxies and their makers), results (add_to_document,
 add_plan_to_document, reevaluate), sheets (the spreadsheets), transaction (undoable steps),
-object_types (what an object is, by its proxy's Type), export_hook (File > Export) and
+object_types (what an object is, by its proxy's Type), export_hook (File > Export),
+export_defaults (the options an export starts from, whichever command writes it), settings (the
+workbench's values kept in FreeCAD's parameter group) and
 inspections (measured points judged against the CAD model: add_inspection_to_document).
 Documents saved with the proxies at ``cmmsampling.document.ProbePoints`` (before this room had
 modules) still open: the names below keep that path.

@@ -158,7 +158,7 @@ def export(source: SamplingResult | PartPlan | PointSet | object, path: str | os
     text = FORMATS[fmt].write(point_set, facts, options)
     target = write_atomically(path, text, FORMATS[fmt].encoding)
     return ExportReport(target, fmt, len(point_set), order, path_order.length_before, path_order.length_after,
-                        facts["frame"], facts["probe_radius_mm"], 0 if moves is None else moves.detours,
+                        facts["frame"], facts.get("probe_radius_mm", 0.0), 0 if moves is None else moves.detours,
                         None if moves is None else moves.seconds, facts.get("ball_radius_mm", 0.0))
 
 
@@ -262,10 +262,10 @@ def prepared(point_set, placement, radius, frame_name="", contact_nominals=False
 
 def _radius_facts(radius, contact_nominals):
     """The facts on the probe radius (mm) of written points: ball centres where it is added,
-    else contact points (with the ball's radius stated where the format takes contact points
-    only)."""
+    else contact points (where the format takes contact points only, the ball's radius is stated
+    alone: a probe radius of 0 beside it read as a contradiction of the radius asked for)."""
     if contact_nominals and radius > 0:
-        return {"probe_radius_mm": 0.0, "ball_radius_mm": radius,
+        return {"ball_radius_mm": radius,
                 "points": f"contact points on the face (the CMM takes its {radius:g} mm ball radius off)"}
     if radius > 0:
         return {"probe_radius_mm": radius, "points": f"probe-ball centres (contact point + {radius:g} mm * normal)"}

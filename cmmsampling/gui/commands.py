@@ -12,9 +12,10 @@ from FreeCAD import Qt
 from PySide import QtCore, QtGui
 
 from .. import document
+from ..document.export_defaults import export_call
 from ..document.object_types import is_part_plan, source_face
 from . import icon
-from .export_options import ask_export_options, export_keywords, say, show_export_report
+from .export_options import ask_export_options, say, show_export_report
 from .selection import SelectionError, selected_face, selected_part_faces
 
 
@@ -273,9 +274,7 @@ def run_echoed_export(points, path, options):
     before = getattr(__main__, "report", None)
     FreeCADGui.doCommand("import cmmsampling")
     try:
-        FreeCADGui.doCommand(
-            f"report = cmmsampling.export(App.getDocument({points.Document.Name!r})"
-            f".getObject({points.Name!r}), {path!r}{export_keywords(options)})")
+        FreeCADGui.doCommand(export_call(points, path, options))
     except Exception as exc:
         warn("Export probe points", str(exc))
         return None

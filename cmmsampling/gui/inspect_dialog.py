@@ -14,7 +14,8 @@ from PySide import QtCore, QtGui
 
 from ..inspection.align import ALIGNMENTS, DEGREES_OF_FREEDOM
 from ..inspection.judge import verdict_text
-from . import icon, settings
+from ..document import settings
+from . import icon
 from .qt_compat import run_modal
 
 ALIGNMENT_TEXTS = {

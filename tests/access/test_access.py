@@ -14,6 +14,7 @@ import cmmsampling
 from cmmsampling.access.obstacles import Obstacles
 from cmmsampling.access.probe import Probe, candidate_axes, head_angles
 from cmmsampling.access.reach import Reachability, reach
+from cmmsampling.document.export_defaults import starting_options
 from cmmsampling.planning.probe_moves import moves_through
 
 PROBE = Probe()
@@ -271,6 +272,13 @@ def test_a_plan_with_a_probe_keeps_to_its_reach_and_writes_one_path(beside_wall,
         from_document = (tmp_path / "from_document.dmi").read_text()
         assert dmis_syntax.check(from_document) == [] and exported.order == "probe_path"
         assert exported.count == plan.n_total and exported.length_after == pytest.approx(report.length_after)
+        options = starting_options(group)
+        assert options["order"] == "probe_path" and options["probe_radius"] == 1.0, "the plan's 2 mm ball"
+        (tmp_path / "command").mkdir()
+        cmmsampling.export(group, tmp_path / "command" / "from_document.dmi", **options)
+        assert (tmp_path / "command" / "from_document.dmi").read_text() == from_document, \
+            "File > Export writes what the Export command's dialog starts with"
+        assert "$$ ball_radius_mm: 1.0" in from_document and "SNSDEF/" in from_document
         labels = re.findall(r"^F\((\w+)\)=FEAT/POINT", from_document, re.M)
         assert sorted(labels) == sorted(re.findall(r"^F\((\w+)\)=FEAT/POINT", text, re.M))
         assert len(set(labels)) == len(labels) == plan.n_total

@@ -110,7 +110,8 @@ def test_dmis_without_comments_still_states_frame_and_radius(point_sets, tmp_pat
     path, _ = exported(point_sets["reference"], tmp_path, "dmis", comments=False, probe_radius=1.5)
     text = path.read_text()
     assert "strategy" not in text and "max_mm" not in text
-    assert "$$ ball_radius_mm: 1.5" in text and "$$ probe_radius_mm: 0.0" in text and "$$ frame: global" in text
+    assert "$$ ball_radius_mm: 1.5" in text and "$$ frame: global" in text
+    assert "probe_radius_mm" not in text, "a probe radius of 0 beside the ball's reads as a contradiction"
 
 
 def test_long_labels_and_comments_wrap_within_80_characters(point_sets, tmp_path):
@@ -210,7 +211,7 @@ def test_dmis_nominals_stay_contact_points_and_state_the_ball_radius(point_sets,
     assert report.probe_radius == 0.0 and report.ball_radius == 1.5
     assert "contact points, ball radius 1.5 mm stated" in str(report)
     assert np.abs(back.points - original.points).max() < 1e-7
-    assert back.metadata["probe_radius_mm"] == 0.0 and back.metadata["ball_radius_mm"] == 1.5
+    assert "probe_radius_mm" not in back.metadata and back.metadata["ball_radius_mm"] == 1.5
     assert back.metadata["points"].startswith("contact points on the face")
     centres, _ = exported(original, tmp_path, "csv", probe_radius=1.5)
     again, report = exported(read_points(centres), tmp_path, "dmis")

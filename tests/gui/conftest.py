@@ -14,7 +14,7 @@ else:
     import pytest
 
     import cmmsampling
-    from cmmsampling.gui import settings
+    from cmmsampling.document import settings
 
     from .helpers import document_with, process_events
 

@@ -16,8 +16,9 @@ from PySide import QtCore, QtGui
 
 import cmmsampling
 from cmmsampling import document
+from cmmsampling.document import export_defaults, settings
 from cmmsampling.gui.panels import compare as compare_panel
-from cmmsampling.gui import commands, export_options, settings
+from cmmsampling.gui import commands, export_options
 from cmmsampling.planning.probe_path import path_length
 from cmmsampling.study import html as report_html
 
@@ -463,8 +464,7 @@ def test_export_options_write_ball_centres_in_a_local_frame_along_a_short_path(d
     assert options == {"frame": lcs, "probe_radius": 1.5, "order": "short_path"}
 
     target = str(tmp_path / "points.csv")
-    call = (f"report = cmmsampling.export(App.getDocument({doc.Name!r}).getObject({points.Name!r}), "
-            f"{target!r}{export_options.export_keywords(options)})")
+    call = export_defaults.export_call(points, target, options)
     assert call.endswith(f", frame=App.getDocument({doc.Name!r}).getObject('LCS'), probe_radius=1.5, "
                          "order='short_path')")
     FreeCADGui.doCommand("import cmmsampling")
@@ -497,7 +497,7 @@ def test_export_options_write_ball_centres_in_a_local_frame_along_a_short_path(d
 def test_export_options_persist_and_cancel_returns_none(doc):
     points = probe_points(doc)
     coordinate_systems(doc)
-    assert export_options.export_keywords(
+    assert export_defaults.export_keywords(
         {"frame": None, "probe_radius": 0.0, "order": "as_optimised"}) == ""
     settings.save({"ExportFrame": "Elsewhere.FCStd|LCS", "ExportProbeRadius": 2.0, "ExportOrder": "short_path"})
     seen = []
@@ -509,10 +509,11 @@ def test_export_options_persist_and_cancel_returns_none(doc):
 
     assert run_dialog(lambda: export_options.ask_export_options(points), look) is None
     assert seen[-1][:3] == ("Global (document)", 2.0, "short_path"), "another document's frame is not reused"
-    settings.save({"ExportFrame": export_options.frame_setting(doc, "LCS")})
+    settings.save({"ExportFrame": export_defaults.frame_setting(doc, "LCS")})
     assert run_dialog(lambda: export_options.ask_export_options(points), look) is None
     assert seen[-1] == ("Measurement frame", 2.0, "short_path", "Starting from the frame of this document's last "
-                        "export and the radius of the last export.")
+                        "export, the radius of the last export and the order of the last export: what File > "
+                        "Export writes.")
     seen.clear()
     doc.removeObject("LCS")
     doc.recompute()
@@ -525,7 +526,7 @@ def test_export_options_persist_and_cancel_returns_none(doc):
     options = run_dialog(lambda: export_options.ask_export_options(points), defaults)
     assert seen[0] == ("Global (document)", "2.000 mm")
     assert options == {"frame": None, "probe_radius": 0.0, "order": "short_path"}
-    assert settings.load(export_options.DEFAULTS) == {
+    assert settings.load(export_defaults.DEFAULTS) == {
         "ExportFrame": "", "ExportProbeRadius": 0.0, "ExportOrder": "short_path"}
 
 

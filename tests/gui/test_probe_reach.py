@@ -15,6 +15,7 @@ from pivy import coin
 from PySide import QtGui
 
 import cmmsampling
+from cmmsampling import document
 from cmmsampling.access.probe import PROBES
 from cmmsampling.gui import echo, export_options, view_providers
 
@@ -114,17 +115,22 @@ def test_sample_face_with_a_probe_keeps_to_its_reach_and_shades_the_rest(slot_do
     process_events(0.5)
     view.saveImage(os.path.join(artifacts, "sample_face_unreached_top.png"), 1200, 900, "White")
 
-    assert export_options.has_probe_path(points)
-    probe = export_options.own_probe(points)
-    dialog = export_options.ExportOptionsDialog(slot_doc, "slot", probe_path=True, probe=probe)
+    assert points.Proxy.follows_probe(points)
+    dialog = export_options.ExportOptionsDialog(points, "slot")
     offered = [dialog.order.itemData(i) for i in range(dialog.order.count())]
     assert offered == ["as_optimised", "short_path", "probe_path"]
+    assert dialog.order.currentData() == "probe_path", "points planned with a probe start along its path"
     assert dialog.probe_radius.value() == pytest.approx(PROBES[PRESET].ball_diameter / 2)   # the points' own ball
     assert f"the {PROBES[PRESET].ball_diameter:g} mm ball of the probe these points were planned with" in \
         dialog.origin.text()
+    chosen = dialog.options()
     dialog.deleteLater()
-    report_written = cmmsampling.export(points, str(tmp_path / "slot.dmi"), order="probe_path")
+    report_written = cmmsampling.export(points, str(tmp_path / "slot.dmi"), **chosen)
     assert report_written.count == 16 and "GOTO/" in (tmp_path / "slot.dmi").read_text()
+    (tmp_path / "file").mkdir()
+    document.export([points], str(tmp_path / "file" / "slot.dmi"))
+    assert (tmp_path / "file" / "slot.dmi").read_text() == (tmp_path / "slot.dmi").read_text(), \
+        "File > Export writes what the Export command's dialog starts with"
 
     assert points.ViewObject.Proxy.doubleClicked(points.ViewObject)
     assert wait_until(lambda: task_form() is not None and task_button(OK) is not None, 5)
@@ -141,8 +147,8 @@ def test_points_sampled_without_a_probe_offer_no_probe_path(slot_doc):
     name = floor_name(slot_doc.Body.Shape)
     result = cmmsampling.sample(slot_doc.Body.getSubObject(name), 9, "halton", grid=20)
     points = cmmsampling.add_to_document(result, slot_doc, source=(slot_doc.Body, name)).Group[0]
-    assert not export_options.has_probe_path(points) and len(shade_points(points)) == 0
-    dialog = export_options.ExportOptionsDialog(slot_doc, "plain", probe_path=False)
+    assert not points.Proxy.follows_probe(points) and len(shade_points(points)) == 0
+    dialog = export_options.ExportOptionsDialog(points, "plain")
     assert [dialog.order.itemData(i) for i in range(dialog.order.count())] == ["as_optimised", "short_path"]
     dialog.deleteLater()
     assert PRESET in PROBES

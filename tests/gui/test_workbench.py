@@ -17,8 +17,9 @@ from PySide import QtCore, QtGui
 
 import cmmsampling
 from cmmsampling import document
+from cmmsampling.document import export_defaults, settings
 from cmmsampling.geometry.surface import make_bspline_surface, reference_poles
-from cmmsampling.gui import colormap, commands, export_options, qt_compat, settings, view_providers
+from cmmsampling.gui import colormap, commands, export_options, qt_compat, view_providers
 from cmmsampling.gui.panels import fields
 from cmmsampling.gui.panels import sample_face
 from support.toy_format import TOY_FORMAT
@@ -553,7 +554,7 @@ def test_the_export_report_says_in_words_what_was_written(doc, tmp_path):
     points = document.add_to_document(short_result(doc), doc, source=(doc.Body, "Face1")).Group[0]
     before = dock_text("Report view")
     path = str(tmp_path / "face.dmi")
-    options = export_options.ExportOptionsDialog(doc, "test").options()
+    options = export_options.ExportOptionsDialog(points, "test").options()
     assert options["order"] == "short_path"
     report = cmmsampling.export(points, path, order=options["order"])
     export_options.show_export_report(report)
@@ -700,7 +701,7 @@ def test_the_preferences_page_sets_what_the_panel_starts_with(doc, artifacts):
                                           "preferences.ui"))
     shown = {w.get("name"): float(w.find("property[@name='value']")[0].text)
              for w in page.iter("widget") if w.get("class", "").startswith("Gui::Pref")}
-    defaults = {**sample_face.panel_defaults(), "ExportProbeRadius": export_options.DEFAULTS["ExportProbeRadius"]}
+    defaults = {**sample_face.panel_defaults(), "ExportProbeRadius": export_defaults.DEFAULTS["ExportProbeRadius"]}
     assert shown == {name: defaults[name] for name in shown}
     seen, icons = [], []
 

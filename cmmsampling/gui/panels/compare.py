@@ -14,12 +14,12 @@ import FreeCAD
 import FreeCADGui
 from PySide import QtCore, QtGui
 
+from ...document import settings
 from ...fitting.deviation import DEFAULT_GRID
 from ...geometry.validation import InputError
 from ...strategies.estimates import about_text
 from ...strategies.sampling import STRATEGIES
 from ...study import DEFAULT_NS, DEFAULT_SEEDS, compare, study_time, write_report
-from .. import settings
 from ..background import BackgroundTask
 from ..echo import echo_study, face_expression, source_text
 from .base import BackgroundRunPanel

@@ -16,12 +16,12 @@ import FreeCADGui
 from PySide import QtGui
 
 from ...access.probe import PROBES
+from ...document import settings
 from ...document.object_types import in_document
 from ...fitting.deviation import DEFAULT_GRID
 from ...planning.part_plan import CANCELLED_REASON, plan
 from ...planning.points_needed import DEFAULT_MAX_POINTS
 from ...strategies.sampling import BEST_STRATEGY, STRATEGIES
-from .. import settings
 from ..background import BackgroundTask
 from ..echo import add_plan
 from .base import BackgroundRunPanel

@@ -17,10 +17,11 @@ from PySide import QtCore, QtGui
 from ...access.probe import PROBES
 from ...fitting.deviation import DEFAULT_GRID
 from ...fitting.substitute import DEFAULT_DEGREE, default_pole_count
+from ...document import settings
 from ...document.object_types import source_face
 from ...strategies import estimates, memory, optimal, sampling
 from ...strategies.problem import resolve_fit_poles
-from .. import echo, settings
+from .. import echo
 from ..background import BackgroundSampling
 from ..selection import SelectionError, selected_face
 from .base import ERROR_STYLE, BackgroundRunPanel

@@ -1,4 +1,5 @@
-"""The task panel's values, kept between uses in FreeCAD's parameter group."""
+"""The workbench's values kept between uses in FreeCAD's parameter group: its panels' and dialogs',
+and the export options File > Export takes as the Export command would start."""
 import FreeCAD
 
 PARAMETER_GROUP = "User parameter:BaseApp/Preferences/Mod/CMMSampling"
