@@ -382,13 +382,15 @@ def evaluate(face: Part.Face, uv: np.ndarray, *, strategy: str = "given", fit_de
     uv = check_uv(uv)
     problem = make_problem(face, len(uv), fit_degree, fit_poles, smoothing, grid, part=part, probe=probe)
     settings = {"strategy": strategy, "n": problem.n, **_common_settings(problem)}
-    return _judge(problem, StrategyOutcome(uv), strategy, settings, 0.0, occ_check)
+    return _judge(problem, StrategyOutcome(uv), strategy, settings, 0.0, occ_check, given=True)
 
 
-def measure_reach(result):
+def measure_reach(result, given=False):
     """The probe's pose at each of a result's points, measured with OCC (result.access), its
-    settings, and notes on the points tilted, refused or left to the fast test; for a result of
-    a run with part= (sample does it, unless its Reachability was ``unmeasured``)."""
+    settings, and notes on the area out of reach and the points tilted, refused or left to the
+    fast test; for a result of a run with part= (sample does it, unless its Reachability was
+    ``unmeasured``). given: the points were given (:func:`evaluate`), not placed by a strategy
+    that kept out of the unreached area."""
     started = time.perf_counter()
     problem = result.problem
     result.access, refused, unmeasured = problem.reachability.final(result.points, result.normals)
@@ -401,9 +403,7 @@ def measure_reach(result):
                             f"probe's clearance was judged with a {obstacles.margin:.2g} mm margin (erring on the "
                             "side of blocking)")
     if problem.domain.unreached_area > 0:
-        share = problem.domain.unreached_area / problem.model.area
-        result.notes.append(f"the probe cannot reach {problem.domain.unreached_area:.4g} mm^2 of the face "
-                            f"({100 * share:.3g} %) without touching the part elsewhere: no point was placed there")
+        result.notes.append(_unreached_note(result, given))
     tilted = result.access.tilted
     if tilted.any():
         result.notes.append(f"{tilted.sum()} of {result.n} points are reached only with the stylus tilted: the head's "
@@ -434,8 +434,26 @@ def _common_settings(problem):
     }
 
 
-def _judge(problem, outcome, strategy, settings, strategy_s, occ_check):
-    """Points, normals, fit and deviation statistics for a strategy's outcome."""
+def _unreached_note(result, given):
+    """The note on the area of the face the probe cannot reach: that no point was placed there,
+    or for given points how many lie there (result.access.unreached: (K, 4) rectangles u0, u1, v0,
+    v1 of the face's parameters)."""
+    problem = result.problem
+    area = problem.domain.unreached_area
+    text = (f"the probe cannot reach {area:.4g} mm^2 of the face ({100 * area / problem.model.area:.3g} %) "
+            "without touching the part elsewhere")
+    if not given:
+        return text + ": no point was placed there"
+    u, v, boxes = result.uv[:, :1], result.uv[:, 1:], result.access.unreached
+    inside = int(((u >= boxes[:, 0]) & (u <= boxes[:, 1]) & (v >= boxes[:, 2]) & (v <= boxes[:, 3])).any(1).sum())
+    if not inside:
+        return text + ": none of the given points lies there"
+    return text + f": {inside} of the {result.n} given points {'lies' if inside == 1 else 'lie'} there"
+
+
+def _judge(problem, outcome, strategy, settings, strategy_s, occ_check, given=False):
+    """Points, normals, fit and deviation statistics for a strategy's outcome; given: the points
+    were given, not placed by the strategy (:func:`evaluate`)."""
     start = time.perf_counter()
     uv = np.asarray(outcome.uv, dtype=float)
     with blas_threads(1):
@@ -457,7 +475,7 @@ def _judge(problem, outcome, strategy, settings, strategy_s, occ_check):
     result.timings = {"strategy_s": strategy_s, "evaluation_s": evaluation_s, "occ_check_s": occ_s,
                       "total_s": strategy_s + evaluation_s + occ_s}
     if problem.reachability is not None and problem.reachability.measures:
-        measure_reach(result)
+        measure_reach(result, given)
     if result.exact:
         result.notes.append(
             f"the substitute reproduces this face exactly (maximum deviation {stats.maximum:.1e} mm, "

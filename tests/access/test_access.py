@@ -180,6 +180,12 @@ def test_sampling_with_the_part_keeps_to_what_the_probe_reaches(slot):
     assert result.notes[0] == (f"the probe cannot reach {area:.4g} mm^2 of the face ({100 * area / floor.Area:.3g} %) "
                                "without touching the part elsewhere: no point was placed there")
     assert all("reproduces this face exactly" in note for note in result.notes[1:]), "the floor is a plane"
+    given = cmmsampling.evaluate(floor, result.uv, part=slot, grid=20)
+    assert given.notes[0].endswith("without touching the part elsewhere: none of the given points lies there")
+    moved = result.uv.copy()
+    moved[:2] = [tuple(floor.Surface.parameter(vector((x, 17.5, 15.0)))) for x in (10.0, 30.0)]
+    assert cmmsampling.evaluate(floor, moved, part=slot, grid=20).notes[0].endswith(
+        ": 2 of the 16 given points lie there"), "given points are not placed: they may lie out of reach"
 
     def inside(uv):
         return ((rectangles[:, 0] <= uv[0]) & (uv[0] <= rectangles[:, 1])
