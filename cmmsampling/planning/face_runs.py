@@ -102,8 +102,8 @@ def run_all(function, jobs, processes=None, scheduler=None, progress=None, descr
     runs the jobs instead of local processes (the package is uploaded to its workers); progress:
     callable(done, total, message) after each job ends, and with message None every BEAT_SECONDS
     while a job runs, returning True to cancel: jobs not started are dropped, running ones are
-    stopped at once (local processes ended, Dask's jobs cancelled; a job in this process runs on
-    in its thread, told to stop (:func:`stop_asked`), and its outcome is dropped), and their
+    stopped at once (local processes ended; a job in this process or on Dask runs on in its
+    thread, told to stop (:func:`stop_asked`, Dask's job cancelled), and its outcome is dropped), and their
     outcomes are None; describe:
     callable(job, outcome) -> the progress message of a finished job (default: "<job.name> done").
     notes: sentences on how the jobs ran where that differs from what was asked (fewer processes,
@@ -191,7 +191,8 @@ def _run_job(function, job, stop, ended):
 
 def stop_asked():
     """True when the run of the job under way in this thread was cancelled (a job run in this
-    process by :func:`run_all`; a job in a local process or on Dask is stopped from outside)."""
+    process by :func:`run_all`, or on a Dask worker; a job in a local process is stopped from
+    outside: the process ends)."""
     stop = _STOP.get()
     return stop is not None and stop.is_set()
 
@@ -253,7 +254,7 @@ def _dask_runs(function, jobs, scheduler):
     futures = []
     try:
         upload_package(client)
-        futures = [client.submit(run_with_heap_thresholds, function, job, pure=False) for job in jobs]
+        futures = [client.submit(run_on_worker, function, job, pure=False) for job in jobs]
         where = {future.key: index for index, future in enumerate(futures)}
         pending = futures
         while pending:
@@ -298,10 +299,32 @@ M_TRIM_THRESHOLD, M_MMAP_THRESHOLD = -1, -3
 HEAP_THRESHOLDS = {M_TRIM_THRESHOLD: 128 * 2 ** 20, M_MMAP_THRESHOLD: 32 * 2 ** 20}
 
 
-def run_with_heap_thresholds(function, job):
-    """``function(job)`` after :func:`set_heap_thresholds` (a job on a Dask worker)."""
+def run_on_worker(function, job):
+    """``function(job)`` on a Dask worker, after :func:`set_heap_thresholds`, with
+    :func:`stop_asked` answering whether the client cancelled this task: Dask cannot stop a
+    running task, so a job that asks ends early instead of holding the worker's thread."""
+    from distributed import get_worker
+
     set_heap_thresholds()
-    return function(job)
+    worker = get_worker()
+    token = _STOP.set(_TaskCancelled(worker, worker.get_current_task()))
+    try:
+        return function(job)
+    finally:
+        _STOP.reset(token)
+
+
+class _TaskCancelled:
+    """Whether a Dask worker's task was cancelled, with the ``is_set()`` of a threading.Event:
+    the worker's own state of the task (no call to the scheduler), gone or no longer to be
+    computed once the client cancels it."""
+
+    def __init__(self, worker, key):
+        self.worker, self.key = worker, key
+
+    def is_set(self):
+        task = self.worker.state.tasks.get(self.key)
+        return task is None or task.state in ("cancelled", "released", "forgotten")
 
 
 def set_heap_thresholds():

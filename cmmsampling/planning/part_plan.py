@@ -372,7 +372,7 @@ def _solve_face(job):
             planned.tried, planned.met, planned.reason = answer.tried, answer.met, answer.reason
             result = answer.result
         else:
-            result = sample(face, job.n, job.strategy, **arguments)
+            result = sample(face, job.n, job.strategy, progress=lambda *_: face_runs.stop_asked(), **arguments)
     except InputError as exc:
         result, planned.reason = None, str(exc)
     if result is not None:

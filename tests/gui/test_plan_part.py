@@ -90,9 +90,9 @@ def hold_plan_at(monkeypatch, faces_done):
     return hold
 
 
-def start_with_probe(obj, faces, strategy, **values):
+def start_with_probe(obj, faces, strategy, probe="2 mm ball, 20 mm stylus", **values):
     """Select obj's faces, open Plan part, set the strategy, the panel's ``values`` and the
-    2 mm x 20 mm probe, and start the plan; returns the form."""
+    probe (default the 2 mm x 20 mm one; "": not judged), and start the plan; returns the form."""
     FreeCADGui.Selection.clearSelection()
     for name in faces:
         FreeCADGui.Selection.addSelection(obj, name)
@@ -100,8 +100,8 @@ def start_with_probe(obj, faces, strategy, **values):
     assert wait_until(lambda: plan_form() is not None, 5), commands.PlanPart().reason()
     form = plan_form()
     fill(form, strategy, **values)
-    probe = child(form, "probe")
-    probe.setCurrentIndex(probe.findData("2 mm ball, 20 mm stylus"))
+    choice = child(form, "probe")
+    choice.setCurrentIndex(choice.findData(probe))
     task_button(OK).click()
     return form
 
@@ -363,12 +363,22 @@ def test_a_ventilator_plan_of_four_faces_with_the_probe_ends_and_exports(ventila
           f"{'along the probe path' if 'GOTO/' in text else 'in the planned order'}")
 
 
-def test_a_ventilator_probe_plan_cancels_at_once_during_its_last_face(ventilator_doc, monkeypatch, artifacts):
-    """The four faces with the probe on 2 processes, optimal runs of at most 2 s: Cancel pressed
-    while the last face runs stops the plan within 5 s and adds the three faces done (the full
+@pytest.mark.parametrize("probe", ["2 mm ball, 20 mm stylus", ""], ids=["probe", "no probe"])
+def test_a_ventilator_plan_cancels_at_once_during_its_last_face(ventilator_doc, monkeypatch, artifacts, probe):
+    """The four faces, with the probe and without, on 2 processes, optimal runs of at most 2 s:
+    Cancel pressed while the last face runs stops the plan within a second, the panel says so at
+    once (no "Cancelling" while the faces done are added) and adds the three faces done (the full
     plan, with the panel's 10 s runs, is the quality test above)."""
     hold = hold_plan_at(monkeypatch, 99)
-    form = start_with_probe(ventilator_doc.Ventilator, FOUR_FACES, "optimal", tolerance=0.05, processes=2,
+    timeline = []
+    show = plan_part.PlanPartTaskPanel.show_status
+
+    def recorded(panel, text, error=False):
+        timeline.append((time.perf_counter(), text))
+        show(panel, text, error)
+
+    monkeypatch.setattr(plan_part.PlanPartTaskPanel, "show_status", recorded)
+    form = start_with_probe(ventilator_doc.Ventilator, FOUR_FACES, "optimal", probe, tolerance=0.05, processes=2,
                             time_limit=2.0)
     shown = []
     assert wait_until(lambda: shown.append(form.status.text()) or form.progress.value() == 3, PLAN_LIMIT_S), \
@@ -380,9 +390,13 @@ def test_a_ventilator_probe_plan_cancels_at_once_during_its_last_face(ventilator
     assert wait_until(lambda: form.status.text().startswith("Cancelled"), 30), form.status.text()
     added = time.perf_counter() - pressed
     [cancelled], [ended] = hold.plans, hold.ended
-    print(f"Cancel during the last face: the plan stopped after {ended - pressed:.1f} s, its 3 faces were added "
-          f"after {added:.1f} s")
-    assert cancelled.cancelled and len(cancelled.placed) == 3 and ended - pressed < 5.0
+    after = [(at - pressed, text) for at, text in timeline if at >= pressed]
+    print(f"Cancel during the last face ({probe or 'no probe'}): the plan stopped after {ended - pressed:.2f} s, "
+          f"its 3 faces were added after {added:.1f} s; the status: "
+          + "; ".join(f"{at:.2f} s {text[:60]!r}" for at, text in after))
+    assert cancelled.cancelled and len(cancelled.placed) == 3 and ended - pressed < 1.0
+    assert after[0][1].startswith("Cancelling") and not after[1][1].startswith("Cancelling")
+    assert after[1][0] < 1.0, "the panel says within a second that the plan stopped"
     main_window().grab().save(os.path.join(artifacts, "plan_part_cancelled_last_face.png"))
     task_button(CANCEL).click()
     assert wait_until(lambda: not FreeCADGui.Control.activeDialog(), 5)

@@ -295,6 +295,9 @@ class PlanPartTaskPanel(BackgroundRunPanel):
                                                        else ": see the reasons above.") + " Nothing was added.",
                              error=not result.cancelled)
             return
+        self.show_status(("Stopped: adding" if result.cancelled else "Adding") + f" the {len(result.placed)} faces "
+                         f"done ({result.n_total} points) to the document...")
+        self.form.status.repaint()
         try:
             group = add_plan(self.source[0], run, result, self.cancelled_group())
         except Exception as exc:
