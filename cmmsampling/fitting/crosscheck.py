@@ -1,16 +1,18 @@
 """Independent check of a result with OpenCASCADE: its distances, both ways, at the nodes of largest
-deviation (cmmsampling.fitting.exact): from the face's nodes to the substitute surface, and from
-the substitute's points at the nodes' parameters back to the face."""
+deviation (cmmsampling.fitting.exact): from the face's nodes to the substitute as delivered
+(trimmed like the face), and from the substitute's points at the nodes' parameters back to the face."""
 import numpy as np
 
 from ..geometry.occ_distance import distances_to_face
+from .occ_surface import trimmed_like
 
 OCC_DISTANCE_NODES = 25
 
 
 def occ_cross_check(stats, exact, substitute, face):
     """Fill stats.occ_maximum using OpenCASCADE only: the largest of its closest-point distances,
-    from the OCC_DISTANCE_NODES nodes of largest forward deviation to the substitute and from the
+    from the OCC_DISTANCE_NODES nodes of largest forward deviation to the substitute trimmed like
+    the face and from the
     substitute's points at the OCC_DISTANCE_NODES nodes of largest reverse deviation to the face.
 
     stats: DeviationStats; exact: the ExactDeviation it summarises; substitute: the delivered
@@ -20,7 +22,7 @@ def occ_cross_check(stats, exact, substitute, face):
     reverse = np.argsort(np.abs(exact.reverse.values))[-OCC_DISTANCE_NODES:]
     node_points = exact.points()[forward]
     substitute_points = np.array([substitute.value(*map(float, uv)) for uv in exact.reverse.at[reverse]])
-    shape = substitute.toShape()
+    shape = trimmed_like(face, substitute)
     stats.occ_maximum = max(_largest_distance(shape, node_points), _largest_distance(face, substitute_points))
     return stats
 

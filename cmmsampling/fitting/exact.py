@@ -4,7 +4,9 @@ The substitute S is the fitted surface on its own parameter rectangle (no extens
 the face in the parameter plane. At every node of the face (cmmsampling.fitting.nodes: a raster of
 the face's domain and points along its edges), at parameters h with F(h) the node:
 
-* forward: the distance from F(h) to S, its closest point p searched over S's rectangle;
+* forward: the distance from F(h) to S, its closest point p searched over S's rectangle, or on
+  S's boundary (S at the face's edge curves) where p lies outside the trim: the substitute
+  delivered is trimmed like the face;
 * reverse: the distance from S(h) back to the face, its closest point on the face's surface, or
   on the face's edges where that foot lies outside the face's trimming loops.
 
@@ -19,7 +21,8 @@ To first order in a change dS of the substitute, each side changes by w . dS(at)
 direction it is measured along and ``at`` the parameters on S (p forward, h reverse): exact there
 in value and gradient, which :class:`Linearisation` hands to the descent and the local bound.
 """
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
+from functools import cached_property
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -122,16 +125,17 @@ def exact_deviation(space, poles, nodes, face, on_face=None):
     uv (..., 2) -> (...) bool, the face's trim test (None: the whole rectangle).
     """
     surface = FittedSurface(space, poles)
+    trimmed = TrimmedSubstitute(surface, nodes, on_face)
     samples = _sample_raster(surface)
-    forward, reverse = forward_side(surface, nodes, samples), reverse_side(surface, nodes, face, on_face)
+    forward, reverse = forward_side(surface, nodes, samples, trimmed), reverse_side(surface, nodes, face, on_face)
     fallback = node_normals(nodes)
     raster = _sample_raster(surface, SETTLE_SAMPLES)
 
     def settled(h, origin, start):
-        return _settled_sides(surface, nodes, face, on_face, h, start, raster, fallback[origin])
+        return _settled_sides(trimmed, face, h, start, raster, fallback[origin])
 
     def sides_at(h, origin, start):
-        return _sides_at(surface, nodes, face, on_face, h, start, fallback[origin], samples)
+        return _sides_at(trimmed, face, h, start, fallback[origin], samples)
 
     forward, reverse = _settle_largest(node_parameters(nodes), forward, reverse, settled)
     sizes = np.maximum(np.abs(forward.values), np.abs(reverse.values))
@@ -155,13 +159,14 @@ def _fine_starts(places, settled, sides_at):
     return FineStarts(places, forward, reverse)
 
 
-def _sides_at(surface, nodes, face, on_face, h, start, fallback, samples):
+def _sides_at(trimmed, face, h, start, fallback, samples):
     """(forward, reverse) Sides at the face's points F(h), h (M, 2) its parameters: forward
     searched from ``start`` (M, 2) on the substitute, reverse from h; each searched again from the
     nearest sample of the substitute or node of the face where that lies nearer than the foot found
     (a search that maximises the deviation would otherwise find where a foot search got stuck);
-    fallback (M, 3) unit, the normals where the face has none at h (a collapsed edge); samples:
-    :func:`_sample_raster` of the substitute."""
+    trimmed: the TrimmedSubstitute; fallback (M, 3) unit, the normals where the face has none at h
+    (a collapsed edge); samples: :func:`_sample_raster` of the substitute."""
+    surface, nodes, on_face = trimmed.surface, trimmed.nodes, trimmed.on_face
     normals = normals_or(face.normals(h), fallback)
     targets = face.points(h)
     at = closest_parameters(surface, targets, start)
@@ -170,11 +175,10 @@ def _sides_at(surface, nodes, face, on_face, h, start, fallback, samples):
     feet = closest_parameters(face, points, h)
     distance, index = nodes.point_tree.query(points)
     feet = _restart_stuck(face, points, feet, (node_parameters(nodes)[index], distance))
-    return (_side(surface.points(at) - targets, at, normals),
-            _reverse_from_feet(face, nodes, on_face, points, h, feet, normals))
+    return trimmed.forward(targets, at, normals), _reverse_from_feet(face, nodes, on_face, points, h, feet, normals)
 
 
-def _settled_sides(surface, nodes, face, on_face, h, start, raster, fallback):
+def _settled_sides(trimmed, face, h, start, raster, fallback):
     """(forward, reverse) Sides at the face's points F(h), h (M, 2) its parameters, each foot the
     nearest of searches from more starts than a node's: forward from ``start`` (M, 2) and the
     SETTLE_SAMPLE_STARTS nearest samples of ``raster`` ((parameters, k-d tree) of the substitute)
@@ -183,7 +187,8 @@ def _settled_sides(surface, nodes, face, on_face, h, start, raster, fallback):
     distance; across a thin strip, in a hollow of its middle or at the wrong one of its two long
     edges, where all the nearest samples lie in the middle), and a search for the largest
     deviation finds first where it did; these feet are settled wider.
-    fallback (M, 3) unit: the normals where the face has none at h."""
+    trimmed: the TrimmedSubstitute; fallback (M, 3) unit: the normals where the face has none at h."""
+    surface, nodes, on_face = trimmed.surface, trimmed.nodes, trimmed.on_face
     targets, points = face.points(h), surface.points(h)
     grid, samples = raster
     near_samples = samples.query(targets, k=SETTLE_SAMPLE_STARTS)[1]
@@ -192,8 +197,7 @@ def _settled_sides(surface, nodes, face, on_face, h, start, raster, fallback):
     near_nodes = nodes.point_tree.query(points, k=min(SETTLE_NODE_STARTS, nodes.point_tree.n))[1].reshape(len(h), -1)
     feet = _nearest_of(face, points, np.concatenate([h[:, None], node_parameters(nodes)[near_nodes]], 1))
     normals = normals_or(face.normals(h), fallback)
-    return (_side(surface.points(ahead) - targets, ahead, normals),
-            _reverse_from_feet(face, nodes, on_face, points, h, feet, normals))
+    return trimmed.forward(targets, ahead, normals), _reverse_from_feet(face, nodes, on_face, points, h, feet, normals)
 
 
 def _nearest_on_sides(raster, targets):
@@ -243,13 +247,40 @@ def _nearest_of(model, targets, starts):
     return found[np.arange(count), np.argmin(gap, axis=1)]
 
 
-def forward_side(surface, nodes, samples=None):
-    """Side: from each node F(h) to its closest point on the substitute's rectangle; samples:
-    :func:`_sample_raster` of the substitute where it is already built."""
+def forward_side(surface, nodes, samples=None, trimmed=None):
+    """Side: from each node F(h) to its closest point on the substitute (see
+    :class:`TrimmedSubstitute`; None: its whole rectangle); samples: :func:`_sample_raster` of the
+    substitute where it is already built."""
+    trimmed = trimmed or TrimmedSubstitute(surface, nodes)
     targets, start = nodes.all_points(), node_parameters(nodes)
     at = closest_parameters(surface, targets, start)
     at = _restart_stuck(surface, targets, at, _nearest_samples(samples or _sample_raster(surface), targets))
-    return _side(surface.points(at) - targets, at, node_normals(nodes))
+    return trimmed.forward(targets, at, node_normals(nodes))
+
+
+class TrimmedSubstitute:
+    """The substitute as delivered, trimmed like the face: surface (FittedSurface) on the face's
+    domain, nodes: the face's FaceNodes (their edge curves bound it), on_face: uv (M, 2) -> (M,)
+    bool, the face's trim test (None: the whole rectangle)."""
+
+    def __init__(self, surface, nodes, on_face=None):
+        self.surface, self.nodes, self.on_face = surface, nodes, on_face
+
+    @cached_property
+    def edges(self):
+        """The nodes with the substitute's points at the edge nodes' parameters as edge points
+        (its boundary polygons), built at first use."""
+        return replace(self.nodes, edge_points=self.surface.points(self.nodes.edge_uv))
+
+    def forward(self, targets, at, normals):
+        """The forward Side from targets (M, 3) mm to the substitute: at its points at ``at`` (M,
+        2), the closest points found on its rectangle, where they are inside the trim, else at the
+        nearest point of its boundary; normals (M, 3) the face's at the targets."""
+        nearest, at = self.surface.points(at), np.array(at, dtype=float)
+        off = np.zeros(len(at), dtype=bool) if self.on_face is None else ~self.on_face(at)
+        if off.any():
+            nearest[off], at[off] = _nearest_on_edge_curves(self.surface, self.edges, targets[off])
+        return _side(nearest - targets, at, normals)
 
 
 def reverse_side(surface, nodes, face, on_face):
@@ -275,7 +306,8 @@ def _reverse_from_feet(face, nodes, on_face, points, at, feet, fallback):
     nearest, normals = face.points(feet), face.normals(feet)
     off = np.zeros(len(at), dtype=bool) if on_face is None else ~on_face(feet)
     if off.any():
-        nearest[off], normals[off] = _nearest_on_edge_curves(face, nodes, points[off])
+        nearest[off], edge_uv = _nearest_on_edge_curves(face, nodes, points[off])
+        normals[off] = face.normals(edge_uv)
     return _side(points - nearest, at, normals_or(normals, fallback))
 
 
@@ -290,8 +322,8 @@ def _side(offsets, at, normals):
 
 
 def _nearest_on_edge_curves(face, nodes, points):
-    """The nearest point (M, 3) mm on the face's edges to each point (M, 3) mm, and the face's
-    unit normal there (M, 3; NaN where the face has none).
+    """The nearest point (M, 3) mm on the edges of ``face`` (the face, or the substitute with
+    ``nodes`` whose edge points are its own) to each point (M, 3) mm, and its parameters (M, 2).
 
     The nearest point on the edge polygons (:func:`_nearest_on_edges`) is refined on the edge
     itself: the face's point F(c(t)) of the edge's curve on the surface c, interpolated by cubics
@@ -321,7 +353,7 @@ def _nearest_on_edge_curves(face, nodes, points):
         scale[active[~better]] *= 0.5
         active = active[np.abs(step) > EDGE_STEP_TOLERANCE]
     uv = edge_curve_uv(nodes, place, runs)[0]
-    return face.points(uv), face.normals(uv)
+    return face.points(uv), uv
 
 
 def _nearest_on_edges(nodes, points):

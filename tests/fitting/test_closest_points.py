@@ -148,9 +148,9 @@ def test_the_nearest_edge_point_is_found_beside_a_sharp_corner():
     finds (the first 8 midpoints alone gave a point on the short edge, overstating the distance)."""
     nodes = sharp_corner_nodes()
     points = np.column_stack([np.linspace(99.0, 99.95, 20), np.full(20, -0.02), np.zeros(20)])
-    nearest, normals = _nearest_on_edge_curves(flat_plane(), nodes, points)
+    nearest, uv = _nearest_on_edge_curves(flat_plane(), nodes, points)
     assert np.allclose(nearest, points * [1.0, 0.0, 1.0], atol=1e-9)
-    assert np.allclose(normals, [0.0, 0.0, 1.0])
+    assert np.allclose(flat_plane().points(uv), nearest, atol=1e-12)
     middle = np.array([[50.0, -0.5, 0.0], [30.0, 0.3, 0.0]])
     assert np.allclose(_nearest_on_edge_curves(flat_plane(), nodes, middle)[0],
                        [[50.0, 0.0, 0.0], [30.0, 0.3, 0.0]], atol=1e-9)

@@ -143,8 +143,8 @@ def test_settling_finds_the_feet_a_search_missed(creased_run):
     reverse = exact.reverse_side(surface, nodes, model, problem.domain.on_face)
 
     def settled(h, origin, start):
-        return exact._settled_sides(surface, nodes, model, problem.domain.on_face, h, start, raster,
-                                    exact.node_normals(nodes)[origin])
+        return exact._settled_sides(exact.TrimmedSubstitute(surface, nodes, problem.domain.on_face), model, h, start,
+                                    raster, exact.node_normals(nodes)[origin])
 
     assert np.abs(forward.values[top]).min() > np.abs(true.forward.values[top]).max()
     fixed, _ = exact._settle_largest(exact.node_parameters(nodes), forward, reverse, settled)

@@ -31,12 +31,16 @@ def test_every_b_spline_face_laid_on_its_own_surface_is_itself(ventilator):
     assert np.abs(ratios - 1.0).max() < 1e-4, f"{np.sum(np.abs(ratios - 1.0) >= 1e-4)} faces differ"
 
 
-@pytest.mark.parametrize("name", ["Face61", "Face230"])
-def test_the_delivered_substitute_is_what_the_figure_describes(ventilator, name):
+@pytest.mark.parametrize("name, strategy", [("Face61", "uniform_parametric"), ("Face230", "uniform_parametric"),
+                                            ("Face23", "halton"), ("Face192", "halton")])
+def test_the_delivered_substitute_is_what_the_figure_describes(ventilator, name, strategy):
     """OCC alone, from the face's points to substitute_shape() and from its points (a raster of its
-    own domain and its edges) back to the face: the largest is the reported maximum to 1 %."""
+    own domain and its edges) back to the face: the largest is the reported maximum to 1 %. On
+    Face23 and Face192 (trimmed by slanted edges) the face's corner lies farther from the trimmed
+    substitute than from its rectangle, which the forward side measured before: 0.0700 mm
+    reported where OCC finds 0.0814 mm, 0.0974 where 0.1309."""
     face = ventilator.getElement(name)
-    result = cmmsampling.sample(face, 49, "uniform_parametric")
+    result = cmmsampling.sample(face, 49, strategy)
     delivered = result.substitute_shape()
     forward = max(delivered.distToShape(Part.Vertex(face.valueAt(u, v)))[0] for u, v in domain_parameters(face))
     reverse = max(face.distToShape(Part.Vertex(delivered.valueAt(u, v)))[0] for u, v in domain_parameters(delivered))
