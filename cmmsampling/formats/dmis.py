@@ -36,6 +36,10 @@ HEAD_MOUNTING = (0.0, 0.0, 1.0)
 DMIS_FEATURE_POINT = re.compile(r"(FA?)\(([^()]*)\)=FEAT/POINT,([A-Z]+),(.*)\Z", re.IGNORECASE)
 # A statement that means a point feature but is not written as DMIS_FEATURE_POINT reads it.
 POINT_LIKE = re.compile(r"FEAT\W*POINT", re.IGNORECASE)
+# UNITS/<length>,<angle>[,<temperature>]: the length units DMIS names, in mm (angles do not enter
+# a point's x, y, z, i, j, k).
+UNITS_STATEMENT = re.compile(r"UNITS/([A-Z]+)(?:,([A-Z]+))?", re.IGNORECASE)
+LENGTH_UNITS_MM = {"MM": 1.0, "CM": 10.0, "METER": 1000.0, "INCH": 25.4, "FEET": 304.8}
 
 
 def write(point_set, facts, options):
@@ -141,11 +145,24 @@ def goto_lines(positions):
 
 
 def read(text, path="<text>"):
-    """PointSet from DMIS text: FEAT/POINT,CART statements, metadata from ``$$ key: value`` comments."""
+    """PointSet from DMIS text: FEAT/POINT,CART statements, in mm whatever UNITS says (MM, CM,
+    METER, INCH, FEET; each statement in the units in force where it stands), metadata from
+    ``$$ key: value`` comments (``dmis_units``: the length units of the last UNITS, where one was
+    given)."""
     statements, comments = dmis_statements(text)
     found = {"F": {}, "FA": {}}
+    scale, units = 1.0, None
     for number, statement in statements:
-        match = DMIS_FEATURE_POINT.match(_without_blanks(statement))
+        compact = _without_blanks(statement)
+        given = UNITS_STATEMENT.match(compact)
+        if given is not None:
+            units = given.group(1).upper()
+            if units not in LENGTH_UNITS_MM:
+                raise InputError(f"{path}, line {number}: UNITS/{given.group(1)} is not a DMIS length unit this "
+                                 f"reader knows ({', '.join(LENGTH_UNITS_MM)})")
+            scale = LENGTH_UNITS_MM[units]
+            continue
+        match = DMIS_FEATURE_POINT.match(compact)
         if match is None:
             if POINT_LIKE.search(statement):
                 raise InputError(f"{path}, line {number}: a point statement that cannot be read "
@@ -157,12 +174,15 @@ def read(text, path="<text>"):
         if label in found[kind.upper()]:
             raise InputError(f"{path}, line {number}: {kind.upper()}({label}) is given twice; give each point "
                              "its own label")
-        found[kind.upper()][label] = numbers(fields.split(","), 6, path, number)
+        values = numbers(fields.split(","), 6, path, number)
+        found[kind.upper()][label] = [value * scale for value in values[:3]] + values[3:]
     points = found["FA"] or found["F"]
     if not points:
         raise InputError(f"{path}: no F(label)=FEAT/POINT,CART,x,y,z,i,j,k statement found")
     metadata = parse_metadata_comments(comments)
     metadata["dmis_features"] = "actual" if found["FA"] else "nominal"
+    if units is not None:
+        metadata["dmis_units"] = units
     data = np.array(list(points.values()))
     return PointSet(list(points), data[:, :3], data[:, 3:], metadata=metadata)
 

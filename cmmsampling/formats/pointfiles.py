@@ -22,7 +22,7 @@ __all__ = ["FORMATS", "FileFormat", "READER_KEYS", "export_filter", "read_points
 
 for _record in (dmis.FORMAT, xyzijk.FORMAT, csv_points.FORMAT):
     register_format(_record)
-READER_KEYS = ("format", "path", "dmis_features", "xyz_units")
+READER_KEYS = ("format", "path", "dmis_features", "dmis_units", "xyz_units", "labels")
 
 
 def resolve_format(path, format=None):
@@ -48,8 +48,8 @@ def read_points(path: str | os.PathLike, format: str | None = None) -> PointSet:
     """Read probe points from a DMIS, PC-DMIS XYZ or CSV file (format from the extension unless given).
 
     DMIS: the FEAT/POINT,CART statements (the actual ``FA(...)`` ones of a DMIS output file when
-    there are any, else the nominal ``F(...)`` ones); XYZ: labels P1..PN by position, INCH files
-    converted to mm; CSV: label, x..k and, where present, u, v and deviation.
+    there are any, else the nominal ``F(...)`` ones), in mm whatever its UNITS; XYZ: labels P1..PN
+    by position (``labels: by order``), INCH files converted to mm; CSV: label, x..k and, where present, u, v and deviation.
     Metadata stated in the file's comments comes back in ``metadata`` (``probe_radius_mm``, ``frame``,
     ``frame_origin_mm``, ... where stated), plus ``format`` and ``path``.
     Returns a PointSet; ValueError naming the file and line for what cannot be read.

@@ -41,7 +41,8 @@ def read(text, path="<text>"):
         raise InputError(f"{path}: no points after the header")
     data = np.array(rows)
     labels = [f"P{index + 1}" for index in range(len(data))]
-    return PointSet(labels, data[:, :3] * XYZ_UNITS[units], data[:, 3:], metadata={"xyz_units": units})
+    return PointSet(labels, data[:, :3] * XYZ_UNITS[units], data[:, 3:],
+                    metadata={"xyz_units": units, "labels": "by order"})
 
 
 FORMAT = FileFormat("xyz", NAME, DESCRIPTION, EXTENSIONS, ENCODING, write, read)

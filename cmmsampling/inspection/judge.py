@@ -294,7 +294,8 @@ def _contact_points(point_set, probe_radius):
 def pair(planned, measured):
     """((measured rows, planned rows), notes): the measured points paired with the planned ones
     by label (as DMIS, regardless of case) where the measured labels are planned ones, else by
-    order when the counts agree.
+    order when the counts agree; labels a file did not give (P1..PN by order, metadata
+    ``labels: by order``) pair by order only.
     InputError for a label given twice, a measured label not planned (when the others pair by
     label), or counts that differ with labels that do not pair."""
     labels = list(measured.labels)
@@ -308,7 +309,7 @@ def pair(planned, measured):
         return (rows, rows), []
     where = {label.casefold(): index for index, label in enumerate(planned.labels)}
     known = [label.casefold() in where for label in labels]
-    if any(known):
+    if measured.metadata.get("labels") != "by order" and any(known):
         if not all(known):
             stranger = labels[known.index(False)]
             raise InputError(f"measured point {stranger} was not planned (planned: {planned.labels[0]} .. "
@@ -323,7 +324,9 @@ def pair(planned, measured):
                          f"{len(planned.labels)} planned points, so they cannot be paired by order; "
                          "label them as planned (e.g. P1) or measure every planned point")
     rows = np.arange(len(labels))
-    return (rows, rows), ["paired by order: the measured labels are not the planned ones"]
+    why = ("the file has no labels" if measured.metadata.get("labels") == "by order"
+           else "the measured labels are not the planned ones")
+    return (rows, rows), [f"paired by order: {why}"]
 
 
 def _closest(faces, owner, points):

@@ -1,8 +1,10 @@
 """Measured points from what CMM software writes: the project's point files (DMIS output with its
-FA(label) actuals, CSV with label,x,y,z,i,j,k, PC-DMIS XYZIJK) and plain labelled text, one point
-a line: ``label x y z`` (or ``x y z``, labels P1..PN by order), the fields separated by commas,
-semicolons or whitespace, optionally followed by the vector i j k. A number with a decimal comma is
-refused with its line, as is a line of another length, a label given twice or no point at all.
+FA(label) actuals, in any UNITS; CSV with label,x,y,z,i,j,k; PC-DMIS XYZIJK) and tables of text:
+a header naming the columns (cmmsampling.inspection.columns) or one point a line, ``label x y z``
+(or ``x y z``, labels P1..PN by order), the fields separated by commas, semicolons or whitespace,
+optionally followed by the vector i j k. A DMIS program with nominal points only is refused (it
+is the plan, not a measurement), as are a number with a decimal comma, a line of another length,
+a label given twice or no point at all, each with its line.
 """
 from __future__ import annotations
 
@@ -17,6 +19,7 @@ from ..formats.pointfiles import read_points, resolve_format
 from ..formats.pointset import PointSet
 from ..formats.text import number
 from ..geometry.validation import InputError
+from .columns import COORDINATES, header_columns
 
 # Lines that say nothing about a point: comments of CSV, DMIS and C-like exports.
 COMMENT = re.compile(r"\s*(#|//|\$\$|;)")
@@ -30,7 +33,11 @@ def read_measured(path):
     lines (:func:`read_labelled_text`)."""
     path = check_readable(path, "measured-points file")
     if _project_file(path):
-        return read_points(path)
+        point_set = read_points(path)
+        if point_set.metadata.get("dmis_features") == "nominal":
+            raise InputError(f"{path}: holds the program's nominal points only (F(label)=FEAT/POINT), no measured "
+                             "FA(label) values; give the DMIS output file the CMM wrote after measuring")
+        return point_set
     with open(path, encoding="utf-8-sig", errors="replace") as stream:
         point_set = read_labelled_text(stream.read(), os.fspath(path))
     point_set.metadata.update({"format": "labelled text", "path": os.path.abspath(path)})
@@ -55,40 +62,73 @@ def _project_file(path):
 
 
 def read_labelled_text(text, path="<text>"):
-    """PointSet from lines of ``[label] x y z [i j k]`` (comma, semicolon or whitespace between
-    fields, comment lines skipped); InputError naming the line for a decimal comma, a line of
-    another length than the first point's, a label given twice or no point at all."""
-    rows, labels, width = [], [], None
+    """PointSet from a table of measured points: a header naming the columns (label, x, y, z and
+    optionally i, j, k in any order and case, see cmmsampling.inspection.columns), or none and
+    lines of ``[label] x y z [i j k]``; comma, semicolon or whitespace between fields, comment
+    lines skipped. Without a label column the points are labelled P1..PN by order, which the
+    metadata says (``labels: by order``). InputError naming the line for a decimal comma, a line
+    of another length, a label given twice, a header of nominal coordinates only, or no point."""
+    rows, labels, seen, layout = [], [], set(), None
     for line_number, line in enumerate(text.splitlines(), start=1):
         if not line.strip() or COMMENT.match(line):
             continue
         fields = _fields(line, path, line_number)
-        if width is None:
-            width = len(fields)
-            if width not in FIELD_COUNTS:
-                raise InputError(f"{path}, line {line_number}: {width} fields; a measured point is one of "
-                                 f"{'; '.join(FIELD_COUNTS.values())}")
-        elif len(fields) != width:
-            raise InputError(f"{path}, line {line_number}: {len(fields)} fields where the first point has {width} "
-                             f"({FIELD_COUNTS[width]})")
-        labelled = width in (4, 7)
-        label = fields[0].strip() if labelled else f"P{len(rows) + 1}"
-        if label in labels:
+        if layout is None:
+            layout = header_columns(fields, path, line_number)
+            if layout is not None:
+                layout.update(width=len(fields), what="header", names=", ".join(fields))
+                continue
+            layout = _plain_layout(fields, path, line_number)
+        elif len(fields) != layout["width"]:
+            raise InputError(f"{path}, line {line_number}: {len(fields)} fields where the {layout['what']} has "
+                             f"{layout['width']} ({layout['names']})")
+        label = fields[layout["label"]].strip() if layout["label"] is not None else f"P{len(rows) + 1}"
+        if label in seen:
             raise InputError(f"{path}, line {line_number}: point {label} is given twice; keep one measurement per "
                              "point")
+        seen.add(label)
         labels.append(label)
-        rows.append([number(field, path, line_number, name)
-                     for field, name in zip(fields[int(labelled):], ("x", "y", "z", "i", "j", "k"))])
+        rows.append([number(fields[layout[name]], path, line_number, name) if layout[name] is not None else np.nan
+                     for name in COORDINATES])
     if not rows:
         raise InputError(f"{path}: no measured point found; write one point a line as label, x, y, z")
     data = np.array(rows)
-    normals = data[:, 3:] if data.shape[1] == 6 else np.full((len(data), 3), np.nan)
-    return PointSet(labels, data[:, :3], normals)
+    metadata = {} if layout["label"] is not None else {"labels": "by order"}
+    return PointSet(labels, data[:, :3], data[:, 3:], metadata=metadata)
+
+
+def _plain_layout(fields, path, line_number):
+    """The columns of a table without a header, from its first point's fields: label (or None),
+    x, y, z, i, j, k (or None) by position."""
+    width = len(fields)
+    if width not in FIELD_COUNTS:
+        raise InputError(f"{path}, line {line_number}: {width} fields; a measured point is one of "
+                         f"{'; '.join(FIELD_COUNTS.values())}, or name the columns in a header line "
+                         "(label, x, y, z, i, j, k)")
+    labelled = int(width in (4, 7))
+    layout = {"label": 0 if labelled else None, "width": width, "what": "first point",
+              "names": FIELD_COUNTS[width]}
+    layout.update({name: labelled + index if labelled + index < width else None
+                   for index, name in enumerate(COORDINATES)})
+    if labelled and not _is_number(fields[0]) and not all(_is_number(field) for field in fields[1:4]):
+        raise InputError(f"{path}, line {line_number}: {fields[1].strip()!r} is neither a number nor a column "
+                         "name this reader knows; name the columns in a header (label, x, y, z, i, j, k) or write "
+                         "one point a line as label x y z")
+    return layout
+
+
+def _is_number(field):
+    """True where a field reads as a float."""
+    try:
+        float(field)
+    except ValueError:
+        return False
+    return True
 
 
 def _fields(line, path, line_number):
-    """The fields of a line: split at semicolons where it has any, else at commas, else at
-    whitespace; a number with a comma inside (12,5 between semicolons or blanks) is a decimal
+    """The fields of a line: split at semicolons where it has any, else at tabs, else at commas,
+    else at blanks; a number with a comma inside (12,5 between semicolons or blanks) is a decimal
     comma, refused."""
     if ";" in line:
         fields = [field.strip() for field in line.split(";")]
@@ -97,6 +137,8 @@ def _fields(line, path, line_number):
                 raise InputError(f"{path}, line {line_number}: {field!r} has a decimal comma; write numbers with a "
                                  f"decimal point ({field.replace(',', '.')})")
         return [field for field in fields if field]
+    if "\t" in line.strip():
+        return [field.strip() for field in line.strip().split("\t")]
     tokens = line.split()
     commas = [token for token in tokens if re.fullmatch(r"[-+]?\d*,\d+", token)]
     if len(tokens) in FIELD_COUNTS and commas:
