@@ -88,6 +88,7 @@ def write_inspection(points, inspection):
     points.Locked = list(inspection.alignment.locked)
     points.AlignmentPlacement = inspection.placement
     points.MovedBy = inspection.alignment.moved_mm
+    points.FreeMotions = list(inspection.free_motions)
     points.MeasuredFile = inspection.measured_file
     points.Notes = list(inspection.notes)
 
@@ -113,7 +114,7 @@ class MeasuredPoints(TypedProxy):
     read, mm), Nominal (planned, mm; 0 where none was planned); Deviation (mm); Bands (-2 .. 2);
     Tolerance (mm, 0 without one), ZoneOffset (mm), Profile (mm, 2 max |d - offset|), Verdict,
     FaceProfiles; Alignment, Locked,
-    AlignmentPlacement (measured -> CAD), MovedBy (mm); MeasuredFile, Notes; Source (the probe
+    AlignmentPlacement (measured -> CAD), MovedBy (mm), FreeMotions; MeasuredFile, Notes; Source (the probe
     points or plan) and Report.
     """
 
@@ -139,6 +140,8 @@ class MeasuredPoints(TypedProxy):
         ("App::PropertyPlacement", "AlignmentPlacement", "Alignment",
          "The alignment, measured -> CAD, applied to the measured points (the part is not moved)"),
         ("App::PropertyLength", "MovedBy", "Alignment", "How far the alignment moved the points at most (mm)"),
+        ("App::PropertyStringList", "FreeMotions", "Alignment",
+         "The motions the points do not hold, kept where their labels put them (rx .. z about the points' centre)"),
         ("App::PropertyString", "MeasuredFile", "Measured", "The file the points were read from"),
         ("App::PropertyStringList", "Notes", "Measured", "What the pairing of the points found"),
     )

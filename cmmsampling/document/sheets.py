@@ -11,7 +11,7 @@ from xml.etree import ElementTree
 
 import numpy as np
 
-REPORT_COLUMNS = "ABCDEFGHIJ"
+REPORT_COLUMNS = "ABCDEFGHIJKLM"
 DEVIATION_DISPLAY_UNIT = "µm"
 DEVIATION_ALIASES = ("max_mm", "mean_mm", "rms_mm", "std_mm", "occ_max_mm")
 # Column widths (pixels) from the longest entry: CHARACTER_PIXELS a character plus COLUMN_PADDING,
@@ -174,7 +174,8 @@ def write_plan_report(sheet, plan, moves=None):
 
 
 INSPECTION_COLUMNS = ("Label", "Face", "Nominal X (mm)", "Nominal Y (mm)", "Nominal Z (mm)", "Measured X (mm)",
-                      "Measured Y (mm)", "Measured Z (mm)", "Deviation (mm)", "Band")
+                      "Measured Y (mm)", "Measured Z (mm)", "Aligned X (mm)", "Aligned Y (mm)", "Aligned Z (mm)",
+                      "Deviation (mm)", "Band")
 BAND_TEXTS = {-2: "OUT below", -1: "near below", 0: "in", 1: "near above", 2: "OUT above"}
 
 
@@ -182,9 +183,9 @@ def write_inspection_report(sheet, points):
     """The inspection report of measured points (cmmsampling.document.inspections): the summary
     (profile, tolerance, zone offset, verdict, points outside the zone, alignment, its 4 x 4 matrix
     measured -> CAD) with aliases (n, profile_mm, tolerance_mm, zone_offset_mm, verdict, outside,
-    moved_mm), each face's profile where there are several, then one row
-    per point: label, face, nominal, measured (aligned) and the deviation as text to 0.1 um, and
-    its band. The figures in mm are numbers shown in micrometres, as in the deviation report."""
+    moved_mm), the motions the points do not hold, each face's profile where there are several,
+    then one row per point: label, face, nominal, measured (as read from the file), aligned, the
+    deviation as text to 0.1 um, and its band. The figures in mm are numbers shown in micrometres, as in the deviation report."""
     clear_cells(sheet)
     bands = np.array(points.Bands, dtype=int)
     matrix = points.AlignmentPlacement.toMatrix()
@@ -199,23 +200,24 @@ def write_inspection_report(sheet, points):
         ("Points outside the zone", int(np.count_nonzero(np.abs(bands) == 2)), "outside"),
         ("Alignment", points.Alignment + (f", locked {', '.join(points.Locked)}" if points.Locked else "")),
         ("Moved the points by up to", points.MovedBy.Value, "moved_mm"),
+        ("Motions the points do not hold", ", ".join(getattr(points, "FreeMotions", [])) or "none"),
     ] + [("Transform (measured -> CAD)" if row == 0 else "", *(f"{matrix.A[4 * row + column]:.9g}"
                                                                for column in range(4))) for row in range(4)]
     notes = [("Face profile", line) for line in points.FaceProfiles if len(points.FaceProfiles) > 1]
     notes += [("Note", note) for note in points.Notes]
     table = [INSPECTION_COLUMNS] + [
-        (label, face, *(f"{c:.4f}" for c in nominal), *(f"{c:.4f}" for c in measured), f"{d:+.4f}",
-         BAND_TEXTS[band])
-        for label, face, nominal, measured, d, band in zip(points.Labels, points.Faces, points.Nominal,
-                                                         points.Points, points.Deviation, bands)]
+        (label, face, *(f"{c:.4f}" for c in nominal), *(f"{c:.4f}" for c in measured),
+         *(f"{c:.4f}" for c in aligned), f"{d:+.4f}", BAND_TEXTS[band])
+        for label, face, nominal, measured, aligned, d, band in zip(
+            points.Labels, points.Faces, points.Nominal, points.Measured, points.Points, points.Deviation, bands)]
     rows = [row[:5] if len(row) == 5 else row[:2] for row in summary] + notes + [()] + table
     write_rows(sheet, rows)
     name_figures(sheet, summary, [entry[2] for entry in summary
                                   if len(entry) == 3 and entry[2].endswith("_mm") and not isinstance(entry[1], str)])
     header = len(rows) - len(points.Labels)
     sheet.setStyle("A1", "bold")
-    sheet.setStyle(f"A{header}:J{header}", "bold")
-    sheet.setAlignment(f"C{header}:I{len(rows)}", "right")
+    sheet.setStyle(f"A{header}:M{header}", "bold")
+    sheet.setAlignment(f"C{header}:L{len(rows)}", "right")
     fit_columns(sheet, [row for row in rows if row not in notes])
 
 

@@ -15,7 +15,15 @@ and iterated with exact closest points until the motion stops.
 
 Degrees of freedom: x, y, z (shifts) and rx, ry, rz (rotations about the centroid's axes);
 ``locked`` names those held fixed (each step holds them; steps about two axes compose to a
-rotation about the third of their product's order, below 1e-4 rad for a degree's misplacement). Pure numpy/scipy: the closest points come from a callable.
+rotation about the third of their product's order, below 1e-4 rad for a degree's misplacement).
+
+The fit starts from ``start`` (the labelled points' rigid match to their nominals, Kabsch's
+solution: :func:`kabsch`), so a part put on the table anywhere is judged as one put exactly. The
+motions the points hardly hold (:func:`held_motions`: a plane's turn about its normal and its two
+slides, a cylinder's axis, a blade's slide) are not fitted at all: they stay where the start put
+them, and the Alignment names them (``free_motions``); before, the fit let the points slide along
+them until the sum of squares could not tell (a blade's 36 exact points slid 0.98 mm). Pure
+numpy/scipy: the closest points come from a callable.
 """
 from __future__ import annotations
 
@@ -46,9 +54,15 @@ COST_TOLERANCE = 1e-12
 # points may slide along a little), where rounding alone decides whether a step lowers the sum.
 GAIN_FLOOR_MM2 = 1e-18
 SCALE_FLOOR = 1e-6
-# The min-max programme's trust region: the largest rotation (rad) and shift (mm) of one step,
-# shrunk by TRUST_SHRINK where a step does not lower the largest deviation.
-TRUST_ROTATION = 0.02
+# A motion the points hold weakly: moving them 1 mm along it (a turn that moves them 1 mm RMS)
+# changes their RMS distance from the face by less than this, mm: 1 % of the motion, so that a
+# micrometre of probing error would set it to a tenth of a millimetre or more.
+WEAK_SENSITIVITY = 0.01
+# A degree of freedom (rx .. z) is named free where at most this share of it (by length, in mm
+# of motion) lies outside the weakly held motions.
+NAMED_SHARE = 0.1
+# The min-max programme's trust region: the largest step (mm of the points' motion) along each
+# held motion, shrunk by TRUST_SHRINK where a step does not lower the largest deviation.
 TRUST_SHIFT_MM = 1.0
 TRUST_SHRINK = 0.25
 
@@ -60,7 +74,9 @@ class Alignment:
     matrix: (4, 4) homogeneous transform applied to measured points (mm); method: one of
     ALIGNMENTS; locked: the degrees of freedom held fixed; iterations: steps taken;
     moved_mm: the largest distance the motion moved a measured point; deviations: (N,) mm, the
-    signed distances of the aligned points from the face (+ out of the material).
+    signed distances of the aligned points from the face (+ out of the material); free_motions:
+    the motions the points do not hold, kept where the start put them (:func:`held_motions`);
+    capped: the fit ran into MAX_ITERATIONS without settling.
     """
 
     matrix: np.ndarray
@@ -69,6 +85,8 @@ class Alignment:
     iterations: int
     moved_mm: float
     deviations: np.ndarray
+    free_motions: tuple = ()
+    capped: bool = False
 
     def apply(self, points):
         """points (N, 3) mm moved by the alignment: (N, 3) mm."""
@@ -102,12 +120,14 @@ def check_locked(locked):
     return locked
 
 
-def align(points, closest, method="best_fit", locked=()):
+def align(points, closest, method="best_fit", locked=(), start=None):
     """The Alignment of measured points to the face that ``closest`` measures.
 
     points: (N, 3) mm, measured contact points; closest: callable (M, 3) mm -> (feet (M, 3) mm,
     outward unit normals (M, 3)) on the CAD face, for the points in order; method: one of
-    ALIGNMENTS; locked: degrees of freedom (DEGREES_OF_FREEDOM) held fixed.
+    ALIGNMENTS; locked: degrees of freedom (DEGREES_OF_FREEDOM) held fixed; start: (4, 4) the
+    motion the fit starts from (None: none), where the motions the points do not hold stay.
+    InputError where the points leave nothing to judge: no more of them than the motions they hold.
     """
     if method not in ALIGNMENTS:
         raise InputError(f"alignment must be one of {', '.join(ALIGNMENTS)}, got {method!r}")
@@ -120,16 +140,107 @@ def align(points, closest, method="best_fit", locked=()):
     if method != "none" and len(points) < max(needed, len(free)):
         raise InputError(f"{len(points)} measured points cannot fix {len(free)} degrees of freedom; measure at "
                          f"least {max(needed, len(free))} points or lock some (locked=...)")
-    matrix, iterations = np.eye(4), 0
+    matrix = np.eye(4) if start is None or method == "none" else np.asarray(start, dtype=float)
+    iterations, free_motions, capped = 0, (), False
     if method != "none" and free:
-        matrix, iterations = _least_squares(points, closest, free)
-        if method == "min_max":
-            matrix, more = _min_max(points, closest, free, matrix)
-            iterations += more
+        basis, free_motions = held_motions(transform(matrix, points), closest, free)
+        _check_redundancy(len(points), basis.shape[1], free_motions, method)
+        if basis.shape[1]:
+            matrix, iterations, capped = _least_squares(points, closest, basis, matrix)
+            if method == "min_max":
+                matrix, more, capped = _min_max(points, closest, basis, matrix)
+                iterations += more
     moved = transform(matrix, points)
     feet, normals = closest(moved)
     return Alignment(matrix, method, locked, iterations, float(np.linalg.norm(moved - points, axis=1).max()),
-                     signed_distances(moved, feet, normals))
+                     signed_distances(moved, feet, normals), free_motions, capped)
+
+
+def kabsch(points, targets):
+    """(4, 4) the rigid motion that takes points (N, 3) mm nearest to targets (N, 3) mm in least
+    squares (Kabsch's solution; for targets on a line, the least turn that lays the points' line
+    on theirs), or None where the targets fix none (fewer than two, or all at one place)."""
+    points, targets = np.asarray(points, dtype=float), np.asarray(targets, dtype=float)
+    if len(points) < 2 or not np.isfinite(targets).all():
+        return None
+    centre, target_centre = points.mean(axis=0), targets.mean(axis=0)
+    spread = np.linalg.svd(targets - target_centre, compute_uv=False)
+    if spread[0] == 0.0:
+        return None
+    if len(points) < 3 or spread[1] <= 1e-6 * spread[0]:
+        turn = _line_turn(points - centre, targets - target_centre)
+    else:
+        u, _, vt = np.linalg.svd((points - centre).T @ (targets - target_centre))
+        turn = vt.T @ np.diag([1.0, 1.0, np.sign(np.linalg.det(vt.T @ u.T))]) @ u.T
+    matrix = np.eye(4)
+    matrix[:3, :3], matrix[:3, 3] = turn, target_centre - turn @ centre
+    return matrix
+
+
+def _line_turn(points, targets):
+    """(3, 3) the least rotation taking the main direction of points (N, 3) (centred) to that of
+    targets (N, 3) (centred), the two directions signed alike along the points' order."""
+    first = np.linalg.svd(points, full_matrices=False)[2][0]
+    second = np.linalg.svd(targets, full_matrices=False)[2][0]
+    second = second if (points @ first) @ (targets @ second) >= 0 else -second
+    axis, cosine = np.cross(first, second), float(np.clip(first @ second, -1.0, 1.0))
+    if np.linalg.norm(axis) < 1e-12:
+        if cosine > 0:
+            return np.eye(3)
+        axis = np.cross(first, np.eye(3)[np.argmin(np.abs(first))])
+    return rotation_matrix(axis / np.linalg.norm(axis) * np.arccos(cosine))
+
+
+def held_motions(points, closest, free):
+    """(basis (6, H), free_motions): the motions the points (N, 3) mm hold, as columns over the
+    six degrees of freedom (a unit of each moves the points about 1 mm RMS), and the names of
+    those they do not (fewer than WEAK_SENSITIVITY mm of RMS deviation per mm of motion, from the
+    eigenvalues of the point-to-plane normal matrix over the ``free`` degrees of freedom): a
+    degree of freedom lying in them by its name (e.g. ('rz', 'x', 'y') for a plane z = const),
+    others as 'turn about (a, b, c)' or 'slide along (a, b, c)', in the part's axes."""
+    feet, normals = closest(points)
+    centre = points.mean(axis=0)
+    length = float(np.sqrt(((points - centre) ** 2).sum(axis=1).mean())) or 1.0
+    scale = np.r_[np.full(3, 1.0 / length), np.ones(3)][free]
+    jacobian = np.hstack([np.cross(points - centre, normals), normals])[:, free] * scale
+    values, vectors = np.linalg.eigh(jacobian.T @ jacobian / len(points))
+    weak = np.sqrt(np.maximum(values, 0.0)) < WEAK_SENSITIVITY
+    basis = np.zeros((6, int((~weak).sum())))
+    basis[free] = scale[:, None] * vectors[:, ~weak]
+    weak_vectors = np.zeros((6, int(weak.sum())))
+    weak_vectors[free] = vectors[:, weak]
+    return basis, _motion_names(weak_vectors)
+
+
+def _motion_names(weak):
+    """The names of the weakly held motions, weak (6, K) orthonormal columns (rotations scaled
+    to mm): the degrees of freedom that lie in them, then the rest described by direction."""
+    names, named = [], []
+    for index, name in enumerate(DEGREES_OF_FREEDOM):
+        unit = np.eye(6)[index]
+        if weak.shape[1] and np.linalg.norm(unit - weak @ (weak.T @ unit)) <= NAMED_SHARE:
+            names.append(name)
+            named.append(weak @ (weak.T @ unit))
+    left = weak.shape[1] - len(names)
+    if left > 0:
+        rest = weak if not named else weak - np.column_stack(named) @ np.linalg.lstsq(
+            np.column_stack(named), weak, rcond=None)[0]
+        for vector in np.linalg.svd(rest, full_matrices=False)[0][:, :left].T:
+            turn, slide = vector[:3], vector[3:]
+            axis, word = (turn, "turn about") if np.linalg.norm(turn) >= np.linalg.norm(slide) else (slide, "slide along")
+            axis = axis / np.linalg.norm(axis) * np.sign(axis[np.argmax(np.abs(axis))])
+            names.append(f"{word} ({', '.join(f'{c:.2f}' for c in axis + 0.0)})")
+    return tuple(names)
+
+
+def _check_redundancy(count, held, free_motions, method):
+    """InputError where ``count`` points leave nothing to judge once they have fixed the ``held``
+    motions (min-max needs one more point: its zone is set by held + 1 of them)."""
+    needed = held + (2 if method == "min_max" else 1)
+    if count < needed:
+        weak = f" (the others, {', '.join(free_motions)}, they do not hold)" if free_motions else ""
+        raise InputError(f"{count} measured points fix the {held} motions they hold{weak} with none to spare, so "
+                         f"any part would pass; measure at least {needed} points, or lock motions (locked=...)")
 
 
 def signed_distances(points, feet, normals):
@@ -137,19 +248,18 @@ def signed_distances(points, feet, normals):
     return np.einsum("ij,ij->i", points - feet, normals)
 
 
-def _model(points, closest, free):
-    """The point-to-plane model at points (N, 3) mm: (deviations (N,) mm, Jacobian (N, F) of
-    the deviations by the free degrees of freedom, centroid (3,) mm)."""
+def _model(points, closest, basis):
+    """The point-to-plane model at points (N, 3) mm: (deviations (N,) mm, Jacobian (N, H) of
+    the deviations by the held motions, basis (6, H), centroid (3,) mm)."""
     feet, normals = closest(points)
     centre = points.mean(axis=0)
-    jacobian = np.hstack([np.cross(points - centre, normals), normals])[:, free]
+    jacobian = np.hstack([np.cross(points - centre, normals), normals]) @ basis
     return signed_distances(points, feet, normals), jacobian, centre
 
 
-def _step_matrix(step, free, centre):
-    """(4, 4): the motion by ``step`` (F,) over the free degrees of freedom, rotation about centre."""
-    full = np.zeros(6)
-    full[free] = step
+def _step_matrix(step, basis, centre):
+    """(4, 4): the motion by ``step`` (H,) along the held motions basis (6, H), rotation about centre."""
+    full = basis @ step
     rotation = rotation_matrix(full[:3])
     matrix = np.eye(4)
     matrix[:3, :3] = rotation
@@ -157,59 +267,67 @@ def _step_matrix(step, free, centre):
     return matrix
 
 
-def _least_squares(points, closest, free):
-    """Levenberg-Marquardt on sum d^2 (Gauss-Newton steps, damped where a step would not lower
-    the sum, so that a weakly constrained motion, e.g. sliding along a nearly flat face, cannot
-    make it oscillate), ended where a Gauss-Newton step could gain nothing: (matrix (4, 4),
-    iterations)."""
-    matrix, damping = np.eye(4), DAMPING[0]
-    deviations, jacobian, centre = _model(points, closest, free)
+def _least_squares(points, closest, basis, start):
+    """Levenberg-Marquardt on sum d^2 from the motion ``start`` (4, 4) along the held motions
+    basis (6, H) (Gauss-Newton steps, damped where a step would not lower the sum), ended where
+    the Gauss-Newton step could gain nothing or would move no point by STEP_TOLERANCE_MM (where
+    rounding alone decides whether a step lowers the sum), or a converged step is that small:
+    (matrix (4, 4), iterations, capped: MAX_ITERATIONS reached)."""
+    matrix, damping = start, DAMPING[0]
+    deviations, jacobian, centre = _model(transform(matrix, points), closest, basis)
     cost = float(deviations @ deviations)
     for iteration in range(1, MAX_ITERATIONS + 1):
         normal = jacobian.T @ jacobian
         scale = np.maximum(np.diag(normal), SCALE_FLOOR * np.diag(normal).max() + np.finfo(float).tiny)
         gradient = jacobian.T @ deviations
-        if gradient @ np.linalg.solve(normal + DAMPING[0] * np.diag(scale), gradient) <= (
-                COST_TOLERANCE * cost + GAIN_FLOOR_MM2):
-            return matrix, iteration - 1
-        step = np.linalg.solve(normal + damping * np.diag(scale), -gradient)
-        motion = _step_matrix(step, free, centre)
+        newton = np.linalg.solve(normal + DAMPING[0] * np.diag(scale), -gradient)
         moved = transform(matrix, points)
+        if -gradient @ newton <= COST_TOLERANCE * cost + GAIN_FLOOR_MM2 or _largest_move(
+                _step_matrix(newton, basis, centre), moved) < STEP_TOLERANCE_MM:
+            return matrix, iteration - 1, False
+        step = np.linalg.solve(normal + damping * np.diag(scale), -gradient)
+        motion = _step_matrix(step, basis, centre)
         trial = motion @ matrix
-        trial_deviations, trial_jacobian, trial_centre = _model(transform(trial, points), closest, free)
+        trial_deviations, trial_jacobian, trial_centre = _model(transform(trial, points), closest, basis)
         trial_cost = float(trial_deviations @ trial_deviations)
-        small = np.linalg.norm(transform(motion, moved) - moved, axis=1).max() < STEP_TOLERANCE_MM
+        small = _largest_move(motion, moved) < STEP_TOLERANCE_MM
         if trial_cost <= cost:
             if damping <= CONVERGED_DAMPING and (small or cost - trial_cost <= COST_TOLERANCE * cost):
-                return trial, iteration
+                return trial, iteration, False
             matrix, cost, damping = trial, trial_cost, max(damping * DAMPING_FALL, DAMPING[0])
             deviations, jacobian, centre = trial_deviations, trial_jacobian, trial_centre
         elif damping >= DAMPING[1]:
-            return matrix, iteration
+            return matrix, iteration, False
         else:
             damping = min(damping * DAMPING_RISE, DAMPING[1])
-    return matrix, MAX_ITERATIONS
+    return matrix, MAX_ITERATIONS, True
 
 
-def _min_max(points, closest, free, matrix):
-    """Sequential linear programmes on max |d| from ``matrix``: (matrix (4, 4), iterations)."""
-    radius = np.array([TRUST_ROTATION if DEGREES_OF_FREEDOM[i].startswith("r") else TRUST_SHIFT_MM for i in free])
-    deviations, jacobian, centre = _model(transform(matrix, points), closest, free)
+def _largest_move(motion, points):
+    """mm, the farthest a motion (4, 4) moves any of the points (N, 3) mm."""
+    return float(np.linalg.norm(transform(motion, points) - points, axis=1).max())
+
+
+def _min_max(points, closest, basis, matrix):
+    """Sequential linear programmes on max |d| from ``matrix`` along the held motions basis (6,
+    H), whose units move the points about 1 mm: (matrix (4, 4), iterations, capped)."""
+    radius = np.full(basis.shape[1], TRUST_SHIFT_MM)
+    deviations, jacobian, centre = _model(transform(matrix, points), closest, basis)
     worst = np.abs(deviations).max()
     for iteration in range(1, MAX_ITERATIONS + 1):
         step = _chebyshev_step(deviations, jacobian, radius)
-        motion = _step_matrix(step, free, centre)
+        motion = _step_matrix(step, basis, centre)
         before = transform(matrix, points)
         trial = motion @ matrix
-        trial_deviations, trial_jacobian, trial_centre = _model(transform(trial, points), closest, free)
+        trial_deviations, trial_jacobian, trial_centre = _model(transform(trial, points), closest, basis)
         if np.abs(trial_deviations).max() < worst:
             matrix, worst = trial, np.abs(trial_deviations).max()
             deviations, jacobian, centre = trial_deviations, trial_jacobian, trial_centre
         else:
             radius *= TRUST_SHRINK
-        if np.linalg.norm(transform(motion, before) - before, axis=1).max() < STEP_TOLERANCE_MM:
-            return matrix, iteration
-    return matrix, MAX_ITERATIONS
+        if _largest_move(motion, before) < STEP_TOLERANCE_MM:
+            return matrix, iteration, False
+    return matrix, MAX_ITERATIONS, True
 
 
 def _chebyshev_step(deviations, jacobian, radius):

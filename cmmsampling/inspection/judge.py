@@ -25,7 +25,7 @@ from ..fitting.occ_surface import substitute_surface
 from ..measurement import check_extent, closest_points, stated_radius
 from ..planning.part_plan import PartPlan
 from ..strategies.result import SamplingResult
-from .align import ALIGNMENTS, Alignment, align, check_locked
+from .align import ALIGNMENTS, Alignment, align, check_locked, kabsch
 from .measured import read_measured
 
 Part = import_part()
@@ -82,6 +82,12 @@ class Inspection:
         return FreeCAD.Placement(FreeCAD.Matrix(*self.transform.ravel().tolist()))
 
     @property
+    def free_motions(self):
+        """The motions the points do not hold (cmmsampling.inspection.align.held_motions), kept
+        where the labelled nominals put them: e.g. ('rz', 'x', 'y') for a plane z = const."""
+        return self.alignment.free_motions
+
+    @property
     def profile(self):
         """The form profile, mm: the width of the zone centred on the nominal (offset by
         zone_offset) that holds every point, 2 max |d - o|."""
@@ -124,9 +130,13 @@ class Inspection:
         """The inspection in a few lines: points, alignment, profile, verdict."""
         zone = f" (zone offset {self.zone_offset:+g} mm)" if self.zone_offset else ""
         lines = [f"{len(self.labels)} points, alignment {self.alignment.method} "
-                 f"({self.alignment.iterations} steps, points moved up to {self.alignment.moved_mm:.4g} mm)",
-                 f"deviation {self.deviations.min():+.4f} .. {self.deviations.max():+.4f} mm, "
-                 f"profile {self.profile:.4f} mm{zone}"]
+                 f"({self.alignment.iterations} steps{' (capped: not settled)' if self.alignment.capped else ''}, "
+                 f"points moved up to {self.alignment.moved_mm:.4g} mm)",
+                 "motions the points do not hold (kept where their labels put them): "
+                 + (", ".join(self.free_motions) if self.free_motions else "none")]
+        lines = lines if self.alignment.method != "none" else lines[:1]
+        lines.append(f"deviation {self.deviations.min():+.4f} .. {self.deviations.max():+.4f} mm, "
+                     f"profile {self.profile:.4f} mm{zone}")
         if self.tolerance is not None:
             outside = int((~self.within).sum())
             lines.append(f"tolerance {self.tolerance:g} mm: {verdict_text(self.passed)}"
@@ -183,7 +193,9 @@ def inspect(source, measured, alignment="best_fit", tolerance=None, locked=(), p
     agree. measured: a path (DMIS output with FA(label) actuals, the project's CSV or XYZIJK,
     labelled x y z text: cmmsampling.inspection.measured) or a PointSet of contact points (a
     file's stated probe radius, or probe_radius mm, is taken off along its vectors).
-    alignment: 'none', 'best_fit' or 'min_max' (cmmsampling.inspection.align); locked: degrees
+    alignment: 'none', 'best_fit' or 'min_max' (cmmsampling.inspection.align), started from the
+    measured points' rigid match to their planned nominals (unless a degree of freedom is
+    locked), the motions the points do not hold kept there (``free_motions``); locked: degrees
     of freedom held fixed (rx, ry, rz, x, y, z); tolerance: the profile tolerance t, mm;
     zone_offset: o, mm, the zone's centre from the nominal (ISO 1101's UZ, + out of the material;
     +-t/2 a unilateral zone outside or inside), which the profile and the verdict are taken from.
@@ -204,8 +216,8 @@ def inspect(source, measured, alignment="best_fit", tolerance=None, locked=(), p
     def closest(where):
         return _closest(planned.faces, owner, where)
 
-    found = align(points, closest, alignment, locked)
     nominal = planned.points[order[1]] if planned.points is not None else np.full_like(points, np.nan)
+    found = align(points, closest, alignment, locked, None if locked else kabsch(points, nominal))
     inspection = Inspection([read.labels[i] for i in order[0]], nominal, points, found.apply(points),
                             found.deviations, found.matrix, found, tolerance, [planned.names[i] for i in owner], notes,
                             measured_file=os.fspath(measured) if isinstance(measured, (str, os.PathLike)) else "",

@@ -42,8 +42,11 @@ def test_an_inspection_goes_in_as_one_step_and_undoes(doc, points, tmp_path):
     assert moved.distanceToPoint(FreeCAD.Vector(*found.points[3])) < 1e-9
     assert sheet.get("profile_mm") == pytest.approx(found.profile) and sheet.get("n") == 25
     assert sheet.get("outside") == int(np.count_nonzero(~found.within))
-    assert sheet.get("A16") == "Label" and sheet.get("A17") == found.labels[0]
-    assert sheet.get(f"J{16 + 25}") in ("in", "near above", "near below", "OUT above", "OUT below")
+    assert sheet.get("A17") == "Label" and sheet.get("A18") == found.labels[0]
+    assert sheet.get("A11") == "Motions the points do not hold" and sheet.get("B11") == "none"
+    assert [sheet.get(f"{c}18") for c in "FGH"] == [f"{v:.4f}" for v in found.measured[0]], "as read"
+    assert [sheet.get(f"{c}18") for c in "IJK"] == [f"{v:.4f}" for v in found.points[0]], "aligned"
+    assert sheet.get(f"M{17 + 25}") in ("in", "near above", "near below", "OUT above", "OUT below")
     doc.undo()
     assert [o.Name for o in doc.Objects] == before and points.Visibility
 
