@@ -19,15 +19,16 @@ from . import icon
 from .qt_compat import run_modal
 
 ALIGNMENT_TEXTS = {
+    "min_max": ("Minimum zone (min-max, ISO 1101)", "The rigid motion that makes the largest |deviation| "
+                                                    "smallest: the narrowest zone, by which ISO 1101 judges the "
+                                                    "form profile of a surface without datums"),
     "best_fit": ("Best fit (least squares)",
                  "The rigid motion that makes the sum of squared deviations along the CAD normals smallest, "
-                 "iterated with exact closest points"),
-    "min_max": ("Min-max (Chebyshev)", "The rigid motion that makes the largest |deviation| smallest: the "
-                                       "narrowest zone, never wider than the best fit's"),
+                 "iterated with exact closest points: its profile is never narrower than the minimum zone's"),
     "none": ("None (points in the part's frame)", "The measured points are judged where they are: the CMM "
                                                   "measured in the part's own frame"),
 }
-DEFAULTS = {"InspectFile": "", "InspectAlignment": "best_fit", "InspectTolerance": 0.1, "InspectLocked": "",
+DEFAULTS = {"InspectFile": "", "InspectAlignment": "min_max", "InspectTolerance": 0.1, "InspectLocked": "",
             "InspectZoneOffset": 0.0}
 MEASURED_FILTERS = ("Measured points (*.dmi *.dmis *.dmo *.csv *.xyz *.txt);;All files (*)")
 MAX_TOLERANCE_MM = 100.0
@@ -161,7 +162,7 @@ def inspection_call(points, arguments):
     doc = f"App.getDocument({points.Document.Name!r})"
     source = f"{doc}.getObject({points.Name!r})"
     words = [source, repr(arguments["measured"])]
-    if arguments["alignment"] != "best_fit":
+    if arguments["alignment"] != "min_max":
         words.append(f"alignment={arguments['alignment']!r}")
     if arguments["locked"]:
         words.append(f"locked={arguments['locked']!r}")

@@ -25,7 +25,7 @@ from ..fitting.occ_surface import substitute_surface
 from ..measurement import check_extent, closest_points, stated_radius
 from ..planning.part_plan import PartPlan
 from ..strategies.result import SamplingResult
-from .align import ALIGNMENTS, Alignment, align, check_locked, kabsch
+from .align import ALIGNMENTS, PROFILE_KINDS, Alignment, align, check_locked, kabsch
 from .measured import read_measured
 
 Part = import_part()
@@ -136,7 +136,7 @@ class Inspection:
                  + (", ".join(self.free_motions) if self.free_motions else "none")]
         lines = lines if self.alignment.method != "none" else lines[:1]
         lines.append(f"deviation {self.deviations.min():+.4f} .. {self.deviations.max():+.4f} mm, "
-                     f"profile {self.profile:.4f} mm{zone}")
+                     f"profile {self.profile:.4f} mm ({PROFILE_KINDS[self.alignment.method]}){zone}")
         if self.tolerance is not None:
             outside = int((~self.within).sum())
             lines.append(f"tolerance {self.tolerance:g} mm: {verdict_text(self.passed)}"
@@ -182,7 +182,7 @@ def band_limits(tolerance, offset=0.0):
     return (offset - half, offset - NEAR_FRACTION * half, offset + NEAR_FRACTION * half, offset + half)
 
 
-def inspect(source, measured, alignment="best_fit", tolerance=None, locked=(), part=None, probe_radius=None,
+def inspect(source, measured, alignment="min_max", tolerance=None, locked=(), part=None, probe_radius=None,
             zone_offset=0.0):
     """Judge measured points against the CAD model they were planned on.
 
@@ -193,12 +193,14 @@ def inspect(source, measured, alignment="best_fit", tolerance=None, locked=(), p
     agree. measured: a path (DMIS output with FA(label) actuals, the project's CSV or XYZIJK,
     labelled x y z text: cmmsampling.inspection.measured) or a PointSet of contact points (a
     file's stated probe radius, or probe_radius mm, is taken off along its vectors).
-    alignment: 'none', 'best_fit' or 'min_max' (cmmsampling.inspection.align), started from the
+    alignment: 'min_max' (ISO 1101's minimum zone, the default), 'best_fit' (least squares) or
+    'none' (cmmsampling.inspection.align), started from the
     measured points' rigid match to their planned nominals (unless a degree of freedom is
     locked), the motions the points do not hold kept there (``free_motions``); locked: degrees
     of freedom held fixed (rx, ry, rz, x, y, z); tolerance: the profile tolerance t, mm;
     zone_offset: o, mm, the zone's centre from the nominal (ISO 1101's UZ, + out of the material;
-    +-t/2 a unilateral zone outside or inside), which the profile and the verdict are taken from.
+    +-t/2 a unilateral zone outside or inside), which the alignment centres the points on and
+    the profile and the verdict are taken from.
     One alignment for all the points (a plan: the whole part). Returns an Inspection.
     """
     if alignment not in ALIGNMENTS:
@@ -217,7 +219,7 @@ def inspect(source, measured, alignment="best_fit", tolerance=None, locked=(), p
         return _closest(planned.faces, owner, where)
 
     nominal = planned.points[order[1]] if planned.points is not None else np.full_like(points, np.nan)
-    found = align(points, closest, alignment, locked, None if locked else kabsch(points, nominal))
+    found = align(points, closest, alignment, locked, None if locked else kabsch(points, nominal), zone_offset)
     inspection = Inspection([read.labels[i] for i in order[0]], nominal, points, found.apply(points),
                             found.deviations, found.matrix, found, tolerance, [planned.names[i] for i in owner], notes,
                             measured_file=os.fspath(measured) if isinstance(measured, (str, os.PathLike)) else "",

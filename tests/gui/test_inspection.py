@@ -12,6 +12,7 @@ from support.faces import TESTDATA
 
 import cmmsampling
 from cmmsampling.document.object_types import is_measured_points
+from cmmsampling.fitting.deviation import mm_text
 from cmmsampling.gui import commands, inspect_dialog, inspection_view
 from cmmsampling.inspection.judge import tolerance_bands
 
@@ -56,7 +57,7 @@ def test_inspect_measured_points_on_a_ventilator_blade(blade_points, tmp_path, a
         seen["ok before"] = dialog.buttons.button(QtGui.QDialogButtonBox.Ok).isEnabled()
         dialog.path.setText(measured)
         dialog.tolerance.setValue(0.013)
-        dialog.alignment.setCurrentIndex(dialog.alignment.findData("best_fit"))
+        dialog.alignment.setCurrentIndex(dialog.alignment.findData("min_max"))
         dialog.grab().save(os.path.join(artifacts, "inspect_dialog.png"))
         dialog.accept()
 
@@ -91,7 +92,7 @@ def test_inspect_measured_points_on_a_ventilator_blade(blade_points, tmp_path, a
     proxy = measured_points.ViewObject.Proxy
     assert isinstance(proxy, inspection_view.ViewProviderMeasuredPoints)
     assert proxy.annotation.getNumChildren() == 3, "dots, labels and legend"
-    assert texts(proxy.annotation)[-1] == (f"Profile {expected.profile:.4f} mm, tolerance 0.013 mm: "
+    assert texts(proxy.annotation)[-1] == (f"Profile {mm_text(expected.profile)}, tolerance 0.013 mm: "
                                            f"{measured_points.Verdict}")
     view = FreeCADGui.ActiveDocument.ActiveView
     view.setViewDirection(tuple(-points.Proxy.point_set(points).normals.mean(axis=0)))
@@ -142,10 +143,10 @@ def test_the_command_says_what_to_select_and_echoes_every_choice(blade_points):
     assert "Select the probe points" in commands.InspectMeasured().reason()
     FreeCADGui.Selection.addSelection(points)
     assert commands.InspectMeasured().reason() is None
-    judge, add = inspect_dialog.inspection_call(points, {"measured": "/data/m.dmi", "alignment": "min_max",
+    judge, add = inspect_dialog.inspection_call(points, {"measured": "/data/m.dmi", "alignment": "best_fit",
                                                          "locked": ("z",), "tolerance": None, "zone_offset": 0.005})
     source = f"App.getDocument({doc.Name!r}).getObject({points.Name!r})"
-    assert judge == (f"inspection = cmmsampling.inspect({source}, '/data/m.dmi', alignment='min_max', "
+    assert judge == (f"inspection = cmmsampling.inspect({source}, '/data/m.dmi', alignment='best_fit', "
                      "locked=('z',), zone_offset=0.005)")
     assert add == f"group = cmmsampling.add_inspection_to_document(inspection, App.getDocument({doc.Name!r}), " \
                   f"source={source})"

@@ -80,7 +80,7 @@ def test_the_best_fit_undoes_a_misplacement_to_a_micrometre(planned, tmp_path):
 def test_with_a_form_error_the_deviations_are_an_independent_point_to_plane_fits(planned, tmp_path):
     made = cmmsampling.simulate_measurement(planned, tmp_path / "measured.csv", form_error=0.03,
                                             misplacement=MISPLACED, seed=4)
-    found = cmmsampling.inspect(planned, tmp_path / "measured.csv", tolerance=0.05)
+    found = cmmsampling.inspect(planned, tmp_path / "measured.csv", tolerance=0.05, alignment="best_fit")
     aligned, deviations = point_to_plane_fit(planned.face, made.actual)
     assert np.abs(found.deviations - deviations).max() < 1e-3   # 1 um
     assert np.linalg.norm(found.points - aligned, axis=1).max() < 1e-3
@@ -90,8 +90,8 @@ def test_with_a_form_error_the_deviations_are_an_independent_point_to_plane_fits
 def test_min_max_gives_a_profile_no_wider_than_the_best_fits(planned, tmp_path):
     cmmsampling.simulate_measurement(planned, tmp_path / "measured.dmi", form_error=0.03, noise=0.002,
                                      misplacement=MISPLACED, seed=2)
-    best = cmmsampling.inspect(planned, tmp_path / "measured.dmi")
-    chebyshev = cmmsampling.inspect(planned, tmp_path / "measured.dmi", alignment="min_max")
+    best = cmmsampling.inspect(planned, tmp_path / "measured.dmi", alignment="best_fit")
+    chebyshev = cmmsampling.inspect(planned, tmp_path / "measured.dmi")
     assert chebyshev.profile <= best.profile + 1e-9
     assert chebyshev.deviations.max() == pytest.approx(-chebyshev.deviations.min(), abs=2e-4)   # equioscillation
 
