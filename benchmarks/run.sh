@@ -39,11 +39,16 @@ run_one() {
     long-runs) page long-runs "Big and long runs: time and memory" "$PY" benchmarks/long_runs.py ;;
     paper-run-spread) page paper-run-spread "The paper's run over 12 seeds: the spread a test must allow" \
                         "$PY" benchmarks/paper_run_spread.py 12 ;;
+    inspection-speed) page inspection-speed "Inspecting 2,000 and 20,000 measured points (quiet machine)" \
+                        "$PY" benchmarks/inspection_speed.py ;;
+    inspection-speed-busy) page inspection-speed-busy \
+                             "Inspecting 2,000 and 20,000 measured points beside a CPU-bound process" \
+                             "$PY" benchmarks/inspection_speed.py --beside-busy ;;
     memory) page memory "Peak memory against sample()'s estimate" "$PY" benchmarks/memory.py --quick ;;
     *) echo "unknown benchmark '$1'; choose from: $ALL" >&2; return 2 ;;
   esac
 }
-ALL="speed part-plan-speed part-plan-ventilator part-plan-ventilator-optimal speed-busy long-runs memory near-optimal probe-path part-plan-points delivered-deviation paper-run-spread"
+ALL="inspection-speed inspection-speed-busy speed part-plan-speed part-plan-ventilator part-plan-ventilator-optimal speed-busy long-runs memory near-optimal probe-path part-plan-points delivered-deviation paper-run-spread"
 status=0
 for name in ${@:-$ALL}; do
   echo "== $name"

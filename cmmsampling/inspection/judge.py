@@ -22,10 +22,12 @@ from ..geometry.surface import as_face
 from ..geometry.validation import InputError, InputTypeError, check_real
 from ..fitting.deviation import NUMERICAL_ZERO_MM
 from ..fitting.occ_surface import substitute_surface
-from ..measurement import check_extent, closest_points, stated_radius
+from ..measurement import check_extent, stated_radius
+from ..strategies.face_setup import reused
 from ..planning.part_plan import PartPlan
 from ..strategies.result import SamplingResult
 from .align import ALIGNMENTS, PROFILE_KINDS, Alignment, align, check_locked, kabsch
+from .closest import OCC_AGREEMENT_MM, OCC_CONFIRMED, FaceCloser, confirm_with_occ
 from .measured import read_measured
 
 Part = import_part()
@@ -215,13 +217,21 @@ def inspect(source, measured, alignment="min_max", tolerance=None, locked=(), pa
     points = contact[order[0]]
     owner = np.zeros(len(points), dtype=int) if planned.owner is None else planned.owner[order[1]]
 
+    with reused():
+        closers = [FaceCloser(face) if np.any(owner == index) else None for index, face in enumerate(planned.faces)]
+
     def closest(where):
-        return _closest(planned.faces, owner, where)
+        return _closest(closers, owner, where)
 
     nominal = planned.points[order[1]] if planned.points is not None else np.full_like(points, np.nan)
     found = align(points, closest, alignment, locked, None if locked else kabsch(points, nominal), zone_offset)
+    deviations, disagreement = confirm_with_occ(planned.faces, owner, found.apply(points), found.deviations,
+                                                zone_offset)
+    if disagreement > OCC_AGREEMENT_MM:
+        notes.append(f"OCC's distances at the {OCC_CONFIRMED} points farthest from the zone's centre differ from the "
+                     f"alignment's by up to {disagreement:.2g} mm; OCC's are reported")
     inspection = Inspection([read.labels[i] for i in order[0]], nominal, points, found.apply(points),
-                            found.deviations, found.matrix, found, tolerance, [planned.names[i] for i in owner], notes,
+                            deviations, found.matrix, found, tolerance, [planned.names[i] for i in owner], notes,
                             measured_file=os.fspath(measured) if isinstance(measured, (str, os.PathLike)) else "",
                             zone_offset=zone_offset)
     if isinstance(source, SamplingResult):
@@ -343,11 +353,12 @@ def pair(planned, measured):
     return (rows, rows), [f"paired by order: {why}"]
 
 
-def _closest(faces, owner, points):
-    """Feet (N, 3) mm and outward normals (N, 3) of points (N, 3) on their own faces."""
+def _closest(closers, owner, points):
+    """Feet (N, 3) mm and outward normals (N, 3) of points (N, 3) on their own faces (closers:
+    a FaceCloser per face, None for a face without points; owner (N,) the face of each point)."""
     feet, normals = np.empty_like(points), np.empty_like(points)
-    for index, face in enumerate(faces):
+    for index, closer in enumerate(closers):
         rows = np.flatnonzero(owner == index)
         if rows.size:
-            feet[rows], normals[rows], _ = closest_points(face, points[rows])
+            feet[rows], normals[rows] = closer(points[rows])
     return feet, normals
