@@ -227,6 +227,8 @@ class InspectMeasured(GuardedCommand):
             if getattr(__main__, "group", None) is before[1]:
                 raise RuntimeError("The inspection was not added to the document: the Report view says why.")
         except Exception as exc:
+            FreeCADGui.getMainWindow().statusBar().showMessage(
+                f"Not inspected: {str(exc).splitlines()[0] if str(exc) else type(exc).__name__}", 20000)
             warn(self.TITLE, str(exc))
             return
         finally:

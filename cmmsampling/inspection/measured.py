@@ -24,6 +24,9 @@ from .columns import COORDINATES, header_columns
 # Lines that say nothing about a point: comments of CSV, DMIS and C-like exports.
 COMMENT = re.compile(r"\s*(#|//|\$\$|;)")
 FIELD_COUNTS = {3: "x y z", 4: "label x y z", 6: "x y z i j k", 7: "label x y z i j k"}
+# The largest measured-points file read (bytes): about a million points of DMIS output, read in
+# seconds and a few hundred MB; a larger one is refused before it is read.
+MAX_FILE_BYTES = 100 * 2 ** 20
 
 
 def read_measured(path):
@@ -32,6 +35,11 @@ def read_measured(path):
     header go through :func:`cmmsampling.read_points`; any other text is read as labelled x, y, z
     lines (:func:`read_labelled_text`)."""
     path = check_readable(path, "measured-points file")
+    size = os.path.getsize(path)
+    if size > MAX_FILE_BYTES:
+        raise InputError(f"{path}: {size / 2 ** 20:.0f} MB is more than a measurement this reader takes "
+                         f"({MAX_FILE_BYTES // 2 ** 20} MB, about a million points); split the file by face or "
+                         "part and inspect each")
     if _project_file(path):
         point_set = read_points(path)
         if point_set.metadata.get("dmis_features") == "nominal":

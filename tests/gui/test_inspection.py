@@ -122,6 +122,8 @@ def test_a_bad_measured_file_is_named_and_adds_nothing(blade_points, tmp_path):
     said = modal_message(lambda: inspect_with(points, choose))
     assert "decimal comma" in said, said
     assert len(doc.Objects) == before
+    shown = main_window().statusBar().currentMessage()
+    assert shown.startswith("Not inspected: ") and "decimal comma" in shown, "the status bar said Inspecting... on"
 
 
 def test_without_a_tolerance_the_points_take_the_deviation_colours(blade_points, tmp_path):

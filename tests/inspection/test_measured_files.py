@@ -99,3 +99,14 @@ def test_unlabelled_points_pair_by_order_only_when_every_point_is_there(measured
     with pytest.raises(InputError, match="the 24 measured points carry no planned label and there are 25 planned "
                                          "points, so they cannot be paired by order"):
         cmmsampling.inspect(planned, folder / "one_missing.txt")
+
+
+def test_a_file_too_large_is_refused_before_it_is_read(measured):
+    """A 200 MB file (sparse: no disk used) is refused at once, naming its size."""
+    planned, _, _, folder = measured
+    path = folder / "huge.txt"
+    with open(path, "wb") as stream:
+        stream.truncate(200 * 2 ** 20)
+    with pytest.raises(InputError, match=r"huge.txt: 200 MB is more than a measurement this reader takes \(100 MB"):
+        cmmsampling.inspect(planned, path)
+
