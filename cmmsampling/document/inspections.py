@@ -94,9 +94,12 @@ def write_inspection(points, inspection):
 
 
 def face_lines(inspection):
-    """'Face3: 0.0123 mm PASS' for each face judged (the verdict left out without a tolerance)."""
+    """'Face3: 0.0123 mm PASS' for each face judged (the verdict left out without a tolerance), with
+    ', form 0.0101 mm aligned alone' where the face has a form profile of its own."""
+    forms = inspection.face_forms
     return [f"{name}: {value:.4f} mm" + ("" if inspection.tolerance is None else
                                           f" {verdict_text(inspection.face_passed(value))}")
+            + ("" if forms.get(name) is None else f", form {forms[name]:.4f} mm aligned alone")
             for name, value in inspection.face_profiles.items()]
 
 

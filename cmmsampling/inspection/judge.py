@@ -51,6 +51,8 @@ class Inspection:
     alignment: the Alignment; tolerance: the profile tolerance t (mm) or None; faces: N names of
     the faces the points were judged on; notes: what the pairing found (points planned but not
     measured); zone_offset: o, mm, the zone's centre from the nominal (+ out of the material);
+    face_forms: {face name: its form profile, mm, each face aligned alone (None, with the reason
+    in notes, where its points cannot be), for a part of several faces};
     for a SamplingResult's points (the paper's step), substitute_poles: (n_u, n_v, 3) mm, the
     substitute fitted to the aligned measured points at their planned (u, v), and
     substitute_deviation: its DeviationStats against the CAD face (the deviation map); else None;
@@ -72,6 +74,7 @@ class Inspection:
     space: object = None
     measured_file: str = ""
     zone_offset: float = 0.0
+    face_forms: dict = field(default_factory=dict)
 
     @property
     def substitute(self):
@@ -82,6 +85,11 @@ class Inspection:
     def placement(self):
         """The alignment as a FreeCAD.Placement (measured -> CAD)."""
         return FreeCAD.Placement(FreeCAD.Matrix(*self.transform.ravel().tolist()))
+
+    def _form_text(self, name):
+        """'; form 0.0101 mm aligned alone' for a face of several with its own form profile."""
+        form = self.face_forms.get(name)
+        return "" if form is None else f" with the part's alignment; form {form:.4f} mm aligned alone"
 
     @property
     def free_motions(self):
@@ -147,7 +155,7 @@ class Inspection:
         if len(faces) > 1:
             lines += [f"{name}: profile {value:.4f} mm" + ("" if self.tolerance is None else
                                                           f", {verdict_text(self.face_passed(value))}")
-                      for name, value in faces.items()]
+                      + self._form_text(name) for name, value in faces.items()]
         return "\n".join(lines + [f"note: {note}" for note in self.notes])
 
 
@@ -234,9 +242,33 @@ def inspect(source, measured, alignment="min_max", tolerance=None, locked=(), pa
                             deviations, found.matrix, found, tolerance, [planned.names[i] for i in owner], notes,
                             measured_file=os.fspath(measured) if isinstance(measured, (str, os.PathLike)) else "",
                             zone_offset=zone_offset)
+    if len(set(owner.tolist())) > 1 and alignment != "none":
+        inspection.face_forms = _face_forms(points, owner, closers, planned.names, found, locked, zone_offset, notes)
     if isinstance(source, SamplingResult):
         rebuild(inspection, source, order[1])
     return inspection
+
+
+def _face_forms(points, owner, closers, names, found, locked, offset, notes):
+    """{face name: its form profile, mm}: each face's points aligned alone (the same method and
+    locked motions, from the part's alignment), the profile 2 max |d - offset| of that fit; None
+    where a face's points cannot be aligned alone (too few for the motions they hold), the reason
+    in notes."""
+    forms = {}
+    for index in sorted(set(owner.tolist())):
+        rows = np.flatnonzero(owner == index)
+
+        def closest(where, rows=rows):
+            return _closest(closers, owner[rows], where)
+
+        try:
+            alone = align(points[rows], closest, found.method, locked, found.matrix, offset)
+        except InputError as exc:
+            forms[names[index]] = None
+            notes.append(f"{names[index]} has no form profile of its own: {exc}")
+            continue
+        forms[names[index]] = 2.0 * float(np.abs(alone.deviations - offset).max())
+    return forms
 
 
 def rebuild(inspection, result, planned_rows):

@@ -185,6 +185,28 @@ def test_a_plan_is_inspected_with_one_alignment_for_the_part(tmp_path):
     faces = found.face_profiles
     assert list(faces) == ["Face1", "Face3", "Face6"] and max(faces.values()) == found.profile
     assert all(f"{name}: profile {value:.4f} mm, PASS" in found.summary() for name, value in faces.items())
+    assert list(found.face_forms) == ["Face1", "Face3", "Face6"]
+    assert all(found.face_forms[name] <= faces[name] + 1e-9 for name in faces), "alone, a face fits no worse"
+
+
+def test_each_face_of_a_plan_has_a_form_profile_of_its_own(tmp_path):
+    """A box's top 20 um too high against its bottom (a part made so): with the part's one alignment
+    the top's profile shows the misplacement; aligned alone its form is its own 5 um
+    waviness, as an independent minimum zone of the top's heights alone finds (a plane: the
+    zone is max - min of z over a tilt, checked here without a tilt as an upper bound)."""
+    block = Part.makeBox(40, 30, 10)
+    made_plan = cmmsampling.plan(block, n_total=80, strategy="halton", faces=[1, 3, 5, 6], processes=1)
+    point_set = cmmsampling.formats.exporting.as_point_set(made_plan)
+    actual = point_set.points.copy()
+    top = np.array([face == "Face6" for face in point_set.faces])
+    wave = 0.0025 * np.sin(actual[:, 0] / 5.0)
+    actual[top, 2] += 0.02 + wave[top]
+    measured = cmmsampling.PointSet(point_set.labels, actual, point_set.normals)
+    found = cmmsampling.inspect(made_plan, measured, part=block)
+    assert found.face_profiles["Face6"] > 0.015
+    assert found.face_forms["Face6"] <= np.ptp(wave[top]) + 1e-6
+    assert found.face_forms["Face6"] == pytest.approx(np.ptp(wave[top]), rel=0.2)
+    assert "Face6: profile" in found.summary() and "form" in found.summary()
 
 
 def test_an_offset_zone_judges_from_its_own_centre(planned):
