@@ -207,18 +207,25 @@ class InspectMeasured(GuardedCommand):
         return one_source_reason("that were measured", "select the one that was measured")
 
     def act(self):
-        from .inspect_dialog import ask_inspection, inspection_call, report_inspection, show_busy
+        from ..inspection.judge import hand_over
+        from .inspect_dialog import ask_inspection, inspection_call, report_inspection, run_with_progress, show_busy
 
         [points] = selected_export_sources()
         arguments = ask_inspection(points)
         if arguments is None:
             return
-        FreeCADGui.doCommand("import cmmsampling")
         judge, add = inspection_call(points, arguments)
         before = getattr(__main__, "inspection", None), getattr(__main__, "group", None)
         show_busy(points)
-        QtGui.QApplication.setOverrideCursor(QtCore.Qt.WaitCursor)
         try:
+            made = run_with_progress(points, arguments)
+            if made is None:
+                FreeCADGui.getMainWindow().statusBar().showMessage(
+                    "Inspection cancelled: nothing was judged or added", 20000)
+                return
+            hand_over(points, inspection=made, **arguments)
+            FreeCADGui.doCommand("import cmmsampling")
+            QtGui.QApplication.setOverrideCursor(QtCore.Qt.WaitCursor)
             FreeCADGui.doCommand(judge)
             inspection = getattr(__main__, "inspection", None)
             if inspection is before[0]:

@@ -7,13 +7,15 @@ one read, else beside the document.
 """
 import math
 import os
+import time
 
 import FreeCAD
 import FreeCADGui
 from PySide import QtCore, QtGui
 
 from ..inspection.align import ALIGNMENTS, DEGREES_OF_FREEDOM
-from ..inspection.judge import verdict_text
+from ..inspection.judge import InspectionCancelled, inspect, verdict_text
+from .background import BackgroundTask
 from ..document import settings
 from . import icon
 from .qt_compat import run_modal
@@ -32,6 +34,8 @@ DEFAULTS = {"InspectFile": "", "InspectAlignment": "min_max", "InspectTolerance"
             "InspectZoneOffset": 0.0}
 MEASURED_FILTERS = ("Measured points (*.dmi *.dmis *.dmo *.csv *.xyz *.txt);;All files (*)")
 MAX_TOLERANCE_MM = 100.0
+# How often the progress dialog looks at the background inspection, s.
+POLL_S = 0.05
 
 
 class InspectDialog(QtGui.QDialog):
@@ -193,6 +197,63 @@ def placement_text(placement):
     axis = rotation.Axis
     return (f"shift ({shift.x:.4f}, {shift.y:.4f}, {shift.z:.4f}) mm, turned {math.degrees(rotation.Angle):.4f} "
             f"deg about ({axis.x:.4f}, {axis.y:.4f}, {axis.z:.4f})")
+
+
+class BackgroundInspection(BackgroundTask):
+    """cmmsampling.inspect of what was planned (a Planned, read from the document by the GUI
+    thread) with the dialog's arguments, in a daemon thread; ``message`` the phase under way,
+    ``steps`` the alignment's steps so far; ``cancel()`` stops it at its next phase or step."""
+
+    def __init__(self, planned, arguments):
+        super().__init__("cmmsampling-inspection")
+        self.planned, self.arguments = planned, dict(arguments)
+        self.message, self.steps, self.inspection = "starting", 0, None
+
+    def cancel(self):
+        self._stop.set()
+
+    def _progress(self, message):
+        if message is None:
+            self.steps += 1
+        else:
+            self.message = message
+        return self.cancelled
+
+    def _work(self):
+        self.inspection = inspect(self.planned, progress=self._progress, **self.arguments)
+
+
+def run_with_progress(points, arguments):
+    """Inspect the points' measurement in the background behind a progress dialog with Cancel:
+    the Inspection, None when the user cancelled (nothing judged), or the run's exception raised
+    here."""
+    planned = points.Proxy.planned(points)
+    run = BackgroundInspection(planned, arguments)
+    dialog = QtGui.QProgressDialog(f"Inspecting the measured points of {points.Label}...", "Cancel", 0, 0,
+                                   FreeCADGui.getMainWindow())
+    dialog.setObjectName("InspectionProgress")
+    dialog.setWindowTitle("Inspect measured points")
+    dialog.setWindowModality(QtCore.Qt.WindowModal)
+    dialog.setMinimumDuration(0)
+    dialog.show()
+    run.start()
+    try:
+        while run.running:
+            QtGui.QApplication.processEvents()
+            if dialog.wasCanceled():
+                run.cancel()
+            dialog.setLabelText(f"Inspecting the measured points of {points.Label}: {run.message}"
+                                + (f", step {run.steps}" if run.steps else "") + "...")
+            time.sleep(POLL_S)
+        QtGui.QApplication.processEvents()
+        if dialog.wasCanceled() or isinstance(run.error, InspectionCancelled):
+            return None
+        if run.error is not None:
+            raise run.error
+        return run.inspection
+    finally:
+        dialog.close()
+        dialog.deleteLater()
 
 
 def show_busy(points):

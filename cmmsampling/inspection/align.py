@@ -126,7 +126,11 @@ def check_locked(locked):
     return locked
 
 
-def align(points, closest, method="min_max", locked=(), start=None, offset=0.0):
+class AlignmentCancelled(Exception):
+    """The progress callback asked the alignment to stop."""
+
+
+def align(points, closest, method="min_max", locked=(), start=None, offset=0.0, progress=None):
     """The Alignment of measured points to the face that ``closest`` measures.
 
     points: (N, 3) mm, measured contact points; closest: callable (M, 3) mm -> (feet (M, 3) mm,
@@ -134,8 +138,9 @@ def align(points, closest, method="min_max", locked=(), start=None, offset=0.0):
     ALIGNMENTS; locked: degrees of freedom (DEGREES_OF_FREEDOM) held fixed; start: (4, 4) the
     motion the fit starts from (None: none), where the motions the points do not hold stay;
     offset: mm, the zone's centre from the face (+ out of the material), which the fit centres
-    the points on (ISO 1101's UZ: the zone the verdict uses is the one fitted). InputError where
-    the points leave nothing to judge: no more of them than the motions they hold.
+    the points on (ISO 1101's UZ: the zone the verdict uses is the one fitted); progress:
+    callable(step) after each step of the fit, returning True to stop it (AlignmentCancelled).
+    InputError where the points leave nothing to judge: no more of them than the motions they hold.
     """
     if method not in ALIGNMENTS:
         raise InputError(f"alignment must be one of {', '.join(ALIGNMENTS)}, got {method!r}")
@@ -154,7 +159,7 @@ def align(points, closest, method="min_max", locked=(), start=None, offset=0.0):
         basis, free_motions = held_motions(transform(matrix, points), closest, free)
         _check_redundancy(len(points), basis.shape[1], free_motions, method)
         if basis.shape[1]:
-            zone = _offset_by(closest, offset)
+            zone = _offset_by(_asking(closest, progress), offset)
             matrix, iterations, capped = _least_squares(points, zone, basis, matrix)
             if method == "min_max":
                 matrix, more, capped = _min_max(points, zone, basis, matrix)
@@ -163,6 +168,21 @@ def align(points, closest, method="min_max", locked=(), start=None, offset=0.0):
     feet, normals = closest(moved)
     return Alignment(matrix, method, locked, iterations, float(np.linalg.norm(moved - points, axis=1).max()),
                      signed_distances(moved, feet, normals), free_motions, capped)
+
+
+def _asking(closest, progress):
+    """``closest`` that calls progress(step) before each of its passes (one a step of the fit)
+    and raises AlignmentCancelled where it returns True."""
+    if progress is None:
+        return closest
+    passes = iter(range(1, 10 ** 9))
+
+    def asked(points):
+        if progress(next(passes)):
+            raise AlignmentCancelled
+        return closest(points)
+
+    return asked
 
 
 def _offset_by(closest, offset):

@@ -23,10 +23,11 @@ from ..geometry.validation import InputError, InputTypeError, check_real
 from ..fitting.deviation import NUMERICAL_ZERO_MM
 from ..fitting.occ_surface import substitute_surface
 from ..measurement import check_extent, stated_radius
+from ..strategies import handover
 from ..strategies.face_setup import reused
 from ..planning.part_plan import PartPlan
 from ..strategies.result import SamplingResult
-from .align import ALIGNMENTS, PROFILE_KINDS, Alignment, align, check_locked, kabsch
+from .align import ALIGNMENTS, PROFILE_KINDS, Alignment, AlignmentCancelled, align, check_locked, kabsch
 from .closest import OCC_AGREEMENT_MM, OCC_CONFIRMED, FaceCloser, confirm_with_occ
 from .measured import read_measured
 
@@ -192,8 +193,12 @@ def band_limits(tolerance, offset=0.0):
     return (offset - half, offset - NEAR_FRACTION * half, offset + NEAR_FRACTION * half, offset + half)
 
 
+class InspectionCancelled(Exception):
+    """The inspection was cancelled (its progress callback returned True); nothing was judged."""
+
+
 def inspect(source, measured, alignment="min_max", tolerance=None, locked=(), part=None, probe_radius=None,
-            zone_offset=0.0):
+            zone_offset=0.0, progress=None):
     """Judge measured points against the CAD model they were planned on.
 
     source: a Part.Face (the measured points are taken as they come), a SamplingResult, a
@@ -211,13 +216,26 @@ def inspect(source, measured, alignment="min_max", tolerance=None, locked=(), pa
     zone_offset: o, mm, the zone's centre from the nominal (ISO 1101's UZ, + out of the material;
     +-t/2 a unilateral zone outside or inside), which the alignment centres the points on and
     the profile and the verdict are taken from.
-    One alignment for all the points (a plan: the whole part). Returns an Inspection.
+    One alignment for all the points (a plan: the whole part). progress: callable(message) before
+    each phase and after each step of the alignment (message None), returning True to cancel
+    (InspectionCancelled). Returns an Inspection; an inspection handed over by a background run
+    (:func:`hand_over`) to exactly this call is returned at once.
     """
+    handed = handover.take(inspect, source, _call(measured, alignment, tolerance, locked, part, probe_radius,
+                                                   zone_offset))
+    if handed is not None:
+        return handed
+
+    def told(message):
+        if progress is not None and progress(message):
+            raise InspectionCancelled
+
     if alignment not in ALIGNMENTS:
         raise InputError(f"alignment must be one of {', '.join(ALIGNMENTS)}, got {alignment!r}")
     locked = check_locked(locked)
     tolerance = None if tolerance is None else check_real("tolerance", tolerance, above=0.0)
     zone_offset = check_real("zone_offset", zone_offset)
+    told("reading the measured points")
     planned = _planned(source, part)
     read = _measured_point_set(measured)
     contact = _contact_points(read, probe_radius)
@@ -225,6 +243,7 @@ def inspect(source, measured, alignment="min_max", tolerance=None, locked=(), pa
     points = contact[order[0]]
     owner = np.zeros(len(points), dtype=int) if planned.owner is None else planned.owner[order[1]]
 
+    told("preparing the faces")
     with reused():
         closers = [FaceCloser(face) if np.any(owner == index) else None for index, face in enumerate(planned.faces)]
 
@@ -232,7 +251,13 @@ def inspect(source, measured, alignment="min_max", tolerance=None, locked=(), pa
         return _closest(closers, owner, where)
 
     nominal = planned.points[order[1]] if planned.points is not None else np.full_like(points, np.nan)
-    found = align(points, closest, alignment, locked, None if locked else kabsch(points, nominal), zone_offset)
+    told(f"aligning {len(points)} points")
+    try:
+        found = align(points, closest, alignment, locked, None if locked else kabsch(points, nominal), zone_offset,
+                      None if progress is None else lambda step: progress(None))
+    except AlignmentCancelled:
+        raise InspectionCancelled from None
+    told("confirming the decisive points with OCC")
     deviations, disagreement = confirm_with_occ(planned.faces, owner, found.apply(points), found.deviations,
                                                 zone_offset)
     if disagreement > OCC_AGREEMENT_MM:
@@ -243,6 +268,7 @@ def inspect(source, measured, alignment="min_max", tolerance=None, locked=(), pa
                             measured_file=os.fspath(measured) if isinstance(measured, (str, os.PathLike)) else "",
                             zone_offset=zone_offset)
     if len(set(owner.tolist())) > 1 and alignment != "none":
+        told("aligning each face alone")
         inspection.face_forms = _face_forms(points, owner, closers, planned.names, found, locked, zone_offset, notes)
     if isinstance(source, SamplingResult):
         rebuild(inspection, source, order[1])
@@ -269,6 +295,21 @@ def _face_forms(points, owner, closers, names, found, locked, offset, notes):
             continue
         forms[names[index]] = 2.0 * float(np.abs(alone.deviations - offset).max())
     return forms
+
+
+def hand_over(source, measured, inspection, alignment="min_max", tolerance=None, locked=(), part=None,
+              probe_radius=None, zone_offset=0.0):
+    """Let the next :func:`inspect` of ``source`` with exactly these arguments return
+    ``inspection`` at once (a background run's, echoed in FreeCAD's console: see
+    :mod:`cmmsampling.strategies.handover`)."""
+    handover.give(inspect, source, _call(measured, alignment, tolerance, locked, part, probe_radius, zone_offset),
+                  inspection)
+
+
+def _call(measured, alignment, tolerance, locked, part, probe_radius, zone_offset):
+    """inspect()'s arguments but the source, by name."""
+    return {"measured": measured, "alignment": alignment, "tolerance": tolerance, "locked": locked, "part": part,
+            "probe_radius": probe_radius, "zone_offset": zone_offset}
 
 
 def rebuild(inspection, result, planned_rows):

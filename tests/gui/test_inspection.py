@@ -126,6 +126,32 @@ def test_a_bad_measured_file_is_named_and_adds_nothing(blade_points, tmp_path):
     assert shown.startswith("Not inspected: ") and "decimal comma" in shown, "the status bar said Inspecting... on"
 
 
+def test_the_inspection_shows_its_progress_and_cancel_adds_nothing(blade_points, tmp_path, artifacts):
+    """The inspection runs behind a progress dialog (it held the GUI 47-64 s for 20,000 points,
+    with no progress or Cancel); Cancel there judges and adds nothing, and FreeCAD goes on."""
+    doc, points = blade_points
+    measured = str(tmp_path / "blade.dmi")
+    cmmsampling.simulate_measurement(points, measured, form_error=0.01, misplacement=MISPLACED, seed=3)
+    before, undo, seen = [o.Name for o in doc.Objects], doc.UndoCount, []
+
+    def choose(dialog):
+        dialog.path.setText(measured)
+        dialog.accept()
+
+    def cancel(progress):
+        seen.append((progress.windowTitle(), progress.labelText()))
+        progress.grab().save(os.path.join(artifacts, "inspection_progress.png"))
+        progress.cancel()
+
+    handle_dialog(QtGui.QProgressDialog, lambda: inspect_with(points, choose), cancel)
+    assert seen and seen[0][0] == "Inspect measured points" and seen[0][1].startswith(
+        f"Inspecting the measured points of {points.Label}")
+    assert [o.Name for o in doc.Objects] == before and doc.UndoCount == undo
+    assert main_window().statusBar().currentMessage() == "Inspection cancelled: nothing was judged or added"
+    inspect_with(points, choose)
+    assert any(o.Label.startswith("Inspection ") for o in doc.Objects), "it runs again after a Cancel"
+
+
 def test_without_a_tolerance_the_points_take_the_deviation_colours(blade_points, tmp_path):
     doc, points = blade_points
     measured = tmp_path / "blade.csv"
