@@ -179,16 +179,18 @@ def inspection_call(points, arguments):
 
 
 def report_inspection(inspection):
-    """The inspection's summary and its alignment in the Report view, its profile and verdict in
-    the status bar."""
+    """The inspection's summary and its alignment in the Report view, its profile, verdict and the
+    motions its points do not hold in the status bar."""
     for line in inspection.summary().splitlines():
         FreeCAD.Console.PrintMessage(f"cmmsampling: {line}\n")
     FreeCAD.Console.PrintMessage(f"cmmsampling: alignment (measured -> CAD, applied to the points; the part is "
                                  f"not moved): {placement_text(inspection.placement)}\n")
     verdict = "" if inspection.passed is None else (
         f", tolerance {inspection.tolerance:g} mm: {verdict_text(inspection.passed)}")
+    free = f"; motions the points do not hold: {', '.join(inspection.free_motions)}" if inspection.free_motions else ""
     FreeCADGui.getMainWindow().statusBar().showMessage(
-        f"Inspection of {len(inspection.labels)} measured points: profile {inspection.profile:.4f} mm{verdict}", 20000)
+        f"Inspection of {len(inspection.labels)} measured points: profile {inspection.profile:.4f} mm{verdict}{free}",
+        20000)
 
 
 def placement_text(placement):

@@ -85,6 +85,8 @@ def test_inspect_measured_points_on_a_ventilator_blade(blade_points, tmp_path, a
             f"{measured!r}, tolerance=0.013)") in echoed
     assert "group = cmmsampling.add_inspection_to_document(inspection, " in echoed
     assert "profile" in main_window().statusBar().currentMessage()
+    assert "motions the points do not hold: slide along" in main_window().statusBar().currentMessage(), \
+        "the 2 mm blade holds its slide weakly"
     assert wait_until(lambda: "cmmsampling: alignment (measured -> CAD, applied to the points; the part is not "
                               "moved): shift (" in dock_text("Report view"), 2)
     assert not points.Visibility and measured_points.Visibility, "the inspection is shown alone"
