@@ -4,11 +4,9 @@ distance within 1e-6 mm of OCC's own (distToShape, per point), and its signed di
 the foot lies inside the face (beside an edge the foot may slide along it, for a point over the
 hole's middle, and the normal with it); an inspection's decisive points confirmed by OCC without
 a note."""
-import os
-
 import numpy as np
 import pytest
-from support.faces import TESTDATA, Part, holed_face
+from support.faces import Part, holed_face, shared_face
 from support.measured import judged, moved
 
 from cmmsampling.inspection.closest import FaceCloser
@@ -32,13 +30,7 @@ def signed(feet, normals, points):
 
 @pytest.mark.parametrize("name", ["holed plate", "surf114 Face2"])
 def test_the_feet_are_occs(name):
-    if name == "holed plate":
-        face = holed_face()
-    else:
-        path = os.path.join(TESTDATA, "surf114.igs")
-        if not os.path.isfile(path):
-            pytest.skip("the shared test data (surf114.igs) is not here")
-        face = Part.read(path).Faces[1]
+    face = holed_face() if name == "holed plate" else shared_face("surf114.igs", 1)
     points = scattered(face)
     feet, normals = FaceCloser(face)(points)
     occ_feet, occ_normals, occ_distances = closest_points(face, points)

@@ -3,13 +3,12 @@
 The alignment is checked against an independent point-to-plane fit written here with OCC's own
 closest points (distToShape) and scipy's rotations, on a built rational face and on a face of the
 shared CAD files (skipped without them)."""
-import os
 
 import numpy as np
 import pytest
 from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
-from support.faces import TESTDATA, Part, rational_patch_face
+from support.faces import Part, rational_patch_face, shared_face
 
 import cmmsampling
 from cmmsampling.geometry.validation import InputError
@@ -24,13 +23,7 @@ def planned(request):
     """A Halton plan of 36 points on a built rational face or on a real part's free-form face
     (surf114.igs's second face: one face alone fixes all six motions there, unlike a narrow strip
     such as the Ventilator's Face61, which lets the points slide along it)."""
-    if request.param == "rational patch":
-        face = rational_patch_face()
-    else:
-        path = os.path.join(TESTDATA, "surf114.igs")
-        if not os.path.isfile(path):
-            pytest.skip("the shared test data (surf114.igs) is not here")
-        face = Part.read(path).Faces[1]
+    face = rational_patch_face() if request.param == "rational patch" else shared_face("surf114.igs", 1)
     return cmmsampling.sample(face, 36, "halton", occ_check=False)
 
 

@@ -81,6 +81,15 @@ def strip_face():
     return make_bspline_surface(np.stack([x, y, z], -1), (3, 3)).toShape()
 
 
+def shared_face(name, index):
+    """Face ``index`` of the shared CAD file ``name`` (e.g. 'surf114.igs'); the test is skipped
+    where the shared test data are not beside the checkout."""
+    path = os.path.join(TESTDATA, name)
+    if not os.path.isfile(path):
+        pytest.skip(f"the shared test data ({name}) is not here")
+    return Part.read(path).Faces[index]
+
+
 def collapsed_face():
     """The reference surface with its first pole row collapsed to one point (a degenerate edge)."""
     poles = reference_poles().copy()
