@@ -2,7 +2,8 @@
 FA(label) actuals, in any UNITS; CSV with label,x,y,z,i,j,k; PC-DMIS XYZIJK) and tables of text:
 a header naming the columns (cmmsampling.inspection.columns) or one point a line, ``label x y z``
 (or ``x y z``, labels P1..PN by order), the fields separated by commas, semicolons or whitespace,
-optionally followed by the vector i j k. A DMIS program with nominal points only is refused (it
+optionally followed by the vector i j k; and a CMM's text report of point locations
+(cmmsampling.inspection.text_report). A DMIS program with nominal points only is refused (it
 is the plan, not a measurement), as are a number with a decimal comma, a line of another length,
 a label given twice or no point at all, each with its line.
 """
@@ -20,6 +21,7 @@ from ..formats.pointset import PointSet
 from ..formats.text import number
 from ..geometry.validation import InputError
 from .columns import COORDINATES, header_columns
+from .text_report import is_text_report, read_text_report
 
 # Lines that say nothing about a point: comments of CSV, DMIS and C-like exports.
 COMMENT = re.compile(r"\s*(#|//|\$\$|;)")
@@ -47,8 +49,13 @@ def read_measured(path):
                              "FA(label) values; give the DMIS output file the CMM wrote after measuring")
         return point_set
     with open(path, encoding="utf-8-sig", errors="replace") as stream:
-        point_set = read_labelled_text(stream.read(), os.fspath(path))
-    point_set.metadata.update({"format": "labelled text", "path": os.path.abspath(path)})
+        text = stream.read()
+    if is_text_report(text):
+        point_set = read_text_report(text, os.fspath(path))
+    else:
+        point_set = read_labelled_text(text, os.fspath(path))
+        point_set.metadata["format"] = "labelled text"
+    point_set.metadata["path"] = os.path.abspath(path)
     return point_set
 
 

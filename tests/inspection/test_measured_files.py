@@ -110,3 +110,23 @@ def test_a_file_too_large_is_refused_before_it_is_read(measured):
     with pytest.raises(InputError, match=r"huge.txt: 200 MB is more than a measurement this reader takes \(100 MB"):
         cmmsampling.inspect(planned, path)
 
+
+
+def test_a_text_report_of_point_locations(measured):
+    """A PC-DMIS-style text report (a block a point: DIM ... LOCATION OF POINT, AX rows with
+    NOMINAL and MEAS columns, the last block in inches), with a flatness dimension between:
+    "line 1: x 'X' is not a number" before."""
+    planned, made, reference, folder = measured
+    lines = ["PART NAME  : FAN BLADE", "DIM FLT1= FLATNESS OF PLANE PLN1  UNITS=MM", "AX   MEAS    DEV", "M    0.012"]
+    for k, label in enumerate(made.labels):
+        inches = k == len(made.labels) - 1
+        scale = 1 / 25.4 if inches else 1.0
+        lines += [f"DIM LOC{k + 1}= LOCATION OF POINT {label}  UNITS={'IN' if inches else 'MM'}",
+                  "AX    NOMINAL       +TOL       -TOL       MEAS        DEV     OUTTOL"]
+        lines += [f"{axis}  {nominal * scale:10.6f}  0.0100  0.0100  {actual * scale:.{9 if inches else 7}f}  0.0000  "
+                  "0.0000" for axis, nominal, actual in zip("XYZ", planned.points[k], made.actual[k])]
+    (folder / "report.txt").write_text("\n".join(lines) + "\n")
+    same_verdict(cmmsampling.inspect(planned, folder / "report.txt"), reference)
+    (folder / "no_z.txt").write_text("\n".join(lines[:8] + lines[9:]) + "\n")
+    with pytest.raises(InputError, match=r"no_z.txt, line 5: point P1 has no measured Z"):
+        cmmsampling.inspect(planned, folder / "no_z.txt")
