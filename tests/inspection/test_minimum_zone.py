@@ -49,3 +49,4 @@ def test_a_one_sided_zone_is_the_zone_the_fit_centres_the_points_on(alignment):
     found = judged(face, nominal, measured, alignment=alignment, tolerance=0.05, zone_offset=0.025)
     assert found.passed and found.within.all()
     assert abs(np.median(found.deviations) - 0.025) < 0.005
+
