@@ -248,6 +248,8 @@ def test_the_demo_closes_the_loop_and_draws_the_measured_face(tmp_path, capsys):
     _inspection_loop(face, result, str(tmp_path / "loop"))
     said = capsys.readouterr().out
     assert "Inspection of the Halton points measured on a virtual CMM" in said and "tolerance 0.1 mm: PASS" in said
+    assert "(minimum zone, ISO 1101)" in said and "capped" not in said, "the minimum-zone verdict, a settled fit"
+    assert "motions the points do not hold (kept where their labels put them): none" in said
     assert cmmsampling.read_points(tmp_path / "loop" / "measured.dmi").metadata["dmis_features"] == "actual"
     assert (tmp_path / "loop" / "deviation.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     cmmsampling.simulate_measurement(result, tmp_path / "bad.dmi", form_error=0.05, seed=3)
