@@ -14,8 +14,9 @@ Each is signed by the face's normal there (+ out of the material); a node's devi
 of larger magnitude. Where the substitute is stretched against the face, places inside those
 raster cells (cmmsampling.fitting.stretch) join the nodes; where the deviation peaks between them,
 the places found by searches about the largest (cmmsampling.fitting.peaks) join them too, and the
-maximum over all of them is the figure reported. OpenCASCADE's distances from the nodes to ``r.substitute.toShape()`` and from
-S(h) to the face agree with both sides (cmmsampling.fitting.crosscheck, and the tests).
+maximum over all of them is the figure reported. OpenCASCADE's distances from the nodes to the
+substitute trimmed like the face (``r.substitute_shape()``) and from S(h) to the face agree with
+both sides (cmmsampling.fitting.crosscheck, and the tests).
 
 To first order in a change dS of the substitute, each side changes by w . dS(at) with w the unit
 direction it is measured along and ``at`` the parameters on S (p forward, h reverse): exact there

@@ -253,10 +253,15 @@ def _plane_basis(normals):
 
 def _largest_cell_diagonal(points):
     """The largest 3D diagonal (mm) of the raster's cells, points (g_u, g_v, 3)."""
-    a, b = points[:-1, :-1], points[1:, 1:]
-    c, d = points[1:, :-1], points[:-1, 1:]
-    diagonals = np.maximum(np.linalg.norm(a - b, axis=-1), np.linalg.norm(c - d, axis=-1))
+    diagonals = cell_diagonals(points)
     return float(np.nanmax(diagonals)) if diagonals.size else 0.0
+
+
+def cell_diagonals(points):
+    """(g_u - 1, g_v - 1) the longer 3D diagonal (mm) of each raster cell, points (g_u, g_v, 3)."""
+    first = np.linalg.norm(points[:-1, :-1] - points[1:, 1:], axis=-1)
+    second = np.linalg.norm(points[1:, :-1] - points[:-1, 1:], axis=-1)
+    return np.maximum(first, second)
 
 
 def _ranges(bounds, keep):

@@ -16,6 +16,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .nodes import cell_diagonals
+
 STRETCH = 1.25
 MOST_SPLITS = 16
 # Rounds that scale the splits down to the budget.
@@ -48,7 +50,7 @@ def stretched_places(nodes, surface, on_face=None):
     if min(size) < 2 or nodes.spacing <= 0:
         return FinePlaces.none()
     points = surface.points(nodes.uv.reshape(-1, 2)).reshape(*size, 3)
-    ratio = _cell_diagonals(points) / nodes.spacing
+    ratio = cell_diagonals(points) / nodes.spacing
     counted = nodes.counted
     corners = np.stack([counted[:-1, :-1], counted[1:, :-1], counted[:-1, 1:], counted[1:, 1:]], -1)
     cells = np.argwhere(corners.any(-1) & (ratio > STRETCH))
@@ -83,13 +85,6 @@ def _within_budget(cells, ratio, most):
     order = np.argsort(-ratio, kind="stable")
     kept = order[np.cumsum((splits[order] + 1) ** 2 - 4) <= most]
     return cells[kept], splits[kept]
-
-
-def _cell_diagonals(points):
-    """(g_u - 1, g_v - 1) the longer 3D diagonal (mm) of each raster cell, points (g_u, g_v, 3)."""
-    first = np.linalg.norm(points[:-1, :-1] - points[1:, 1:], axis=-1)
-    second = np.linalg.norm(points[1:, :-1] - points[:-1, 1:], axis=-1)
-    return np.maximum(first, second)
 
 
 def _cell_places(raster, cells, origin, splits):

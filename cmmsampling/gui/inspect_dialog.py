@@ -13,11 +13,11 @@ import FreeCAD
 import FreeCADGui
 from PySide import QtCore, QtGui
 
+from ..document import settings
 from ..inspection.align import ALIGNMENTS, DEGREES_OF_FREEDOM
 from ..inspection.judge import InspectionCancelled, inspect, verdict_text
-from .background import BackgroundTask
-from ..document import settings
 from . import icon
+from .background import BackgroundTask
 from .qt_compat import run_modal
 
 ALIGNMENT_TEXTS = {

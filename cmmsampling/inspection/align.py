@@ -29,6 +29,7 @@ numpy/scipy: the closest points come from a callable.
 """
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass
 
 import numpy as np
@@ -175,7 +176,7 @@ def _asking(closest, progress):
     and raises AlignmentCancelled where it returns True."""
     if progress is None:
         return closest
-    passes = iter(range(1, 10 ** 9))
+    passes = itertools.count(1)
 
     def asked(points):
         if progress(next(passes)):
@@ -240,11 +241,10 @@ def held_motions(points, closest, free):
     eigenvalues of the point-to-plane normal matrix over the ``free`` degrees of freedom): a
     degree of freedom lying in them by its name (e.g. ('rz', 'x', 'y') for a plane z = const),
     others as 'turn about (a, b, c)' or 'slide along (a, b, c)', in the part's axes."""
-    feet, normals = closest(points)
-    centre = points.mean(axis=0)
+    _, jacobian, centre = _model(points, closest, np.eye(6)[:, free])
     length = float(np.sqrt(((points - centre) ** 2).sum(axis=1).mean())) or 1.0
     scale = np.r_[np.full(3, 1.0 / length), np.ones(3)][free]
-    jacobian = np.hstack([np.cross(points - centre, normals), normals])[:, free] * scale
+    jacobian = jacobian * scale
     values, vectors = np.linalg.eigh(jacobian.T @ jacobian / len(points))
     weak = np.sqrt(np.maximum(values, 0.0)) < WEAK_SENSITIVITY
     basis = np.zeros((6, int((~weak).sum())))

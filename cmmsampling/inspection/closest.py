@@ -10,7 +10,7 @@ points nearest the zone's limits, are measured again with OCC (:func:`confirm_wi
 """
 import numpy as np
 
-from ..fitting.exact import _nearest_of, _nearest_on_edge_curves, node_parameters
+from ..fitting.exact import _nearest_of, _nearest_on_edge_curves, node_normals, node_parameters
 from ..fitting.nodes import face_nodes
 from ..fitting.sides import normals_or
 from ..measurement import closest_points
@@ -34,7 +34,7 @@ class FaceCloser:
         self.model = setup.model
         self.on_face = setup.domain().on_face if self.model.trimmed else None
         self.nodes = face_nodes(self.model, CLOSEST_GRID, self.on_face)
-        self.starts = node_parameters(self.nodes)
+        self.starts, self.fallback = node_parameters(self.nodes), node_normals(self.nodes)
 
     def __call__(self, points):
         points = np.asarray(points, dtype=float).reshape(-1, 3)
@@ -47,8 +47,7 @@ class FaceCloser:
             if off.any():
                 nearest[off], edge_uv = _nearest_on_edge_curves(self.model, self.nodes, points[off])
                 normals[off] = self.model.normals(edge_uv)
-        fallback = np.concatenate([self.nodes.normals[self.nodes.counted], self.nodes.edge_normals])[near[:, 0]]
-        return nearest, normals_or(normals, fallback)
+        return nearest, normals_or(normals, self.fallback[near[:, 0]])
 
 
 def confirm_with_occ(faces, owner, points, deviations, offset=0.0):

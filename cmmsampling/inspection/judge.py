@@ -258,12 +258,12 @@ def inspect(source, measured, alignment="min_max", tolerance=None, locked=(), pa
     except AlignmentCancelled:
         raise InspectionCancelled from None
     told("confirming the decisive points with OCC")
-    deviations, disagreement = confirm_with_occ(planned.faces, owner, found.apply(points), found.deviations,
-                                                zone_offset)
+    aligned = found.apply(points)
+    deviations, disagreement = confirm_with_occ(planned.faces, owner, aligned, found.deviations, zone_offset)
     if disagreement > OCC_AGREEMENT_MM:
         notes.append(f"OCC's distances at the {OCC_CONFIRMED} points farthest from the zone's centre differ from the "
                      f"alignment's by up to {disagreement:.2g} mm; OCC's are reported")
-    inspection = Inspection([read.labels[i] for i in order[0]], nominal, points, found.apply(points),
+    inspection = Inspection([read.labels[i] for i in order[0]], nominal, points, aligned,
                             deviations, found.matrix, found, tolerance, [planned.names[i] for i in owner], notes,
                             measured_file=os.fspath(measured) if isinstance(measured, (str, os.PathLike)) else "",
                             zone_offset=zone_offset)
