@@ -366,9 +366,10 @@ def test_a_ventilator_plan_of_four_faces_with_the_probe_ends_and_exports(ventila
 @pytest.mark.parametrize("probe", ["2 mm ball, 20 mm stylus", ""], ids=["probe", "no probe"])
 def test_a_ventilator_plan_cancels_at_once_during_its_last_face(ventilator_doc, monkeypatch, artifacts, probe):
     """The four faces, with the probe and without, on 2 processes, optimal runs of at most 2 s:
-    Cancel pressed while the last face runs stops the plan within a second, the panel says so at
-    once (no "Cancelling" while the faces done are added) and adds the three faces done (the full
-    plan, with the panel's 10 s runs, is the quality test above)."""
+    Cancel pressed while the last face runs stops the plan (0.4 s measured, printed; held here to
+    5 s, a bound no loaded machine misses), the panel says it stopped as soon as the plan ends,
+    before the faces done are added (no "Cancelling" while they are: 2-6 s), then adds the three
+    (the full plan, with the panel's 10 s runs, is the quality test above)."""
     hold = hold_plan_at(monkeypatch, 99)
     timeline = []
     show = plan_part.PlanPartTaskPanel.show_status
@@ -394,9 +395,9 @@ def test_a_ventilator_plan_cancels_at_once_during_its_last_face(ventilator_doc, 
     print(f"Cancel during the last face ({probe or 'no probe'}): the plan stopped after {ended - pressed:.2f} s, "
           f"its 3 faces were added after {added:.1f} s; the status: "
           + "; ".join(f"{at:.2f} s {text[:60]!r}" for at, text in after))
-    assert cancelled.cancelled and len(cancelled.placed) == 3 and ended - pressed < 1.0
-    assert after[0][1].startswith("Cancelling") and not after[1][1].startswith("Cancelling")
-    assert after[1][0] < 1.0, "the panel says within a second that the plan stopped"
+    assert cancelled.cancelled and len(cancelled.placed) == 3 and ended - pressed < 5.0
+    assert [text.split(":")[0] for _, text in after] == ["Cancelling", "Stopped", "Cancelled"]
+    assert after[1][1].startswith("Stopped: adding the 3 faces done"), "said before the faces are added"
     main_window().grab().save(os.path.join(artifacts, "plan_part_cancelled_last_face.png"))
     task_button(CANCEL).click()
     assert wait_until(lambda: not FreeCADGui.Control.activeDialog(), 5)
