@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # Install what cmmsampling needs on Debian (12, 13 or sid), only what is missing: FreeCAD (Part/OCC),
 # numpy, scipy, Xvfb for the GUI tests, pytest, hypothesis, matplotlib, threadpoolctl, Dask's
-# distributed (a part plan on a cluster).
+# distributed (a part plan on a cluster). lxml, which checks QIF files against the QIF 3.0 schemas,
+# comes with matplotlib (python3-matplotlib -> python3-fonttools -> python3-lxml on Debian 12, 13
+# and sid); tests/formats/test_qif.py fails where it is missing.
 # --list prints the package names instead (scripts/test-matrix.sh installs the same into its roots).
 set -euo pipefail
 PACKAGES=(freecad python3-numpy python3-scipy xvfb xauth python3-pytest python3-matplotlib

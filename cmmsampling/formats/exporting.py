@@ -96,16 +96,57 @@ class ExportReport:
         return line + f"Probe path {self.length_before:.1f} mm in the optimised order."
 
 
+@dataclass(frozen=True)
+class ResultsReport:
+    """What :func:`export` wrote of an inspection: path (absolute), format, count (points),
+    profile (mm) and passed (True, False, or None without a tolerance)."""
+
+    path: str
+    format: str
+    count: int
+    profile: float
+    passed: bool = None
+
+    def __str__(self):
+        verdict = "" if self.passed is None else f", {'PASS' if self.passed else 'FAIL'}"
+        return (f"Wrote the results of {self.count} measured points to {self.path} ({FORMATS[self.format].title}): "
+                f"profile {self.profile:.4f} mm{verdict}.")
+
+
+def is_inspection(source):
+    """True for an inspection's results (cmmsampling.inspection.judge.Inspection: measured points,
+    their deviations and the alignment's transform)."""
+    return all(hasattr(source, name) for name in ("deviations", "transform", "face_profiles", "measured"))
+
+
+def export_results(inspection, path, fmt, label=None, **asked):
+    """Write an inspection's results (a format with write_results: QIF). asked: export()'s
+    options that do not apply to results, refused unless left at their defaults."""
+    if FORMATS[fmt].write_results is None:
+        with_results = [f"{record.title} ({', '.join(record.extensions)})" for record in FORMATS.values()
+                        if record.write_results is not None]
+        raise InputError(f"an inspection's results are written as {', '.join(with_results)}, not "
+                         f"{FORMATS[fmt].title}; give a path ending in {FORMATS['qif'].extensions[0]}")
+    changed = [name for name, (value, default) in asked.items() if value != default]
+    if changed:
+        raise InputError(f"an inspection's results are written as measured and aligned; leave {', '.join(changed)} "
+                         "at the default")
+    text = FORMATS[fmt].write_results(inspection, "part" if label is None else str(label))
+    target = write_atomically(path, text, FORMATS[fmt].encoding)
+    return ResultsReport(target, fmt, len(inspection.labels), inspection.profile, inspection.passed)
+
+
 def export(source: SamplingResult | PartPlan | PointSet | object, path: str | os.PathLike, format: str | None = None,
            *, frame: object = None, probe_radius: float = 0.0, order: str = "as_optimised", name: str | None = None,
            approach: float = 2.0, retract: float = 2.0, search: float = 5.0, comments: bool = True,
-           motion: Motion | None = None, label: str | None = None) -> ExportReport:
+           motion: Motion | None = None, label: str | None = None) -> ExportReport | ResultsReport:
     """Write probe points to a file for a CMM.
 
-    source: a PointSet, a SamplingResult, or a document object whose Proxy has ``point_set(obj)``;
+    source: a PointSet, a SamplingResult, a PartPlan, a document object whose Proxy has
+    ``point_set(obj)``, or an Inspection (its results, QIF only: ResultsReport);
     points: (N, 3) mm, normals (N, 3) unit vectors out of the material (the probe travels along
-    -normal), both global. path: the file; format: 'dmis', 'xyz' or 'csv', by default from the
-    extension (.dmi/.dmis, .xyz/.txt, .csv).
+    -normal), both global. path: the file; format: 'dmis', 'xyz', 'csv' or 'qif', by default
+    from the extension (.dmi/.dmis, .xyz/.txt, .csv, .qif).
     frame: None for global coordinates, or the local coordinate system as a FreeCAD.Placement or an
     object with a Placement (e.g. a datum coordinate system; its global placement is used): points
     are written as placement.inverse() * p, normals rotated only.
@@ -131,6 +172,9 @@ def export(source: SamplingResult | PartPlan | PointSet | object, path: str | os
     input, ExportError (an OSError) naming the path and the reason when it cannot be written.
     """
     fmt = resolve_format(path, format)
+    if is_inspection(source):
+        return export_results(source, path, fmt, label, frame=(frame, None), probe_radius=(probe_radius, 0.0),
+                              order=(order, "as_optimised"))
     check_choice("order", order, list(ORDERS))
     radius = check_real("probe_radius", probe_radius, minimum=0.0)
     options = WriteOptions(
@@ -208,6 +252,7 @@ def plan_point_set(plan):
     labels = [f"{face.name}_P{i}" for face in placed for i in range(1, face.n + 1)]
     metadata = {"source": "part plan", "strategy": plan.strategy, "mode": plan.mode, "faces": len(plan.faces),
                 "points_per_face": {face.name: face.n for face in placed}, "worst_max_mm": plan.worst,
+                "max_deviation_mm": {face.name: float(face.maximum) for face in placed},
                 **spacing_by_face({face.name: face.settings for face in placed})}
     if plan.tolerance is not None:
         metadata["tolerance_mm"] = plan.tolerance

@@ -1,8 +1,8 @@
 """Point files: the formats probe points are written in and read from, one module each
-(:mod:`.dmis`, :mod:`.xyzijk`, :mod:`.csv_points`, each with its FileFormat record, registered
-here), found by name or by a file's extension.
+(:mod:`.dmis`, :mod:`.xyzijk`, :mod:`.csv_points`, :mod:`.qif`, each with its FileFormat record,
+registered here), found by name or by a file's extension.
 
-All three hold, per point, x, y, z in mm and the unit approach vector i, j, k (out of the
+All of them hold, per point, x, y, z in mm and the unit approach vector i, j, k (out of the
 material: the probe travels along -ijk). DMIS and CSV also hold labels and ``key: value``
 comments with the facts of the points (source face, strategy, frame, probe radius, deviation
 figures); CSV adds the face parameters u, v and each point's deviation where known.
@@ -12,7 +12,7 @@ from __future__ import annotations
 import os
 
 from ..geometry.validation import InputError, check_choice
-from . import csv_points, dmis, xyzijk
+from . import csv_points, dmis, qif, xyzijk
 from .files import check_readable, path_of
 from .pointset import PointSet
 from .registry import FORMATS, FileFormat, export_filter, extensions, register_format, unregister_format
@@ -20,7 +20,7 @@ from .registry import FORMATS, FileFormat, export_filter, extensions, register_f
 __all__ = ["FORMATS", "FileFormat", "READER_KEYS", "export_filter", "read_points", "register_format",
            "resolve_format", "unregister_format"]
 
-for _record in (dmis.FORMAT, xyzijk.FORMAT, csv_points.FORMAT):
+for _record in (dmis.FORMAT, xyzijk.FORMAT, csv_points.FORMAT, qif.FORMAT):
     register_format(_record)
 READER_KEYS = ("format", "path", "dmis_features", "dmis_units", "xyz_units", "labels")
 
@@ -45,7 +45,8 @@ def resolve_format(path, format=None):
 
 
 def read_points(path: str | os.PathLike, format: str | None = None) -> PointSet:
-    """Read probe points from a DMIS, PC-DMIS XYZ or CSV file (format from the extension unless given).
+    """Read probe points from a DMIS, PC-DMIS XYZ, CSV or QIF 3.0 file (format from the extension
+    unless given); QIF: the measured points of a results file, else the planned ones (:mod:`.qif.read`).
 
     DMIS: the FEAT/POINT,CART statements (the actual ``FA(...)`` ones of a DMIS output file when
     there are any, else the nominal ``F(...)`` ones), in mm whatever its UNITS; XYZ: labels P1..PN

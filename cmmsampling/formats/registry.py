@@ -23,7 +23,8 @@ class FileFormat:
     text; read: (text, path) -> PointSet, raising ValueError naming the path and line;
     contact_nominals: the format's points are nominal surface points whose probe radius the CMM
     takes off itself (DMIS's FEAT/POINT and PTMEAS): a probe radius is stated (ball_radius_mm),
-    never added to the points.
+    never added to the points; write_results: (Inspection, part name) -> the file's text, for a
+    format that holds an inspection's results (QIF), else None.
     """
 
     name: str
@@ -34,6 +35,7 @@ class FileFormat:
     write: object
     read: object
     contact_nominals: bool = False
+    write_results: object = None
 
     @property
     def patterns(self):

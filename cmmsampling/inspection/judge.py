@@ -57,7 +57,8 @@ class Inspection:
     for a SamplingResult's points (the paper's step), substitute_poles: (n_u, n_v, 3) mm, the
     substitute fitted to the aligned measured points at their planned (u, v), and
     substitute_deviation: its DeviationStats against the CAD face (the deviation map); else None;
-    measured_file: the file read ('' for a PointSet).
+    measured_file: the file read ('' for a PointSet); normals: (N, 3) unit, the face's outward
+    normal at each aligned point's closest point (the point's foot is points - deviations * normals).
     """
 
     labels: list
@@ -76,6 +77,12 @@ class Inspection:
     measured_file: str = ""
     zone_offset: float = 0.0
     face_forms: dict = field(default_factory=dict)
+    normals: np.ndarray = None
+
+    @property
+    def feet(self):
+        """(N, 3) mm: the closest point of each aligned point on its face."""
+        return self.points - self.deviations[:, None] * self.normals
 
     @property
     def substitute(self):
@@ -266,7 +273,7 @@ def inspect(source, measured, alignment="min_max", tolerance=None, locked=(), pa
     inspection = Inspection([read.labels[i] for i in order[0]], nominal, points, aligned,
                             deviations, found.matrix, found, tolerance, [planned.names[i] for i in owner], notes,
                             measured_file=os.fspath(measured) if isinstance(measured, (str, os.PathLike)) else "",
-                            zone_offset=zone_offset)
+                            zone_offset=zone_offset, normals=closest(aligned)[1])
     if len(set(owner.tolist())) > 1 and alignment != "none":
         told("aligning each face alone")
         inspection.face_forms = _face_forms(points, owner, closers, planned.names, found, locked, zone_offset, notes)

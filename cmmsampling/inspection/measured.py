@@ -1,5 +1,6 @@
 """Measured points from what CMM software writes: the project's point files (DMIS output with its
-FA(label) actuals, in any UNITS; CSV with label,x,y,z,i,j,k; PC-DMIS XYZIJK) and tables of text:
+FA(label) actuals, in any UNITS; CSV with label,x,y,z,i,j,k; PC-DMIS XYZIJK; QIF 3.0 results,
+cmmsampling.formats.qif.read) and tables of text:
 a header naming the columns (cmmsampling.inspection.columns) or one point a line, ``label x y z``
 (or ``x y z``, labels P1..PN by order), the fields separated by commas, semicolons or whitespace,
 optionally followed by the vector i j k; and a CMM's text report of point locations
@@ -33,8 +34,9 @@ MAX_FILE_BYTES = 100 * 2 ** 20
 
 def read_measured(path):
     """The measured points of a file: a PointSet of contact points or ball centres (normals NaN
-    where the file gives no vectors). DMIS and XYZIJK files and CSV files with the project's
-    header go through :func:`cmmsampling.read_points`; any other text is read as labelled x, y, z
+    where the file gives no vectors). DMIS, XYZIJK and QIF files and CSV files with the project's
+    header go through :func:`cmmsampling.read_points` (a DMIS program or a QIF plan without
+    measured points is refused); any other text is read as labelled x, y, z
     lines (:func:`read_labelled_text`)."""
     path = check_readable(path, "measured-points file")
     size = os.path.getsize(path)
@@ -47,6 +49,9 @@ def read_measured(path):
         if point_set.metadata.get("dmis_features") == "nominal":
             raise InputError(f"{path}: holds the program's nominal points only (F(label)=FEAT/POINT), no measured "
                              "FA(label) values; give the DMIS output file the CMM wrote after measuring")
+        if point_set.metadata.get("qif") == "plan":
+            raise InputError(f"{path}: a QIF plan (planned points, no measured point set or feature measurement); "
+                             "give the QIF results file the CMM software wrote after measuring")
         return point_set
     with open(path, encoding="utf-8-sig", errors="replace") as stream:
         text = stream.read()

@@ -1,0 +1,47 @@
+"""QIF 3.0 (ISO 23952, the Quality Information Framework): measurement plans (:mod:`.plan`) and
+inspection results (:mod:`.results`) written, points read back (:mod:`.read`), every document
+checked against the official schemas (:mod:`.schema`) before it is written where lxml is
+present."""
+from ..registry import FileFormat
+from . import plan, read, results
+from .schema import SchemaUnavailable, schema_errors
+
+
+class QIFSchemaError(RuntimeError):
+    """A document the writers built does not pass the QIF 3.0 schemas (a defect of ours)."""
+
+
+def checked(text):
+    """The document's text once the QIF 3.0 schemas accept it (unchecked without lxml);
+    QIFSchemaError naming the first complaint otherwise, so nothing is written."""
+    try:
+        errors = schema_errors(text)
+    except SchemaUnavailable:
+        return text
+    if errors:
+        raise QIFSchemaError(f"the QIF document does not pass the QIF 3.0 schemas ({errors[0]}); nothing was "
+                             "written: please report this with the points")
+    return text
+
+
+def write(point_set, facts, options):
+    """A measurement plan of written probe points (:func:`.plan.write`), checked."""
+    return checked(plan.write(point_set, facts, options))
+
+
+def write_results(inspection, part):
+    """The results of an Inspection (:func:`.results.write_results`), checked."""
+    return checked(results.write_results(inspection, part))
+
+
+FORMAT = FileFormat(
+    name="qif",
+    title="QIF 3.0",
+    description="QIF 3.0 plan or results (ISO 23952)",
+    extensions=(".qif",),
+    encoding="utf-8",
+    write=write,
+    read=read.read,
+    contact_nominals=True,
+    write_results=write_results,
+)
