@@ -11,6 +11,7 @@ import numpy as np
 
 from ..geometry.freecad_env import import_part
 from ..geometry.validation import InputError, InputTypeError
+from ..inspection.align import Alignment
 from ..inspection.judge import Inspection, verdict_text
 from .object_types import MEASURED_POINTS, in_document, is_measured_points
 from .objects import TypedProxy
@@ -91,6 +92,8 @@ def write_inspection(points, inspection):
     points.FreeMotions = list(inspection.free_motions)
     points.MeasuredFile = inspection.measured_file
     points.Notes = list(inspection.notes)
+    points.Normals = vectors(inspection.normals)
+    points.FaceForms = {name: repr(form) for name, form in inspection.face_forms.items() if form is not None}
 
 
 def face_lines(inspection):
@@ -116,9 +119,10 @@ class MeasuredPoints(TypedProxy):
     Properties: Labels, Faces (the face each was judged on); Points (aligned, mm), Measured (as
     read, mm), Nominal (planned, mm; 0 where none was planned); Deviation (mm); Bands (-2 .. 2);
     Tolerance (mm, 0 without one), ZoneOffset (mm), Profile (mm, 2 max |d - offset|), Verdict,
-    FaceProfiles; Alignment, Locked,
-    AlignmentPlacement (measured -> CAD), MovedBy (mm), FreeMotions; MeasuredFile, Notes; Source (the probe
-    points or plan) and Report.
+    FaceProfiles, FaceForms (each face aligned alone, mm); Alignment, Locked,
+    AlignmentPlacement (measured -> CAD), MovedBy (mm), FreeMotions; MeasuredFile, Notes; Normals
+    (the face's outward normal at each aligned point's foot); Source (the probe points or plan)
+    and Report.
     """
 
     Type = MEASURED_POINTS
@@ -147,21 +151,52 @@ class MeasuredPoints(TypedProxy):
          "The motions the points do not hold, kept where their labels put them (rx .. z about the points' centre)"),
         ("App::PropertyString", "MeasuredFile", "Measured", "The file the points were read from"),
         ("App::PropertyStringList", "Notes", "Measured", "What the pairing of the points found"),
+        ("App::PropertyVectorList", "Normals", "Measured",
+         "The face's outward normal at each aligned point's closest point on it"),
+        ("App::PropertyMap", "FaceForms", "Verdict", "Each face's form profile aligned alone (mm), for several faces"),
     )
 
     def __init__(self, obj):
         obj.Proxy = self
-        for kind, name, group, doc in self.PROPERTIES:
-            obj.addProperty(kind, name, group, doc)
-            obj.setEditorMode(name, 1)
+        self.add_missing_properties(obj)
         obj.addProperty("App::PropertyLink", "Source", "Measured", "The probe points or part plan measured")
         obj.addProperty("App::PropertyLink", "Report", "Verdict", "The inspection report sheet")
+
+    @classmethod
+    def add_missing_properties(cls, obj):
+        """The PROPERTIES an object lacks (one saved before they existed), added read-only."""
+        for kind, name, group, doc in cls.PROPERTIES:
+            if not hasattr(obj, name):
+                obj.addProperty(kind, name, group, doc)
+                obj.setEditorMode(name, 1)
+
+    def inspection(self, obj):
+        """The Inspection these properties hold (its results for :func:`cmmsampling.export`).
+        InputError for an inspection saved before the normals were kept whose points were not
+        all planned (their nominal is their foot on the face, which needs the normals)."""
+        count = len(obj.Labels)
+        array = lambda values: np.array([tuple(v) for v in values], dtype=float).reshape(-1, 3)  # noqa: E731
+        nominal = array(obj.Nominal) if obj.Source is not None else np.full((count, 3), np.nan)
+        normals = array(obj.Normals) if len(obj.Normals) == count else None
+        if normals is None and obj.Source is None:
+            raise InputError(f"{obj.Label} was saved before the inspection kept its normals; inspect the points "
+                             "again to export its results")
+        deviations = np.array(obj.Deviation, dtype=float)
+        matrix = np.array(obj.AlignmentPlacement.toMatrix().A, dtype=float).reshape(4, 4)
+        alignment = Alignment(matrix, obj.Alignment, tuple(obj.Locked), 0, float(obj.MovedBy.Value), deviations,
+                              tuple(obj.FreeMotions))
+        return Inspection(list(obj.Labels), nominal, array(obj.Measured), array(obj.Points), deviations, matrix,
+                          alignment, obj.Tolerance.Value or None, list(obj.Faces), list(obj.Notes),
+                          measured_file=obj.MeasuredFile, zone_offset=float(obj.ZoneOffset.Value),
+                          face_forms={name: float(value) for name, value in obj.FaceForms.items()},
+                          normals=normals)
 
     def execute(self, obj):
         """Shape: a compound of the aligned points as vertices."""
         obj.Shape = Part.makeCompound([Part.Vertex(p) for p in obj.Points])
 
     def onDocumentRestored(self, obj):
+        self.add_missing_properties(obj)
         if FreeCAD.GuiUp:
             from ..gui import inspection_view
 

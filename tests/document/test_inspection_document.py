@@ -1,5 +1,7 @@
 """Inspections in the document headless: the measured points and the report in one transaction,
 judged on the probe points' own face (or a plan's faces), saved and reopened; bad sources named."""
+import xml.etree.ElementTree as ET
+
 import numpy as np
 import pytest
 from support.faces import FreeCAD, Part, closed, reference_document
@@ -110,3 +112,32 @@ def test_what_is_not_an_inspection_or_not_in_the_document_is_refused(doc, points
         closed(other.Name)
     with pytest.raises(InputTypeError, match="cannot inspect against a Feature"):
         cmmsampling.inspect(doc.Body, tmp_path / "m.csv")
+
+
+def test_file_export_writes_a_saved_inspections_results_as_qif(doc, tmp_path):
+    from cmmsampling.formats.qif.schema import schema_errors
+
+    block = doc.addObject("Part::Feature", "Block")
+    block.Shape = Part.makeBox(40, 30, 10)
+    doc.recompute()
+    plan = cmmsampling.plan(block.Shape, n_total=32, strategy="uniform_parametric", faces=[1, 6], processes=1)
+    group = cmmsampling.add_plan_to_document(plan, doc, block)
+    cmmsampling.simulate_measurement(group, tmp_path / "part.dmi", form_error=0.01, misplacement=MISPLACED)
+    found = cmmsampling.inspect(group, tmp_path / "part.dmi", tolerance=0.05)
+    inspected, label = cmmsampling.add_inspection_to_document(found, doc, source=group).Name, group.Label
+    path = str(tmp_path / "inspected.FCStd")
+    doc.saveAs(path)
+    closed(doc.Name)
+    again = FreeCAD.openDocument(path)
+    try:
+        report = document.export([again.getObject(inspected)], str(tmp_path / "results.qif"))
+        assert report.count == 32 and report.passed is found.passed
+        text = (tmp_path / "results.qif").read_text()
+        assert schema_errors(text) == [] and f"<Name>{label}</Name>" in text
+        back = cmmsampling.read_points(tmp_path / "results.qif")
+        assert back.labels == found.labels and np.abs(back.deviation - found.deviations).max() < 1e-12
+        assert np.abs(back.points - found.measured).max() < 1e-12, "the points as read"
+        forms = [float(e.text) for e in ET.fromstring(text.encode()).iter("{http://qifstandards.org/xsd/qif3}Form")]
+        assert forms == [found.face_forms[face] for face in found.face_profiles], "each face aligned alone"
+    finally:
+        closed(again.Name)

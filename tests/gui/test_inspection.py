@@ -1,6 +1,7 @@
 """*Inspect measured points...* on a Ventilator blade: the points a virtual CMM measured on a
 misplaced part with a form error come back, are aligned and judged against a tolerance, coloured
 by band on the part, with the inspection report, in one Undo, echoed as the API calls."""
+import importlib
 import os
 
 import FreeCAD
@@ -13,6 +14,7 @@ from support.faces import TESTDATA
 import cmmsampling
 from cmmsampling.document.object_types import is_measured_points
 from cmmsampling.fitting.deviation import mm_text
+from cmmsampling.formats.qif.schema import schema_errors
 from cmmsampling.gui import commands, inspect_dialog, inspection_view
 from cmmsampling.inspection.judge import tolerance_bands
 
@@ -106,6 +108,15 @@ def test_inspect_measured_points_on_a_ventilator_blade(blade_points, tmp_path, a
     FreeCADGui.ActiveDocument.ActiveView.saveImage(os.path.join(artifacts, "inspection_ventilator_blade.png"),
                                                    1200, 900, "White")
     print(f"Ventilator {BLADE}: {expected.summary()}")
+
+    exporter = importlib.import_module(FreeCAD.getExportType("qif")[0])
+    results = str(tmp_path / "blade_results.qif")
+    exporter.export([group], results)   # what File > Export runs after its file dialog
+    text = open(results).read()
+    assert schema_errors(text) == [] and "<InspectionStatusEnum>" + measured_points.Verdict in text
+    back = cmmsampling.read_points(results)
+    assert back.labels == expected.labels and np.abs(back.deviation - deviations).max() < 1e-12
+    assert wait_until(lambda: f"Wrote the results of 36 measured points to {results}" in dock_text("Report view"), 2)
 
     doc.undo()
     assert len(doc.Objects) == before and points.Visibility

@@ -529,7 +529,8 @@ def test_export_dialog_adds_the_extension_of_the_chosen_format(doc, monkeypatch,
 def test_a_registered_format_is_offered_by_the_export_command(doc, monkeypatch, tmp_path):
     """File > Export lists every built-in format (Init.py builds its filter from the records);
     the Export command's dialog offers a format registered later and writes it."""
-    assert all("cmmsampling.document" in FreeCAD.getExportType(extension) for extension in ("dmi", "xyz", "txt", "csv"))
+    assert all("cmmsampling.document" in FreeCAD.getExportType(extension)
+               for extension in ("dmi", "xyz", "txt", "csv", "qif"))
     cmmsampling.register_format(TOY_FORMAT)
     try:
         points = document.add_to_document(short_result(doc), doc, source=(doc.Body, "Face1")).Group[0]
@@ -548,6 +549,39 @@ def test_a_registered_format_is_offered_by_the_export_command(doc, monkeypatch, 
         assert open(target).read().startswith("TOY 25\n")
     finally:
         cmmsampling.unregister_format(TOY_FORMAT.name)
+
+
+def test_the_export_command_offers_qif_and_writes_a_plan_the_schemas_accept(doc, monkeypatch, tmp_path, artifacts):
+    from cmmsampling.formats.qif.schema import schema_errors
+
+    points = document.add_to_document(short_result(doc), doc, source=(doc.Body, "Face1")).Group[0]
+    offered = [text for text, _ in commands.export_filters()]
+    assert [text.split(" (")[0].split()[0] for text in offered] == ["DMIS", "PC-DMIS", "CSV", "QIF"]
+    qif = next(text for text, extensions in commands.export_filters() if extensions == [".qif"])
+    dialog = QtGui.QFileDialog(main_window(), "Export probe points", str(tmp_path), ";;".join(offered))
+    dialog.setOption(QtGui.QFileDialog.DontUseNativeDialog)
+    dialog.setAcceptMode(QtGui.QFileDialog.AcceptSave)
+    dialog.selectNameFilter(qif)
+    dialog.show()
+    process_events(0.3)
+    assert dialog.selectedNameFilter() == qif
+    dialog.grab().save(os.path.join(artifacts, "export_file_types.png"))
+    dialog.close()
+    monkeypatch.setattr(QtGui.QFileDialog, "getSaveFileName",
+                        lambda parent, title, start, filters: (str(tmp_path / "points"), qif))
+    target = commands.choose_export_path(points)
+    assert target == str(tmp_path / "points.qif")
+    monkeypatch.setattr(commands, "choose_export_path", lambda chosen: target)
+    monkeypatch.setattr(commands, "ask_export_options",
+                        lambda chosen: {"frame": None, "probe_radius": 1.0, "order": "short_path"})
+    FreeCADGui.Selection.clearSelection()
+    FreeCADGui.Selection.addSelection(points)
+    FreeCADGui.runCommand(EXPORT)
+    process_events(0.2)
+    text = open(target).read()
+    assert schema_errors(text) == [] and "<TipEndDiameter>2</TipEndDiameter>" in text
+    back = cmmsampling.read_points(target)
+    assert sorted(back.labels) == sorted(points.Proxy.point_set(points).labels) and len(back) == 25
 
 
 def test_the_export_report_says_in_words_what_was_written(doc, tmp_path):
