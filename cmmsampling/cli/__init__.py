@@ -309,7 +309,7 @@ def run_plan(args):
     print(result.table())
     order = "probe_path" if args.probe and result.placed and not any(f.unreached for f in result.placed) else "short_path"
     for path in args.out:
-        print(export(result, path, probe_radius=args.probe_radius, order=order))
+        print(export(result, path, probe_radius=args.probe_radius, order=order, label=os.path.basename(args.file)))
     if args.fcstd:
         _save_document(args, lambda document, part: add_plan_to_document(result, document, part))
     return 0

@@ -193,6 +193,7 @@ def test_the_command_line_writes_a_plans_qif(walled, tmp_path, capsys):
                      "--max-points", "40", "--processes", "1", "--probe", "2", "--out", str(tmp_path / "plan.qif")]) == 0
     assert "QIF 3.0" in capsys.readouterr().out
     root = valid(tmp_path / "plan.qif")
+    assert root.findtext("q:Product/q:PartSet/q:Part/q:Header/q:Name", namespaces=NS) == "walled.brep"
     assert len(root.findall(".//q:PointDefinedSurfaceFeatureNominal", NS)) == 2
     assert root.find(".//{urn:cmmsampling:qif:1}ProbePath") is not None
 

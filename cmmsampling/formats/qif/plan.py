@@ -27,6 +27,8 @@ import numpy as np
 from .xml import QIFWriter, decimal, extension, extension_child, new_qpid, numbers
 
 APPLICATION = "cmmsampling"
+# The source a PartPlan's points state unless the caller names the part (cmmsampling.formats.exporting).
+PLAN_SOURCE = "part plan"
 DEFAULT_FACE = "face"
 
 
@@ -42,12 +44,12 @@ def face_groups(point_set):
 
 
 def part_name(metadata):
-    """The part's name: the stated part, else the source before its face ('bracket.step:Face3'),
-    else 'part'."""
-    if metadata.get("part"):
-        return str(metadata["part"])
+    """The part's name: the source before its face ('bracket.step:Face3' -> 'bracket.step'), a
+    part plan's source as given (its file, e.g. 'bracket.step'), else 'part'."""
     source = str(metadata.get("source", ""))
-    return source.rsplit(":", 1)[0] if ":" in source else "part"
+    if ":" in source:
+        return source.rsplit(":", 1)[0]
+    return source if source and source != PLAN_SOURCE else "part"
 
 
 def header(doc, description):
