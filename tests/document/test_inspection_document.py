@@ -66,14 +66,20 @@ def test_the_points_are_judged_on_their_own_face_where_it_is_now(doc, points, tm
         cmmsampling.inspect(points, tmp_path / "m.csv")
 
 
-def test_a_plan_group_is_inspected_on_its_faces(doc, tmp_path):
+def inspected_block_plan(doc, tmp_path):
+    """A block's plan of two faces in the document, measured on a virtual CMM and inspected with a
+    0.05 mm tolerance: (the plan's group, the Inspection)."""
     block = doc.addObject("Part::Feature", "Block")
     block.Shape = Part.makeBox(40, 30, 10)
     doc.recompute()
     plan = cmmsampling.plan(block.Shape, n_total=32, strategy="uniform_parametric", faces=[1, 6], processes=1)
     group = cmmsampling.add_plan_to_document(plan, doc, block)
     cmmsampling.simulate_measurement(group, tmp_path / "part.dmi", form_error=0.01, misplacement=MISPLACED)
-    found = cmmsampling.inspect(group, tmp_path / "part.dmi", tolerance=0.05)
+    return group, cmmsampling.inspect(group, tmp_path / "part.dmi", tolerance=0.05)
+
+
+def test_a_plan_group_is_inspected_on_its_faces(doc, tmp_path):
+    group, found = inspected_block_plan(doc, tmp_path)
     assert sorted(set(found.faces)) == ["Block:Face1", "Block:Face6"] and len(found.labels) == 32
     assert found.labels[0].startswith("Face1_P") and found.passed
     inspected = cmmsampling.add_inspection_to_document(found, doc, source=group)
@@ -117,13 +123,7 @@ def test_what_is_not_an_inspection_or_not_in_the_document_is_refused(doc, points
 def test_file_export_writes_a_saved_inspections_results_as_qif(doc, tmp_path):
     from cmmsampling.formats.qif.schema import schema_errors
 
-    block = doc.addObject("Part::Feature", "Block")
-    block.Shape = Part.makeBox(40, 30, 10)
-    doc.recompute()
-    plan = cmmsampling.plan(block.Shape, n_total=32, strategy="uniform_parametric", faces=[1, 6], processes=1)
-    group = cmmsampling.add_plan_to_document(plan, doc, block)
-    cmmsampling.simulate_measurement(group, tmp_path / "part.dmi", form_error=0.01, misplacement=MISPLACED)
-    found = cmmsampling.inspect(group, tmp_path / "part.dmi", tolerance=0.05)
+    group, found = inspected_block_plan(doc, tmp_path)
     inspected, label = cmmsampling.add_inspection_to_document(found, doc, source=group).Name, group.Label
     path = str(tmp_path / "inspected.FCStd")
     doc.saveAs(path)

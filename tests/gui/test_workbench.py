@@ -526,6 +526,24 @@ def test_export_dialog_adds_the_extension_of_the_chosen_format(doc, monkeypatch,
     assert asked[2][0] == os.path.join(str(tmp_path), "Body_Face1_pso_3.dmi"), "an earlier export's file is not offered"
 
 
+def export_with_the_command(points, extension, options, monkeypatch, tmp_path):
+    """Run the Export command on points, the file dialog answered with 'points' and the file type
+    of ``extension`` (the command adds the extension), the options dialog with options; returns
+    the file written."""
+    chosen = next(text for text, extensions in commands.export_filters() if extensions == [extension])
+    monkeypatch.setattr(QtGui.QFileDialog, "getSaveFileName",
+                        lambda parent, title, start, filters: (str(tmp_path / "points"), chosen))
+    target = commands.choose_export_path(points)
+    assert target == str(tmp_path / f"points{extension}")
+    monkeypatch.setattr(commands, "choose_export_path", lambda chosen_points: target)
+    monkeypatch.setattr(commands, "ask_export_options", lambda chosen_points: options)
+    FreeCADGui.Selection.clearSelection()
+    FreeCADGui.Selection.addSelection(points)
+    FreeCADGui.runCommand(EXPORT)
+    process_events(0.2)
+    return target
+
+
 def test_a_registered_format_is_offered_by_the_export_command(doc, monkeypatch, tmp_path):
     """File > Export lists every built-in format (Init.py builds its filter from the records);
     the Export command's dialog offers a format registered later and writes it."""
@@ -534,18 +552,8 @@ def test_a_registered_format_is_offered_by_the_export_command(doc, monkeypatch, 
     cmmsampling.register_format(TOY_FORMAT)
     try:
         points = document.add_to_document(short_result(doc), doc, source=(doc.Body, "Face1")).Group[0]
-        toy = next(text for text, extensions in commands.export_filters() if extensions == [".toy"])
-        monkeypatch.setattr(QtGui.QFileDialog, "getSaveFileName",
-                            lambda parent, title, start, filters: (str(tmp_path / "points"), toy))
-        target = commands.choose_export_path(points)
-        assert target == str(tmp_path / "points.toy")
-        monkeypatch.setattr(commands, "choose_export_path", lambda chosen: target)
-        monkeypatch.setattr(commands, "ask_export_options",
-                            lambda chosen: {"frame": None, "probe_radius": 0.0, "order": "as_optimised"})
-        FreeCADGui.Selection.clearSelection()
-        FreeCADGui.Selection.addSelection(points)
-        FreeCADGui.runCommand(EXPORT)
-        process_events(0.2)
+        target = export_with_the_command(points, ".toy", {"frame": None, "probe_radius": 0.0,
+                                                           "order": "as_optimised"}, monkeypatch, tmp_path)
         assert open(target).read().startswith("TOY 25\n")
     finally:
         cmmsampling.unregister_format(TOY_FORMAT.name)
@@ -567,17 +575,8 @@ def test_the_export_command_offers_qif_and_writes_a_plan_the_schemas_accept(doc,
     assert dialog.selectedNameFilter() == qif
     dialog.grab().save(os.path.join(artifacts, "export_file_types.png"))
     dialog.close()
-    monkeypatch.setattr(QtGui.QFileDialog, "getSaveFileName",
-                        lambda parent, title, start, filters: (str(tmp_path / "points"), qif))
-    target = commands.choose_export_path(points)
-    assert target == str(tmp_path / "points.qif")
-    monkeypatch.setattr(commands, "choose_export_path", lambda chosen: target)
-    monkeypatch.setattr(commands, "ask_export_options",
-                        lambda chosen: {"frame": None, "probe_radius": 1.0, "order": "short_path"})
-    FreeCADGui.Selection.clearSelection()
-    FreeCADGui.Selection.addSelection(points)
-    FreeCADGui.runCommand(EXPORT)
-    process_events(0.2)
+    target = export_with_the_command(points, ".qif", {"frame": None, "probe_radius": 1.0, "order": "short_path"},
+                                     monkeypatch, tmp_path)
     text = open(target).read()
     assert schema_errors(text) == [] and "<TipEndDiameter>2</TipEndDiameter>" in text
     back = cmmsampling.read_points(target)
