@@ -243,6 +243,25 @@ def _inspection_loop(face, result, folder):
           f"({measured.path}):")
     print(found.summary())
     print(f"colour map: {write_inspection_figure(found, face, os.path.join(folder, 'deviation.png'))}")
+    _live_measurement(result, folder, found)
+
+
+def _live_measurement(result, folder, filed):
+    """The same points measured live: the simulated I++ DME server (the same virtual part) on
+    127.0.0.1, the client's session, its transcript and the inspection of what it measured,
+    beside the file route's."""
+    from ..cmm.client import measure
+    from ..cmm.server import SimulatedCMM, VirtualPart
+    from ..inspection.judge import inspect
+
+    part = VirtualPart.of(result, **DEMO_MEASUREMENT)
+    with SimulatedCMM(part) as cmm:
+        run = measure(result, cmm.address, os.path.join(folder, "measured_live.csv"),
+                      log=os.path.join(folder, "ippdme_session.log"))
+    found = inspect(result, run, tolerance=DEMO_TOLERANCE)
+    print(f"\nMeasured live over I++ DME: {run}\nsession transcript: {os.path.join(folder, 'ippdme_session.log')}")
+    print(f"profile {found.profile:.4f} mm (the file route: {filed.profile:.4f} mm), "
+          f"{'PASS' if found.passed else 'FAIL'}")
 
 
 def _study_report(face, args):

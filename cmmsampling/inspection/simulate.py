@@ -68,17 +68,27 @@ class SimulatedMeasurement:
 def form_field(points, amplitude, seed=0):
     """A smooth form error at points (N, 3) mm: (N,) mm within +-amplitude, a sum of WAVES plane
     waves across the points' extent with random directions, lengths and phases (seeded)."""
+    return form_waves(points, amplitude, seed)(points)
+
+
+def form_waves(points, amplitude, seed=0):
+    """The form error of :func:`form_field` as a function of any points (M, 3) mm -> (M,) mm, its
+    waves sized by the extent of points (N, 3) mm."""
     points = np.asarray(points, dtype=float)
-    if amplitude == 0:
-        return np.zeros(len(points))
     rng = np.random.default_rng(seed)
     extent = float(np.ptp(points, axis=0).max()) or 1.0
     directions = rng.normal(size=(WAVES, 3))
     directions /= np.linalg.norm(directions, axis=1, keepdims=True)
     lengths = extent * rng.uniform(*WAVELENGTHS, WAVES)
     phases = rng.uniform(0, 2 * np.pi, WAVES)
-    waves = np.sin(2 * np.pi * (points @ directions.T) / lengths + phases).sum(axis=1)
-    return amplitude * waves / WAVES
+
+    def waves(where):
+        where = np.asarray(where, dtype=float).reshape(-1, 3)
+        if amplitude == 0:
+            return np.zeros(len(where))
+        return amplitude * np.sin(2 * np.pi * (where @ directions.T) / lengths + phases).sum(axis=1) / WAVES
+
+    return waves
 
 
 def simulate_measurement(source, path, *, form_error=0.0, noise=0.0, misplacement=None, seed=0):

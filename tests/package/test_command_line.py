@@ -124,3 +124,15 @@ def test_the_demo_runs_every_strategy_and_ends_with_the_time_it_took(capsys):
     rows = {line.split()[0] for line in said if line.split()[1:2] == ["25"]}
     assert rows == set(cmmsampling.STRATEGIES)
     assert re.fullmatch(rf"The demo took {DURATION} on {os.cpu_count()} cores\.", said[-1]), said[-1]
+
+
+def test_the_demo_measures_its_points_live_over_ipp_dme_and_inspects_them(capsys, tmp_path):
+    settings = ["--iterations", "5", "--population", "4", "--time-limit", "1"]
+    assert cli_main(["demo", "-n", "25", *settings, "--inspection", str(tmp_path), "--report", "none"]) == 0
+    said = capsys.readouterr().out
+    assert "Measured live over I++ DME: Measured 25 of 25 points over I++ DME at 127.0.0.1:" in said
+    log = (tmp_path / "ippdme_session.log").read_text().splitlines()
+    assert log[0] == "> 00001 StartSession()" and log[-3].endswith("EndSession()") and log[-1].endswith("%")
+    live = re.search(r"profile (\d+\.\d+) mm \(the file route: (\d+\.\d+) mm\)", said)
+    assert live and abs(float(live.group(1)) - float(live.group(2))) < 0.005, "the same part, probed again"
+    assert cmmsampling.read_points(tmp_path / "measured_live.csv").labels[:2] == ["P1", "P2"]
