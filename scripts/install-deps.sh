@@ -5,15 +5,18 @@
 # comes with matplotlib (python3-matplotlib -> python3-fonttools -> python3-lxml on Debian 12, 13
 # and sid); tests/formats/test_qif.py fails where it is missing.
 # --list prints the package names instead (scripts/test-matrix.sh installs the same into its roots).
+# HOST_PACKAGES go on this machine only, not into those roots: g++ builds NIST's I++ DME command
+# checker and response parser for the tests (tests/support/ippdme.py), which run once, on the host.
 set -euo pipefail
 PACKAGES=(freecad python3-numpy python3-scipy xvfb xauth python3-pytest python3-matplotlib
           python3-hypothesis python3-threadpoolctl python3-distributed)
+HOST_PACKAGES=(g++)
 if [ "${1:-}" = "--list" ]; then
   printf '%s\n' "${PACKAGES[@]}"
   exit 0
 fi
 missing=()
-for p in "${PACKAGES[@]}"; do
+for p in "${PACKAGES[@]}" "${HOST_PACKAGES[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
 done
 if [ ${#missing[@]} -eq 0 ]; then
