@@ -48,8 +48,8 @@ def nist_passes(commands, tmp_path, log=None):
 
 
 def test_a_face_measured_live_is_judged_as_the_file_route_judges_it(result, tmp_path):
-    part = VirtualPart.of(result, form_error=0.02, misplacement=MISPLACED, seed=2)
-    with SimulatedCMM(part, tools={"Probe1": 1.5}) as cmm:
+    with cmmsampling.SimulatedCMM.measuring(result, form_error=0.02, misplacement=MISPLACED, seed=2,
+                                            tools={"Probe1": 1.5}) as cmm:
         run = measure(result, cmm.address, tmp_path / "live.csv", log=tmp_path / "session.log")
     assert run.labels == result.labels and not run.missing and run.radius == 1.5 and run.tool == "Probe1"
     assert str(run).startswith("Measured 16 of 16 points over I++ DME at 127.0.0.1:")
