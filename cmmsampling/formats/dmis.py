@@ -18,7 +18,7 @@ from .text import (COORDINATE_DECIMALS, VECTOR_DECIMALS, comment_entries, fixed,
 
 NAME = "DMIS"
 DESCRIPTION = "DMIS 5.2 input program (FEAT/POINT, MEAS/POINT, PTMEAS)"
-EXTENSIONS = (".dmi", ".dmis")
+EXTENSIONS = (".dmi", ".dmis", ".dmo", ".dms")
 ENCODING = "ascii"
 DMIS_VERSION = "05.2"
 DMIS_LINE_LIMIT = 80
@@ -34,6 +34,15 @@ ANGLE_DECIMALS = 4
 # at A = 0), +Z as DMIS writes it for a vertical CMM.
 HEAD_MOUNTING = (0.0, 0.0, 1.0)
 DMIS_FEATURE_POINT = re.compile(r"(FA?)\(([^()]*)\)=FEAT/POINT,([A-Z]+),(.*)\Z", re.IGNORECASE)
+# The output device the program writes its results to, and the part alignment it assumes (no
+# datums planned: the operator sets the part's frame before the automatic run).
+OUTPUT_DEVICE = "RESULTS"
+ALIGNMENT_ASSUMED = ["$$ part alignment: the part's frame must be set (aligned to the CAD model's",
+                     "$$+ coordinates) before this program runs; it measures no datum features"]
+# Any feature's definition, a MEAS block's start and a probed point.
+OTHER_FEATURE = re.compile(r"(FA?)\(([^()]*)\)=FEAT/([A-Z]+)", re.IGNORECASE)
+MEAS_BLOCK = re.compile(r"MEAS/([A-Z]+),FA?\(([^()]*)\)", re.IGNORECASE)
+PTMEAS = re.compile(r"PTMEAS/([A-Z]+),(.*)\Z", re.IGNORECASE)
 # A statement that means a point feature but is not written as DMIS_FEATURE_POINT reads it.
 POINT_LIKE = re.compile(r"FEAT\W*POINT", re.IGNORECASE)
 # UNITS/<length>,<angle>[,<temperature>]: the length units DMIS names, in mm (angles do not enter
@@ -43,7 +52,11 @@ LENGTH_UNITS_MM = {"MM": 1.0, "CM": 10.0, "METER": 1000.0, "INCH": 25.4, "FEET":
 
 
 def write(point_set, facts, options):
-    """A DMIS 5.2 input program measuring each point once: FEAT/POINT, MEAS/POINT, PTMEAS, ENDMES."""
+    """A DMIS 5.2 input program measuring each point once: FEAT/POINT, MEAS/POINT, PTMEAS, ENDMES,
+    then OUTPUT/FA(label) of the measured point to the output file the program opens
+    (DEVICE/STOR '<name>.dmo', OPEN ... OUTPUT; CLOSE before ENDFIL), which the CMM fills with
+    FA(label)=FEAT/POINT actuals (what :func:`read` takes back). The part's frame is stated as
+    set by the operator before the run (ALIGNMENT_ASSUMED): the plan has no datums."""
     check_dmis_labels(point_set.labels)
     xyz = fixed(point_set.points, COORDINATE_DECIMALS)
     ijk = fixed(point_set.normals, VECTOR_DECIMALS)
@@ -53,7 +66,10 @@ def write(point_set, facts, options):
     lines += metadata_comment_lines(entries, f"{DMIS_COMMENT} ", DMIS_COMMENT_CONTINUED, DMIS_LINE_LIMIT)
     sensors = sensor_labels(point_set) if point_set.travel is not None else None
     lines += ["UNITS/MM,ANGDEC", "MODE/AUTO,PROG,MAN" if sensors is not None else "MODE/PROG,MAN"]
+    lines += ALIGNMENT_ASSUMED
     lines += frame_statements(facts)
+    lines += [f"DID({OUTPUT_DEVICE})=DEVICE/STOR,'{options.name[:DMIS_NAME_LIMIT - 4]}.dmo'",
+              f"OPEN/DID({OUTPUT_DEVICE}),FDATA,DMIS,OUTPUT"]
     distances = {"APPRCH": options.approach, "RETRCT": options.retract, "SEARCH": options.search}
     lines += [f"SNSET/{word},{fixed(value, COORDINATE_DECIMALS).item()}" for word, value in distances.items()]
     if sensors is not None:
@@ -70,10 +86,10 @@ def write(point_set, facts, options):
         lines += dmis_statement([f"F({label})=FEAT/POINT", "CART", *position], vector)
         lines += dmis_statement(["MEAS/POINT", f"F({label})", "1"])
         lines += dmis_statement(["PTMEAS/CART", *position], vector)
-        lines.append("ENDMES")
+        lines += ["ENDMES", f"OUTPUT/FA({label})"]
     if sensors is not None:
         lines += goto_lines(point_set.travel[-1][0])
-    lines.append("ENDFIL")
+    lines += [f"CLOSE/DID({OUTPUT_DEVICE})", "ENDFIL"]
     return "\n".join(without_repeated_gotos(lines)) + "\n"
 
 
@@ -145,22 +161,29 @@ def goto_lines(positions):
 
 
 def read(text, path="<text>"):
-    """PointSet from DMIS text: FEAT/POINT,CART statements, in mm whatever UNITS says (MM, CM,
-    METER, INCH, FEET; each statement in the units in force where it stands), metadata from
-    ``$$ key: value`` comments (``dmis_units``: the length units of the last UNITS, where one was
-    given)."""
+    """PointSet from DMIS text: FEAT/POINT,CART statements and the PTMEAS/CART points measuring
+    another feature (labelled <feature>_P1.., nominal), in mm whatever UNITS says (MM, CM, METER,
+    INCH, FEET; each statement in the units in force where it stands), metadata from ``$$ key:
+    value`` comments (``dmis_units``: the length units of the last UNITS, where one was given;
+    ``dmis_other_features``: the features that are not points, named). A program of actual
+    ``FA(...)`` points gives those; one with no point at all is refused, naming what it holds."""
     statements, comments = dmis_statements(text)
     found = {"F": {}, "FA": {}}
-    scale, units = 1.0, None
+    scale, units, measuring, others = 1.0, None, None, []
     for number, statement in statements:
         compact = _without_blanks(statement)
         given = UNITS_STATEMENT.match(compact)
         if given is not None:
-            units = given.group(1).upper()
-            if units not in LENGTH_UNITS_MM:
-                raise InputError(f"{path}, line {number}: UNITS/{given.group(1)} is not a DMIS length unit this "
-                                 f"reader knows ({', '.join(LENGTH_UNITS_MM)})")
-            scale = LENGTH_UNITS_MM[units]
+            scale, units = _units(given, path, number)
+            continue
+        measuring = _measure_block(compact, measuring)
+        if measuring is not None and measuring[1] != "POINT" and PTMEAS.match(compact):
+            label = f"{measuring[0]}_P{sum(key.startswith(measuring[0] + '_P') for key in found['F']) + 1}"
+            found["F"][label] = _point(PTMEAS.match(compact).groups(), scale, path, number)
+            continue
+        other = OTHER_FEATURE.match(compact)
+        if other is not None and other.group(3).upper() != "POINT":
+            others.append(f"{other.group(1).upper()}({other.group(2)}) {other.group(3).upper()}")
             continue
         match = DMIS_FEATURE_POINT.match(compact)
         if match is None:
@@ -169,22 +192,49 @@ def read(text, path="<text>"):
                                  f"({statement.strip()[:60]}); write it as F(label)=FEAT/POINT,CART,x,y,z,i,j,k")
             continue
         kind, label, system, fields = match.groups()
-        if system.upper() != "CART":
-            raise InputError(f"{path}, line {number}: only Cartesian points (CART) can be read, got {system}")
         if label in found[kind.upper()]:
             raise InputError(f"{path}, line {number}: {kind.upper()}({label}) is given twice; give each point "
                              "its own label")
-        values = numbers(fields.split(","), 6, path, number)
-        found[kind.upper()][label] = [value * scale for value in values[:3]] + values[3:]
+        found[kind.upper()][label] = _point((system, fields), scale, path, number)
     points = found["FA"] or found["F"]
     if not points:
-        raise InputError(f"{path}: no F(label)=FEAT/POINT,CART,x,y,z,i,j,k statement found")
+        held = f"; it holds {', '.join(others)}" if others else ""
+        raise InputError(f"{path}: no point to read (F(label)=FEAT/POINT,CART,x,y,z,i,j,k or PTMEAS/CART){held}")
     metadata = parse_metadata_comments(comments)
     metadata["dmis_features"] = "actual" if found["FA"] else "nominal"
     if units is not None:
         metadata["dmis_units"] = units
+    if others:
+        metadata["dmis_other_features"] = ", ".join(others)
     data = np.array(list(points.values()))
     return PointSet(list(points), data[:, :3], data[:, 3:], metadata=metadata)
+
+
+def _units(given, path, number):
+    """(mm per unit, unit name) of a UNITS statement's match; InputError for another length unit."""
+    units = given.group(1).upper()
+    if units not in LENGTH_UNITS_MM:
+        raise InputError(f"{path}, line {number}: UNITS/{given.group(1)} is not a DMIS length unit this "
+                         f"reader knows ({', '.join(LENGTH_UNITS_MM)})")
+    return LENGTH_UNITS_MM[units], units
+
+
+def _measure_block(compact, measuring):
+    """(feature label, feature type) of the MEAS block a statement opens or stands in; None after
+    ENDMES or outside one."""
+    opened = MEAS_BLOCK.match(compact)
+    if opened is not None:
+        return opened.group(2), opened.group(1).upper()
+    return None if compact.upper() == "ENDMES" else measuring
+
+
+def _point(groups, scale, path, number):
+    """[x, y, z (mm), i, j, k] of a point's (coordinate system, fields); InputError unless CART."""
+    system, fields = groups
+    if system.upper() != "CART":
+        raise InputError(f"{path}, line {number}: only Cartesian points (CART) can be read, got {system}")
+    values = numbers(fields.split(","), 6, path, number)
+    return [value * scale for value in values[:3]] + values[3:]
 
 
 def dmis_statements(text):

@@ -32,7 +32,7 @@ ALIGNMENT_TEXTS = {
 }
 DEFAULTS = {"InspectFile": "", "InspectAlignment": "min_max", "InspectTolerance": 0.1, "InspectLocked": "",
             "InspectZoneOffset": 0.0}
-MEASURED_FILTERS = ("Measured points (*.dmi *.dmis *.dmo *.csv *.xyz *.txt);;All files (*)")
+MEASURED_FILTERS = ("Measured points (*.dmi *.dmis *.dmo *.dms *.csv *.xyz *.txt *.qif);;All files (*)")
 MAX_TOLERANCE_MM = 100.0
 # How often the progress dialog looks at the background inspection, s.
 POLL_S = 0.05

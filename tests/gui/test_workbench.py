@@ -483,7 +483,7 @@ def test_export_command_writes_the_selected_points(doc, tmp_path, monkeypatch):
     exec(call, vars(__main__))
     with open(target) as f:
         assert f.read() == text
-    assert [text for text, _ in commands.export_filters()][0].endswith("(*.dmi *.dmis)")
+    assert [text for text, _ in commands.export_filters()][0].endswith("(*.dmi *.dmis *.dmo *.dms)")
 
 
 def test_a_failed_export_says_why_and_leaves_the_last_report(doc, tmp_path, monkeypatch):

@@ -12,10 +12,14 @@ ending in ``$`` goes on in the next one. Statements, in this order::
     SNSLCT/S(label)                           label defined, not inside MEAS
     GOTO/x,y,z                                not inside MEAS, in a MODE/AUTO,PROG,MAN
                                               (DCC) program only, never the line before again
+    DID(label)=DEVICE/STOR,'name'              after UNITS, before any FEAT
+    OPEN/DID(label),FDATA,DMIS,OUTPUT          its DEVICE before it, before any FEAT
     F(label)=FEAT/POINT,CART,x,y,z,i,j,k      label new, after UNITS
     MEAS/POINT,F(label),n                     label defined, not inside another MEAS
     PTMEAS/CART,x,y,z,i,j,k                   only inside MEAS, n of them
     ENDMES                                    closes MEAS
+    OUTPUT/FA(label)                          a measured feature's, its device open, not inside MEAS
+    CLOSE/DID(label)                          an open device's, not inside MEAS
     ENDFIL                                    last
 
 Numbers are fixed notation (-12.345), counts whole numbers, labels 1-64 characters of
@@ -37,6 +41,10 @@ SIMPLE = {
     "ENDFIL": re.compile(r"ENDFIL\Z"),
 }
 FEATURE = re.compile(r"F\(([^()]*)\)=FEAT/POINT,CART,(.*)\Z")
+OUTPUTS = {"DID": re.compile(rf"DID\(({LABEL})\)=DEVICE/STOR,'[ -&(-~]+'\Z"),
+           "OPEN": re.compile(rf"OPEN/DID\(({LABEL})\),FDATA,DMIS,OUTPUT\Z"),
+           "OUTPUT": re.compile(rf"OUTPUT/FA\(({LABEL})\)\Z"),
+           "CLOSE": re.compile(rf"CLOSE/DID\(({LABEL})\)\Z")}
 MEASURE = re.compile(r"MEAS/POINT,F\(([^()]*)\),(.*)\Z")
 POINT = re.compile(r"PTMEAS/CART,(.*)\Z")
 SENSOR = re.compile(r"S\(([^()]*)\)=SNSDEF/PROBE,INDEX,POL,(.*)\Z")
@@ -99,6 +107,8 @@ class ProgramState:
         self.features = set()
         self.sensors = set()
         self.datums = set()
+        self.devices = {}
+        self.measured = set()
         self.measuring = None
         self.expected = 0
         self.points = 0
@@ -124,6 +134,8 @@ class ProgramState:
             return self.datum(statement)
         if keyword in ("SNSLCT", "GOTO"):
             return self.move(keyword, statement)
+        if keyword in ("DID", "OPEN", "OUTPUT", "CLOSE"):
+            return self.output(keyword, statement)
         if keyword == "MEAS":
             return self.measure(statement)
         if keyword == "PTMEAS":
@@ -143,6 +155,7 @@ class ProgramState:
                 return ["ENDMES without MEAS"]
             errors = [] if self.points == self.expected else [
                 f"MEAS of F({self.measuring}) announced {self.expected} points, got {self.points}"]
+            self.measured.add(self.measuring)
             self.measuring = None
             return errors
         if keyword == "ENDFIL":
@@ -183,6 +196,31 @@ class ProgramState:
         if not self.units or self.features or self.measuring:
             errors.append("a datum statement belongs after UNITS and before the first FEAT")
         self.datums.add(label)
+        return errors
+
+    def output(self, keyword, statement):
+        """DID(label)=DEVICE/STOR,'name', OPEN/DID(label),FDATA,DMIS,OUTPUT (both before the
+        first FEAT), OUTPUT/FA(label) of a measured feature to the open device, CLOSE/DID(label)."""
+        pattern = OUTPUTS[keyword]
+        match = pattern.match(statement)
+        if match is None:
+            return [f"malformed {keyword}: {statement!r}"]
+        label = match.group(1)
+        errors = ["statement inside MEAS"] if self.measuring else []
+        if keyword in ("DID", "OPEN") and (not self.units or self.features):
+            errors.append(f"{keyword} belongs after UNITS and before the first FEAT")
+        if keyword == "DID":
+            self.devices[label] = False
+        elif keyword == "OPEN":
+            errors += [] if label in self.devices else [f"OPEN of DID({label}) before its DEVICE"]
+            self.devices[label] = True
+        elif keyword == "OUTPUT":
+            errors += [] if label in self.measured else [f"OUTPUT of FA({label}) before it was measured"]
+            errors += [] if any(self.devices.values()) else ["OUTPUT with no output device open"]
+        elif not self.devices.get(label):
+            errors.append(f"CLOSE of DID({label}), which is not open")
+        else:
+            self.devices[label] = False
         return errors
 
     def move(self, keyword, statement):
