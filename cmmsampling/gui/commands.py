@@ -243,6 +243,55 @@ class InspectMeasured(GuardedCommand):
         report_inspection(inspection)
 
 
+class MeasureOnCMM(GuardedCommand):
+    """*Measure on CMM...*: measure the selected probe points (or part plan) on a CMM over I++
+    DME, then inspect what it measured."""
+
+    NAME = "CMMSampling_Measure"
+    TITLE = Qt.QT_TRANSLATE_NOOP("CMMSampling_Measure", "Measure on CMM")
+    MENU = Qt.QT_TRANSLATE_NOOP("CMMSampling_Measure", "Measure on CMM...")
+    ICON = "MeasureCMM.svg"
+    TIP = Qt.QT_TRANSLATE_NOOP(
+        "CMMSampling_Measure",
+        "Measure the selected probe points (or part plan) on a CMM through its I++ DME server: along the "
+        "collision-free path where the points were planned with a probe; the contact points go to a file, "
+        "which Inspect measured points then judges")
+
+    def reason(self):
+        """Why the command cannot act now, or None."""
+        return one_source_reason("to measure", "select the one to measure")
+
+    def act(self):
+        from ..cmm.client import MeasurementStopped, hand_over
+        from .measure_dialog import ask_measurement, measurement_call, run_with_progress
+
+        [points] = selected_export_sources()
+        arguments = ask_measurement(points)
+        if arguments is None:
+            return
+        status = FreeCADGui.getMainWindow().statusBar()
+        try:
+            run = run_with_progress(points, arguments)
+        except MeasurementStopped as exc:
+            status.showMessage(f"Measurement stopped: {str(exc).splitlines()[0]}", 20000)
+            warn(self.TITLE, str(exc))
+            return
+        except Exception as exc:
+            status.showMessage(f"Not measured: {str(exc).splitlines()[0] if str(exc) else type(exc).__name__}", 20000)
+            warn(self.TITLE, str(exc))
+            return
+        hand_over(points, run, **arguments)
+        FreeCADGui.doCommand("import cmmsampling")
+        FreeCADGui.doCommand(measurement_call(points, arguments))
+        FreeCAD.Console.PrintMessage(f"cmmsampling: {run}\n")
+        status.showMessage(str(run), 20000)
+        if run.labels and not run.cancelled:
+            from ..document import settings
+
+            settings.save({"InspectFile": run.path})
+            FreeCADGui.runCommand(InspectMeasured.NAME)
+
+
 class CompareStrategies(FaceCommand):
     """*Compare strategies...*: open the comparison panel for the one selected face."""
 
@@ -393,7 +442,7 @@ class OpenComparisonReport(GuardedCommand):
             open_report(path, f"Compare strategies: {os.path.basename(os.path.dirname(path))}")
 
 
-COMMANDS = (SampleFace, ExportProbePoints, Reevaluate, CompareStrategies, PlanPart, InspectMeasured)
+COMMANDS = (SampleFace, ExportProbePoints, Reevaluate, CompareStrategies, PlanPart, MeasureOnCMM, InspectMeasured)
 MENU_ONLY = (OpenComparisonReport,)
 
 

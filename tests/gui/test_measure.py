@@ -1,0 +1,108 @@
+"""*Measure on CMM...* in the GUI: the probe points measured over I++ DME on the simulated server
+(127.0.0.1) behind a progress dialog, the echoed call that replays it without moving the machine
+again, and the Inspect dialog it ends in, with the measured file; Cancel keeps the points
+measured and ends the session."""
+import os
+
+import FreeCAD
+import FreeCADGui
+import numpy as np
+import pytest
+
+import cmmsampling
+from cmmsampling import document
+from cmmsampling.document.object_types import is_measured_points
+from cmmsampling.gui import commands, inspect_dialog, measure_dialog
+
+from PySide import QtGui
+
+from .helpers import dock_text, handle_dialog, main_window, process_events, wait_until
+
+MISPLACED = {"rz": 0.5, "x": 0.8}
+
+
+@pytest.fixture
+def points(doc):
+    result = cmmsampling.sample(doc.Body.Shape.Faces[0], 16, "halton", occ_check=False)
+    return document.add_to_document(result, doc, source=(doc.Body, "Face1")).Group[0]
+
+
+def measure_with(points, choose, after=None, timeout_s=30):
+    """Select points, run Measure on CMM, answer its dialog with choose(dialog) and, where it ends
+    in the Inspect dialog, that one with after(dialog)."""
+    FreeCADGui.Selection.clearSelection()
+    FreeCADGui.Selection.addSelection(points)
+
+    def measure():
+        handle_dialog(measure_dialog.MeasureDialog, lambda: FreeCADGui.runCommand(commands.MeasureOnCMM.NAME),
+                      choose, timeout_s)
+
+    if after is None:
+        return measure()
+    return handle_dialog(inspect_dialog.InspectDialog, measure, after, timeout_s)
+
+
+def test_measure_on_cmm_measures_echoes_and_ends_in_the_inspection(points, tmp_path, artifacts):
+    doc = points.Document
+    out = str(tmp_path / "measured.csv")
+    seen = {}
+    with cmmsampling.SimulatedCMM.measuring(points, form_error=0.01, misplacement=MISPLACED, seed=3) as cmm:
+        port = int(cmm.address.rsplit(":", 1)[1])
+
+        def choose(dialog):
+            seen["title"] = dialog.windowTitle()
+            dialog.host.setText("127.0.0.1")
+            dialog.port.setValue(port)
+            dialog.path.setText(out)
+            dialog.grab().save(os.path.join(artifacts, "measure_dialog.png"))
+            dialog.accept()
+
+        def inspect_it(dialog):
+            seen["inspect file"] = dialog.path.text()
+            dialog.tolerance.setValue(0.05)
+            dialog.accept()
+
+        console = dock_text("Python console")
+        measure_with(points, choose, inspect_it)
+        served = cmm.connections
+    assert seen["title"] == f"Measure on CMM: {points.Label}" and seen["inspect file"] == out
+    assert served == 1, "the echoed call did not measure a second time"
+    echoed = dock_text("Python console")[len(console):]
+    assert (f"run = cmmsampling.measure(App.getDocument({doc.Name!r}).getObject({points.Name!r}), "
+            f"'127.0.0.1:{port}', {out!r})") in echoed
+    assert f"inspection = cmmsampling.inspect(App.getDocument({doc.Name!r}).getObject({points.Name!r}), {out!r}, " \
+           "tolerance=0.05)" in echoed
+    assert wait_until(lambda: "Measured 16 of 16 points over I++ DME at 127.0.0.1:" in dock_text("Report view"), 2)
+    [measured] = [o for o in doc.Objects if is_measured_points(o)]
+    assert measured.Verdict == "PASS" and len(measured.Labels) == 16
+    assert measured.Profile.Value <= 0.02 + 1e-5, "a 0.01 mm form error at most"
+    FreeCADGui.SendMsgToActiveView("ViewFit")
+    process_events(0.3)
+    FreeCADGui.ActiveDocument.ActiveView.saveImage(os.path.join(artifacts, "measured_live.png"), 1000, 750, "White")
+
+
+def test_cancel_keeps_the_points_measured_and_asks_nothing_more(points, tmp_path, artifacts):
+    out, seen = str(tmp_path / "measured.csv"), []
+    with cmmsampling.SimulatedCMM.measuring(points, move_s=0.1) as cmm:
+        port = int(cmm.address.rsplit(":", 1)[1])
+
+        def choose(dialog):
+            dialog.port.setValue(port)
+            dialog.path.setText(out)
+            dialog.accept()
+
+        def cancel(progress):
+            wait_until(lambda: sum("PtMeas(" in c for c in cmm.commands) >= 3, 10)
+            seen.append((progress.windowTitle(), progress.labelText()))
+            progress.grab().save(os.path.join(artifacts, "measure_progress.png"))
+            progress.cancel()
+
+        handle_dialog(QtGui.QProgressDialog, lambda: measure_with(points, choose), cancel, 30)
+        received = list(cmm.commands)
+    assert received[-2].endswith("ClearAllErrors()") and received[-1].endswith("EndSession()"), received[-6:]
+    back = cmmsampling.read_points(out)
+    assert seen[0][0] == "Measure on CMM" and seen[0][1].startswith(f"Measuring {points.Label} on 127.0.0.1:")
+    assert 2 <= len(back) <= 4 and back.labels == [f"P{k}" for k in range(1, len(back) + 1)]
+    assert "Not measured (cancelled)" in main_window().statusBar().currentMessage()
+    assert not [o for o in points.Document.Objects if is_measured_points(o)], "a cancelled run is not inspected"
+    assert np.isfinite(back.points).all()
