@@ -4,7 +4,6 @@ again, and the Inspect dialog it ends in, with the measured file; Cancel keeps t
 measured and ends the session."""
 import os
 
-import FreeCAD
 import FreeCADGui
 import numpy as np
 import pytest
