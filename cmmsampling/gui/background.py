@@ -2,6 +2,7 @@
 cancel, any one call (:class:`BackgroundCall`, the time estimates), and the
 :class:`BackgroundTask` base that other long jobs (the comparison) share."""
 import threading
+import time
 import traceback
 
 from ..strategies.sampling import sample
@@ -88,3 +89,31 @@ class BackgroundSampling(BackgroundTask):
 
     def _work(self):
         self.result = sample(self.face, progress=self._progress, **self.arguments)
+
+
+def behind_progress(job, title, name, label, poll_s=0.05):
+    """Run a BackgroundTask whose ``cancel()`` takes no argument behind a window-modal progress
+    dialog (object name ``name``, window title ``title``) with Cancel, its text ``label()`` as
+    the job goes; returns whether the user pressed Cancel, once the job has ended."""
+    import FreeCADGui
+    from PySide import QtCore, QtGui
+
+    dialog = QtGui.QProgressDialog(label(), "Cancel", 0, 0, FreeCADGui.getMainWindow())
+    dialog.setObjectName(name)
+    dialog.setWindowTitle(title)
+    dialog.setWindowModality(QtCore.Qt.WindowModal)
+    dialog.setMinimumDuration(0)
+    dialog.show()
+    job.start()
+    try:
+        while job.running:
+            QtGui.QApplication.processEvents()
+            if dialog.wasCanceled():
+                job.cancel()
+            dialog.setLabelText(label())
+            time.sleep(poll_s)
+        QtGui.QApplication.processEvents()
+        return dialog.wasCanceled()
+    finally:
+        dialog.close()
+        dialog.deleteLater()

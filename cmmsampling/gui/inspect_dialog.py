@@ -7,7 +7,6 @@ one read, else beside the document.
 """
 import math
 import os
-import time
 
 import FreeCAD
 import FreeCADGui
@@ -17,7 +16,7 @@ from ..document import settings
 from ..inspection.align import ALIGNMENTS, DEGREES_OF_FREEDOM
 from ..inspection.judge import InspectionCancelled, inspect, verdict_text
 from . import icon
-from .background import BackgroundTask
+from .background import BackgroundTask, behind_progress
 from .qt_compat import run_modal
 
 ALIGNMENT_TEXTS = {
@@ -34,8 +33,6 @@ DEFAULTS = {"InspectFile": "", "InspectAlignment": "min_max", "InspectTolerance"
             "InspectZoneOffset": 0.0}
 MEASURED_FILTERS = ("Measured points (*.dmi *.dmis *.dmo *.dms *.csv *.xyz *.txt *.qif);;All files (*)")
 MAX_TOLERANCE_MM = 100.0
-# How often the progress dialog looks at the background inspection, s.
-POLL_S = 0.05
 
 
 class InspectDialog(QtGui.QDialog):
@@ -229,33 +226,15 @@ def run_with_progress(points, arguments):
     """Inspect the points' measurement in the background behind a progress dialog with Cancel:
     the Inspection, None when the user cancelled (nothing judged), or the run's exception raised
     here."""
-    planned = points.Proxy.planned(points)
-    run = BackgroundInspection(planned, arguments)
-    dialog = QtGui.QProgressDialog(f"Inspecting the measured points of {points.Label}...", "Cancel", 0, 0,
-                                   FreeCADGui.getMainWindow())
-    dialog.setObjectName("InspectionProgress")
-    dialog.setWindowTitle("Inspect measured points")
-    dialog.setWindowModality(QtCore.Qt.WindowModal)
-    dialog.setMinimumDuration(0)
-    dialog.show()
-    run.start()
-    try:
-        while run.running:
-            QtGui.QApplication.processEvents()
-            if dialog.wasCanceled():
-                run.cancel()
-            dialog.setLabelText(f"Inspecting the measured points of {points.Label}: {run.message}"
-                                + (f", step {run.steps}" if run.steps else "") + "...")
-            time.sleep(POLL_S)
-        QtGui.QApplication.processEvents()
-        if dialog.wasCanceled() or isinstance(run.error, InspectionCancelled):
-            return None
-        if run.error is not None:
-            raise run.error
-        return run.inspection
-    finally:
-        dialog.close()
-        dialog.deleteLater()
+    run = BackgroundInspection(points.Proxy.planned(points), arguments)
+    cancelled = behind_progress(run, "Inspect measured points", "InspectionProgress", lambda: (
+        f"Inspecting the measured points of {points.Label}: {run.message}"
+        + (f", step {run.steps}" if run.steps else "") + "..."))
+    if cancelled or isinstance(run.error, InspectionCancelled):
+        return None
+    if run.error is not None:
+        raise run.error
+    return run.inspection
 
 
 def show_busy(points):

@@ -7,20 +7,18 @@ the file it wrote.
 The values persist in the workbench's parameter group.
 """
 import os
-import time
 
 import FreeCADGui
-from PySide import QtCore, QtGui
+from PySide import QtGui
 
 from ..cmm.client import DEFAULT_PORT, measure
 from ..document import settings
 from ..formats.exporting import along_moves, as_point_set
 from . import icon
-from .background import BackgroundTask
+from .background import BackgroundTask, behind_progress
 from .qt_compat import run_modal
 
 DEFAULTS = {"MeasureHost": "127.0.0.1", "MeasurePort": DEFAULT_PORT, "MeasureTool": ""}
-POLL_S = 0.05
 
 
 class MeasureDialog(QtGui.QDialog):
@@ -133,24 +131,8 @@ def run_with_progress(points, arguments):
     """Measure the points in the background behind a progress dialog with Cancel: the
     MeasuredRun (``cancelled`` where the user stopped it), or the run's exception raised here."""
     job = BackgroundMeasurement(planned_points(points), arguments)
-    dialog = QtGui.QProgressDialog(f"Measuring {points.Label} on {arguments['server']}...", "Cancel", 0, 0,
-                                   FreeCADGui.getMainWindow())
-    dialog.setObjectName("MeasureProgress")
-    dialog.setWindowTitle("Measure on CMM")
-    dialog.setWindowModality(QtCore.Qt.WindowModal)
-    dialog.setMinimumDuration(0)
-    dialog.show()
-    job.start()
-    try:
-        while job.running:
-            QtGui.QApplication.processEvents()
-            if dialog.wasCanceled():
-                job.cancel()
-            dialog.setLabelText(f"Measuring {points.Label} on {arguments['server']}: {job.message}...")
-            time.sleep(POLL_S)
-        if job.error is not None:
-            raise job.error
-        return job.run
-    finally:
-        dialog.close()
-        dialog.deleteLater()
+    behind_progress(job, "Measure on CMM", "MeasureProgress",
+                    lambda: f"Measuring {points.Label} on {arguments['server']}: {job.message}...")
+    if job.error is not None:
+        raise job.error
+    return job.run

@@ -8,7 +8,7 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 import pytest
-from support.faces import FreeCAD, Part
+from support.faces import FreeCAD, walled_part
 from support.paths import ROOT
 
 import cmmsampling
@@ -46,9 +46,7 @@ def result(reference):
 @pytest.fixture(scope="module")
 def walled():
     """A base with a wall, its two upward faces planned with a probe (a collision-free path)."""
-    part = Part.makeBox(60, 40, 10).fuse(Part.makeBox(10, 40, 60, FreeCAD.Vector(0, 0, 10))).removeSplitter()
-    upward = [k for k, face in enumerate(part.Faces, start=1)
-              if face.normalAt(*face.Surface.parameter(face.CenterOfMass)).z > 0.5]
+    part, upward = walled_part()
     plan = cmmsampling.plan(part, tolerance=0.5, strategy="uniform_parametric", faces=upward, probe=Probe(),
                             processes=1, grid=20, n_max=60)
     return part, plan

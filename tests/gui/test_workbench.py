@@ -39,10 +39,11 @@ def test_workbench_has_its_toolbar_menu_and_icons(workbench):
     toolbar = main_window().findChild(QtGui.QToolBar, "CMM Sampling")
     assert [a.text() for a in toolbar.actions()] == [
         "Sample face...", "Export probe points...", "Re-evaluate", "Compare strategies...", "Plan part...",
-        "Inspect measured points..."]
+        "Measure on CMM...", "Inspect measured points..."]
     menus = [a.text() for a in main_window().menuBar().actions()]
     assert "CMM Sampling" in menus
-    for name in (SAMPLE, EXPORT, REEVALUATE, "CMMSampling_Compare", "CMMSampling_PlanPart", "CMMSampling_Inspect"):
+    for name in (SAMPLE, EXPORT, REEVALUATE, "CMMSampling_Compare", "CMMSampling_PlanPart", "CMMSampling_Measure",
+                 "CMMSampling_Inspect"):
         assert os.path.isfile(FreeCADGui.Command.get(name).getInfo()["pixmap"])
     assert "cmmsampling.document" in FreeCAD.getExportType("dmi")
 

@@ -169,3 +169,12 @@ def sample_faces():
         "sphere_converted": Part.makeSphere(10).Faces[0],
         "box_face_reversed": [f for f in box.Faces if f.Orientation == "Reversed"][0],
     }
+
+
+def walled_part():
+    """A 60 x 40 x 10 mm base with a wall 10 mm thick and 50 mm high over x = 0..10, and the
+    numbers (from 1) of its two upward faces: (Part.Shape, [k, k])."""
+    part = Part.makeBox(60, 40, 10).fuse(Part.makeBox(10, 40, 60, FreeCAD.Vector(0, 0, 10))).removeSplitter()
+    upward = [k for k, face in enumerate(part.Faces, start=1)
+              if face.normalAt(*face.Surface.parameter(face.CenterOfMass)).z > 0.5]
+    return part, upward
