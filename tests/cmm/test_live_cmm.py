@@ -115,15 +115,18 @@ def test_cancel_between_points_ends_the_session_without_an_abort(result, tmp_pat
 
 def test_an_ipp_error_is_named_and_the_points_before_it_are_kept(result, tmp_path):
     far = VirtualPart.of(result, misplacement={"z": 30.0})
-    with SimulatedCMM(far, homed=True) as cmm:
+    with SimulatedCMM(far) as cmm:
         with pytest.raises(MeasurementStopped, match=r"I\+\+ error 1006 \(severity 2\): Surface not found") as caught:
-            measure(result, cmm.address, tmp_path / "p.csv")
+            measure(result, cmm.address, tmp_path / "p.csv", log=tmp_path / "error.log")
     run = caught.value.run
     assert run.labels == [] and run.missing == result.labels and run.commands[-1].endswith("EndSession()")
-    assert "ClearAllErrors()" in run.commands[-2]
+    assert "ClearAllErrors()" in run.commands[-2] and not (tmp_path / "p.csv").exists()
+    nist_passes(run.commands, tmp_path, tmp_path / "error.log")
     with SimulatedCMM(VirtualPart.of(result)) as cmm:
-        with pytest.raises(MeasurementStopped, match="the CMM has no tool 'Star'; it lists Probe1"):
+        with pytest.raises(MeasurementStopped, match="the CMM has no tool 'Star'; it lists Probe1") as caught:
             measure(result, cmm.address, tmp_path / "q.csv", tool="Star")
+    assert caught.value.run.commands[-1].endswith("EndSession()")
+    nist_passes(caught.value.run.commands, tmp_path)
 
 
 def serve_then_drop(commands_before_drop, answers=True):
