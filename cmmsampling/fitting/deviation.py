@@ -47,13 +47,15 @@ class EvaluationGrid:
         self.uv = length_raster(model, self.size)
 
 
-def deviation_objective(model, space, grid, on_face=None):
+def deviation_objective(model, space, grid, on_face=None, reached=None):
     """The DeviationObjective on ``grid``'s nodes of the face.
 
     model: SurfaceModel of the face; space: SubstituteSpace; grid: EvaluationGrid; on_face: uv
-    (..., 2) -> (...) bool, the face's trim test (None: the whole parameter range).
+    (..., 2) -> (...) bool, the face's trim test (None: the whole parameter range); reached: uv
+    (..., 2) -> (...) bool, where a probe reaches the face (None: everywhere), the only nodes
+    that count.
     """
-    return DeviationObjective(model, space, grid, face_nodes(model, grid.size, on_face))
+    return DeviationObjective(model, space, grid, face_nodes(model, grid.size, on_face, reached))
 
 
 class DeviationObjective:
@@ -89,7 +91,8 @@ class DeviationObjective:
         counted = tuple(np.where(nodes.counted, np.nan_to_num(array), 0.0) for array in arrays)
         bu, bv = space.bases(nodes.edge_uv)
         edges = (bu[0], bv[0], nodes.edge_points,
-                 np.concatenate([nodes.edge_normals[:, None, :], nodes.edge_across], axis=1))
+                 np.concatenate([nodes.edge_normals[:, None, :], nodes.edge_across], axis=1)
+                 * nodes.edge_weights[:, None, None])
         self._exact = Expansion((self.grid_u, self.grid_v_t) + counted, edges, np.float64)
         self._single = Expansion((self.grid_u, self.grid_v_t) + counted, edges, np.float32)
         self._screen = NodeScreen(self._exact, single_rounding(nodes))
@@ -520,7 +523,7 @@ class DeviationStats:
     @classmethod
     def from_exact(cls, exact):
         """Statistics of an ExactDeviation (cmmsampling.fitting.exact) at its nodes and peaks."""
-        values = exact.node_signed()
+        values = exact.counted_signed()
         magnitude = np.abs(values)
         nodes = exact.nodes
         grid = exact.grid_signed()

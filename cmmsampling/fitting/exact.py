@@ -92,6 +92,12 @@ class ExactDeviation:
         """(K,) signed deviations at the nodes (the peak nodes left out), mm."""
         return self.signed[:len(self.signed) - len(self.peak_points)]
 
+    def counted_signed(self):
+        """(K',) signed deviations at the nodes that count (the edge nodes out of a probe's reach
+        left out, see FaceNodes.edge_counted), mm."""
+        counted = np.concatenate([np.ones(int(self.nodes.counted.sum()), dtype=bool), self.nodes.edge_weights > 0])
+        return self.node_signed()[counted]
+
     def peak_signed(self):
         """(P,) signed deviations at the peak nodes, mm."""
         return self.signed[len(self.signed) - len(self.peak_points):]
@@ -118,35 +124,54 @@ def node_normals(nodes):
     return np.concatenate([nodes.normals[nodes.counted], nodes.edge_normals])
 
 
-def exact_deviation(space, poles, nodes, face, on_face=None):
+def exact_deviation(space, poles, nodes, face, on_face=None, reached=None):
     """The ExactDeviation of the substitute with ``poles`` (n_u, n_v, 3) mm in ``space``, at the
     nodes and at the peaks searched between them (cmmsampling.fitting.peaks).
 
     nodes: FaceNodes; face: the face's NurbsPatch (bounds, points, normals, derivatives); on_face:
-    uv (..., 2) -> (...) bool, the face's trim test (None: the whole rectangle).
+    uv (..., 2) -> (...) bool, the face's trim test (None: the whole rectangle); reached: uv
+    (..., 2) -> (...) bool, where a probe reaches the face (None: everywhere): the deviation
+    counts there only (the nodes' own ``counted`` and ``edge_counted`` say it for them; the edge
+    nodes and peaks elsewhere get zero, with no gradient).
     """
     surface = FittedSurface(space, poles)
     trimmed = TrimmedSubstitute(surface, nodes, on_face)
     samples = _sample_raster(surface)
-    forward, reverse = forward_side(surface, nodes, samples, trimmed), reverse_side(surface, nodes, face, on_face)
+    weights = np.concatenate([np.ones(int(nodes.counted.sum())), nodes.edge_weights])
+    forward = forward_side(surface, nodes, samples, trimmed).weighted(weights)
+    reverse = reverse_side(surface, nodes, face, on_face).weighted(weights)
+    judged = on_face if reached is None else _both(on_face, reached)
     fallback = node_normals(nodes)
     raster = _sample_raster(surface, SETTLE_SAMPLES)
 
+    def counted(h, sides):
+        if reached is None:
+            return sides
+        counts = reached(h).astype(float)
+        return sides[0].weighted(counts), sides[1].weighted(counts)
+
     def settled(h, origin, start):
-        return _settled_sides(trimmed, face, h, start, raster, fallback[origin])
+        return counted(h, _settled_sides(trimmed, face, h, start, raster, fallback[origin]))
 
     def sides_at(h, origin, start):
-        return _sides_at(trimmed, face, h, start, fallback[origin], samples)
+        return counted(h, _sides_at(trimmed, face, h, start, fallback[origin], samples))
 
     forward, reverse = _settle_largest(node_parameters(nodes), forward, reverse, settled)
     sizes = np.maximum(np.abs(forward.values), np.abs(reverse.values))
-    fine = _fine_starts(stretched_places(nodes, surface, on_face), settled, sides_at)
-    peaks = peak_search(nodes, sizes, forward.at, sides_at, on_face, fine)
+    fine = _fine_starts(stretched_places(nodes, surface, judged), settled, sides_at)
+    peaks = peak_search(nodes, sizes, forward.at, sides_at, judged, fine)
     ahead, back = (settled(peaks.uv, peaks.origin, peaks.forward.at) if len(peaks.uv)
                    else (peaks.forward, peaks.reverse))
     between = np.concatenate([fine.places.uv, peaks.uv])
     return ExactDeviation(np.asarray(poles, dtype=float), nodes, forward.joined(fine.forward).joined(ahead),
                           reverse.joined(fine.reverse).joined(back), face.points(between))
+
+
+def _both(first, second):
+    """uv (..., 2) -> (...) bool: True where both tests are (first None: the second alone)."""
+    if first is None:
+        return second
+    return lambda uv: first(uv) & second(uv)
 
 
 def _fine_starts(places, settled, sides_at):

@@ -52,7 +52,8 @@ class FaceNodes:
     unused); loops: list of (start, stop) index ranges of edge_uv, one closed polygon each;
     edge_runs: (E, 2) int, the [start, stop) index range of the run each edge node is in: samples
     of one edge span's curve on the surface at equal parameter steps; spacing: mm, the largest raster
-    cell diagonal.
+    cell diagonal; edge_counted: (E,) bool, the edge nodes whose deviation counts (None: all; the
+    others lie where a probe cannot reach the face and stay for the edges' geometry only).
     """
 
     uv: np.ndarray
@@ -66,11 +67,19 @@ class FaceNodes:
     loops: list
     edge_runs: np.ndarray
     spacing: float
+    edge_counted: np.ndarray = None
 
     @property
     def size(self):
         """(g_u, g_v) of the raster."""
         return self.counted.shape
+
+    @property
+    def edge_weights(self):
+        """(E,) 1.0 at the edge nodes whose deviation counts, 0.0 at the others."""
+        if self.edge_counted is None:
+            return np.ones(len(self.edge_uv))
+        return self.edge_counted.astype(float)
 
     def all_points(self):
         """The counted raster nodes then the edge nodes: (K, 3) mm."""
@@ -88,13 +97,15 @@ class FaceNodes:
         return edge_pieces(self)
 
 
-def face_nodes(model, size=DEFAULT_GRID, on_face=None):
+def face_nodes(model, size=DEFAULT_GRID, on_face=None, reached=None):
     """The FaceNodes of a face.
 
     model: SurfaceModel (its ``edge_spans`` and ``span_samples`` give the edges) or, for
     tests, anything with ``bounds``, ``points``, ``normals``, ``edge_spans`` and
     ``span_samples``; size: int or (g_u, g_v); on_face:
-    uv (..., 2) -> (...) bool, the face's trim test (None: the whole parameter rectangle).
+    uv (..., 2) -> (...) bool, the face's trim test (None: the whole parameter rectangle);
+    reached: uv (..., 2) -> (...) bool, where a probe reaches the face (None: everywhere): the
+    raster and edge nodes elsewhere do not count.
     """
     size = grid_size(size)
     uv = length_raster(model, size)
@@ -102,6 +113,8 @@ def face_nodes(model, size=DEFAULT_GRID, on_face=None):
     counted = np.isfinite(points).all(-1) & np.isfinite(normals).all(-1)
     if on_face is not None:
         counted &= on_face(uv)
+    if reached is not None:
+        counted &= reached(uv)
     spacing = _largest_cell_diagonal(points)
     step = max(spacing / EDGE_NODES_PER_STEP, 1e-9 * max(spacing, 1.0))
     wires = [edges for edges in edge_node_uv(model, step, uv) if edges]
@@ -112,8 +125,9 @@ def face_nodes(model, size=DEFAULT_GRID, on_face=None):
     across = edge_directions(edge_points, edge_normals, list(zip(bounds[:-1], bounds[1:])))
     keep = np.isfinite(edge_points).all(-1)
     edge_normals = np.where(np.isfinite(edge_normals).all(-1, keepdims=True), edge_normals, [0.0, 0.0, 1.0])
+    edge_counted = None if reached is None else reached(edge_uv[keep])
     return FaceNodes(uv, points, normals, counted, edge_uv[keep], edge_points[keep], edge_normals[keep],
-                     across[keep], _ranges(bounds, keep), _runs(sizes, keep), spacing)
+                     across[keep], _ranges(bounds, keep), _runs(sizes, keep), spacing, edge_counted)
 
 
 def edge_node_uv(model, step, raster):

@@ -31,6 +31,12 @@ class Side:
         """Write other's entries into this Side's entries ``index`` (in place)."""
         self.values[index], self.at[index], self.directions[index] = other.values, other.at, other.directions
 
+    def weighted(self, weights):
+        """This Side with values and directions times ``weights`` (K,): 0 makes an entry count
+        for nothing (no deviation, no gradient), 1 keeps it."""
+        weights = np.asarray(weights, dtype=float)
+        return Side(self.values * weights, self.at, self.directions * weights[:, None])
+
     def joined(self, other):
         """One Side of this Side's entries then other's."""
         return Side(np.concatenate([self.values, other.values]), np.concatenate([self.at, other.at]),

@@ -19,8 +19,12 @@ margin below, is as small as CELLS allows:
   margin from its edges.
 
 Given where a probe reaches the part (``reachable``), the cells it cannot reach are infeasible too:
-asked once per face on a coarser raster of about REACH_CELLS cells, and a cell counts only when
-its coarse cell and their eight neighbours are reached (so a corner far from a centre is judged).
+asked once per face on a coarser raster of about REACH_CELLS cells (at the middle of each coarse
+cell's part on the face), and a cell counts only when its coarse cell and their eight neighbours
+are reached (so a corner far from a centre is judged). Where the probe reaches only part of a
+face, that part is the face's domain for judging too (``judged``): a substitute is fitted to
+points there and says nothing about the surface the probe cannot touch, so its deviation is
+measured over the reached part of the face only (the rest is reported, with its area).
 
 Points outside the feasible cells are moved to the nearest feasible cell centre.
 """
@@ -47,12 +51,14 @@ class FaceDomain:
     feasible cells (the face's area when exact); reach: mm, the largest edge offset that some
     cell keeps by the conservative measure; margin: mm, how much farther from the edges a point
     of the face may lie than that measure says (0 when exact); unreached: (R_u, R_v) bool, the
-    cells that keep the edge offset but a probe cannot reach (None when no probe was asked);
-    unreached_area: mm^2 of those cells.
+    cells on the face that a probe cannot reach (None when no probe was asked); unreached_area:
+    mm^2 of those cells; out_of_reach: (R_u, R_v) bool, the cells in the probe's coarse cells
+    it cannot reach, on the face or not (a point near a trimming loop may lie on the face in a
+    cell the raster has off it).
     """
 
     def __init__(self, bounds, trimmed=False, edge_offset=0.0, on_face=None, feasible=None, area=None,
-                 loops=None, reach=np.inf, margin=0.0, unreached=None, unreached_area=0.0):
+                 loops=None, reach=np.inf, margin=0.0, unreached=None, unreached_area=0.0, out_of_reach=None):
         self.bounds = tuple(float(b) for b in bounds)
         self.trimmed = trimmed
         self.edge_offset = float(edge_offset)
@@ -60,6 +66,7 @@ class FaceDomain:
         self.margin = float(margin)
         self.unreached = unreached
         self.unreached_area = float(unreached_area)
+        self._out_of_reach = out_of_reach
         self.shape = np.array(feasible.shape if feasible is not None else (1, 1))
         self._on_face = on_face
         self._loops = loops if trimmed else None
@@ -128,6 +135,20 @@ class FaceDomain:
         inside[near] = self._crossings.inside(uv[near])
         return inside
 
+    def reached(self, uv):
+        """False where uv: (..., 2) lies in a cell of the face a probe cannot reach, else True
+        (everywhere when no probe was asked): (...,) bool."""
+        uv = np.asarray(uv, dtype=float)
+        if self._out_of_reach is None:
+            return np.ones(uv.shape[:-1], dtype=bool)
+        cells = self._cells(uv)
+        return ~self._out_of_reach[cells[..., 0], cells[..., 1]]
+
+    def judged(self, uv):
+        """True where uv: (..., 2) lies on the face and where a probe reaches it (the part of
+        the face a substitute's deviation is measured over): (...,) bool."""
+        return self.on_face(uv) & self.reached(uv)
+
     def contains(self, uv):
         """True where uv: (..., 2) is a feasible probe position: (...,) bool (on the face by
         :meth:`on_face`, near the loops tested against the loops themselves)."""
@@ -188,15 +209,16 @@ def face_domain(model, edge_offset=0.0, reachable=None):
     clearance = distance - 0.5 * gap - half_diagonals
     feasible = on_face & (clearance >= edge_offset)
     cell_areas = _cell_areas(points)
-    unreached = None
+    unreached = out_of_reach = None
     if reachable is not None:
-        unreached = feasible & ~reachable_cells(model, feasible, reachable)
+        out_of_reach = ~reachable_cells(model, on_face, reachable, centres)
+        unreached = on_face & out_of_reach
         feasible &= ~unreached
     reach = float(clearance[on_face].max(initial=0.0))
     margin = 0.5 * gap + 2.0 * float(half_diagonals[on_face].max(initial=0.0))
     return FaceDomain(model.bounds, trimmed, edge_offset, on_face, feasible,
                       float(cell_areas[feasible].sum()), loops, reach, margin, unreached,
-                      0.0 if unreached is None else float(cell_areas[unreached].sum()))
+                      0.0 if unreached is None else float(cell_areas[unreached].sum()), out_of_reach)
 
 
 def cell_rectangles(bounds, cells):
@@ -220,23 +242,24 @@ def cell_rectangles(bounds, cells):
                             v0 + runs[firsts, 1] * dv, v0 + runs[firsts, 2] * dv])
 
 
-def reachable_cells(model, feasible, reachable):
-    """(R_u, R_v) bool: the cells of the raster ``feasible`` whose coarse cell (about
-    REACH_CELLS in all, each covering whole cells of it) and its eight neighbours a probe reaches
-    at their centres (so that a cell's far corner is judged too); only coarse cells over
-    feasible cells are asked (reachable: see :func:`face_domain`)."""
-    shape = np.array(feasible.shape)
-    factor = max(1, int(np.ceil(np.sqrt(feasible.size / REACH_CELLS))))
+def reachable_cells(model, wanted, reachable, centres):
+    """(R_u, R_v) bool: the cells of the raster whose coarse cell (about REACH_CELLS in all, each
+    covering whole cells of it) and its eight neighbours a probe reaches (so that a cell's far
+    corner is judged too). Only coarse cells over ``wanted`` (R_u, R_v) bool cells are asked,
+    each at the mean parameters of its wanted cells' centres (R_u, R_v, 2) (on the face, where a
+    coarse cell's own centre may lie off it); the others count as reached, so that the face's
+    own edges do not eat into it. reachable: see :func:`face_domain`."""
+    shape = np.array(wanted.shape)
+    factor = max(1, int(np.ceil(np.sqrt(wanted.size / REACH_CELLS))))
     coarse = tuple(-(-shape // factor))
-    cells = np.zeros(coarse, dtype=bool)
-    rows, cols = np.nonzero(feasible)
-    cells[rows // factor, cols // factor] = True
-    u0, u1, v0, v1 = model.bounds
-    span = np.array([u1 - u0, v1 - v0]) / shape * factor
-    wanted = np.argwhere(cells)
-    centres = np.array([u0, v0]) + (wanted + 0.5) * span
-    centres = np.minimum(centres, [u1, v1])
-    cells[tuple(wanted.T)] = reachable(model.points(centres), model.normals(centres))
+    rows, cols = np.nonzero(wanted)
+    index = np.ravel_multi_index((rows // factor, cols // factor), coarse)
+    count = np.bincount(index, minlength=int(np.prod(coarse)))
+    asked = np.flatnonzero(count)
+    middles = np.column_stack([np.bincount(index, weights=centres[rows, cols, k], minlength=count.size)[asked]
+                               for k in range(2)]) / count[asked, None]
+    cells = np.ones(coarse, dtype=bool)
+    cells.ravel()[asked] = reachable(model.points(middles), model.normals(middles))
     cells = minimum_filter(cells, size=3, mode="nearest")
     return cells[np.arange(shape[0])[:, None] // factor, np.arange(shape[1])[None, :] // factor]
 

@@ -153,6 +153,22 @@ def points_needed(face: Part.Face, tolerance: float, strategy: str = BEST_STRATE
         return answer
 
 
+def why_not_met(result, tolerance):
+    """Why a SamplingResult misses ``tolerance`` (mm), as the rest of a sentence: whether its
+    substitute's space can hold it at all (the local bound about it, mm) and, where the probe
+    cannot reach all of the face, over how much of the face it was judged."""
+    bound = result.bounds()["grid"].lower
+    if bound > tolerance:
+        why = f": not even reshaping its substitute gets below {bound:.4g} mm (the local bound)"
+    else:
+        why = f": its substitute could reach {bound:.4g} mm (the local bound), no point set found does"
+    domain = result.problem.domain if result.problem is not None else None
+    if domain is not None and domain.unreached_area > 0:
+        why += (f"; judged over the {result.problem.model.area - domain.unreached_area:.4g} mm^2 the probe reaches, "
+                f"{domain.unreached_area:.4g} mm^2 out of its reach")
+    return why
+
+
 def check_max_points(n_max, fit_degree=DEFAULT_DEGREE):
     """n_max as int; InputError when it is below the fewest points a search runs (16 for the
     bicubic substitute: its 4 x 4 poles)."""
@@ -252,7 +268,7 @@ class _Search:
         n = min(made, key=lambda k: made[k].deviation.maximum)
         best = made[n]
         reason = (f"no N up to {n_max} meets {self.tolerance:g} mm: the best reached is "
-                  f"{best.deviation.maximum:.4g} mm with {n} points (local bound {best.bounds()['grid'].lower:.4g} mm)")
+                  f"{best.deviation.maximum:.4g} mm with {n} points{why_not_met(best, self.tolerance)}")
         if self.stopped:
             reason = f"stopped before a result met {self.tolerance:g} mm; the best so far is " \
                      f"{best.deviation.maximum:.4g} mm with {n} points"

@@ -46,6 +46,12 @@ class SamplingProblem:
         self._bounds = None
         self._judged = {}
 
+    @property
+    def reached(self):
+        """uv (..., 2) -> (...) bool, where the probe reaches the face, the only part of it a
+        substitute is judged over; None when no probe was asked (the whole face is judged)."""
+        return None if self.domain.unreached is None else self.domain.reached
+
     def spacing_advice(self):
         """How to let more points in, in words that say whether the caller chose the spacing."""
         if self.spacing_by_default:
@@ -73,7 +79,7 @@ class SamplingProblem:
 
     def _reference_objective(self, grid):
         """A DeviationObjective on ``grid``'s nodes of the face."""
-        return deviation_objective(self.model, self.space, grid, self.domain.on_face)
+        return deviation_objective(self.model, self.space, grid, self.domain.on_face, self.reached)
 
     def judge(self, poles, check=False):
         """The exact two-sided deviation (cmmsampling.fitting.exact.ExactDeviation) of the substitute
@@ -85,7 +91,8 @@ class SamplingProblem:
             if np.array_equal(judged_poles, poles):
                 return exact
         objective = self.check_objective if check else self.objective
-        exact = exact_deviation(self.space, poles, objective.nodes, objective.model, self.domain.on_face)
+        exact = exact_deviation(self.space, poles, objective.nodes, objective.model, self.domain.on_face,
+                                self.reached)
         kept.append((poles.copy(), exact))
         del kept[:-JUDGED_KEPT]
         return exact

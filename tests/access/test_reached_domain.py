@@ -1,0 +1,80 @@
+"""A face the probe reaches only in part is judged over that part: a free-form top under a shelf,
+built here with Part. The substitute is fitted to points where the probe reaches; over the surface
+it cannot touch the substitute is free, so its deviation there says nothing (it reached 9 to 89 mm
+when it was counted). The figures are checked with OCC's distances to ``substitute_shape()`` at
+points of the face outside the rectangles the result reports out of reach."""
+import numpy as np
+import pytest
+from support.faces import FreeCAD, Part
+
+import cmmsampling
+from cmmsampling.geometry.occ_distance import distances_to_face
+
+
+@pytest.fixture(scope="module")
+def shelf_part():
+    """A 60 x 40 mm block whose top is a wavy B-spline surface (z about 10 +- 1.5 mm), a 5 mm
+    wall at x = 0..5 and a shelf over x = 0..25 at z = 15..19: under the shelf the probe cannot
+    reach the top. Returns (part, top face)."""
+    surface = Part.BSplineSurface()
+    xs, ys = np.linspace(0, 60, 6), np.linspace(0, 40, 6)
+    poles = [[FreeCAD.Vector(x, y, 10 + 1.5 * np.sin(x / 9) * np.cos(y / 7)) for y in ys] for x in xs]
+    knots = [0.0, 1 / 3, 2 / 3, 1.0]
+    surface.buildFromPolesMultsKnots(poles, [4, 1, 1, 4], [4, 1, 1, 4], knots, knots, False, False, 3, 3)
+    above = Part.Face(surface).extrude(FreeCAD.Vector(0, 0, 30))
+    block = Part.makeBox(60, 40, 30, FreeCAD.Vector(0, 0, -15)).cut(above)
+    wall = Part.makeBox(5, 40, 25, FreeCAD.Vector(0, 0, -10))
+    shelf = Part.makeBox(25, 40, 4, FreeCAD.Vector(0, 0, 15))
+    part = block.fuse(wall).fuse(shelf).Solids[0]
+    top = max((f for f in part.Faces if isinstance(f.Surface, Part.BSplineSurface)), key=lambda f: f.Area)
+    return part, top
+
+
+def outside(rectangles, uv):
+    """(M,) True for the parameters uv (M, 2) outside every rectangle (K, 4) u0, u1, v0, v1."""
+    u, v = uv[:, :1], uv[:, 1:]
+    return ~((u >= rectangles[:, 0]) & (u <= rectangles[:, 1])
+             & (v >= rectangles[:, 2]) & (v <= rectangles[:, 3])).any(1)
+
+
+def reached_face_points(face, rectangles):
+    """Points (M, 3) of the face on a 61 x 41 raster of its parameters, on the face (OCC's
+    isInside) and outside the rectangles out of reach."""
+    u0, u1, v0, v1 = face.ParameterRange
+    uu, vv = np.meshgrid(np.linspace(u0, u1, 61), np.linspace(v0, v1, 41), indexing="ij")
+    uv = np.column_stack([uu.ravel(), vv.ravel()])
+    points = [face.valueAt(float(u), float(v)) for u, v in uv[outside(rectangles, uv)]]
+    return np.array([tuple(p) for p in points if face.isInside(p, 1e-6, True)])
+
+
+@pytest.mark.parametrize("n", [16, 64])
+def test_a_face_the_probe_reaches_in_part_is_judged_where_it_reaches(shelf_part, n):
+    part, top = shelf_part
+    result = cmmsampling.sample(top, n, "uniform_parametric", part=part, grid=30)
+    rectangles = result.access.unreached
+    assert 0.3 * top.Area < result.access.unreached_area < 0.5 * top.Area, "the shelf covers x = 5..25 of 5..60"
+    points = reached_face_points(top, rectangles)
+    assert len(points) > 1000
+    occ = distances_to_face(result.substitute_shape(), points)[0].max()
+    assert result.deviation.maximum < 0.2, "the free surface under the shelf is not counted (it gave 9 to 89 mm)"
+    assert occ <= result.deviation.maximum + 1e-6, "OCC finds no larger deviation where the probe reaches"
+    assert occ >= 0.8 * result.deviation.maximum, "the figure is found there by OCC too"
+    assert result.deviation.occ_maximum == pytest.approx(result.deviation.maximum, rel=1e-3)
+
+
+def test_a_search_with_the_probe_meets_a_tolerance_over_what_it_reaches(shelf_part):
+    part, top = shelf_part
+    needed = cmmsampling.points_needed(top, 0.1, "uniform_parametric", part=part, grid=30, n_max=100)
+    assert needed.met and needed.maximum <= 0.1
+    assert max(tried.maximum for tried in needed.tried) < 1.0, "no N is judged on the free surface"
+    assert needed.result.access.unreached_area > 0.3 * top.Area
+
+
+def test_a_face_that_misses_the_tolerance_says_why_in_one_line(shelf_part):
+    part, top = shelf_part
+    needed = cmmsampling.points_needed(top, 1e-5, "uniform_parametric", part=part, grid=30, n_max=40)
+    assert not needed.met and "\n" not in needed.reason
+    area = needed.result.access.unreached_area
+    assert needed.reason.endswith(f"; judged over the {top.Area - area:.4g} mm^2 the probe reaches, "
+                                  f"{area:.4g} mm^2 out of its reach"), needed.reason
+    assert "(the local bound)" in needed.reason
