@@ -17,6 +17,7 @@ import multiprocessing
 import multiprocessing.context
 import multiprocessing.spawn
 import os
+import queue
 import tempfile
 import threading
 import time
@@ -92,7 +93,7 @@ class WorkersFailed(RuntimeError):
     package); the message says why."""
 
 
-def run_all(function, jobs, processes=None, scheduler=None, progress=None, describe=None):
+def run_all(function, jobs, processes=None, scheduler=None, progress=None, describe=None, during=None):
     """``function(job)`` for every job; returns (outcomes in the jobs' order, notes).
 
     function: a module-level function (picklable); jobs: a list of picklable jobs;
@@ -105,17 +106,20 @@ def run_all(function, jobs, processes=None, scheduler=None, progress=None, descr
     stopped at once (local processes ended; a job in this process or on Dask runs on in its
     thread, told to stop (:func:`stop_asked`, Dask's job cancelled), and its outcome is dropped), and their
     outcomes are None; describe:
-    callable(job, outcome) -> the progress message of a finished job (default: "<job.name> done").
+    callable(job, outcome) -> the progress message of a finished job (default: "<job.name> done");
+    during: callable(index, text) with what a job under way last said of itself (:func:`report`:
+    in this process and on local processes, not on Dask), before each beat's progress.
     notes: sentences on how the jobs ran where that differs from what was asked (fewer processes,
     processes that failed, after which the jobs left ran here).
     """
     total = len(jobs)
     outcomes, notes = [None] * total, []
+    reports = _Reports()
     if scheduler is not None:
         runs = _dask_runs(function, jobs, scheduler)
     else:
         count = process_count(processes, total, notes)
-        runs = _here(function, jobs) if count == 1 else _local_processes(function, jobs, count)
+        runs = _here(function, jobs, reports) if count == 1 else _local_processes(function, jobs, count, reports)
     describe = describe or _message
     done = 0
 
@@ -123,6 +127,9 @@ def run_all(function, jobs, processes=None, scheduler=None, progress=None, descr
         """Keep an outcome and report it (a beat where index is None); True when the caller cancels."""
         nonlocal done
         if index is None:
+            for job, text in reports.drain():
+                if during is not None and outcomes[job] is None:
+                    during(job, text)
             return progress is not None and bool(progress(done, total, None))
         done += 1
         outcomes[index] = outcome
@@ -136,6 +143,7 @@ def run_all(function, jobs, processes=None, scheduler=None, progress=None, descr
         any(record(index, function(jobs[index])) for index in left)
     finally:
         runs.close()
+        reports.close()
     return outcomes, notes
 
 
@@ -154,16 +162,17 @@ def process_count(processes, jobs, notes=None):
     return count
 
 
-def _here(function, jobs):
+def _here(function, jobs, reports):
     """Each job in this process, in order, in a thread of its own: (index, outcome), and
-    (None, None) every BEAT_SECONDS while it runs. Closing the generator early asks the job under
-    way to stop (:func:`stop_asked`) and leaves it to end in its thread."""
+    (None, None) every BEAT_SECONDS while it runs; what a job says of itself (:func:`report`) goes
+    to ``reports`` (a _Reports). Closing the generator early asks the job under way to stop
+    (:func:`stop_asked`) and leaves it to end in its thread."""
     stop = threading.Event()
     try:
         for index, job in enumerate(jobs):
             ended = {}
-            thread = threading.Thread(target=_run_job, args=(function, job, stop, ended), daemon=True,
-                                      name="cmmsampling-job")
+            thread = threading.Thread(target=_run_job, args=(function, job, stop, ended, reports.teller(index)),
+                                      daemon=True, name="cmmsampling-job")
             thread.start()
             thread.join(BEAT_SECONDS)
             while thread.is_alive():
@@ -179,14 +188,89 @@ def _here(function, jobs):
 _STOP = contextvars.ContextVar("cmmsampling_job_stop", default=None)
 
 
-def _run_job(function, job, stop, ended):
+def _run_job(function, job, stop, ended, teller):
     """function(job) into ended["outcome"] (or its exception into ended["error"]), with
-    :func:`stop_asked` answering from ``stop`` (a threading.Event)."""
+    :func:`stop_asked` answering from ``stop`` (a threading.Event) and :func:`report` telling
+    ``teller`` (callable(text))."""
     _STOP.set(stop)
+    _TELL.set(teller)
     try:
         ended["outcome"] = function(job)
     except BaseException as exc:  # handed to the generator, which raises it in the caller's thread
         ended["error"] = exc
+
+
+_TELL = contextvars.ContextVar("cmmsampling_job_report", default=None)
+# In a local process: the queue its jobs' reports go to (set by _start_process).
+_PROCESS_QUEUE = None
+
+
+def report(text):
+    """Say how the job under way in this thread is getting on (e.g. "N = 36 (best so far ...)"):
+    run_all hands the latest text of each job to its ``during`` at the next beat. Does nothing
+    outside a job of run_all or on Dask."""
+    tell = _TELL.get()
+    if tell is not None:
+        tell(text)
+
+
+class _Reports:
+    """The latest text each job under way said of itself (:func:`report`): jobs in this process
+    write them here directly, jobs in local processes through a queue (:meth:`queue`)."""
+
+    def __init__(self):
+        self._latest, self._lock, self._queue = {}, threading.Lock(), None
+
+    def teller(self, index):
+        """callable(text) that keeps ``text`` as job ``index``'s latest."""
+
+        def tell(text):
+            with self._lock:
+                self._latest[index] = text
+
+        return tell
+
+    def queue(self, context):
+        """A queue of the multiprocessing ``context`` for local processes' reports (index, text)."""
+        self._queue = context.Queue()
+        return self._queue
+
+    def drain(self):
+        """[(index, latest text)] said since the last drain, each job once."""
+        while self._queue is not None:
+            try:
+                index, text = self._queue.get_nowait()
+            except (queue.Empty, OSError, ValueError):
+                break
+            self.teller(index)(text)
+        with self._lock:
+            latest, self._latest = self._latest, {}
+        return sorted(latest.items())
+
+    def close(self):
+        """Let go of the queue (its feeder thread ends)."""
+        if self._queue is not None:
+            self._queue.close()
+            self._queue.cancel_join_thread()
+            self._queue = None
+
+
+def _start_process(parent, reports):
+    """A local process's initializer: follow the parent (:func:`follow_parent`) and send its
+    jobs' reports to the queue ``reports``."""
+    global _PROCESS_QUEUE
+    _PROCESS_QUEUE = reports
+    follow_parent(parent)
+
+
+def _in_process(function, index, job):
+    """function(job) in a local process, its :func:`report` texts sent as (index, text)."""
+    queue_ = _PROCESS_QUEUE
+    token = _TELL.set(None if queue_ is None else (lambda text: queue_.put((index, text))))
+    try:
+        return function(job)
+    finally:
+        _TELL.reset(token)
 
 
 def stop_asked():
@@ -197,13 +281,15 @@ def stop_asked():
     return stop is not None and stop.is_set()
 
 
-def _local_processes(function, jobs, count):
+def _local_processes(function, jobs, count, reports):
     """The jobs on ``count`` local processes as they end: (index, outcome); closing the
     generator early stops the processes. WorkersFailed when a process dies (or cannot import
-    the package). Each process ends itself when this one dies (:func:`follow_parent`)."""
-    pool = concurrent.futures.ProcessPoolExecutor(count, mp_context=package_context(), initializer=follow_parent,
-                                                  initargs=(os.getpid(),))
-    futures = {pool.submit(function, job): index for index, job in enumerate(jobs)}
+    the package). Each process ends itself when this one dies (:func:`follow_parent`) and sends
+    what its jobs say of themselves to ``reports`` (a _Reports)."""
+    context = package_context()
+    pool = concurrent.futures.ProcessPoolExecutor(count, mp_context=context, initializer=_start_process,
+                                                  initargs=(os.getpid(), reports.queue(context)))
+    futures = {pool.submit(_in_process, function, index, job): index for index, job in enumerate(jobs)}
     pending = set(futures)
     try:
         while pending:

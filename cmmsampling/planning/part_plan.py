@@ -233,7 +233,9 @@ def plan(shape_or_faces: Part.Shape | list, tolerance: float | None = None, n_to
     distributed.Client; progress: callable(done, total, message) after each face's run (message:
     the face's :attr:`FacePlan.line`, then on a second line the plan's tally, e.g. "12 of 40
     faces, 610 points so far, about 2 min left") and about every second while faces run (the
-    first line then empty, the tally ending "running for 35 s"), returning True to cancel: the
+    first line then empty, the tally ending "running for 35 s" and, for each face under way, the
+    N it runs and the best maximum so far, e.g. "; Face57: N = 36 (best so far 0.1046 mm with 16
+    points)"), returning True to cancel: the
     faces under way stop within a second or two, and the faces done are kept; probe: a
     cmmsampling.Probe whose reach on the part is judged (each face keeps to what it reaches, and
     ``export(plan, order="probe_path")`` writes a collision-free path); part: the shape the probe
@@ -368,7 +370,7 @@ def _solve_face(job):
         planned.edge_offset = arguments["edge_offset"]
         if job.mode == "tolerance":
             answer = points_needed(face, job.tolerance, job.strategy, n_max=job.n_max,
-                                   progress=lambda n, message: face_runs.stop_asked(), **arguments)
+                                   progress=_searching, **arguments)
             planned.tried, planned.met, planned.reason = answer.tried, answer.met, answer.reason
             result = answer.result
         else:
@@ -379,6 +381,14 @@ def _solve_face(job):
         _take(planned, result)
     planned.seconds = time.perf_counter() - started
     return planned
+
+
+def _searching(n, message):
+    """A face's tolerance search's progress in a plan's job: tell the plan the N about to run
+    and the best so far (face_runs.report); True when the plan was cancelled."""
+    if message is not None:
+        face_runs.report(message)
+    return face_runs.stop_asked()
 
 
 def larger_with_more(tried, factor=RISE_FACTOR):
@@ -420,13 +430,15 @@ def _run(jobs, processes, scheduler, progress, kept=()):
     tally = PlanTally(len(kept) + len(jobs), len(kept), sum(face.n for face in kept))
 
     def watched(done, total, message):
-        report = f"{message}\n{tally.line}" if message is not None else f"\n{tally.line}, {tally.elapsed}"
+        report = (f"{message}\n{tally.line}" if message is not None
+                  else f"\n{tally.line}, {tally.elapsed}{tally.working_text}")
         if progress is not None and progress(len(kept) + done, len(kept) + total, report):
             stopped.append(True)
             return True
         return False
 
-    outcomes, notes = face_runs.run_all(solve_face, jobs, processes, scheduler, watched, describe=tally.count)
+    outcomes, notes = face_runs.run_all(solve_face, jobs, processes, scheduler, watched, describe=tally.count,
+                                        during=lambda index, text: tally.working.__setitem__(jobs[index].name, text))
     return outcomes, bool(stopped), notes
 
 
@@ -438,24 +450,35 @@ class PlanTally:
 
     def __init__(self, total, done=0, points=0):
         self.total, self.done, self.points = total, done, points
+        self.working = {}
         self._before = done
-        self._start = time.perf_counter()
+        self._start = self._last = time.perf_counter()
 
     def count(self, job, outcome):
         """Count a finished face (its FacePlan); returns the face's line."""
         self.done += 1
         self.points += outcome.n
+        self.working.pop(job.name, None)
+        self._last = time.perf_counter()
         return outcome.line
 
     @property
+    def working_text(self):
+        """What the faces under way last said, e.g. "; Face57: N = 36 (best so far 0.1046 mm
+        with 16 points)" ('' before any said anything)."""
+        return "".join(f"; {name}: {text}" for name, text in self.working.items())
+
+    @property
     def line(self):
-        """e.g. "12 of 40 faces, 610 points so far, about 2 min left" (from the pace of the faces
-        run so far)."""
+        """e.g. "12 of 40 faces, 610 points so far, about 2 min left": at each face done, the
+        pace of the faces run so far times the faces left, counted down from then (none before
+        a face is done, or once a count-down from a second or more has run out)."""
         text = f"{self.done} of {self.total} faces, {self.points} points so far"
         ran = self.done - self._before
         if ran and self.done < self.total:
-            left = (time.perf_counter() - self._start) / ran * (self.total - self.done)
-            text += f", {time_left_text(left)}"
+            pace = (self._last - self._start) / ran * (self.total - self.done)
+            left = pace - (time.perf_counter() - self._last)
+            text += f", {time_left_text(max(left, 0.0))}" if left >= 1 or pace < 1 else ""
         return text
 
     @property

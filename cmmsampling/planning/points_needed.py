@@ -125,7 +125,8 @@ def points_needed(face: Part.Face, tolerance: float, strategy: str = BEST_STRATE
     ``arguments``: as in :func:`cmmsampling.sample` (e.g. grid, seed, workers, time_limit; part
     and probe: the probe's reach, judged once for all the N tried, and measured with OCC at the
     points of the result returned only);
-    progress: callable(n, message) before each run (message "N = 16") and after each iteration of
+    progress: callable(n, message) before each run (message "N = 16", after the first run with
+    the best so far: "N = 36 (best so far 0.1046 mm with 16 points)") and after each iteration of
     an optimiser's run (message None), returning True to stop the search (the best found so far
     is returned). An optimiser that takes ``stop_at`` (optimal) stops each run once its maximum
     meets the tolerance, unless the arguments give stop_at (None: each run to its end). Returns a
@@ -197,7 +198,7 @@ class _Search:
         """The strategy's result at n (None when refused or stopped)."""
         if n in self.results:
             return self.results[n]
-        if self.stopped or (self.progress is not None and self.progress(n, f"N = {n}")):
+        if self.stopped or (self.progress is not None and self.progress(n, self._trying(n))):
             self.stopped = True
             return None
         start = time.perf_counter()
@@ -210,6 +211,15 @@ class _Search:
         self.tried.append(Tried(n, result.deviation.maximum, seconds=time.perf_counter() - start))
         self.results[n] = result
         return result
+
+    def _trying(self, n):
+        """The progress message before the run at n: "N = 36" and, after a run, the best maximum
+        so far, e.g. "N = 36 (best so far 0.1046 mm with 16 points)"."""
+        made = [t for t in self.tried if not t.refused]
+        if not made:
+            return f"N = {n}"
+        best = min(made, key=lambda t: t.maximum)
+        return f"N = {n} (best so far {best.maximum:.4g} mm with {best.n} points)"
 
     def _during(self, n):
         """sample()'s progress for the run at n: it asks the search's progress (message None)

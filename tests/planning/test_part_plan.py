@@ -176,9 +176,32 @@ def test_the_progress_tallies_faces_points_and_time_left(part, tolerance_plan):
     for done, total, _, tally in faces[:-1]:
         assert re.fullmatch(rf"{done} of {total} faces, \d+ points so far, {LEFT}", tally)
     assert faces[-1][3] == f"4 of 4 faces, {plan.n_total} points so far"
+    working = r"(; Face\d: N = \d+( \(best so far [\d.e+-]+ mm with \d+ points\))?)*"
     for done, total, _, tally in (report for report in reports if not report[2]):
-        assert re.fullmatch(rf"{done} of {total} faces, \d+ points so far(, {LEFT})?, running for {DURATION}", tally)
+        assert re.fullmatch(rf"{done} of {total} faces, \d+ points so far(, {LEFT})?, running for {DURATION}{working}",
+                            tally), tally
     assert plan.n_total == tolerance_plan.n_total
+
+
+@pytest.mark.parametrize("processes", [1, 2])
+def test_the_progress_shows_each_face_under_way_its_n_and_best_so_far(part, processes):
+    """Inside a face: the beats name the N each face under way runs and the best maximum it
+    reached so far, from this process and from local processes alike."""
+    beats = []
+
+    def watch(done, total, message):
+        line, tally = message.split("\n")
+        if not line:
+            beats.append(tally)
+
+    cmmsampling.plan(part, tolerance=1e-6, strategy="pso", iterations=300, population=10, faces=[1, 4], n_max=81,
+                     edge_offset=1.5, processes=processes, progress=watch, **FAST)
+    said = [re.findall(r"; (Face\d): N = (\d+)(?: \(best so far ([\d.e+-]+) mm with (\d+) points\))?", tally)
+            for tally in beats]
+    runs = {(face, int(n)) for tallies in said for face, n, _, _ in tallies}
+    assert len({n for face, n in runs if face == "Face1"}) >= 2, beats
+    best = [(face, int(n), float(value), int(m)) for tallies in said for face, n, value, m in tallies if value]
+    assert best and all(m < n for _, n, _, m in best), "the best so far is of an N run before"
 
 
 @pytest.mark.parametrize("processes", [1, 2])
