@@ -275,6 +275,46 @@ def test_resume_adds_the_whole_plan_when_the_cancelled_one_was_deleted(part_doc,
     assert ", replace=" not in dock_text("Python console").split("resume=plan")[-1]
 
 
+def test_the_status_shows_the_search_moving_inside_a_face_and_the_bar_ends_full(part_doc, monkeypatch, artifacts):
+    """Two faces whose searches run several N (a tolerance none meets, PSO runs of about a second):
+    the face list shows a grey line per face under way with the N it runs and, after its first
+    run, the best so far (replaced by the face's line when it ends); the bar ends full."""
+    shown, bars = [], []
+    show = plan_part.PlanPartTaskPanel.show_progress
+
+    def recorded(panel, run):
+        show(panel, run)
+        listed = panel.form.faceLines
+        shown.append(" | ".join(listed.item(k).text() for k in range(listed.count())))
+        bars.append((panel.form.progress.value(), panel.form.progress.maximum()))
+
+    monkeypatch.setattr(plan_part.PlanPartTaskPanel, "show_progress", recorded)
+    hold = hold_plan_at(monkeypatch, 99)
+    form = open_plan(part_doc, "Face1", "Face4")
+    fill(form, "pso", tolerance=1e-4, grid=20, n_max=81, edge_offset=1.5, processes=2, iterations=3000, population=10)
+    task_button(OK).click()
+    saved = []
+
+    def inside_face_shown():
+        if not FreeCADGui.Control.activeDialog():
+            return True
+        if shown and "best so far" in shown[-1] and not saved:
+            main_window().grab().save(os.path.join(artifacts, "plan_part_inside_a_face.png"))
+            saved.append(shown[-1])
+        return False
+
+    assert wait_until(inside_face_shown, 240), form.status.text()
+    [made] = hold.plans
+    runs = {n for text in shown for n in re.findall(r"Face1: N = (\d+)", text)}
+    print(f"Face1's runs seen in the status: N = {sorted(runs, key=int)}; e.g. {saved}")
+    assert len(runs) >= 2, shown
+    assert any(re.search(r"Face\d: N = \d+ \(best so far [\d.e+-]+ mm with \d+ points\) \.\.\.", text)
+               for text in shown)
+    assert not re.search(r"N = \d+", shown[-1]), "the lines under way give way to the faces' lines"
+    assert bars[-1][0] == bars[-1][1] == 2, bars[-3:]
+    assert len(made.faces) == 2 and all(face.placed for face in made.faces)
+
+
 def test_a_plan_with_a_probe_draws_its_path(part_doc, monkeypatch, artifacts):
     from cmmsampling.access.probe import PROBES
 

@@ -13,7 +13,7 @@ import os
 
 import FreeCAD
 import FreeCADGui
-from PySide import QtGui
+from PySide import QtCore, QtGui
 
 from ...access.probe import PROBES
 from ...document import settings
@@ -36,6 +36,8 @@ NO_LIMIT = {"time_limit": "until it converges"}
 PLAN_OPTION_DEFAULTS = {"time_limit": 10.0}
 # Labels of settings whose one-line help is too long for a label.
 SETTING_LABELS = {"time_limit": "Time limit per run"}
+# The face list's item data that marks a line of a face under way (replaced at each refresh).
+WORKING = QtCore.Qt.UserRole
 SPIN_BOXES = ("tolerance", "points", "n_max", "grid", "processes")
 
 
@@ -95,6 +97,7 @@ class BackgroundPlan(BackgroundTask):
 
     The GUI thread polls ``done``/``total`` (faces), ``lines`` (one per face done, see
     FacePlan.line), ``tally`` (faces done, points so far, time left, renewed about every second),
+    ``working`` (a line per face under way: the N its search runs and the best so far),
     ``running``, then ``plan`` or ``error``/``details``; ``cancel()`` makes the progress callback
     stop the plan within a second or two (the faces under way are stopped, the faces done
     kept). The thread never touches the document.
@@ -108,6 +111,7 @@ class BackgroundPlan(BackgroundTask):
         self.total = 0
         self.lines = []
         self.tally = ""
+        self.working = []
         self.plan = None
 
     def cancel(self):
@@ -115,7 +119,8 @@ class BackgroundPlan(BackgroundTask):
         self._stop.set()
 
     def _progress(self, done, total, message):
-        line, _, self.tally = message.partition("\n")
+        line, _, tally = message.partition("\n")
+        self.tally, *self.working = tally.split("; ")
         self.done, self.total = done, total
         if line:
             self.lines.append(line)
@@ -265,23 +270,33 @@ class PlanPartTaskPanel(BackgroundRunPanel):
                                f"{values['processes']} processes...")
 
     def show_progress(self, run):
-        """A line per face done, the count of faces done, and the plan's tally in the status line
-        (faces done, points so far, time left) until Cancel is pressed."""
-        self.show_lines(run.lines)
+        """A line per face done, then one per face under way (in grey: the N its search runs and
+        the best so far), the count of faces done, and the plan's tally in the status line (faces
+        done, points so far, time left) until Cancel is pressed."""
+        self.show_lines(run.lines, [] if run.cancelled else run.working)
         if run.tally and not run.cancelled:
             self.show_status(run.tally)
         if run.total:
             self.form.progress.setRange(0, run.total)
             self.form.progress.setValue(run.done)
 
-    def show_lines(self, lines):
-        """Add the face lines not shown yet to the list, the newest in view."""
-        shown = self.form.faceLines.count()
+    def show_lines(self, lines, working=()):
+        """Add the face lines not shown yet to the list, then the lines of the faces under way
+        (``working``, in grey, renewed at each call), the newest in view."""
+        listed = self.form.faceLines
+        while listed.count() > len(lines) or (listed.count() and listed.item(listed.count() - 1).data(WORKING)):
+            listed.takeItem(listed.count() - 1)
+        shown = listed.count()
         for line in lines[shown:]:
-            item = QtGui.QListWidgetItem(line, self.form.faceLines)
+            item = QtGui.QListWidgetItem(line, listed)
             item.setToolTip(line)
-        if len(lines) > shown:
-            self.form.faceLines.scrollToBottom()
+        for line in working:
+            item = QtGui.QListWidgetItem(f"{line} ...", listed)
+            item.setData(WORKING, True)
+            item.setForeground(QtGui.QBrush(QtGui.QColor("gray")))
+            item.setToolTip(f"Under way: {line}")
+        if len(lines) > shown or working:
+            listed.scrollToBottom()
 
     def finish(self, run):
         """Add the plan to the document (echoed); close when complete, say what was kept when
