@@ -87,6 +87,7 @@ def test_panel_defaults_are_the_papers_and_options_follow_the_strategy(doc):
     assert not form.optimalGroup.isEnabled()
     fill(form, "optimal")
     assert form.optimalGroup.isEnabled() and not form.psoGroup.isEnabled() and form.time_limit.isEnabled()
+    assert form.time_limit.value() == 60.0, "the optimal run is bounded by default: its time is known before"
     assert form.start.currentData() == "best"
     assert [form.start.itemData(i) for i in range(form.start.count())] == ["best"] + [
         name for name, s in cmmsampling.STRATEGIES.items() if not s.optimiser]
@@ -320,6 +321,35 @@ def test_optimal_strategy_through_the_panel(doc):
     echo = ("strategy='optimal', seed=0, fit_degree=3, grid=30, edge_offset=1.5, min_spacing=None, "
             "start='best', time_limit=None, max_evaluations=40)")
     assert echo in dock_text("Python console")
+
+
+def test_an_optimal_run_shows_its_time_left_and_its_bar_fills(doc, monkeypatch, artifacts):
+    """The optimal strategy's steps are not known in advance: the bar fills with the time spent of
+    its time limit, the status gives the best so far and the time left, and the bar ends full."""
+    seen = []
+    show = sample_face.SampleFaceTaskPanel.show_progress
+
+    def recorded(panel, run):
+        show(panel, run)
+        seen.append((panel.form.progress.value(), panel.form.progress.maximum(), panel.form.status.text()))
+
+    monkeypatch.setattr(sample_face.SampleFaceTaskPanel, "show_progress", recorded)
+    finish = sample_face.SampleFaceTaskPanel.finish
+    ended = []
+    monkeypatch.setattr(sample_face.SampleFaceTaskPanel, "finish",
+                        lambda panel, run: ended.append((panel.form.progress.value(), panel.form.progress.maximum()))
+                        or finish(panel, run))
+    form = open_panel(doc)
+    fill(form, "optimal", n=49, grid=30, time_limit=4.0)
+    task_button(OK).click()
+    assert wait_until(lambda: len(seen) > 5 and seen[-1][2].endswith(" left"), 30), seen[-1:]
+    form.grab().save(os.path.join(artifacts, "optimal_time_left.png"))
+    assert wait_until(lambda: not FreeCADGui.Control.activeDialog(), 60), seen[-1:]
+    values = [value for value, maximum, _ in seen if maximum == sample_face.TIME_STEPS]
+    assert values == sorted(values) and len(set(values)) >= 3, values
+    assert re.search(r"Surrogate evaluation \d+: best \d+\.\d{4} mm, (about \d s|under a second) left",
+                     " ".join(text for _, _, text in seen))
+    assert ended and ended[0][0] == ended[0][1], "the bar ends full"
 
 
 def test_probe_constraints_keep_points_off_the_edges_and_apart(doc):

@@ -38,16 +38,21 @@ COMMON = ("n", "seed", "edge_offset", "min_spacing", "probe", "fit_degree", "aut
 OPTION_GROUPS = ("psoGroup", "optimalGroup")
 # Panel stand-ins for options whose default None means automatic or unlimited.
 STAND_INS = {"time_limit": 0.0, "max_evaluations": 0}
+# The panel's own defaults where the core's would leave a run unbounded: the optimal strategy
+# stops after this many seconds (its best so far kept), so the run's time is known before it starts.
+PANEL_OPTION_DEFAULTS = {"time_limit": 60.0}
+# Steps of the progress bar of a run bounded by its time limit only.
+TIME_STEPS = 1000
 AUTOMATIC = ("edge_offset", "min_spacing")
 
 
 def option_defaults():
     """The panel's defaults of the strategies' options by name: the core's (the paper's values
-    for the swarm), with STAND_INS where the core's default is None."""
+    for the swarm), with PANEL_OPTION_DEFAULTS or else STAND_INS where the core's default is None."""
     defaults = {}
     for strategy in sampling.STRATEGIES.values():
         for name, value in strategy.options.items():
-            value = STAND_INS.get(name) if value is None else value
+            value = PANEL_OPTION_DEFAULTS.get(name, STAND_INS.get(name)) if value is None else value
             if isinstance(value, (bool, int, float, str)):
                 defaults[name] = value
     return defaults
@@ -102,6 +107,8 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
         self._set_up("sample_face.ui", "SampleFace.svg", source)
         self.source_text = echo.source_text(source)
         self.step = ""
+        self.time_limit = None
+        self.started_at = 0.0
         self.picker = None
         self.run_face = None
         self.run_arguments = None
@@ -388,6 +395,10 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
         self.run_face = face
         self.paced_from = None
         self.step, total = progress_total(arguments)
+        self.time_limit = arguments.get("time_limit") if not total else None
+        self.started_at = time.perf_counter()
+        if self.time_limit:
+            total = TIME_STEPS
         self.run_arguments = arguments
         self.begin(BackgroundSampling(face.copy(), detached(arguments)), total,
                    f"Running {sampling.STRATEGIES[arguments['strategy']].label} with N = {arguments['n']}...")
@@ -396,12 +407,27 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
         """The swarm's or descent's step, its best maximum deviation so far and the time left at
         the pace of the steps so far (the estimate before the run cannot know how busy the
         machine will be)."""
+        if self.time_limit:
+            self.show_timed_progress(run)
+            return
         total = self.form.progress.maximum()
         if total:
             self.form.progress.setValue(min(run.iteration, total))
         if run.iteration:
             self.show_status(f"{self.step} {run.iteration}{f' of {total}' if total else ''}: "
                              f"best maximum deviation {run.best_mm:.4f} mm{self.time_left(run.iteration, total)}")
+
+    def show_timed_progress(self, run):
+        """A run bounded by its time limit only (the optimal strategy's steps are not known in
+        advance): the bar fills with the time spent of the limit, the status gives the step, the
+        best so far and the time left of the limit (then that the result is being judged)."""
+        spent = time.perf_counter() - self.started_at
+        self.form.progress.setValue(min(TIME_STEPS, round(TIME_STEPS * spent / self.time_limit)))
+        if not run.iteration:
+            return
+        left = self.time_limit - spent
+        when = f", {estimates.time_left_text(left)}" if left > 0 else "; judging it"
+        self.show_status(f"{self.step} {run.iteration}: best {run.best_mm:.4f} mm{when}")
 
     def time_left(self, iteration, total):
         """', about 40 s left' from the pace since the first step seen, or '' (no total, or too
