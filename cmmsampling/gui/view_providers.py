@@ -8,6 +8,7 @@ import numpy as np
 from pivy import coin
 from scipy.interpolate import RegularGridInterpolator
 from scipy.ndimage import distance_transform_edt
+from scipy.spatial import cKDTree
 from PySide import QtCore, QtGui
 
 from ..fitting.deviation import NUMERICAL_ZERO_MM, mm_text
@@ -26,6 +27,9 @@ DEFAULT_APPROACH_MM = 5.0
 TESSELLATION_FRACTION = 2e-3
 # Labels closer than this fraction of the face's diagonal to a shown one are left out.
 LABEL_SPACING_FRACTION = 0.04
+# Labels of a part plan's points closer than this fraction of the part's diagonal to a label shown
+# for any face of the plan are left out (about a label's width when the view fits the part).
+PLAN_LABEL_FRACTION = 0.08
 POINT_VIEW_PROPERTIES = ("ShowLabels", "ShowApproach", "ApproachLength", "LabelSize")
 # The shade over the regions a probe cannot reach: colour, transparency, and the quads across the
 # face's parameter range that follow its curvature.
@@ -132,8 +136,8 @@ class ViewProviderProbePoints(Annotated):
         if vobj.ShowApproach:
             self.annotation.addChild(approach_lines(points, tips))
         if vobj.ShowLabels:
-            shown = spaced(tips, label_spacing(vobj))
-            self.shown_labels = shown
+            shown = shown_labels(obj, tips, label_spacing(vobj))
+            self.shown_labels, self.shown_tips = shown, tips[shown]
             labels = [obj.Labels[i] for i in shown]
             self.annotation.addChild(point_labels(labels, tips[shown], vobj.LabelSize))
         rectangles = np.reshape(getattr(obj, "Unreached", []), (-1, 4))
@@ -443,6 +447,36 @@ def approach_lines(points, tips):
     for child in (colour, style, coords, lines):
         node.addChild(child)
     return node
+
+
+def redraw_plan_points(group):
+    """Draw the labels and approach lines of a part plan's probe points again, now that they are
+    in its group (their labels are then spaced over the whole part: :func:`shown_labels`)."""
+    for points in plan_probe_points(group):
+        view = points.ViewObject
+        if view is not None and hasattr(view.Proxy, "redraw"):
+            view.Proxy.redraw(view)
+
+
+def shown_labels(points, tips, spacing):
+    """Indices of the labels of probe points ``points`` drawn at ``tips`` (N, 3) mm: a greedy
+    subset at least ``spacing`` mm apart (0: all). Points of a part plan, whose faces' labels
+    crowd the view of the whole part, keep at least PLAN_LABEL_FRACTION of the part's diagonal
+    apart, also from the labels drawn for the plan's other faces."""
+    plan = next((parent for parent in points.InListRecursive if is_part_plan(parent)), None)
+    if plan is None or spacing <= 0:
+        return spaced(tips, spacing)
+    part = points.Source[0] if points.Source is not None else None
+    if part is not None and hasattr(part, "Shape") and part.Shape.BoundBox.isValid():
+        spacing = max(spacing, PLAN_LABEL_FRACTION * part.Shape.BoundBox.DiagonalLength)
+    drawn = [getattr(other.ViewObject.Proxy, "shown_tips", None) for other in plan_probe_points(plan)
+             if other is not points and other.ViewObject is not None]
+    drawn = [tips_ for tips_ in drawn if tips_ is not None and len(tips_)]
+    free = np.arange(len(tips))
+    if drawn:
+        gaps = cKDTree(np.concatenate(drawn)).query(tips, distance_upper_bound=spacing)[0]
+        free = np.flatnonzero(gaps >= spacing)
+    return free[spaced(tips[free], spacing)]
 
 
 def label_spacing(vobj):

@@ -9,6 +9,7 @@ import re
 import time
 
 import FreeCAD
+import numpy as np
 import FreeCADGui
 import Part
 import pytest
@@ -195,6 +196,11 @@ def test_a_plan_runs_face_by_face_and_adds_a_group_per_face(part_doc, monkeypatc
         "the plan's faces share one colour scale"
     assert {view_providers.legend_title(surface) for surface in surfaces} == {f"Deviation, {group.Label}"}
     assert sum(surface.ViewObject.ShowLegend for surface in surfaces) == 1
+    tips = np.concatenate([points.ViewObject.Proxy.shown_tips for points in probe_points_in([group])])
+    gaps = np.linalg.norm(tips[:, None] - tips[None], axis=-1) + np.diag(np.full(len(tips), np.inf))
+    spacing = view_providers.PLAN_LABEL_FRACTION * part_doc.Part.Shape.BoundBox.DiagonalLength
+    print(f"{len(tips)} of the plan's {made.n_total} labels shown, at least {gaps.min():.1f} mm apart")
+    assert gaps.min() >= spacing, "the labels of all the plan's faces keep apart"
     FreeCADGui.Selection.clearSelection()
     FreeCADGui.SendMsgToActiveView("ViewFit")
     process_events(0.5)
