@@ -35,6 +35,11 @@ run_one() {
                                     "$PY" benchmarks/part_plan.py ventilator --strategies optimal ;;
     part-plan-points) page part-plan-points "Points a tolerance needs: optimal against uniform parametric" \
                         "$PY" benchmarks/part_plan.py points ;;
+    probe-plans) page probe-plans "Probe plans against their targets, as ratios to the prototype (quiet machine)" \
+                   "$PY" benchmarks/probe_plans.py ;;
+    probe-plans-busy) page probe-plans-busy \
+                        "Probe plans against their targets, as ratios to the prototype, beside a CPU-bound process" \
+                        "$PY" benchmarks/probe_plans.py --beside-busy ;;
     probe-path) page probe-path "A part plan with the probe's reach and path (Ventilator.stp)" "$PY" benchmarks/probe_path.py ;;
     long-runs) page long-runs "Big and long runs: time and memory" "$PY" benchmarks/long_runs.py ;;
     paper-run-spread) page paper-run-spread "The paper's run over 12 seeds: the spread a test must allow" \
@@ -48,7 +53,7 @@ run_one() {
     *) echo "unknown benchmark '$1'; choose from: $ALL" >&2; return 2 ;;
   esac
 }
-ALL="inspection-speed inspection-speed-busy speed part-plan-speed part-plan-ventilator part-plan-ventilator-optimal speed-busy long-runs memory near-optimal probe-path part-plan-points delivered-deviation paper-run-spread"
+ALL="inspection-speed inspection-speed-busy speed part-plan-speed part-plan-ventilator part-plan-ventilator-optimal speed-busy long-runs memory near-optimal probe-plans probe-plans-busy probe-path part-plan-points delivered-deviation paper-run-spread"
 status=0
 for name in ${@:-$ALL}; do
   echo "== $name"

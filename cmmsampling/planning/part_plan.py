@@ -31,16 +31,19 @@ from ..geometry.validation import InputError, InputTypeError, check_int, check_p
 from ..strategies import handover
 from ..strategies.estimates import duration_text, time_left_text
 from ..strategies.face_setup import reused
-from ..strategies.sampling import BEST_STRATEGY, check_arguments, evaluate, probe_edge_offset, sample
+from ..strategies.sampling import BEST_STRATEGY, STRATEGIES, check_arguments, evaluate, probe_edge_offset, sample
 from ..strategies.threads import blas_threads
 from . import face_runs
-from .points_needed import DEFAULT_MAX_POINTS, check_max_points, fewest_points, points_needed, step_counts
+from .points_needed import (DEFAULT_MAX_POINTS, RISE_FACTOR, check_max_points, fewest_points, points_needed,
+                            step_counts)
 
 Part = import_part()
 FIT_KEYS = ("fit_degree", "fit_poles", "smoothing", "grid")
 CANCELLED_REASON = "cancelled before this face was planned"
-# How much larger a larger N's maximum must be than a smaller N's for a plan's note on it.
-RISE_FACTOR = 1.2
+# Seconds a plan's runs of a strategy with a time limit (optimal) take at most unless told
+# otherwise: a face's search runs it at several N, so the plan's time stays bounded (the Plan part
+# panel starts with the same).
+PLAN_TIME_LIMIT_S = 10.0
 
 
 @dataclass
@@ -228,7 +231,8 @@ def plan(shape_or_faces: Part.Shape | list, tolerance: float | None = None, n_to
     tolerance: mm, each face gets the fewest N that meets it (up to n_max); n_total: the points
     of the whole part, spent to make the worst face's deviation smallest; exactly one of the two.
     strategy and ``arguments``: as in :func:`cmmsampling.sample` (workers default 1: the faces
-    are the parallel part); edge_offset: mm, None for each face's probe edge offset;
+    are the parallel part; time_limit, for the optimal strategy, default PLAN_TIME_LIMIT_S = 10 s
+    per run, None: each run until it converges); edge_offset: mm, None for each face's probe edge offset;
     processes: local processes (None: all cores); scheduler: a Dask scheduler address or
     distributed.Client; progress: callable(done, total, message) after each face's run (message:
     the face's :attr:`FacePlan.line`, then on a second line the plan's tally, e.g. "12 of 40
@@ -259,6 +263,8 @@ def plan(shape_or_faces: Part.Shape | list, tolerance: float | None = None, n_to
         arguments["edge_offset"] = check_real("edge_offset", edge_offset, 0.0)
     degree = arguments.get("fit_degree", DEFAULT_DEGREE)
     check_arguments(strategy, arguments, fewest_points(check_pair("fit_degree", degree, 1)))
+    if "time_limit" in STRATEGIES[strategy].options:
+        arguments.setdefault("time_limit", PLAN_TIME_LIMIT_S)
     start = time.perf_counter()
     if tolerance is not None:
         tolerance = check_real("tolerance", tolerance, above=0.0)

@@ -11,9 +11,11 @@ the tolerance while its local bound (the least maximum deviation reshaping that 
 reach, :meth:`SamplingResult.bounds`) is within it is tried once more at the most points of the
 step before the search moves on; the bound is worked out only there, and only as far as telling
 it from the tolerance needs (:meth:`SamplingResult.bound_exceeds`). The result of each N tried
-is kept in ``tried``. A strategy that can stop once its result is good enough (optimal's
-``stop_at``) is told the tolerance: a run that meets it needs to go no further to answer, and one
-that does not runs its whole course, so the search takes the same steps.
+is kept in ``tried``. The galloping search gives up when two runs in a row each gave a maximum
+above RISE_FACTOR times the best before them (the answer says so). A strategy that can stop once
+its result is good enough (optimal's ``stop_at``) is told the tolerance: a run that meets it
+needs to go no further to answer, and one that does not runs its whole course, so the search
+takes the same steps.
 """
 from __future__ import annotations
 
@@ -32,6 +34,10 @@ from ..strategies.sampling import (BEST_STRATEGY, MIN_POINTS, STRATEGIES, Part, 
                                    probe_edge_offset, sample)
 
 DEFAULT_MAX_POINTS = 400
+# A search stops climbing when two runs in a row each gave a maximum this many times larger than
+# the best before them: more points do not help there (a reached region too thin to hold them,
+# a surface the substitute cannot follow), and each larger N costs more.
+RISE_FACTOR = 1.2
 
 
 def step_counts(n_max, degree=DEFAULT_DEGREE):
@@ -187,7 +193,7 @@ class _Search:
     def __init__(self, face, strategy, tolerance, progress, arguments):
         self.face, self.strategy, self.tolerance = face, strategy, tolerance
         self.progress, self.arguments = progress, arguments
-        self.results, self.tried, self.stopped = {}, [], False
+        self.results, self.tried, self.stopped, self.gave_up = {}, [], False, False
 
     def meets(self, n):
         """True when the result at n meets the tolerance (runs it once)."""
@@ -250,12 +256,15 @@ class _Search:
         """Run the steps the search needs to find the first that meets the tolerance: galloping
         up, then bisecting down (steps: non-empty, as :func:`step_counts`). A face that refuses
         the fewest points (too narrow for the edge offset, no usable area) refuses more too: the
-        search ends there."""
+        search ends there; so it does where more points kept giving larger maxima (:meth:`rising`)."""
         low, index, stride = -1, 0, 1
         while not self.stopped:
             if self.step_meets(steps[index]):
                 break
             if index == len(steps) - 1 or self.tried[0].refused:
+                return
+            if self.rising():
+                self.gave_up = True
                 return
             low, index, stride = index, min(index + stride, len(steps) - 1), stride * 2
         while index - low > 1 and not self.stopped:
@@ -264,6 +273,12 @@ class _Search:
                 index = middle
             else:
                 low = middle
+
+    def rising(self):
+        """True when each of the last two runs made gave a maximum above RISE_FACTOR times the
+        best of the runs before it."""
+        made = [t.maximum for t in self.tried if not t.refused]
+        return len(made) >= 3 and all(made[k] > RISE_FACTOR * min(made[:k]) for k in (-2, -1))
 
     def answer(self, n_max):
         """The PointsNeeded of the runs made."""
@@ -277,7 +292,9 @@ class _Search:
             return PointsNeeded(0, None, False, self.tolerance, self.tried, f"no N could be placed: {why}")
         n = min(made, key=lambda k: made[k].deviation.maximum)
         best = made[n]
-        reason = (f"no N up to {n_max} meets {self.tolerance:g} mm: the best reached is "
+        upto = (f"stopped at N = {max(made)}, two larger N in a row having given larger maxima"
+                if self.gave_up else f"up to {n_max}")
+        reason = (f"no N {upto} meets {self.tolerance:g} mm: the best reached is "
                   f"{best.deviation.maximum:.4g} mm with {n} points{why_not_met(best, self.tolerance)}")
         if self.stopped:
             reason = f"stopped before a result met {self.tolerance:g} mm; the best so far is " \

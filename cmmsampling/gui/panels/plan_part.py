@@ -19,7 +19,7 @@ from ...access.probe import PROBES
 from ...document import settings
 from ...document.object_types import in_document
 from ...fitting.deviation import DEFAULT_GRID
-from ...planning.part_plan import CANCELLED_REASON, plan
+from ...planning.part_plan import CANCELLED_REASON, PLAN_TIME_LIMIT_S, plan
 from ...planning.points_needed import DEFAULT_MAX_POINTS
 from ...strategies.sampling import BEST_STRATEGY, STRATEGIES
 from ..background import BackgroundTask
@@ -33,7 +33,7 @@ POINTS_PER_FACE = 46
 # What the panel shows for an option whose default None means "no limit".
 NO_LIMIT = {"time_limit": "until it converges"}
 # The panel's own default of those options: a plan runs the strategy several times per face.
-PLAN_OPTION_DEFAULTS = {"time_limit": 10.0}
+PLAN_OPTION_DEFAULTS = {"time_limit": PLAN_TIME_LIMIT_S}
 # Labels of settings whose one-line help is too long for a label.
 SETTING_LABELS = {"time_limit": "Time limit per run"}
 # The face list's item data that marks a line of a face under way (replaced at each refresh).
