@@ -87,6 +87,7 @@ def plans(yardstick):
     print(ratio_line(f"Four faces {FOUR_FACES}, 0.05 mm, optimal, 2 mm probe, 2 processes", seconds, yardstick,
                      20, "the prototype's 300 iterations"))
     print(made.table())
+    slowest(made)
     reached = [face for face in made.placed if face.unreached_area < face.area]
     print(f"tolerance met on {sum(bool(face.met) for face in reached)} of the {len(reached)} faces the probe reaches")
     seconds, made = probe_plan(shape, TWENTY_FACES)
@@ -98,6 +99,14 @@ def plans(yardstick):
     if yardstick is not None:
         print(f"  = {seconds / yardstick:.3g} x the prototype's 300 iterations")
     print(made.table())
+    slowest(made)
+
+
+def slowest(made, count=5):
+    """The ``count`` slowest faces of a plan with the N their search tried, a line."""
+    faces = sorted(made.faces, key=lambda face: -face.seconds)[:count]
+    print("slowest faces: " + "; ".join(
+        f"{face.name} {face.seconds:.1f} s (N tried {', '.join(str(t.n) for t in face.tried)})" for face in faces))
 
 
 def paper_run(yardstick):

@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..formats.exporting import as_point_set, export
+from ..formats.exporting import along_moves, as_point_set, export
 from ..formats.files import check_writable
 from ..formats.pointfiles import resolve_format
 from ..formats.pointset import PointSet
@@ -40,11 +40,13 @@ REPORT = "OnPtMeasReport(X(),Y(),Z(),IJK(),ER())"
 
 class MeasurementStopped(RuntimeError):
     """The run stopped before its last point: an I++ error, a lost connection or a time-out
-    (the message says which). ``run``: the MeasuredRun of the points measured before, written."""
+    (the message says which). ``run``: the MeasuredRun of the points measured before, written;
+    ``connection_lost``: the connection is gone (nothing more can be sent on it)."""
 
-    def __init__(self, message, run=None):
+    def __init__(self, message, run=None, connection_lost=False):
         super().__init__(message)
         self.run = run
+        self.connection_lost = connection_lost
 
 
 class _Cancelled(Exception):
@@ -114,7 +116,7 @@ class Connection:
         try:
             self.sock.sendall((line + LINE_END).encode("ascii"))
         except OSError as exc:
-            raise MeasurementStopped(f"the connection to the CMM was lost sending {line!r} ({exc})") from None
+            raise MeasurementStopped(f"the connection to the CMM was lost sending {line!r} ({exc})", connection_lost=True) from None
 
     def answers(self, tag, method, cancellable=True):
         """Read lines until tag's '%'; its '#' answers."""
@@ -151,9 +153,9 @@ class Connection:
             except socket.timeout:
                 continue
             except OSError as exc:
-                raise MeasurementStopped(f"the connection to the CMM was lost during {what} ({exc})") from None
+                raise MeasurementStopped(f"the connection to the CMM was lost during {what} ({exc})", connection_lost=True) from None
             if not chunk:
-                raise MeasurementStopped(f"the CMM closed the connection during {what}")
+                raise MeasurementStopped(f"the CMM closed the connection during {what}", connection_lost=True)
             self.buffer += chunk
         line, self.buffer = self.buffer.split(b"\n", 1)
         text = line.rstrip(b"\r").decode("ascii", "replace")
@@ -237,10 +239,10 @@ def measure(source, server: str, out: str | os.PathLike = "measured.csv", tool: 
         connection.abort()
     except MeasurementStopped as exc:
         stopped = exc
-        if "lost" not in str(exc) and "closed" not in str(exc):
+        if not exc.connection_lost:
             connection.abort()
     finally:
-        if stopped is None or ("lost" not in str(stopped) and "closed" not in str(stopped)):
+        if stopped is None or not stopped.connection_lost:
             connection.quietly("EndSession()")
         sock.close()
         if log is not None:
@@ -272,10 +274,8 @@ def _planned_path(source):
         moves = probe_moves(source)
     except (InputError, TypeError, AttributeError):
         return planned, None
-    order = np.asarray(moves.order)
-    ordered = PointSet([planned.labels[i] for i in order], planned.points[order], planned.normals[order],
-                       metadata=dict(planned.metadata))
-    return ordered, moves.travel_pairs()
+    ordered = along_moves(planned, moves)
+    return ordered, ordered.travel
 
 
 def _session(connection, planned, moves, tool, progress, touched, state):

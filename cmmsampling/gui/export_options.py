@@ -16,7 +16,7 @@ from PySide import QtCore, QtGui
 from ..document import settings
 from ..document.export_defaults import frame_objects, frame_setting, own_probe, starting_options
 from . import icon
-from .qt_compat import run_modal
+from .qt_compat import asked
 
 GLOBAL = "Global (document)"
 # The orders offered for probe points in the document; "probe_path" only for points sampled with
@@ -152,11 +152,5 @@ def ask_export_options(points):
     their console text."""
     groups = [o.Label for o in points.InList if o.isDerivedFrom("App::DocumentObjectGroup")]
     dialog = ExportOptionsDialog(points, (groups or [points.Label])[0], FreeCADGui.getMainWindow())
-    try:
-        if run_modal(dialog) != QtGui.QDialog.Accepted:
-            return None
-        settings.save(dialog.stored())
-        return dialog.options()
-    finally:
-        dialog.deleteLater()
+    return asked(dialog, ExportOptionsDialog.options)
 

@@ -17,7 +17,7 @@ from ..inspection.align import ALIGNMENTS, DEGREES_OF_FREEDOM
 from ..inspection.judge import InspectionCancelled, inspect, verdict_text
 from . import icon
 from .background import BackgroundTask, behind_progress
-from .qt_compat import run_modal
+from .qt_compat import asked
 
 ALIGNMENT_TEXTS = {
     "min_max": ("Minimum zone (min-max, ISO 1101)", "The rigid motion that makes the largest |deviation| "
@@ -148,13 +148,7 @@ def ask_inspection(points):
     folder = os.path.dirname(doc.FileName) if doc.FileName else os.path.expanduser("~")
     groups = [o.Label for o in points.InList if o.isDerivedFrom("App::DocumentObjectGroup")]
     dialog = InspectDialog((groups or [points.Label])[0], folder, FreeCADGui.getMainWindow())
-    try:
-        if run_modal(dialog) != QtGui.QDialog.Accepted:
-            return None
-        settings.save(dialog.stored())
-        return dialog.arguments()
-    finally:
-        dialog.deleteLater()
+    return asked(dialog, InspectDialog.arguments)
 
 
 def inspection_call(points, arguments):

@@ -16,7 +16,7 @@ from ..document import settings
 from ..formats.exporting import along_moves, as_point_set
 from . import icon
 from .background import BackgroundTask, behind_progress
-from .qt_compat import run_modal
+from .qt_compat import asked
 
 DEFAULTS = {"MeasureHost": "127.0.0.1", "MeasurePort": DEFAULT_PORT, "MeasureTool": ""}
 
@@ -76,13 +76,7 @@ def ask_measurement(points):
     folder = os.path.dirname(doc.FileName) if doc.FileName else os.path.expanduser("~")
     dialog = MeasureDialog(points.Label, os.path.join(folder, f"{points.Name}_measured.csv"),
                            FreeCADGui.getMainWindow())
-    try:
-        if run_modal(dialog) != QtGui.QDialog.Accepted:
-            return None
-        settings.save(dialog.stored())
-        return dialog.arguments()
-    finally:
-        dialog.deleteLater()
+    return asked(dialog, MeasureDialog.arguments)
 
 
 def measurement_call(points, arguments):

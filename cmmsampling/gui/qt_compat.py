@@ -23,6 +23,21 @@ def run_modal(dialog):
     return run()
 
 
+def asked(dialog, answer):
+    """Run ``dialog`` modally; when accepted, save its ``stored()`` values for the next use
+    (cmmsampling.document.settings) and return ``answer(dialog)``, else None. The dialog is
+    deleted either way."""
+    from ..document import settings
+
+    try:
+        if run_modal(dialog) != dialog.Accepted:
+            return None
+        settings.save(dialog.stored())
+        return answer(dialog)
+    finally:
+        dialog.deleteLater()
+
+
 def shiboken():
     """The shiboken module of the PySide that FreeCAD uses (shiboken2 or shiboken6)."""
     binding = QtCore.QObject.__module__.split(".")[0]

@@ -292,10 +292,10 @@ class _Search:
             return PointsNeeded(0, None, False, self.tolerance, self.tried, f"no N could be placed: {why}")
         n = min(made, key=lambda k: made[k].deviation.maximum)
         best = made[n]
-        upto = (f"stopped at N = {max(made)}, two larger N in a row having given larger maxima"
-                if self.gave_up else f"up to {n_max}")
-        reason = (f"no N {upto} meets {self.tolerance:g} mm: the best reached is "
-                  f"{best.deviation.maximum:.4g} mm with {n} points{why_not_met(best, self.tolerance)}")
+        tried = (f"no N meets {self.tolerance:g} mm (the search stopped at N = {max(made)}: two larger N in a row "
+                 "gave larger maxima)" if self.gave_up else f"no N up to {n_max} meets {self.tolerance:g} mm")
+        reason = (f"{tried}: the best reached is {best.deviation.maximum:.4g} mm with {n} points"
+                  f"{why_not_met(best, self.tolerance)}")
         if self.stopped:
             reason = f"stopped before a result met {self.tolerance:g} mm; the best so far is " \
                      f"{best.deviation.maximum:.4g} mm with {n} points"

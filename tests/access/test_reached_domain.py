@@ -3,12 +3,16 @@ built here with Part. The substitute is fitted to points where the probe reaches
 it cannot touch the substitute is free, so its deviation there says nothing (it reached 9 to 89 mm
 when it was counted). The figures are checked with OCC's distances to ``substitute_shape()`` at
 points of the face outside the rectangles the result reports out of reach."""
+import os
+
 import numpy as np
 import pytest
-from support.faces import FreeCAD, Part
+from support.faces import TESTDATA, FreeCAD, Part
 
 import cmmsampling
+from cmmsampling.access.reach import Reachability
 from cmmsampling.geometry.occ_distance import distances_to_face
+from cmmsampling.planning.points_needed import RISE_FACTOR
 
 
 @pytest.fixture(scope="module")
@@ -78,3 +82,19 @@ def test_a_face_that_misses_the_tolerance_says_why_in_one_line(shelf_part):
     assert needed.reason.endswith(f"; judged over the {top.Area - area:.4g} mm^2 the probe reaches, "
                                   f"{area:.4g} mm^2 out of its reach"), needed.reason
     assert "(the local bound)" in needed.reason
+
+
+@pytest.mark.skipif(not os.path.isfile(os.path.join(TESTDATA, "Ventilator.stp")),
+                    reason="the shared CAD files are not beside the checkout")
+def test_a_search_stops_climbing_where_more_points_keep_giving_larger_maxima():
+    """Ventilator Face289 (37 mm^2, half of it out of the 2 mm probe's reach): uniform layouts of
+    46 and 96 points give larger maxima than 16; the search stops there (it went on to 352 points,
+    each larger N costing more) and says why."""
+    shape = Part.read(os.path.join(TESTDATA, "Ventilator.stp"))
+    needed = cmmsampling.points_needed(shape.Faces[288], 0.05, "uniform_parametric",
+                                       part=Reachability(shape, cmmsampling.Probe()), grid=30)
+    maxima = [tried.maximum for tried in needed.tried]
+    assert [tried.n for tried in needed.tried] == [16, 46, 96], maxima
+    assert maxima[1] > RISE_FACTOR * maxima[0] and maxima[2] > RISE_FACTOR * min(maxima[:2])
+    assert needed.reason.startswith("no N meets 0.05 mm (the search stopped at N = 96: two larger N in a row gave "
+                                    f"larger maxima): the best reached is {maxima[0]:.4g} mm with 16 points")
