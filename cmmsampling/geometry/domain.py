@@ -21,7 +21,8 @@ margin below, is as small as CELLS allows:
 Given where a probe reaches the part (``reachable``), the cells it cannot reach are infeasible too:
 asked once per face on a coarser raster of about REACH_CELLS cells (at the middle of each coarse
 cell's part on the face), and a cell counts only when its coarse cell and their eight neighbours
-are reached (so a corner far from a centre is judged). Where the probe reaches only part of a
+are reached (so a corner far from a centre is judged; for placing points, a neighbour off the
+face or out of the edge offset counts as unreached: a margin more near the edges). Where the probe reaches only part of a
 face, that part is the face's domain for judging too (``judged``): a substitute is fitted to
 points there and says nothing about the surface the probe cannot touch, so its deviation is
 measured over the reached part of the face only (the rest is reported, with its area).
@@ -211,9 +212,10 @@ def face_domain(model, edge_offset=0.0, reachable=None):
     cell_areas = _cell_areas(points)
     unreached = out_of_reach = None
     if reachable is not None:
-        out_of_reach = ~reachable_cells(model, on_face, reachable, centres)
+        placeable, judged = reachable_cells(model, on_face, feasible, reachable, centres)
+        out_of_reach = ~judged
         unreached = on_face & out_of_reach
-        feasible &= ~unreached
+        feasible &= placeable
     reach = float(clearance[on_face].max(initial=0.0))
     margin = 0.5 * gap + 2.0 * float(half_diagonals[on_face].max(initial=0.0))
     return FaceDomain(model.bounds, trimmed, edge_offset, on_face, feasible,
@@ -242,26 +244,36 @@ def cell_rectangles(bounds, cells):
                             v0 + runs[firsts, 1] * dv, v0 + runs[firsts, 2] * dv])
 
 
-def reachable_cells(model, wanted, reachable, centres):
-    """(R_u, R_v) bool: the cells of the raster whose coarse cell (about REACH_CELLS in all, each
-    covering whole cells of it) and its eight neighbours a probe reaches (so that a cell's far
-    corner is judged too). Only coarse cells over ``wanted`` (R_u, R_v) bool cells are asked,
-    each at the mean parameters of its wanted cells' centres (R_u, R_v, 2) (on the face, where a
-    coarse cell's own centre may lie off it); the others count as reached, so that the face's
-    own edges do not eat into it. reachable: see :func:`face_domain`."""
-    shape = np.array(wanted.shape)
-    factor = max(1, int(np.ceil(np.sqrt(wanted.size / REACH_CELLS))))
+def reachable_cells(model, on_face, feasible, reachable, centres):
+    """Where a probe reaches the raster's cells: (placeable, judged), each (R_u, R_v) bool.
+
+    The coarse cells (about REACH_CELLS in all, each covering whole cells of the raster) over
+    the face (``on_face`` (R_u, R_v) bool) are asked once, each at the mean parameters of its
+    cells' centres (R_u, R_v, 2) on the face (a coarse cell's own centre may lie off it). A cell
+    counts only where its coarse cell and their eight neighbours are reached, so that a cell's far
+    corner is judged too; a neighbour not asked counts as unreached for ``placeable`` (the cells a
+    point may go: near the edges the probe gets that margin more, erring on the side of refusing)
+    and as reached for ``judged`` (the part of the face judged, which the face's own edges should
+    not eat into). feasible: (R_u, R_v) bool, the cells that keep the edge offset; a coarse cell
+    over none of them is not placeable. reachable: see :func:`face_domain`."""
+    shape = np.array(on_face.shape)
+    factor = max(1, int(np.ceil(np.sqrt(on_face.size / REACH_CELLS))))
     coarse = tuple(-(-shape // factor))
-    rows, cols = np.nonzero(wanted)
+    rows, cols = np.nonzero(on_face)
     index = np.ravel_multi_index((rows // factor, cols // factor), coarse)
     count = np.bincount(index, minlength=int(np.prod(coarse)))
     asked = np.flatnonzero(count)
     middles = np.column_stack([np.bincount(index, weights=centres[rows, cols, k], minlength=count.size)[asked]
                                for k in range(2)]) / count[asked, None]
-    cells = np.ones(coarse, dtype=bool)
-    cells.ravel()[asked] = reachable(model.points(middles), model.normals(middles))
-    cells = minimum_filter(cells, size=3, mode="nearest")
-    return cells[np.arange(shape[0])[:, None] // factor, np.arange(shape[1])[None, :] // factor]
+    answers = reachable(model.points(middles), model.normals(middles))
+    over_feasible = np.zeros(coarse, dtype=bool)
+    feasible_rows, feasible_cols = np.nonzero(feasible)
+    over_feasible[feasible_rows // factor, feasible_cols // factor] = True
+    placeable, judged = np.zeros(coarse, dtype=bool), np.ones(coarse, dtype=bool)
+    placeable.ravel()[asked], judged.ravel()[asked] = answers, answers
+    placeable &= over_feasible
+    fine = (np.arange(shape[0])[:, None] // factor, np.arange(shape[1])[None, :] // factor)
+    return tuple(minimum_filter(cells, size=3, mode="nearest")[fine] for cells in (placeable, judged))
 
 
 def raster_shape(model):

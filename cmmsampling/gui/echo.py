@@ -11,7 +11,6 @@ import FreeCADGui
 from ..access.probe import PROBES
 from ..fitting.deviation import mm_text
 from ..strategies import sampling
-from . import view_providers
 
 
 def source_text(source):
@@ -128,6 +127,4 @@ def add_plan(part, run, result, replace=None):
     FreeCADGui.doCommand(f"plan = cmmsampling.plan({call})  # {note}")
     replacing = "" if replace is None else f", replace={doc}.getObject({replace.Name!r})"
     FreeCADGui.doCommand(f"group = cmmsampling.add_plan_to_document(plan, {doc}, {part_expr}{replacing})")
-    group = part.Document.getObject(__main__.group.Name)
-    view_providers.redraw_plan_points(group)
-    return group
+    return part.Document.getObject(__main__.group.Name)

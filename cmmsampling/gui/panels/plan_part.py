@@ -24,6 +24,7 @@ from ...planning.points_needed import DEFAULT_MAX_POINTS
 from ...strategies.sampling import BEST_STRATEGY, STRATEGIES
 from ..background import BackgroundTask
 from ..echo import add_plan
+from ..view_providers import redraw_plan_points
 from .base import BackgroundRunPanel
 from .fields import AUTO, Fields, add_choice, probe_choice, snap_to_auto
 
@@ -318,6 +319,7 @@ class PlanPartTaskPanel(BackgroundRunPanel):
         except Exception as exc:
             self.show_status(f"The plan could not be added to the document: {exc}", error=True)
             return
+        redraw_plan_points(group)
         if not result.cancelled:
             FreeCADGui.Control.closeDialog()
             return
