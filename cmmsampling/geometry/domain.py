@@ -22,7 +22,7 @@ Given where a probe reaches the part (``reachable``), the cells it cannot reach 
 asked once per face on a coarser raster of about REACH_CELLS cells (at the middle of each coarse
 cell's part on the face), and a cell counts only when its coarse cell and their eight neighbours
 are reached (so a corner far from a centre is judged; for placing points, a neighbour off the
-face or out of the edge offset counts as unreached: a margin more near the edges). Where the probe reaches only part of a
+face counts as unreached: a margin more along the face's edges). Where the probe reaches only part of a
 face, that part is the face's domain for judging too (``judged``): a substitute is fitted to
 points there and says nothing about the surface the probe cannot touch, so its deviation is
 measured over the reached part of the face only (the rest is reported, with its area).
@@ -212,7 +212,7 @@ def face_domain(model, edge_offset=0.0, reachable=None):
     cell_areas = _cell_areas(points)
     unreached = out_of_reach = None
     if reachable is not None:
-        placeable, judged = reachable_cells(model, on_face, feasible, reachable, centres)
+        placeable, judged = reachable_cells(model, on_face, reachable, centres)
         out_of_reach = ~judged
         unreached = on_face & out_of_reach
         feasible &= placeable
@@ -244,18 +244,17 @@ def cell_rectangles(bounds, cells):
                             v0 + runs[firsts, 1] * dv, v0 + runs[firsts, 2] * dv])
 
 
-def reachable_cells(model, on_face, feasible, reachable, centres):
+def reachable_cells(model, on_face, reachable, centres):
     """Where a probe reaches the raster's cells: (placeable, judged), each (R_u, R_v) bool.
 
     The coarse cells (about REACH_CELLS in all, each covering whole cells of the raster) over
     the face (``on_face`` (R_u, R_v) bool) are asked once, each at the mean parameters of its
     cells' centres (R_u, R_v, 2) on the face (a coarse cell's own centre may lie off it). A cell
     counts only where its coarse cell and their eight neighbours are reached, so that a cell's far
-    corner is judged too; a neighbour not asked counts as unreached for ``placeable`` (the cells a
-    point may go: near the edges the probe gets that margin more, erring on the side of refusing)
-    and as reached for ``judged`` (the part of the face judged, which the face's own edges should
-    not eat into). feasible: (R_u, R_v) bool, the cells that keep the edge offset; a coarse cell
-    over none of them is not placeable. reachable: see :func:`face_domain`."""
+    corner is judged too; a neighbour off the face counts as unreached for ``placeable`` (the
+    cells a point may go: along the face's edges the probe gets that margin more, erring on the
+    side of refusing) and as reached for ``judged`` (the part of the face judged, which the face's
+    own edges should not eat into). reachable: see :func:`face_domain`."""
     shape = np.array(on_face.shape)
     factor = max(1, int(np.ceil(np.sqrt(on_face.size / REACH_CELLS))))
     coarse = tuple(-(-shape // factor))
@@ -266,12 +265,8 @@ def reachable_cells(model, on_face, feasible, reachable, centres):
     middles = np.column_stack([np.bincount(index, weights=centres[rows, cols, k], minlength=count.size)[asked]
                                for k in range(2)]) / count[asked, None]
     answers = reachable(model.points(middles), model.normals(middles))
-    over_feasible = np.zeros(coarse, dtype=bool)
-    feasible_rows, feasible_cols = np.nonzero(feasible)
-    over_feasible[feasible_rows // factor, feasible_cols // factor] = True
     placeable, judged = np.zeros(coarse, dtype=bool), np.ones(coarse, dtype=bool)
     placeable.ravel()[asked], judged.ravel()[asked] = answers, answers
-    placeable &= over_feasible
     fine = (np.arange(shape[0])[:, None] // factor, np.arange(shape[1])[None, :] // factor)
     return tuple(minimum_filter(cells, size=3, mode="nearest")[fine] for cells in (placeable, judged))
 
