@@ -116,7 +116,8 @@ class Connection:
         try:
             self.sock.sendall((line + LINE_END).encode("ascii"))
         except OSError as exc:
-            raise MeasurementStopped(f"the connection to the CMM was lost sending {line!r} ({exc})", connection_lost=True) from None
+            raise MeasurementStopped(f"the connection to the CMM was lost sending {line!r} ({exc})",
+                                     connection_lost=True) from None
 
     def answers(self, tag, method, cancellable=True):
         """Read lines until tag's '%'; its '#' answers."""
@@ -153,7 +154,8 @@ class Connection:
             except socket.timeout:
                 continue
             except OSError as exc:
-                raise MeasurementStopped(f"the connection to the CMM was lost during {what} ({exc})", connection_lost=True) from None
+                raise MeasurementStopped(f"the connection to the CMM was lost during {what} ({exc})",
+                                         connection_lost=True) from None
             if not chunk:
                 raise MeasurementStopped(f"the CMM closed the connection during {what}", connection_lost=True)
             self.buffer += chunk

@@ -22,10 +22,11 @@ Given where a probe reaches the part (``reachable``), the cells it cannot reach 
 asked once per face on a coarser raster of about REACH_CELLS cells (at the middle of each coarse
 cell's part on the face), and a cell counts only when its coarse cell and their eight neighbours
 are reached (so a corner far from a centre is judged; for placing points, a neighbour off the
-face counts as unreached: a margin more along the face's edges). Where the probe reaches only part of a
-face, that part is the face's domain for judging too (``judged``): a substitute is fitted to
-points there and says nothing about the surface the probe cannot touch, so its deviation is
-measured over the reached part of the face only (the rest is reported, with its area).
+face counts as unreached: a margin more along the face's edges). Where the probe reaches only
+part of a face, that part is the face's domain for judging too (``judged``): a substitute is
+fitted to points there and says nothing about the surface the probe cannot touch, so its
+deviation is measured over the reached part of the face only (the rest is reported, with its
+area).
 
 Points outside the feasible cells are moved to the nearest feasible cell centre.
 """

@@ -13,7 +13,6 @@ import FreeCAD
 import FreeCADGui
 from PySide import QtCore, QtGui
 
-from ..document import settings
 from ..document.export_defaults import frame_objects, frame_setting, own_probe, starting_options
 from . import icon
 from .qt_compat import asked

@@ -8,7 +8,7 @@ names ``QDialog.exec_`` ``exec`` (``exec_`` is deprecated there; PySide2 has onl
 import functools
 import importlib
 
-from PySide import QtCore
+from PySide import QtCore, QtGui
 
 
 def flag_value(flags):
@@ -30,7 +30,7 @@ def asked(dialog, answer):
     from ..document import settings
 
     try:
-        if run_modal(dialog) != dialog.Accepted:
+        if run_modal(dialog) != QtGui.QDialog.Accepted:
             return None
         settings.save(dialog.stored())
         return answer(dialog)
