@@ -95,8 +95,7 @@ class ExactDeviation:
     def counted_signed(self):
         """(K',) signed deviations at the nodes that count (the edge nodes out of a probe's reach
         left out, see FaceNodes.edge_counted), mm."""
-        counted = np.concatenate([np.ones(int(self.nodes.counted.sum()), dtype=bool), self.nodes.edge_weights > 0])
-        return self.node_signed()[counted]
+        return self.node_signed()[self.nodes.node_weights() > 0]
 
     def peak_signed(self):
         """(P,) signed deviations at the peak nodes, mm."""
@@ -137,7 +136,7 @@ def exact_deviation(space, poles, nodes, face, on_face=None, reached=None):
     surface = FittedSurface(space, poles)
     trimmed = TrimmedSubstitute(surface, nodes, on_face)
     samples = _sample_raster(surface)
-    weights = np.concatenate([np.ones(int(nodes.counted.sum())), nodes.edge_weights])
+    weights = nodes.node_weights()
     forward = forward_side(surface, nodes, samples, trimmed).weighted(weights)
     reverse = reverse_side(surface, nodes, face, on_face).weighted(weights)
     judged = on_face if reached is None else _both(on_face, reached)

@@ -81,6 +81,11 @@ class FaceNodes:
             return np.ones(len(self.edge_uv))
         return self.edge_counted.astype(float)
 
+    def node_weights(self):
+        """(K,) 1.0 at the counted raster nodes then at the edge nodes whose deviation counts, 0.0
+        at the other edge nodes: the nodes in the order of :meth:`all_points`."""
+        return np.concatenate([np.ones(int(self.counted.sum())), self.edge_weights])
+
     def all_points(self):
         """The counted raster nodes then the edge nodes: (K, 3) mm."""
         return np.concatenate([self.points[self.counted], self.edge_points])

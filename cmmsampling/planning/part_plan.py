@@ -444,7 +444,7 @@ def _run(jobs, processes, scheduler, progress, kept=()):
         return False
 
     outcomes, notes = face_runs.run_all(solve_face, jobs, processes, scheduler, watched, describe=tally.count,
-                                        during=lambda index, text: tally.working.__setitem__(jobs[index].name, text))
+                                        during=lambda index, text: tally.say(jobs[index].name, text))
     return outcomes, bool(stopped), notes
 
 
@@ -467,6 +467,10 @@ class PlanTally:
         self.working.pop(job.name, None)
         self._last = time.perf_counter()
         return outcome.line
+
+    def say(self, name, text):
+        """Keep what the face ``name`` under way last said of itself (its N and best so far)."""
+        self.working[name] = text
 
     @property
     def working_text(self):
