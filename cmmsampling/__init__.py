@@ -49,6 +49,7 @@ _API = {
     "measured_deviation": "measurement",
     "inspect": "inspection.judge",
     "Inspection": "inspection.judge",
+    "Datum": "inspection.datums",
     "simulate_measurement": "inspection.simulate",
     "measure": "cmm.client",
     "MeasuredRun": "cmm.client",

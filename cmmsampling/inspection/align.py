@@ -72,6 +72,8 @@ NAMED_SHARE = 0.1
 # held motion, shrunk by TRUST_SHRINK where a step does not lower the largest deviation.
 TRUST_SHIFT_MM = 1.0
 TRUST_SHRINK = 0.25
+# A tangent datum's fit weighs a point left out of the material this many times its distance.
+TANGENT_PENALTY = 10.0
 
 
 @dataclass
@@ -291,11 +293,12 @@ def signed_distances(points, feet, normals):
     return np.einsum("ij,ij->i", points - feet, normals)
 
 
-def _model(points, closest, basis):
+def _model(points, closest, basis, pivot=None):
     """The point-to-plane model at points (N, 3) mm: (deviations (N,) mm, Jacobian (N, H) of
-    the deviations by the held motions, basis (6, H), centroid (3,) mm)."""
+    the deviations by the held motions, basis (6, H), the centre (3,) mm the rotations turn
+    about: pivot (3,) mm where given, else the points' centroid)."""
     feet, normals = closest(points)
-    centre = points.mean(axis=0)
+    centre = points.mean(axis=0) if pivot is None else pivot
     jacobian = np.hstack([np.cross(points - centre, normals), normals]) @ basis
     return signed_distances(points, feet, normals), jacobian, centre
 
@@ -310,14 +313,15 @@ def _step_matrix(step, basis, centre):
     return matrix
 
 
-def _least_squares(points, closest, basis, start):
+def _least_squares(points, closest, basis, start, pivot=None):
     """Levenberg-Marquardt on sum d^2 from the motion ``start`` (4, 4) along the held motions
     basis (6, H) (Gauss-Newton steps, damped where a step would not lower the sum), ended where
     the Gauss-Newton step could gain nothing or would move no point by STEP_TOLERANCE_MM (where
     rounding alone decides whether a step lowers the sum), or a converged step is that small:
-    (matrix (4, 4), iterations, capped: MAX_ITERATIONS reached)."""
+    (matrix (4, 4), iterations, capped: MAX_ITERATIONS reached). pivot: (3,) mm, the fixed
+    centre of the basis's rotations (None: the moved points' centroid)."""
     matrix, damping = start, DAMPING[0]
-    deviations, jacobian, centre = _model(transform(matrix, points), closest, basis)
+    deviations, jacobian, centre = _model(transform(matrix, points), closest, basis, pivot)
     cost = float(deviations @ deviations)
     for iteration in range(1, MAX_ITERATIONS + 1):
         normal = jacobian.T @ jacobian
@@ -331,7 +335,7 @@ def _least_squares(points, closest, basis, start):
         step = np.linalg.solve(normal + damping * np.diag(scale), -gradient)
         motion = _step_matrix(step, basis, centre)
         trial = motion @ matrix
-        trial_deviations, trial_jacobian, trial_centre = _model(transform(trial, points), closest, basis)
+        trial_deviations, trial_jacobian, trial_centre = _model(transform(trial, points), closest, basis, pivot)
         trial_cost = float(trial_deviations @ trial_deviations)
         small = _largest_move(motion, moved) < STEP_TOLERANCE_MM
         if trial_cost <= cost:
@@ -351,20 +355,41 @@ def _largest_move(motion, points):
     return float(np.linalg.norm(transform(motion, points) - points, axis=1).max())
 
 
-def _min_max(points, closest, basis, matrix):
+def _min_max(points, closest, basis, matrix, pivot=None):
     """Sequential linear programmes on max |d| from ``matrix`` along the held motions basis (6,
     H), whose units move the points about 1 mm: (matrix (4, 4), iterations, capped)."""
+    return _linear_programmes(points, closest, basis, matrix, pivot, _chebyshev_step, lambda d: np.abs(d).max())
+
+
+def tangent(points, closest, basis, matrix, pivot=None):
+    """ISO 5459's association of a datum: the motion along basis (6, H) (rotations about pivot
+    (3,) mm) that lays the face on the outside of the points (every d <= 0: the points in the
+    material) as near to them as it can (min max -d), from ``matrix`` (4, 4): (matrix,
+    iterations, capped). A point left outside counts TANGENT_PENALTY times its distance."""
+    return _linear_programmes(points, closest, basis, matrix, pivot, _tangent_step, tangent_merit)
+
+
+def tangent_merit(deviations):
+    """mm, how far deviations (N,) mm are from a tangent datum's: max -d, plus TANGENT_PENALTY
+    times the farthest point out of the material (d > 0)."""
+    return max(-float(deviations.min()), 0.0) + TANGENT_PENALTY * max(float(deviations.max()), 0.0)
+
+
+def _linear_programmes(points, closest, basis, matrix, pivot, step_of, merit):
+    """Sequential linear programmes: each step step_of(deviations, jacobian, radius) inside a
+    trust region, kept where it lowers merit(deviations) (mm), the trust region shrunk by
+    TRUST_SHRINK where it does not: (matrix (4, 4), iterations, capped)."""
     radius = np.full(basis.shape[1], TRUST_SHIFT_MM)
-    deviations, jacobian, centre = _model(transform(matrix, points), closest, basis)
-    worst = np.abs(deviations).max()
+    deviations, jacobian, centre = _model(transform(matrix, points), closest, basis, pivot)
+    worst = merit(deviations)
     for iteration in range(1, MAX_ITERATIONS + 1):
-        step = _chebyshev_step(deviations, jacobian, radius)
+        step = step_of(deviations, jacobian, radius)
         motion = _step_matrix(step, basis, centre)
         before = transform(matrix, points)
         trial = motion @ matrix
-        trial_deviations, trial_jacobian, trial_centre = _model(transform(trial, points), closest, basis)
-        if np.abs(trial_deviations).max() < worst:
-            matrix, worst = trial, np.abs(trial_deviations).max()
+        trial_deviations, trial_jacobian, trial_centre = _model(transform(trial, points), closest, basis, pivot)
+        if merit(trial_deviations) < worst:
+            matrix, worst = trial, merit(trial_deviations)
             deviations, jacobian, centre = trial_deviations, trial_jacobian, trial_centre
         else:
             radius *= TRUST_SHRINK
@@ -383,6 +408,23 @@ def _chebyshev_step(deviations, jacobian, radius):
     upper = np.vstack([np.hstack([jacobian, -ones]), np.hstack([-jacobian, -ones])])
     bound = np.concatenate([-deviations, deviations])
     limits = [(-r, r) for r in radius] + [(0, None)]
+    solved = linprog(cost, A_ub=upper, b_ub=bound, bounds=limits, method="highs")
+    if not solved.success:
+        return np.zeros(size)
+    return solved.x[:size]
+
+
+def _tangent_step(deviations, jacobian, radius):
+    """The step x (F,) within |x| <= radius minimising the linearised tangent_merit of d + J x:
+    a linear programme in (x, s, v): minimise s + TANGENT_PENALTY v with -s <= d + J x <= v,
+    s, v >= 0 (always feasible: v takes what the trust region cannot bring in)."""
+    count, size = jacobian.shape
+    cost = np.zeros(size + 2)
+    cost[-2:] = 1.0, TANGENT_PENALTY
+    ones, zeros = np.ones((count, 1)), np.zeros((count, 1))
+    upper = np.vstack([np.hstack([jacobian, zeros, -ones]), np.hstack([-jacobian, -ones, zeros])])
+    bound = np.concatenate([-deviations, deviations])
+    limits = [(-r, r) for r in radius] + [(0, None), (0, None)]
     solved = linprog(cost, A_ub=upper, b_ub=bound, bounds=limits, method="highs")
     if not solved.success:
         return np.zeros(size)

@@ -27,7 +27,9 @@ from ..strategies import handover
 from ..strategies.face_setup import reused
 from ..planning.part_plan import PartPlan
 from ..strategies.result import SamplingResult
-from .align import ALIGNMENTS, PROFILE_KINDS, Alignment, AlignmentCancelled, align, check_locked, kabsch
+from .align import ALIGNMENTS, PROFILE_KINDS, Alignment, AlignmentCancelled, align, check_locked, kabsch, transform
+from .datums import Datum, Stage, align_on_datums, as_datums, floating_frame
+from .uncertainty import NO_UNCERTAINTY, decide, profile_uncertainty
 from .closest import OCC_AGREEMENT_MM, OCC_CONFIRMED, FaceCloser, confirm_with_occ
 from .measured import read_measured
 
@@ -58,7 +60,10 @@ class Inspection:
     substitute fitted to the aligned measured points at their planned (u, v), and
     substitute_deviation: its DeviationStats against the CAD face (the deviation map); else None;
     measured_file: the file read ('' for a PointSet); normals: (N, 3) unit, the face's outward
-    normal at each aligned point's closest point (the point's foot is points - deviations * normals).
+    normal at each aligned point's closest point (the point's foot is points - deviations * normals);
+    datums: a DatumFit per datum of the frame the points were judged in (cmmsampling.inspection.
+    datums; empty: the form profile, floated); uncertainty: the ProfileUncertainty of the
+    profile (cmmsampling.inspection.uncertainty) or None where none was given.
     """
 
     labels: list
@@ -78,6 +83,8 @@ class Inspection:
     zone_offset: float = 0.0
     face_forms: dict = field(default_factory=dict)
     normals: np.ndarray = None
+    datums: list = field(default_factory=list)
+    uncertainty: object = None
 
     @property
     def feet(self):
@@ -144,6 +151,44 @@ class Inspection:
         """The profile is within the tolerance (None without one)."""
         return self.face_passed(self.profile)
 
+    @property
+    def profile_uncertainty(self):
+        """U, mm, the profile's expanded uncertainty (k = 2), or None where none was given."""
+        return None if self.uncertainty is None else self.uncertainty.expanded
+
+    @property
+    def decision(self):
+        """ISO 14253-1's decision on the whole profile: 'conforms', 'does not conform' or
+        'undecided' (cmmsampling.inspection.uncertainty.DECISIONS); None without a tolerance
+        or an uncertainty."""
+        return self.face_decision(None)
+
+    def face_decision(self, name):
+        """The decision on face ``name``'s profile (None: the whole profile), as :attr:`decision`."""
+        if self.tolerance is None or self.uncertainty is None:
+            return None
+        profile = self.profile if name is None else self.face_profiles[name]
+        expanded = self.uncertainty.expanded if name is None else self.uncertainty.faces[name]
+        return decide(profile, expanded, self.tolerance + 2 * LIMIT_SLACK_MM)
+
+    @property
+    def profile_kind(self):
+        """What the profile is, in the summary's words: floated form, or relative to datums."""
+        if not self.datums:
+            return PROFILE_KINDS[self.alignment.method]
+        frame = "|".join(datum.label for datum in self.datums)
+        return f"relative to datums {frame}: location and form, ISO 1101"
+
+    def decision_text(self):
+        """The verdict's uncertainty in a line: 'ISO 14253-1: undecided: profile 0.0480 mm, U =
+        0.0040 mm (k = 2 ...)', or that none was given."""
+        if self.uncertainty is None:
+            return NO_UNCERTAINTY
+        if self.tolerance is None:
+            return f"profile {self.profile:.4f} mm, {self.uncertainty.text()}"
+        return (f"ISO 14253-1: {self.decision} (profile {self.profile:.4f} mm, tolerance {self.tolerance:g} mm, "
+                f"guard band U): {self.uncertainty.text()}")
+
     def summary(self):
         """The inspection in a few lines: points, alignment, profile, verdict."""
         zone = f" (zone offset {self.zone_offset:+g} mm)" if self.zone_offset else ""
@@ -152,19 +197,31 @@ class Inspection:
                  f"points moved up to {self.alignment.moved_mm:.4g} mm)",
                  "motions the points do not hold (kept where their labels put them): "
                  + (", ".join(self.free_motions) if self.free_motions else "none")]
-        lines = lines if self.alignment.method != "none" else lines[:1]
+        lines = lines if self.alignment.method != "none" or self.datums else lines[:1]
+        if self.datums:
+            lines.insert(1, "datums " + " | ".join(datum.text() for datum in self.datums))
         lines.append(f"deviation {self.deviations.min():+.4f} .. {self.deviations.max():+.4f} mm, "
-                     f"profile {self.profile:.4f} mm ({PROFILE_KINDS[self.alignment.method]}){zone}")
+                     f"profile {self.profile:.4f} mm ({self.profile_kind}){zone}")
         if self.tolerance is not None:
             outside = int((~self.within).sum())
             lines.append(f"tolerance {self.tolerance:g} mm: {verdict_text(self.passed)}"
                          f"{f', {outside} points outside the zone' if outside else ''}")
+        lines.append(self.decision_text())
         faces = self.face_profiles
         if len(faces) > 1:
-            lines += [f"{name}: profile {value:.4f} mm" + ("" if self.tolerance is None else
-                                                          f", {verdict_text(self.face_passed(value))}")
-                      + self._form_text(name) for name, value in faces.items()]
-        return "\n".join(lines + [f"note: {note}" for note in self.notes])
+            lines += [f"{name}: profile {value:.4f} mm" + self._face_verdict(name, value) + self._form_text(name)
+                      for name, value in faces.items()]
+        notes = self.notes + ([] if self.uncertainty is None else self.uncertainty.notes)
+        return "\n".join(lines + [f"note: {note}" for note in notes])
+
+    def _face_verdict(self, name, profile):
+        """', PASS' (and ', U 0.0041 mm: conforms' with an uncertainty) for a face's profile."""
+        if self.tolerance is None:
+            return "" if self.uncertainty is None else f", U {self.uncertainty.faces[name]:.4f} mm"
+        text = f", {verdict_text(self.face_passed(profile))}"
+        if self.uncertainty is not None:
+            text += f", U {self.uncertainty.faces[name]:.4f} mm: {self.face_decision(name)}"
+        return text
 
 
 @dataclass
@@ -205,7 +262,7 @@ class InspectionCancelled(Exception):
 
 
 def inspect(source, measured, alignment="min_max", tolerance=None, locked=(), part=None, probe_radius=None,
-            zone_offset=0.0, progress=None):
+            zone_offset=0.0, progress=None, datums=(), uncertainty=None, seed=0):
     """Judge measured points against the CAD model they were planned on.
 
     source: a Part.Face (the measured points are taken as they come), a SamplingResult, a
@@ -223,13 +280,21 @@ def inspect(source, measured, alignment="min_max", tolerance=None, locked=(), pa
     zone_offset: o, mm, the zone's centre from the nominal (ISO 1101's UZ, + out of the material;
     +-t/2 a unilateral zone outside or inside), which the alignment centres the points on and
     the profile and the verdict are taken from.
+    datums: the datum reference frame, Datums (cmmsampling.inspection.datums) or face names
+    ('Face3', a tangent datum labelled A, B, C in order), primary first: the part is aligned on
+    them and the other points are judged in their frame, floated by ``alignment`` only in the
+    motions the datums leave free (the profile is location and form); a datum's points are
+    those planned on its face (taken out of the toleranced ones) unless it brings its own.
+    uncertainty: u, mm, the CMM's probing standard uncertainty per point (MPE_P / sqrt(3)):
+    the profile's expanded uncertainty by Monte Carlo (cmmsampling.inspection.uncertainty,
+    seeded by ``seed``) and ISO 14253-1's decision (``Inspection.decision``).
     One alignment for all the points (a plan: the whole part). progress: callable(message) before
     each phase and after each step of the alignment (message None), returning True to cancel
     (InspectionCancelled). Returns an Inspection; an inspection handed over by a background run
     (:func:`hand_over`) to exactly this call is returned at once.
     """
-    handed = handover.take(inspect, source, _call(measured, alignment, tolerance, locked, part, probe_radius,
-                                                   zone_offset))
+    call = _call(measured, alignment, tolerance, locked, part, probe_radius, zone_offset, datums, uncertainty, seed)
+    handed = handover.take(inspect, source, call)
     if handed is not None:
         return handed
 
@@ -242,44 +307,127 @@ def inspect(source, measured, alignment="min_max", tolerance=None, locked=(), pa
     locked = check_locked(locked)
     tolerance = None if tolerance is None else check_real("tolerance", tolerance, above=0.0)
     zone_offset = check_real("zone_offset", zone_offset)
+    uncertainty = None if uncertainty is None else check_real("uncertainty", uncertainty, above=0.0)
+    wanted = as_datums(datums)
     told("reading the measured points")
     planned = _planned(source, part)
     read = _measured_point_set(measured)
     contact = _contact_points(read, probe_radius)
     order, notes = pair(planned, read)
+    owner = np.zeros(len(order[0]), dtype=int) if planned.owner is None else planned.owner[order[1]]
+    nominal = planned.points[order[1]] if planned.points is not None else np.full((len(order[0]), 3), np.nan)
+    sources, kept = datum_points(wanted, planned, order, owner, contact, part, probe_radius)
+    order, owner, nominal = (order[0][kept], order[1][kept]), owner[kept], nominal[kept]
+    if not len(order[0]):
+        raise InputError("every measured point lies on a datum face: measure the toleranced face too, or give "
+                         "fewer datums")
     points = contact[order[0]]
-    owner = np.zeros(len(points), dtype=int) if planned.owner is None else planned.owner[order[1]]
 
     told("preparing the faces")
     with reused():
         closers = [FaceCloser(face) if np.any(owner == index) else None for index, face in enumerate(planned.faces)]
+        stages = [Stage(source.datum.label, source.name, source.datum.criterion, source.points,
+                        FaceCloser(source.face)) for source in sources]
 
     def closest(where):
         return _closest(closers, owner, where)
 
-    nominal = planned.points[order[1]] if planned.points is not None else np.full_like(points, np.nan)
-    told(f"aligning {len(points)} points")
-    try:
-        found = align(points, closest, alignment, locked, None if locked else kabsch(points, nominal), zone_offset,
-                      None if progress is None else lambda step: progress(None))
-    except AlignmentCancelled:
-        raise InspectionCancelled from None
+    told(f"aligning {len(points)} points" + (f" on datums {'|'.join(d.label for d in wanted)}" if wanted else ""))
+    start = None if locked else _start([source.points for source in sources] + [points],
+                                       [source.nominal for source in sources] + [nominal])
+    found, frame = _aligned(points, closest, alignment, locked, start, zone_offset, stages, progress)
     told("confirming the decisive points with OCC")
     aligned = found.apply(points)
     deviations, disagreement = confirm_with_occ(planned.faces, owner, aligned, found.deviations, zone_offset)
     if disagreement > OCC_AGREEMENT_MM:
         notes.append(f"OCC's distances at the {OCC_CONFIRMED} points farthest from the zone's centre differ from the "
                      f"alignment's by up to {disagreement:.2g} mm; OCC's are reported")
+    normals = closest(aligned)[1]
     inspection = Inspection([read.labels[i] for i in order[0]], nominal, points, aligned,
                             deviations, found.matrix, found, tolerance, [planned.names[i] for i in owner], notes,
                             measured_file=os.fspath(measured) if isinstance(measured, (str, os.PathLike)) else "",
-                            zone_offset=zone_offset, normals=closest(aligned)[1])
+                            zone_offset=zone_offset, normals=normals, datums=frame.datums)
     if len(set(owner.tolist())) > 1 and alignment != "none":
         told("aligning each face alone")
         inspection.face_forms = _face_forms(points, owner, closers, planned.names, found, locked, zone_offset, notes)
-    if isinstance(source, SamplingResult):
+    if uncertainty is not None:
+        told("propagating the probing uncertainty (Monte Carlo)")
+        inspection.uncertainty = profile_uncertainty(frame, _frame_normals(frame, stages, normals), owner,
+                                                     planned.names, uncertainty, zone_offset, seed)
+    if isinstance(source, SamplingResult) and not wanted:
         rebuild(inspection, source, order[1])
     return inspection
+
+
+def _start(points, nominals):
+    """The (4, 4) motion the fit starts from: the rigid match of the points (a list of (M, 3)
+    mm, datum points included) to their nominals (a list of (M, 3) mm, NaN where unknown), or
+    None where no point has a nominal."""
+    every, targets = np.vstack(points), np.vstack(nominals)
+    labelled = np.isfinite(targets).all(axis=1)
+    return kabsch(every[labelled], targets[labelled]) if labelled.any() else None
+
+
+@dataclass
+class DatumSource:
+    """Where a datum's points come from: datum (a Datum), name: its face's name, face: the
+    Part.Face, points: (M, 3) mm contact points (measured frame), nominal: (M, 3) mm planned
+    (NaN where it brings its own points)."""
+
+    datum: Datum
+    name: str
+    face: object
+    points: np.ndarray
+    nominal: np.ndarray
+
+
+def datum_points(datums, planned, order, owner, contact, part, probe_radius):
+    """(DatumSources, kept (N,) bool): each datum's points, and which of the paired points
+    (order: (measured rows (N,) into contact (P, 3) mm, planned rows (N,)), owner (N,) their
+    planned faces) stay toleranced (those of a datum's face that brings no points of its own
+    go to the datum)."""
+    kept, sources = np.ones(len(order[0]), dtype=bool), []
+    for datum in datums:
+        name = datum.face if isinstance(datum.face, str) else f"datum {datum.label}"
+        if datum.points is not None:
+            face = _datum_face(datum, planned, part)
+            own = _contact_points(_datum_point_set(datum), probe_radius)
+            sources.append(DatumSource(datum, name, face, own, np.full_like(own, np.nan)))
+            continue
+        if name not in planned.names:
+            raise InputError(f"datum {datum.label}: {name} has no planned points here; plan it with the toleranced "
+                             f"faces (plan(part, faces=[...])) or give Datum({datum.label!r}, face, points=...)")
+        rows = owner == planned.names.index(name)
+        if not rows.any():
+            raise InputError(f"datum {datum.label}: none of the measured points lies on {name}; measure it or give "
+                             f"Datum({datum.label!r}, face, points=...)")
+        kept &= ~rows
+        nominal = planned.points[order[1][rows]] if planned.points is not None else None
+        sources.append(DatumSource(datum, name, planned.faces[planned.names.index(name)], contact[order[0][rows]],
+                                   np.full((int(rows.sum()), 3), np.nan) if nominal is None else nominal))
+    return sources, kept
+
+
+def _aligned(points, closest, alignment, locked, start, offset, stages, progress):
+    """(Alignment, Frame) of the toleranced points: on the datum stages where there are any,
+    else the floating fit of :func:`align` (its Frame the one link of its solution)."""
+    toleranced = Stage("", "toleranced", alignment, points, closest)
+    if stages:
+        frame = align_on_datums(stages, toleranced, np.eye(4) if start is None else start, locked, offset)
+        return frame.alignment, frame
+    try:
+        found = align(points, closest, alignment, locked, start, offset,
+                      None if progress is None else lambda step: progress(None))
+    except AlignmentCancelled:
+        raise InspectionCancelled from None
+    return found, floating_frame(toleranced, found, locked, offset)
+
+
+def _frame_normals(frame, stages, normals):
+    """(P, 3): the outward normals at every point of the frame's links (datums', then the
+    toleranced points' normals (N, 3)), in the links' order."""
+    datum = [stage.closest(transform(frame.alignment.matrix, stage.points))[1] for stage in stages]
+    return np.vstack(datum + [normals])
 
 
 def _face_forms(points, owner, closers, names, found, locked, offset, notes):
@@ -305,18 +453,19 @@ def _face_forms(points, owner, closers, names, found, locked, offset, notes):
 
 
 def hand_over(source, measured, inspection, alignment="min_max", tolerance=None, locked=(), part=None,
-              probe_radius=None, zone_offset=0.0):
+              probe_radius=None, zone_offset=0.0, datums=(), uncertainty=None, seed=0):
     """Let the next :func:`inspect` of ``source`` with exactly these arguments return
     ``inspection`` at once (a background run's, echoed in FreeCAD's console: see
     :mod:`cmmsampling.strategies.handover`)."""
-    handover.give(inspect, source, _call(measured, alignment, tolerance, locked, part, probe_radius, zone_offset),
-                  inspection)
+    handover.give(inspect, source, _call(measured, alignment, tolerance, locked, part, probe_radius, zone_offset,
+                                         datums, uncertainty, seed), inspection)
 
 
-def _call(measured, alignment, tolerance, locked, part, probe_radius, zone_offset):
+def _call(measured, alignment, tolerance, locked, part, probe_radius, zone_offset, datums, uncertainty, seed):
     """inspect()'s arguments but the source, by name."""
     return {"measured": measured, "alignment": alignment, "tolerance": tolerance, "locked": locked, "part": part,
-            "probe_radius": probe_radius, "zone_offset": zone_offset}
+            "probe_radius": probe_radius, "zone_offset": zone_offset, "datums": tuple(datums or ()),
+            "uncertainty": uncertainty, "seed": seed}
 
 
 def rebuild(inspection, result, planned_rows):
@@ -351,6 +500,32 @@ def _planned(source, part):
         return Planned(None, None, [as_face(source)], ["face"], None)
     raise InputTypeError(f"cannot inspect against a {type(source).__name__}; give a Part.Face, a SamplingResult, "
                          "a PartPlan or the workbench's probe points in a document")
+
+
+def _datum_face(datum, planned, part):
+    """The Part.Face of a datum that brings its own points: its face given, a face of the plan
+    by name, or of part=; InputError where none is found."""
+    if not isinstance(datum.face, str):
+        return as_face(datum.face)
+    if datum.face in planned.names:
+        return planned.faces[planned.names.index(datum.face)]
+    if part is None:
+        raise InputError(f"datum {datum.label}: {datum.face} is no face of the plan; give part= the shape it is a "
+                         "face of, or the Part.Face itself")
+    return _face_of(part, datum.face)
+
+
+def _datum_point_set(datum):
+    """A datum's own points as a PointSet: a path or PointSet as measured, an (M, 3) array of
+    contact points (mm) labelled by order."""
+    if isinstance(datum.points, (str, bytes, os.PathLike, PointSet)):
+        return _measured_point_set(datum.points)
+    points = np.asarray(datum.points, dtype=float)
+    if points.ndim != 2 or points.shape[1] != 3 or not len(points):
+        raise InputError(f"datum {datum.label}: points= takes an (M, 3) array of contact points in mm, a PointSet "
+                         f"or a measured-points file, got shape {points.shape}")
+    return PointSet([f"{datum.label}{index}" for index in range(1, len(points) + 1)], points,
+                    np.full_like(points, np.nan))
 
 
 def _face_of(part, name):

@@ -1,0 +1,239 @@
+"""Datum reference frames (ISO 5459): the part aligned on its datum features in order, the
+toleranced surface then judged in that frame (ISO 1101's profile relative to datums: location
+and form together).
+
+Each datum is associated with its nominal face in turn and fixes only the motions the datums
+before it leave free: a primary plane fixes three (its normal shift and two tilts), a secondary
+plane square to it two, a tertiary one. Which motions a datum fixes is found from its points,
+not assumed from its type: the motions left free, as a basis of small rigid motions (twists:
+a rotation vector about a fixed pivot and a shift), are split by how strongly they move the
+datum's points off its face (the generalised eigenvalues of the point-to-plane normal matrix
+against the motions' own size; the weak ones, below align.WEAK_SENSITIVITY, stay free for
+the next datum). A free-form datum surface fixes whatever it holds.
+
+A datum is associated by one of DATUM_CRITERIA: 'tangent' (ISO 5459's default: the face laid
+on the outside of the points, as near to them as it goes: min max distance, every point in the
+material) or 'least_squares'. Motions no datum fixes are floated by the toleranced surface's
+own fit (ISO 1101: the zone is free in them) with the inspection's alignment method, or kept
+where the start put them and named. Pure numpy/scipy: the closest points come from callables.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.linalg import eigh
+
+from ..geometry.validation import InputError
+from .align import (DEGREES_OF_FREEDOM, WEAK_SENSITIVITY, Alignment, _least_squares, _min_max, _motion_names,
+                    _offset_by, signed_distances, tangent, transform)
+
+DATUM_CRITERIA = ("tangent", "least_squares")
+# The regularisation of a datum's motion metric, as a share of its trace: a motion that moves
+# none of its points (a turn about the line they lie on) counts as weakly held, not singular.
+METRIC_FLOOR = 1e-12
+
+
+@dataclass(frozen=True)
+class Datum:
+    """A datum feature of a datum reference frame, given in precedence order (primary first).
+
+    label: its letter on the drawing ('A'); face: the name of a face of the plan's part
+    ('Face3') or a Part.Face; points: where its measured contact points come from: None (the
+    measured file's points planned on that face, by label), a measured-points path, a PointSet
+    or an (M, 3) array, mm, in the measured frame; criterion: one of DATUM_CRITERIA.
+    """
+
+    label: str
+    face: object
+    points: object = None
+    criterion: str = "tangent"
+
+
+@dataclass
+class DatumFit:
+    """One datum as associated: label; face: its name; criterion; count: its points; held: the
+    motions it fixed (0 .. 6); deviations: (M,) mm, its points' signed distances from its face
+    in the frame (+ out of the material); form: mm, their spread (max - min)."""
+
+    label: str
+    face: str
+    criterion: str
+    count: int
+    held: int
+    deviations: np.ndarray
+
+    @property
+    def form(self):
+        """mm, the spread of the datum's points about its associated face."""
+        return float(self.deviations.max() - self.deviations.min())
+
+    def text(self):
+        """'A (Face1, tangent, 3 motions, 12 points, form 0.0012 mm)'."""
+        return (f"{self.label} ({self.face}, {self.criterion.replace('_', ' ')}, {self.held} motion"
+                f"{'' if self.held == 1 else 's'}, {self.count} points, form {self.form:.4f} mm)")
+
+
+@dataclass
+class Stage:
+    """Points aligned in one step of a frame: label and face (names), criterion (one of
+    DATUM_CRITERIA, or an alignment method for the toleranced surface), points (M, 3) mm
+    (measured), closest: callable (M, 3) -> (feet, outward normals), each (M, 3)."""
+
+    label: str
+    face: str
+    criterion: str
+    points: np.ndarray
+    closest: object
+
+
+@dataclass
+class Link:
+    """A step of the frame as the linear model at its solution sees it, for the Monte Carlo:
+    rows: the step's rows in all the points; jacobian: (M, 6) the deviations' change per twist
+    (rotation vector rad about the pivot, shift mm); held: (6, H) the twists the step fitted;
+    criterion: how (DATUM_CRITERIA, 'best_fit', 'min_max', or 'none' for no fit); deviations:
+    (M,) mm at the solution, from the zone's centre."""
+
+    rows: np.ndarray
+    jacobian: np.ndarray
+    held: np.ndarray
+    criterion: str
+    deviations: np.ndarray
+
+
+@dataclass
+class Frame:
+    """A datum reference frame found: alignment (of the toleranced points: its matrix maps the
+    measured frame to the CAD one), datums: a DatumFit each, links: the Links of every step
+    (datums, then the toleranced surface), pivot: (3,) mm."""
+
+    alignment: Alignment
+    datums: list
+    links: list
+    pivot: np.ndarray
+
+
+def twist_jacobian(points, normals, pivot):
+    """(M, 6): how the signed distances of points (M, 3) mm (outward normals (M, 3)) change by a
+    twist (rotation vector w rad about pivot (3,) mm, shift s mm): ((p - pivot) x n, n)."""
+    return np.hstack([np.cross(points - pivot, normals), normals])
+
+
+def split_motions(points, normals, allowed, pivot):
+    """(held (6, H), weak (6, K - H)): the twists of allowed (6, K) that move points (M, 3) mm
+    off their face (outward normals (M, 3)) by at least WEAK_SENSITIVITY mm RMS per mm RMS of
+    the points' own motion, and those that do not; a held column moves the points 1 mm RMS."""
+    if not allowed.shape[1]:
+        return allowed, allowed
+    jacobian = twist_jacobian(points, normals, pivot) @ allowed
+    arms = points - pivot
+    motion = np.cross(allowed[:3].T[None, :, :], arms[:, None, :]) + allowed[3:].T[None, :, :]
+    metric = np.einsum("mki,mli->kl", motion, motion) / len(points)
+    metric += METRIC_FLOOR * np.trace(metric) * np.eye(len(metric))
+    values, vectors = eigh(jacobian.T @ jacobian / len(points), metric)
+    weak = np.sqrt(np.maximum(values, 0.0)) < WEAK_SENSITIVITY
+    return allowed @ vectors[:, ~weak], allowed @ vectors[:, weak]
+
+
+def motion_names(twists, length):
+    """The names of the motions twists (6, K) span (align._motion_names: 'x', 'rz', 'slide
+    along (...)'), rotations weighed by length mm, the points' RMS distance from the pivot."""
+    if not twists.shape[1]:
+        return ()
+    scaled = twists * np.r_[np.full(3, length), np.ones(3)][:, None]
+    return _motion_names(np.linalg.svd(scaled, full_matrices=False)[0][:, :twists.shape[1]])
+
+
+def align_on_datums(datums, toleranced, start, locked=(), offset=0.0):
+    """The Frame of the Stages ``datums`` (precedence order) and of ``toleranced`` (the
+    toleranced surface's Stage, its criterion the inspection's alignment method), from the
+    motion start (4, 4) measured -> CAD; locked: degrees of freedom no step moves; offset: mm,
+    the toleranced zone's centre from its face (+ out of the material).
+    InputError for a datum that fixes nothing the ones before it left free, or has fewer points
+    than the motions it fixes."""
+    matrix = np.asarray(start, dtype=float)
+    pivot = transform(matrix, toleranced.points).mean(axis=0)
+    allowed = np.eye(6)[:, [index for index, name in enumerate(DEGREES_OF_FREEDOM) if name not in locked]]
+    fits, links, first = [], [], 0
+    for stage in datums:
+        moved = transform(matrix, stage.points)
+        held, weak = split_motions(moved, stage.closest(moved)[1], allowed, pivot)
+        _check_datum(stage, held.shape[1])
+        fit = tangent if stage.criterion == "tangent" else _least_squares
+        matrix = fit(stage.points, stage.closest, held, matrix, pivot)[0]
+        link = _link(stage, matrix, held, pivot, first)
+        fits.append(DatumFit(stage.label, stage.face, stage.criterion, len(stage.points), held.shape[1],
+                             link.deviations))
+        links.append(link)
+        first, allowed = first + len(stage.points), weak
+    zone = _offset_by(toleranced.closest, offset)
+    moved = transform(matrix, toleranced.points)
+    held, weak = (split_motions(moved, zone(moved)[1], allowed, pivot) if toleranced.criterion != "none"
+                  else (allowed[:, :0], allowed))
+    iterations = 0
+    if held.shape[1]:
+        matrix, iterations, _ = _least_squares(toleranced.points, zone, held, matrix, pivot)
+        if toleranced.criterion == "min_max":
+            matrix, more, _ = _min_max(toleranced.points, zone, held, matrix, pivot)
+            iterations += more
+    last = _link(Stage(toleranced.label, toleranced.face, toleranced.criterion, toleranced.points, zone), matrix,
+                 held, pivot, first)
+    moved = transform(matrix, toleranced.points)
+    length = float(np.sqrt(((moved - pivot) ** 2).sum(axis=1).mean())) or 1.0
+    alignment = Alignment(matrix, toleranced.criterion, tuple(locked), iterations,
+                          float(np.linalg.norm(moved - toleranced.points, axis=1).max()),
+                          last.deviations + offset, motion_names(weak, length), False)
+    return Frame(alignment, fits, links + [last], pivot)
+
+
+def _check_datum(stage, held):
+    """InputError where a datum fixes no motion or has too few points for those it fixes."""
+    if held == 0:
+        raise InputError(f"datum {stage.label} ({stage.face}) fixes none of the motions the datums before it leave "
+                         "free; give another face as this datum or leave it out")
+    if len(stage.points) < held:
+        raise InputError(f"datum {stage.label} ({stage.face}) has {len(stage.points)} measured points for the {held} "
+                         f"motions it fixes; measure at least {held} points on it")
+
+
+def _link(stage, matrix, held, pivot, first):
+    """The Link of a stage solved to ``matrix`` (its rows from ``first`` in all the points)."""
+    moved = transform(matrix, stage.points)
+    feet, normals = stage.closest(moved)
+    return Link(np.arange(first, first + len(moved)), twist_jacobian(moved, normals, pivot), held, stage.criterion,
+                signed_distances(moved, feet, normals))
+
+
+def as_datums(datums):
+    """The Datums of inspect()'s datums=: None or () for none, a Datum or a face name ('Face3')
+    or a sequence of them in precedence order (names become tangent datums A, B, C ...).
+    InputError for an unknown criterion or a label given twice."""
+    if datums is None:
+        return ()
+    if isinstance(datums, (str, Datum)):
+        datums = (datums,)
+    found = tuple(datum if isinstance(datum, Datum) else Datum(chr(ord("A") + index), datum)
+                  for index, datum in enumerate(datums))
+    for datum in found:
+        if datum.criterion not in DATUM_CRITERIA:
+            raise InputError(f"datum {datum.label}: criterion must be one of {', '.join(DATUM_CRITERIA)}, "
+                             f"got {datum.criterion!r}")
+    labels = [datum.label for datum in found]
+    twice = [label for label in labels if labels.count(label) > 1]
+    if twice:
+        raise InputError(f"datum {twice[0]} is given twice; give each datum feature once, primary first")
+    return found
+
+
+def floating_frame(toleranced, alignment, locked=(), offset=0.0):
+    """The Frame of a fit with no datums: the toleranced Stage aligned alone (an Alignment from
+    align.align), its one Link the linear model at that solution."""
+    zone = _offset_by(toleranced.closest, offset)
+    moved = alignment.apply(toleranced.points)
+    pivot = moved.mean(axis=0)
+    allowed = np.eye(6)[:, [index for index, name in enumerate(DEGREES_OF_FREEDOM) if name not in locked]]
+    held = (split_motions(moved, zone(moved)[1], allowed, pivot)[0] if alignment.method != "none"
+            else allowed[:, :0])
+    stage = Stage(toleranced.label, toleranced.face, alignment.method, toleranced.points, zone)
+    return Frame(alignment, [], [_link(stage, alignment.matrix, held, pivot, 0)], pivot)

@@ -1,0 +1,157 @@
+"""The uncertainty of a profile verdict, and the decision ISO 14253-1 takes with it.
+
+The CMM's probing error (standard uncertainty u per point, mm, isotropic: an MPE_P read as the
+bound of a rectangular distribution gives u = MPE_P / sqrt(3), GUM 4.3.7) is carried through
+the whole chain by Monte Carlo (GUM Supplement 1): each trial adds independent normal errors to
+every measured point, datum points included, re-associates every datum and re-fits the
+toleranced surface in the order the inspection did, and takes the profile again. Each trial
+solves its fits on the chain's linear model at the inspection's solution (the point-to-plane
+model whose steps found it, exact for planes; for a curved face the error it makes is of the
+order u^2 times the curvature, far below u): least squares in closed form for all trials at
+once, the tangent and minimum-zone fits as one linear programme each.
+
+The expanded uncertainty is U = k s with k = 2 and s the trials' standard deviation. The
+trials run in batches until the Monte Carlo's own relative error of s (1/2 sqrt((kurtosis - 1)
+/ n)) is below SAMPLING_ERROR, at most MAX_TRIALS. Seeded: the same call gives the same U.
+
+ISO 14253-1's decision for a profile tolerance t (an upper limit): 'conforms' where profile + U
+<= t, 'does not conform' where profile - U > t, else 'undecided'.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.optimize import linprog
+
+COVERAGE_FACTOR = 2.0
+SAMPLING_ERROR = 0.05
+BATCH = 250
+MAX_TRIALS = 20000
+CONFORMS, DOES_NOT_CONFORM, UNDECIDED = "conforms", "does not conform", "undecided"
+DECISIONS = (CONFORMS, DOES_NOT_CONFORM, UNDECIDED)
+NO_UNCERTAINTY = "no uncertainty given: the verdict takes the measured profile as exact"
+
+
+@dataclass
+class ProfileUncertainty:
+    """The Monte Carlo's result. probing: u per point, mm; expanded: U = k s, mm, of the
+    profile; faces: {face name: its U, mm}; profiles: (T,) mm, each trial's profile; mean_shift:
+    mm, the trials' mean profile less the measured one (how much the probing error widens a
+    profile on average); relative_error: the Monte Carlo's own relative error of U; seed."""
+
+    probing: float
+    expanded: float
+    faces: dict
+    profiles: np.ndarray
+    mean_shift: float
+    relative_error: float
+    seed: int
+    coverage: float = COVERAGE_FACTOR
+    notes: list = field(default_factory=list)
+
+    @property
+    def trials(self):
+        """The number of trials run."""
+        return len(self.profiles)
+
+    def text(self):
+        """'U = 0.0042 mm (k = 2; u = 0.001 mm per point, 750 Monte Carlo trials, its own error 3.1 %)'."""
+        return (f"U = {self.expanded:.4f} mm (k = {self.coverage:g}; probing u = {self.probing:g} mm per point, "
+                f"{self.trials} Monte Carlo trials, their own error {100 * self.relative_error:.1f} %)")
+
+
+def decide(profile, expanded, tolerance):
+    """ISO 14253-1's decision for a profile (mm) with expanded uncertainty U (mm) against an
+    upper limit t (mm): CONFORMS (profile + U <= t), DOES_NOT_CONFORM (profile - U > t) or
+    UNDECIDED."""
+    if profile + expanded <= tolerance:
+        return CONFORMS
+    if profile - expanded > tolerance:
+        return DOES_NOT_CONFORM
+    return UNDECIDED
+
+
+def profile_uncertainty(frame, normals, owner, names, probing, offset=0.0, seed=0):
+    """The ProfileUncertainty of a Frame (cmmsampling.inspection.datums: its Links, the datums'
+    then the toleranced surface's) under probing error u = probing mm per point and axis.
+
+    normals: (P, 3) the outward normals at all P points of the links, in their order; owner:
+    (N,) int, the face of each toleranced point (the last link's rows); names: the faces' names;
+    offset: mm, the zone's centre (the last link's deviations are from it already)."""
+    rng = np.random.default_rng(seed)
+    faces = [np.flatnonzero(owner == index) for index in range(len(names))]
+    profiles = np.empty((0, len(names)))
+    while True:
+        noise = rng.normal(0.0, probing, size=(BATCH, len(normals), 3))
+        profiles = np.vstack([profiles, trial_profiles(frame.links, np.einsum("tpi,pi->tp", noise, normals), faces)])
+        error = relative_error(profiles.max(axis=1))
+        if error <= SAMPLING_ERROR or len(profiles) >= MAX_TRIALS:
+            break
+    whole = profiles.max(axis=1)
+    measured = 2.0 * float(np.abs(frame.links[-1].deviations).max())
+    notes = [] if error <= SAMPLING_ERROR else [
+        f"the Monte Carlo stopped at {MAX_TRIALS} trials with its own error {100 * error:.1f} %"]
+    return ProfileUncertainty(probing, COVERAGE_FACTOR * float(whole.std(ddof=1)),
+                              {name: COVERAGE_FACTOR * float(profiles[:, index].std(ddof=1))
+                               for index, name in enumerate(names) if faces[index].size},
+                              whole, float(whole.mean()) - measured, error, seed, notes=notes)
+
+
+def relative_error(values):
+    """The relative standard error of the standard deviation of values (T,): 1/2 sqrt((b - 1)
+    / T) with b their kurtosis (3 for a normal distribution); 0 where they do not vary."""
+    spread = values.std()
+    if spread == 0.0:
+        return 0.0
+    kurtosis = float((((values - values.mean()) / spread) ** 4).mean())
+    return 0.5 * np.sqrt(max(kurtosis - 1.0, 0.0) / len(values))
+
+
+def trial_profiles(links, errors, faces):
+    """(T, F) mm: each trial's profile per face (2 max |d - o| over its rows of the last link;
+    faces: F arrays of row numbers), the links solved in order on their linear models with the
+    errors (T, P) mm along the normals of all P points added to their deviations."""
+    twist = np.zeros((len(errors), 6))
+    for link in links:
+        deviations = link.deviations + errors[:, link.rows] + twist @ link.jacobian.T
+        if link.held.shape[1] and link.criterion != "none":
+            step = _solve(link.criterion, deviations, link.jacobian @ link.held)
+            twist = twist + step @ link.held.T
+            deviations = deviations + step @ (link.jacobian @ link.held).T
+    reach = np.abs(deviations)
+    return np.column_stack([2.0 * reach[:, rows].max(axis=1) if rows.size else np.zeros(len(reach))
+                            for rows in faces])
+
+
+def _solve(criterion, deviations, jacobian):
+    """(T, H): each trial's step x minimising the criterion of deviations (T, M) + jacobian (M,
+    H) x: least squares for all trials at once, a linear programme per trial otherwise."""
+    if criterion in ("least_squares", "best_fit"):
+        return -np.linalg.lstsq(jacobian, deviations.T, rcond=None)[0].T
+    step = _tangent_programme if criterion == "tangent" else _chebyshev_programme
+    return np.array([step(row, jacobian) for row in deviations])
+
+
+def _chebyshev_programme(deviations, jacobian):
+    """x (H,) minimising max |d + J x| (d (M,), J (M, H)): minimise s, -s <= d + J x <= s."""
+    count, size = jacobian.shape
+    ones = np.ones((count, 1))
+    upper = np.vstack([np.hstack([jacobian, -ones]), np.hstack([-jacobian, -ones])])
+    return _programme(np.r_[np.zeros(size), 1.0], upper, np.concatenate([-deviations, deviations]), size, 1)
+
+
+def _tangent_programme(deviations, jacobian):
+    """x (H,) minimising max -(d + J x) with every d + J x <= 0: minimise s, -s <= d + J x <= 0."""
+    count, size = jacobian.shape
+    upper = np.vstack([np.hstack([jacobian, np.zeros((count, 1))]), np.hstack([-jacobian, -np.ones((count, 1))])])
+    return _programme(np.r_[np.zeros(size), 1.0], upper, np.concatenate([-deviations, deviations]), size, 1)
+
+
+def _programme(cost, upper, bound, size, extra):
+    """The first ``size`` unknowns of min cost . z, upper z <= bound, the last ``extra`` >= 0."""
+    limits = [(None, None)] * size + [(0, None)] * extra
+    solved = linprog(cost, A_ub=upper, b_ub=bound, bounds=limits, method="highs")
+    if not solved.success:
+        raise ArithmeticError(f"a Monte Carlo trial's fit has no solution ({solved.message})")
+    return solved.x[:size]
