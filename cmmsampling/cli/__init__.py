@@ -23,6 +23,8 @@ PROBE_CHOICES = {f"{probe.ball_diameter:g}": name for name, probe in PROBES.item
 DEMO_MEASUREMENT = {"form_error": 0.02, "noise": 0.001, "seed": 7,
                     "misplacement": {"rx": 0.4, "ry": -0.3, "rz": 0.9, "x": 1.2, "y": -2.0, "z": 0.5}}
 DEMO_TOLERANCE = 0.1
+# The datum block's profile tolerance relative to A | B | C (mm).
+DEMO_DATUM_TOLERANCE = 0.05
 
 DESCRIPTION = """Where should a CMM's contact probe touch a free-form face?
 
@@ -238,12 +240,33 @@ def _inspection_loop(face, result, folder):
 
     os.makedirs(folder, exist_ok=True)
     measured = simulate_measurement(result, os.path.join(folder, "measured.dmi"), **DEMO_MEASUREMENT)
-    found = inspect(result, measured.path, tolerance=DEMO_TOLERANCE)
+    found = inspect(result, measured.path, tolerance=DEMO_TOLERANCE, uncertainty=DEMO_MEASUREMENT["noise"])
     print(f"\nInspection of the {STRATEGIES[result.strategy].label} points measured on a virtual CMM "
-          f"({measured.path}):")
+          f"({measured.path}), the CMM's probing uncertainty {DEMO_MEASUREMENT['noise']:g} mm per point:")
     print(found.summary())
     print(f"colour map: {write_inspection_figure(found, face, os.path.join(folder, 'deviation.png'))}")
     _live_measurement(result, folder, found)
+    _datum_inspection(folder)
+
+
+def _datum_inspection(folder):
+    """A profile relative to datums A | B | C: the datum block's top and its three planar sides
+    planned together (16 points a face), measured on the virtual CMM (DEMO_MEASUREMENT: the
+    same form error, noise and misplacement), aligned on the datums, judged with its
+    uncertainty."""
+    from ..geometry.blocks import DATUM_FACES, TOP, datum_block
+    from ..inspection.judge import inspect
+    from ..inspection.simulate import simulate_measurement
+    from ..planning.part_plan import plan
+
+    block = datum_block()
+    planned = plan(block, n_total=64, strategy="uniform_parametric", faces=[3, 1, 5, 4], processes=1)
+    measured = simulate_measurement(planned, os.path.join(folder, "measured_block.dmi"), **DEMO_MEASUREMENT)
+    found = inspect(planned, measured.path, part=block, tolerance=DEMO_DATUM_TOLERANCE, datums=DATUM_FACES,
+                    uncertainty=DEMO_MEASUREMENT["noise"])
+    print(f"\nThe datum block's top ({TOP}) measured with its datums A = {DATUM_FACES[0]}, B = {DATUM_FACES[1]}, "
+          f"C = {DATUM_FACES[2]} ({measured.path}), profile {DEMO_DATUM_TOLERANCE:g} | A | B | C:")
+    print(found.summary())
 
 
 def _live_measurement(result, folder, filed):

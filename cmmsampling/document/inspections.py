@@ -7,12 +7,16 @@ shown as a placement. Lengths in mm.
 """
 from __future__ import annotations
 
+import json
+
 import numpy as np
 
 from ..geometry.freecad_env import import_part
 from ..geometry.validation import InputError, InputTypeError
 from ..inspection.align import Alignment
+from ..inspection.datums import DatumFit
 from ..inspection.judge import Inspection, verdict_text
+from ..inspection.uncertainty import NO_UNCERTAINTY, ProfileUncertainty
 from .object_types import MEASURED_POINTS, in_document, is_measured_points
 from .objects import TypedProxy
 from .sheets import write_inspection_report
@@ -94,16 +98,34 @@ def write_inspection(points, inspection):
     points.Notes = list(inspection.notes)
     points.Normals = vectors(inspection.normals)
     points.FaceForms = {name: repr(form) for name, form in inspection.face_forms.items() if form is not None}
+    points.ProfileKind = inspection.profile_kind
+    points.Datums = [datum.text() for datum in inspection.datums]
+    points.Uncertainty = inspection.profile_uncertainty or 0.0
+    points.Decision = decision(inspection)
+    points.Records = json.dumps({"datums": [datum.as_record() for datum in inspection.datums],
+                                 "uncertainty": None if inspection.uncertainty is None
+                                 else inspection.uncertainty.as_record()})
 
 
 def face_lines(inspection):
     """'Face3: 0.0123 mm PASS' for each face judged (the verdict left out without a tolerance), with
     ', form 0.0101 mm aligned alone' where the face has a form profile of its own."""
     forms = inspection.face_forms
+    spread = {} if inspection.uncertainty is None else inspection.uncertainty.faces
     return [f"{name}: {value:.4f} mm" + ("" if inspection.tolerance is None else
                                           f" {verdict_text(inspection.face_passed(value))}")
+            + ("" if name not in spread else f", U {spread[name]:.4f} mm" + (
+                "" if inspection.tolerance is None else f" {inspection.face_decision(name)}"))
             + ("" if forms.get(name) is None else f", form {forms[name]:.4f} mm aligned alone")
             for name, value in inspection.face_profiles.items()]
+
+
+def decision(inspection):
+    """ISO 14253-1's decision ('conforms', 'does not conform', 'undecided'), 'no tolerance', or
+    that no uncertainty was given."""
+    if inspection.uncertainty is None:
+        return NO_UNCERTAINTY
+    return NO_TOLERANCE if inspection.decision is None else inspection.decision
 
 
 def verdict(inspection):
@@ -154,6 +176,15 @@ class MeasuredPoints(TypedProxy):
         ("App::PropertyVectorList", "Normals", "Measured",
          "The face's outward normal at each aligned point's closest point on it"),
         ("App::PropertyMap", "FaceForms", "Verdict", "Each face's form profile aligned alone (mm), for several faces"),
+        ("App::PropertyString", "ProfileKind", "Verdict",
+         "What the profile is: the form, floated, or location and form relative to datums"),
+        ("App::PropertyStringList", "Datums", "Alignment",
+         "The datum reference frame, primary first: face, criterion, motions fixed, points, form"),
+        ("App::PropertyLength", "Uncertainty", "Verdict",
+         "The profile's expanded uncertainty U (k = 2, mm, Monte Carlo), 0 without one"),
+        ("App::PropertyString", "Decision", "Verdict",
+         "ISO 14253-1's decision with U as guard band: conforms, does not conform or undecided"),
+        ("App::PropertyString", "Records", "Verdict", "The datums' fits and the uncertainty's figures (JSON)"),
     )
 
     def __init__(self, obj):
@@ -185,11 +216,14 @@ class MeasuredPoints(TypedProxy):
         matrix = np.array(obj.AlignmentPlacement.toMatrix().A, dtype=float).reshape(4, 4)
         alignment = Alignment(matrix, obj.Alignment, tuple(obj.Locked), 0, float(obj.MovedBy.Value), deviations,
                               tuple(obj.FreeMotions))
+        records = json.loads(obj.Records or "{}")
+        spread = records.get("uncertainty")
         return Inspection(list(obj.Labels), nominal, array(obj.Measured), array(obj.Points), deviations, matrix,
                           alignment, obj.Tolerance.Value or None, list(obj.Faces), list(obj.Notes),
                           measured_file=obj.MeasuredFile, zone_offset=float(obj.ZoneOffset.Value),
                           face_forms={name: float(value) for name, value in obj.FaceForms.items()},
-                          normals=normals)
+                          normals=normals, datums=[DatumFit.from_record(item) for item in records.get("datums", [])],
+                          uncertainty=None if spread is None else ProfileUncertainty.from_record(spread))
 
     def execute(self, obj):
         """Shape: a compound of the aligned points as vertices."""

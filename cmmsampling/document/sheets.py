@@ -181,9 +181,11 @@ BAND_TEXTS = {-2: "OUT below", -1: "near below", 0: "in", 1: "near above", 2: "O
 
 def write_inspection_report(sheet, points):
     """The inspection report of measured points (cmmsampling.document.inspections): the summary
-    (profile, tolerance, zone offset, verdict, points outside the zone, alignment, its 4 x 4 matrix
-    measured -> CAD) with aliases (n, profile_mm, tolerance_mm, zone_offset_mm, verdict, outside,
-    moved_mm), the motions the points do not hold, each face's profile where there are several,
+    (profile and what it is, tolerance, zone offset, verdict, the expanded uncertainty and ISO
+    14253-1's decision, points outside the zone, alignment, its 4 x 4 matrix measured -> CAD) with
+    aliases (n, profile_mm, tolerance_mm, zone_offset_mm, verdict, uncertainty_mm, decision,
+    outside, moved_mm), the motions the points do not hold, the datums, each face's profile where
+    there are several,
     then one row per point: label, face, nominal, measured (as read from the file), aligned, the
     deviation as text to 0.1 um, and its band. The figures in mm are numbers shown in micrometres, as in the deviation report."""
     clear_cells(sheet)
@@ -193,17 +195,22 @@ def write_inspection_report(sheet, points):
         ("Inspection report",),
         ("Measured file", points.MeasuredFile or "(points given in the console)"),
         ("Points", len(points.Labels), "n"),
-        ("Profile (form)", points.Profile.Value, "profile_mm"),
+        ("Profile", points.Profile.Value, "profile_mm"),
+        ("Profile is", getattr(points, "ProfileKind", "") or "the form (floated)"),
         ("Tolerance", points.Tolerance.Value if points.Tolerance.Value > 0 else "none", "tolerance_mm"),
         ("Zone offset (UZ)", points.ZoneOffset.Value, "zone_offset_mm"),
         ("Verdict", points.Verdict, "verdict"),
+        ("Expanded uncertainty U (k = 2)", points.Uncertainty.Value if getattr(points, "Uncertainty", 0) else "none",
+         "uncertainty_mm"),
+        ("Decision (ISO 14253-1)", getattr(points, "Decision", ""), "decision"),
         ("Points outside the zone", int(np.count_nonzero(np.abs(bands) == 2)), "outside"),
         ("Alignment", points.Alignment + (f", locked {', '.join(points.Locked)}" if points.Locked else "")),
         ("Moved the points by up to", points.MovedBy.Value, "moved_mm"),
         ("Motions the points do not hold", ", ".join(getattr(points, "FreeMotions", [])) or "none"),
     ] + [("Transform (measured -> CAD)" if row == 0 else "", *(f"{matrix.A[4 * row + column]:.9g}"
                                                                for column in range(4))) for row in range(4)]
-    notes = [("Face profile", line) for line in points.FaceProfiles if len(points.FaceProfiles) > 1]
+    notes = [("Datum" if index == 0 else "", line) for index, line in enumerate(getattr(points, "Datums", []))]
+    notes += [("Face profile", line) for line in points.FaceProfiles if len(points.FaceProfiles) > 1]
     notes += [("Note", note) for note in points.Notes]
     table = [INSPECTION_COLUMNS] + [
         (label, face, *(f"{c:.4f}" for c in nominal), *(f"{c:.4f}" for c in measured),

@@ -1,5 +1,5 @@
-"""*Inspect measured points...*: the measured file, the alignment, the locked degrees of freedom
-and the profile tolerance, asked in a small dialog; the inspection then runs as its echoed API
+"""*Inspect measured points...*: the measured file, the alignment, the locked degrees of freedom,
+the profile tolerance, the datums and the CMM's probing uncertainty, asked in a small dialog; the inspection then runs as its echoed API
 calls (``inspection = cmmsampling.inspect(...)``, ``cmmsampling.add_inspection_to_document``).
 
 The values persist in the workbench's parameter group; the file starts in the folder of the last
@@ -14,7 +14,7 @@ from PySide import QtCore, QtGui
 
 from ..document import settings
 from ..inspection.align import ALIGNMENTS, DEGREES_OF_FREEDOM
-from ..inspection.judge import InspectionCancelled, inspect, verdict_text
+from ..inspection.judge import InspectionCancelled, inspect, verdict_words
 from . import icon
 from .background import BackgroundTask, behind_progress
 from .qt_compat import asked
@@ -30,9 +30,10 @@ ALIGNMENT_TEXTS = {
                                                   "measured in the part's own frame"),
 }
 DEFAULTS = {"InspectFile": "", "InspectAlignment": "min_max", "InspectTolerance": 0.1, "InspectLocked": "",
-            "InspectZoneOffset": 0.0}
+            "InspectZoneOffset": 0.0, "InspectDatums": "", "InspectUncertainty": 0.0}
 MEASURED_FILTERS = ("Measured points (*.dmi *.dmis *.dmo *.dms *.csv *.xyz *.txt *.qif);;All files (*)")
 MAX_TOLERANCE_MM = 100.0
+MAX_UNCERTAINTY_MM = 1.0
 
 
 class InspectDialog(QtGui.QDialog):
@@ -93,6 +94,20 @@ class InspectDialog(QtGui.QDialog):
                                   "out of the material: 0 a zone centred on the nominal, +t/2 a unilateral zone "
                                   "outside the material, -t/2 inside.")
         layout.addRow("Zone offset (UZ)", self.zone_offset)
+        self.datums = QtGui.QLineEdit(stored["InspectDatums"], self)
+        self.datums.setObjectName("datums")
+        self.datums.setPlaceholderText("none: the form, floated (e.g. Face1, Face5, Face4)")
+        self.datums.setToolTip("The datum faces, primary first, as A, B, C on the drawing: the part is aligned on "
+                               "their measured points (ISO 5459, tangent) and the profile is judged in their frame "
+                               "(location and form). Plan the datum faces with the toleranced ones.")
+        layout.addRow("Datums", self.datums)
+        self.uncertainty = mm_box(self, "uncertainty", (0.0, MAX_UNCERTAINTY_MM), stored["InspectUncertainty"],
+                                  "The CMM's probing standard uncertainty per point (an MPE_P / sqrt(3)): the "
+                                  "profile's expanded uncertainty U (k = 2) by Monte Carlo, and ISO 14253-1's "
+                                  "decision (conforms, does not conform, undecided). 'none': no uncertainty.")
+        self.uncertainty.setSingleStep(0.001)
+        self.uncertainty.setSpecialValueText("none")
+        layout.addRow("Probing uncertainty u", self.uncertainty)
         self.buttons = QtGui.QDialogButtonBox(QtGui.QDialogButtonBox.Ok | QtGui.QDialogButtonBox.Cancel, parent=self)
         self.buttons.accepted.connect(self.accept)
         self.buttons.rejected.connect(self.reject)
@@ -115,17 +130,21 @@ class InspectDialog(QtGui.QDialog):
 
     def arguments(self):
         """{"measured": path, "alignment": ..., "locked": tuple, "tolerance": mm or None,
-        "zone_offset": mm}: keyword arguments of cmmsampling.inspect."""
+        "zone_offset": mm, "datums": face names, "uncertainty": mm or None}: keyword arguments
+        of cmmsampling.inspect."""
         return {"measured": self.path.text(), "alignment": self.alignment.currentData(),
                 "locked": tuple(name for name, box in self.locked.items() if box.isChecked()),
-                "tolerance": self.tolerance.value() or None, "zone_offset": self.zone_offset.value()}
+                "tolerance": self.tolerance.value() or None, "zone_offset": self.zone_offset.value(),
+                "datums": tuple(name.strip() for name in self.datums.text().split(",") if name.strip()),
+                "uncertainty": self.uncertainty.value() or None}
 
     def stored(self):
         """The values to keep for the next inspection."""
         chosen = self.arguments()
         return {"InspectFile": chosen["measured"], "InspectAlignment": chosen["alignment"],
                 "InspectTolerance": self.tolerance.value(), "InspectLocked": ",".join(chosen["locked"]),
-                "InspectZoneOffset": chosen["zone_offset"]}
+                "InspectZoneOffset": chosen["zone_offset"], "InspectDatums": ", ".join(chosen["datums"]),
+                "InspectUncertainty": self.uncertainty.value()}
 
 
 def mm_box(parent, name, limits, value, tip):
@@ -165,6 +184,10 @@ def inspection_call(points, arguments):
         words.append(f"tolerance={arguments['tolerance']!r}")
     if arguments["zone_offset"]:
         words.append(f"zone_offset={arguments['zone_offset']!r}")
+    if arguments.get("datums"):
+        words.append(f"datums={tuple(arguments['datums'])!r}")
+    if arguments.get("uncertainty") is not None:
+        words.append(f"uncertainty={arguments['uncertainty']!r}")
     return [f"inspection = cmmsampling.inspect({', '.join(words)})",
             f"group = cmmsampling.add_inspection_to_document(inspection, {doc}, source={source})"]
 
@@ -176,8 +199,7 @@ def report_inspection(inspection):
         FreeCAD.Console.PrintMessage(f"cmmsampling: {line}\n")
     FreeCAD.Console.PrintMessage(f"cmmsampling: alignment (measured -> CAD, applied to the points; the part is "
                                  f"not moved): {placement_text(inspection.placement)}\n")
-    verdict = "" if inspection.passed is None else (
-        f", tolerance {inspection.tolerance:g} mm: {verdict_text(inspection.passed)}")
+    verdict = verdict_words(inspection)
     free = f"; motions the points do not hold: {', '.join(inspection.free_motions)}" if inspection.free_motions else ""
     FreeCADGui.getMainWindow().statusBar().showMessage(
         f"Inspection of {len(inspection.labels)} measured points: profile {inspection.profile:.4f} mm{verdict}{free}",

@@ -61,6 +61,8 @@ class ViewProviderMeasuredPoints(Annotated):
             offset = float(obj.ZoneOffset.Value)
             zone = f" (offset {offset:+g} mm)" if offset else ""
             title = f"Profile {mm_text(obj.Profile.Value)}, tolerance {tolerance:g} mm{zone}: {obj.Verdict}"
+            if getattr(obj, "Uncertainty", None) is not None and obj.Uncertainty.Value > 0:
+                title += f"; U {mm_text(obj.Uncertainty.Value)}: {obj.Decision}"
             legend = colormap.band_legend(band_rows(tolerance, offset), title)
         else:
             largest = colormap.shown_maximum(np.abs(deviations).max())

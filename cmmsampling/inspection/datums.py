@@ -68,6 +68,16 @@ class DatumFit:
         """mm, the spread of the datum's points about its associated face."""
         return float(self.deviations.max() - self.deviations.min())
 
+    def as_record(self):
+        """The fit as a JSON-friendly dict."""
+        return {"label": self.label, "face": self.face, "criterion": self.criterion, "count": self.count,
+                "held": self.held, "deviations": [float(value) for value in self.deviations]}
+
+    @classmethod
+    def from_record(cls, record):
+        """The DatumFit of :meth:`as_record`'s dict."""
+        return cls(**{**record, "deviations": np.array(record["deviations"], dtype=float)})
+
     def text(self):
         """'A (Face1, tangent, 3 motions, 12 points, form 0.0012 mm)'."""
         return (f"{self.label} ({self.face}, {self.criterion.replace('_', ' ')}, {self.held} motion"

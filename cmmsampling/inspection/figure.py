@@ -14,7 +14,7 @@ from matplotlib.collections import PolyCollection
 from matplotlib.figure import Figure
 
 from ..geometry.surface import as_face
-from .judge import verdict_text
+from .judge import verdict_words
 
 # The tessellation's tolerance as a fraction of the face's diagonal.
 MESH_FRACTION = 5e-3
@@ -47,9 +47,7 @@ def write_inspection_figure(inspection, face, path, title="Measured deviation"):
     if inspection.tolerance and inspection.tolerance / 2.0 < limit:
         for bound in (-inspection.tolerance / 2.0, inspection.tolerance / 2.0):
             bar.ax.axhline(bound, color="black", linewidth=1.5)
-    verdict = "" if inspection.passed is None else (
-        f", tolerance {inspection.tolerance:g} mm: {verdict_text(inspection.passed)}")
-    ax.set_title(f"{title}: profile {inspection.profile:.4f} mm{verdict}", fontsize=10)
+    ax.set_title(f"{title}: profile {inspection.profile:.4f} mm{verdict_words(inspection)}", fontsize=10)
     names = "xyz"
     ax.set_xlabel(f"{names[axes_2d[0]]} (mm)")
     ax.set_ylabel(f"{names[axes_2d[1]]} (mm)")

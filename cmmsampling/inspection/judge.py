@@ -192,8 +192,7 @@ class Inspection:
     def summary(self):
         """The inspection in a few lines: points, alignment, profile, verdict."""
         zone = f" (zone offset {self.zone_offset:+g} mm)" if self.zone_offset else ""
-        lines = [f"{len(self.labels)} points, alignment {self.alignment.method} "
-                 f"({self.alignment.iterations} steps{' (capped: not settled)' if self.alignment.capped else ''}, "
+        lines = [f"{len(self.labels)} points, {self._alignment_words()}, "
                  f"points moved up to {self.alignment.moved_mm:.4g} mm)",
                  "motions the points do not hold (kept where their labels put them): "
                  + (", ".join(self.free_motions) if self.free_motions else "none")]
@@ -213,6 +212,15 @@ class Inspection:
                       for name, value in faces.items()]
         notes = self.notes + ([] if self.uncertainty is None else self.uncertainty.notes)
         return "\n".join(lines + [f"note: {note}" for note in notes])
+
+    def _alignment_words(self):
+        """'alignment min_max (7 steps' or 'aligned on datums A|B|C (then min_max, 3 steps in the
+        motions they leave free' (the summary's first line closes the bracket)."""
+        steps = f"{self.alignment.iterations} steps{' (capped: not settled)' if self.alignment.capped else ''}"
+        if not self.datums:
+            return f"alignment {self.alignment.method} ({steps}"
+        frame = "|".join(datum.label for datum in self.datums)
+        return f"aligned on datums {frame} (then {self.alignment.method}, {steps} in the motions they leave free"
 
     def _face_verdict(self, name, profile):
         """', PASS' (and ', U 0.0041 mm: conforms' with an uncertainty) for a face's profile."""
@@ -239,6 +247,15 @@ class Planned:
 def verdict_text(passed):
     """'PASS' or 'FAIL' for a verdict (True or False)."""
     return "PASS" if passed else "FAIL"
+
+
+def verdict_words(inspection):
+    """', U 0.0061 mm, tolerance 0.05 mm: FAIL, ISO 14253-1: undecided' (the parts it has)."""
+    spread = "" if inspection.uncertainty is None else f", U {inspection.profile_uncertainty:.4f} mm (k = 2)"
+    if inspection.passed is None:
+        return spread
+    decided = "" if inspection.decision is None else f", ISO 14253-1: {inspection.decision}"
+    return f"{spread}, tolerance {inspection.tolerance:g} mm: {verdict_text(inspection.passed)}{decided}"
 
 
 def tolerance_bands(deviations, tolerance, offset=0.0):

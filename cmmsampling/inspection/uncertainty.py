@@ -36,24 +36,35 @@ NO_UNCERTAINTY = "no uncertainty given: the verdict takes the measured profile a
 @dataclass
 class ProfileUncertainty:
     """The Monte Carlo's result. probing: u per point, mm; expanded: U = k s, mm, of the
-    profile; faces: {face name: its U, mm}; profiles: (T,) mm, each trial's profile; mean_shift:
-    mm, the trials' mean profile less the measured one (how much the probing error widens a
-    profile on average); relative_error: the Monte Carlo's own relative error of U; seed."""
+    profile; faces: {face name: its U, mm}; trials: how many were run; mean_shift: mm, the
+    trials' mean profile less the measured one (how much the probing error widens a profile on
+    average); relative_error: the Monte Carlo's own relative error of U; seed; coverage: k;
+    profiles: (trials,) mm, each trial's profile (None once saved and read back)."""
 
     probing: float
     expanded: float
     faces: dict
-    profiles: np.ndarray
+    trials: int
     mean_shift: float
     relative_error: float
     seed: int
     coverage: float = COVERAGE_FACTOR
     notes: list = field(default_factory=list)
+    profiles: np.ndarray = None
 
     @property
-    def trials(self):
-        """The number of trials run."""
-        return len(self.profiles)
+    def standard(self):
+        """u_c, mm: the profile's combined standard uncertainty, U / k."""
+        return self.expanded / self.coverage
+
+    def as_record(self):
+        """The figures as a JSON-friendly dict (the trials' profiles left out)."""
+        return {key: value for key, value in vars(self).items() if key != "profiles"}
+
+    @classmethod
+    def from_record(cls, record):
+        """The ProfileUncertainty of :meth:`as_record`'s dict."""
+        return cls(**record)
 
     def text(self):
         """'U = 0.0042 mm (k = 2; u = 0.001 mm per point, 750 Monte Carlo trials, its own error 3.1 %)'."""
@@ -95,7 +106,8 @@ def profile_uncertainty(frame, normals, owner, names, probing, offset=0.0, seed=
     return ProfileUncertainty(probing, COVERAGE_FACTOR * float(whole.std(ddof=1)),
                               {name: COVERAGE_FACTOR * float(profiles[:, index].std(ddof=1))
                                for index, name in enumerate(names) if faces[index].size},
-                              whole, float(whole.mean()) - measured, error, seed, notes=notes)
+                              len(whole), float(whole.mean()) - measured, float(error), seed, notes=notes,
+                              profiles=whole)
 
 
 def relative_error(values):

@@ -12,6 +12,7 @@ from support.faces import FreeCAD, walled_part
 from support.paths import ROOT
 
 import cmmsampling
+from cmmsampling.geometry.blocks import datum_block
 from cmmsampling import cli
 from cmmsampling.access.probe import Probe
 from cmmsampling.formats import qif
@@ -256,3 +257,25 @@ def test_decimals_are_positional_and_exact_to_1e_24_mm(value):
     text = decimal(value)
     assert "e" not in text.lower() and abs(float(text) - value) <= 1e-24
     assert len(text.lstrip("-").replace(".", "").lstrip("0")) <= 24
+
+
+def test_a_datum_referenced_verdict_with_its_uncertainty_passes_the_schemas(tmp_path):
+    block = datum_block()
+    plan = cmmsampling.plan(block, n_total=80, strategy="uniform_parametric", faces=[3, 1, 5, 4], processes=1)
+    planned = cmmsampling.formats.exporting.plan_point_set(plan)
+    out = np.array([0.024 if face == "Face3" else 0.0 for face in planned.faces])
+    read = cmmsampling.PointSet(list(planned.labels), planned.points + out[:, None] * planned.normals, planned.normals)
+    inspection = cmmsampling.inspect(plan, read, part=block, tolerance=0.05, datums=["Face1", "Face5", "Face4"],
+                                     uncertainty=0.002)
+    assert inspection.decision == "undecided"
+    cmmsampling.export(inspection, tmp_path / "datums.qif")
+    root = valid(tmp_path / "datums.qif")
+    assert root.findtext(".//q:InspectionStatus/q:InspectionStatusEnum", namespaces=NS) == "UNKNOWN"
+    assert [e.text for e in root.iter(f"{{{QIF_NS}}}CharacteristicStatusEnum")] == ["INDETERMINATE"]
+    value = root.find(".//q:SurfaceProfileCharacteristicMeasurement/q:Value", NS)
+    assert float(value.text) == inspection.profile
+    assert float(value.get("combinedUncertainty")) == inspection.profile_uncertainty / 2
+    facts = {e.get("name"): e.get("value") for e in root.find("q:Attributes", NS)}
+    assert float(facts["expandedUncertainty_mm"]) == inspection.profile_uncertainty
+    assert facts["profileIs"].startswith("relative to datums A|B|C: location and form")
+    assert facts["decision"].startswith("ISO 14253-1: undecided") and facts["datumA"].startswith("A (Face1, tangent")

@@ -8,9 +8,10 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from support.faces import Part, wavy_block
+from support.faces import Part
 
 import cmmsampling
+from cmmsampling.geometry.blocks import datum_block
 from cmmsampling.formats.exporting import as_point_set
 from cmmsampling.geometry.validation import InputError
 from cmmsampling.inspection.align import transform
@@ -25,7 +26,7 @@ FRAME = ("Face1", "Face5", "Face4")
 @pytest.fixture(scope="module")
 def block():
     """(shape, plan, nominal PointSet): 16 points on each of the top (Face3) and the datum faces."""
-    shape = wavy_block()
+    shape = datum_block()
     plan = cmmsampling.plan(shape, n_total=80, strategy="uniform_parametric", faces=[3, 1, 5, 4], processes=1)
     return shape, plan, as_point_set(plan)
 

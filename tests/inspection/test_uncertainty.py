@@ -8,9 +8,10 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from support.faces import Part, wavy_block
+from support.faces import Part
 
 import cmmsampling
+from cmmsampling.geometry.blocks import datum_block
 from cmmsampling.formats.exporting import as_point_set
 from cmmsampling.formats.pointset import PointSet
 from cmmsampling.inspection.align import transform
@@ -44,7 +45,7 @@ def test_on_a_plane_the_monte_carlo_meets_the_closed_form(alignment):
 @pytest.fixture(scope="module")
 def block():
     """(shape, plan, nominal PointSet) of the datum tests' block: 16 points a face."""
-    shape = wavy_block()
+    shape = datum_block()
     plan = cmmsampling.plan(shape, n_total=80, strategy="uniform_parametric", faces=[3, 1, 5, 4], processes=1)
     return shape, plan, as_point_set(plan)
 

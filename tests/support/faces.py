@@ -179,16 +179,3 @@ def walled_part():
               if face.normalAt(*face.Surface.parameter(face.CenterOfMass)).z > 0.5]
     return part, upward
 
-
-def wavy_block(length=100.0, depth=60.0, height=30.0, wave=3.0):
-    """A block with a free-form top: Face1 the base (z = 0), Face4 the end x = 0, Face5 the side
-    y = 0 (three planar datums, square to each other) and Face3 the wavy top, a B-spline curve
-    (height + wave sin(3 pi x / length)) extruded along y."""
-    xs = np.linspace(0.0, length, 21)
-    top = [FreeCAD.Vector(x, 0.0, height + wave * np.sin(3 * np.pi * x / length)) for x in xs]
-    curve = Part.BSplineCurve()
-    curve.interpolate(top)
-    edges = [Part.makeLine(FreeCAD.Vector(0, 0, 0), FreeCAD.Vector(length, 0, 0)),
-             Part.makeLine(FreeCAD.Vector(length, 0, 0), top[-1]), curve.toShape(),
-             Part.makeLine(top[0], FreeCAD.Vector(0, 0, 0))]
-    return Part.Face(Part.Wire(Part.__sortEdges__(edges))).extrude(FreeCAD.Vector(0, depth, 0))

@@ -67,6 +67,10 @@ def add_transform(doc, parent, matrix):
     return identifier
 
 
+# A characteristic's status from ISO 14253-1's decision (cmmsampling.inspection.uncertainty).
+DECISION_STATUS = {"conforms": "PASS", "does not conform": "FAIL", "undecided": "INDETERMINATE"}
+
+
 def status_of(passed):
     """PASS, FAIL, or (without a verdict: no tolerance) NOT_CALCULATED."""
     return {True: "PASS", False: "FAIL", None: "NOT_CALCULATED"}[passed]
@@ -113,10 +117,16 @@ def characteristic_measurements(doc, parent, inspection, groups, items, measured
     profiles = inspection.face_profiles
     for name, rows in groups:
         element = doc.with_id(holder, "SurfaceProfileCharacteristicMeasurement")[0]
-        doc.add(doc.add(element, "Status"), "CharacteristicStatusEnum", status_of(inspection.face_passed(profiles[name])))
+        status = status_of(inspection.face_passed(profiles[name]))
+        if inspection.face_decision(name) is not None:
+            status = DECISION_STATUS[inspection.face_decision(name)]
+        doc.add(doc.add(element, "Status"), "CharacteristicStatusEnum", status)
         doc.add(element, "CharacteristicItemId", items[name])
         doc.id_list(element, "FeatureMeasurementIds", [measured[name]])
-        doc.add(element, "Value", decimal(profiles[name]))
+        value = doc.add(element, "Value", decimal(profiles[name]))
+        if inspection.uncertainty is not None:
+            value.set("combinedUncertainty", decimal(inspection.uncertainty.faces[name] / inspection.uncertainty.coverage))
+            value.set("meanError", decimal(abs(inspection.uncertainty.mean_shift)))
         doc.add(element, "WorstPositiveDeviation", decimal(float(inspection.deviations[rows].max())))
         doc.add(element, "WorstNegativeDeviation", decimal(float(inspection.deviations[rows].min())))
 
@@ -127,6 +137,14 @@ def inspection_facts(inspection):
                ("D1", "profile_mm", decimal(inspection.profile))]
     if inspection.measured_file:
         entries.append(("Str", "measuredFile", inspection.measured_file))
+    entries.append(("Str", "profileIs", inspection.profile_kind))
+    entries += [("Str", f"datum{datum.label}", datum.text()) for datum in inspection.datums]
+    if inspection.uncertainty is not None:
+        entries += [("D1", "expandedUncertainty_mm", decimal(inspection.uncertainty.expanded)),
+                    ("D1", "coverageFactor", decimal(inspection.uncertainty.coverage)),
+                    ("D1", "probingUncertainty_mm", decimal(inspection.uncertainty.probing)),
+                    ("Str", "uncertaintyMethod", inspection.uncertainty.text())]
+    entries.append(("Str", "decision", inspection.decision_text()))
     entries += [("Str", f"note{index}", note) for index, note in enumerate(inspection.notes, start=1)]
     return entries
 
@@ -160,6 +178,8 @@ def write_results(inspection, part="part"):
     doc.add(association, "ActualTransformId", add_transform(doc, actual, np.asarray(inspection.transform, float)))
     doc.add(association, "CoordinateSystemId", cad_id)
     status = status_of(inspection.passed)
+    if inspection.decision is not None:
+        status = {**DECISION_STATUS, "undecided": "UNKNOWN"}[inspection.decision]
     doc.add(doc.add(results, "InspectionStatus"), "InspectionStatusEnum", status)
     component_set = doc.add(doc.add(top, "ActualComponentSets", n=1), "ActualComponentSet", n=1)
     component, component_id = doc.with_id(component_set, "ActualComponent")
