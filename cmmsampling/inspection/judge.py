@@ -411,16 +411,18 @@ def datum_points(datums, planned, order, owner, contact, part, probe_radius):
             own = _contact_points(_datum_point_set(datum), probe_radius)
             sources.append(DatumSource(datum, name, face, own, np.full_like(own, np.nan)))
             continue
-        if name not in planned.names:
+        index = planned_face(planned, name)
+        if index is None:
             raise InputError(f"datum {datum.label}: {name} has no planned points here; plan it with the toleranced "
                              f"faces (plan(part, faces=[...])) or give Datum({datum.label!r}, face, points=...)")
-        rows = owner == planned.names.index(name)
+        name = planned.names[index]
+        rows = owner == index
         if not rows.any():
             raise InputError(f"datum {datum.label}: none of the measured points lies on {name}; measure it or give "
                              f"Datum({datum.label!r}, face, points=...)")
         kept &= ~rows
         nominal = planned.points[order[1][rows]] if planned.points is not None else None
-        sources.append(DatumSource(datum, name, planned.faces[planned.names.index(name)], contact[order[0][rows]],
+        sources.append(DatumSource(datum, name, planned.faces[index], contact[order[0][rows]],
                                    np.full((int(rows.sum()), 3), np.nan) if nominal is None else nominal))
     return sources, kept
 
@@ -519,13 +521,22 @@ def _planned(source, part):
                          "a PartPlan or the workbench's probe points in a document")
 
 
+def planned_face(planned, name):
+    """The index of face ``name`` among the planned faces: its own name, or the one name of the
+    form '<object>:<name>' (a plan in a document names its faces 'Block:Face1'); None if none."""
+    if name in planned.names:
+        return planned.names.index(name)
+    ends = [index for index, planned_name in enumerate(planned.names) if planned_name.split(":")[-1] == name]
+    return ends[0] if len(ends) == 1 else None
+
+
 def _datum_face(datum, planned, part):
     """The Part.Face of a datum that brings its own points: its face given, a face of the plan
     by name, or of part=; InputError where none is found."""
     if not isinstance(datum.face, str):
         return as_face(datum.face)
-    if datum.face in planned.names:
-        return planned.faces[planned.names.index(datum.face)]
+    if planned_face(planned, datum.face) is not None:
+        return planned.faces[planned_face(planned, datum.face)]
     if part is None:
         raise InputError(f"datum {datum.label}: {datum.face} is no face of the plan; give part= the shape it is a "
                          "face of, or the Part.Face itself")

@@ -44,11 +44,11 @@ def test_an_inspection_goes_in_as_one_step_and_undoes(doc, points, tmp_path):
     assert moved.distanceToPoint(FreeCAD.Vector(*found.points[3])) < 1e-9
     assert sheet.get("profile_mm") == pytest.approx(found.profile) and sheet.get("n") == 25
     assert sheet.get("outside") == int(np.count_nonzero(~found.within))
-    assert sheet.get("A17") == "Label" and sheet.get("A18") == found.labels[0]
-    assert sheet.get("A11") == "Motions the points do not hold" and sheet.get("B11") == "none"
-    assert [sheet.get(f"{c}18") for c in "FGH"] == [f"{v:.4f}" for v in found.measured[0]], "as read"
-    assert [sheet.get(f"{c}18") for c in "IJK"] == [f"{v:.4f}" for v in found.points[0]], "aligned"
-    assert sheet.get(f"M{17 + 25}") in ("in", "near above", "near below", "OUT above", "OUT below")
+    assert sheet.get("A20") == "Label" and sheet.get("A21") == found.labels[0]
+    assert sheet.get("A14") == "Motions the points do not hold" and sheet.get("B14") == "none"
+    assert [sheet.get(f"{c}21") for c in "FGH"] == [f"{v:.4f}" for v in found.measured[0]], "as read"
+    assert [sheet.get(f"{c}21") for c in "IJK"] == [f"{v:.4f}" for v in found.points[0]], "aligned"
+    assert sheet.get(f"M{20 + 25}") in ("in", "near above", "near below", "OUT above", "OUT below")
     doc.undo()
     assert [o.Name for o in doc.Objects] == before and points.Visibility
 
@@ -139,5 +139,37 @@ def test_file_export_writes_a_saved_inspections_results_as_qif(doc, tmp_path):
         assert np.abs(back.points - found.measured).max() < 1e-12, "the points as read"
         forms = [float(e.text) for e in ET.fromstring(text.encode()).iter("{http://qifstandards.org/xsd/qif3}Form")]
         assert forms == [found.face_forms[face] for face in found.face_profiles], "each face aligned alone"
+    finally:
+        closed(again.Name)
+
+
+def test_a_datum_referenced_inspection_keeps_its_datums_and_uncertainty(doc, tmp_path):
+    from cmmsampling.geometry.blocks import DATUM_FACES, datum_block
+
+    block = doc.addObject("Part::Feature", "Block")
+    block.Shape = datum_block()
+    doc.recompute()
+    plan = cmmsampling.plan(block.Shape, n_total=64, strategy="uniform_parametric", faces=[3, 1, 5, 4], processes=1)
+    group = cmmsampling.add_plan_to_document(plan, doc, block)
+    cmmsampling.simulate_measurement(group, tmp_path / "block.dmi", form_error=0.02, noise=0.001, seed=7,
+                                     misplacement=MISPLACED)
+    found = cmmsampling.inspect(group, tmp_path / "block.dmi", tolerance=0.05, datums=DATUM_FACES, uncertainty=0.001)
+    assert [datum.face for datum in found.datums] == [f"Block:{face}" for face in DATUM_FACES]
+    assert set(found.faces) == {"Block:Face3"} and found.decision is not None
+    measured = cmmsampling.add_inspection_to_document(found, doc, source=group).Group[0]
+    report = measured.Report
+    assert report.get("uncertainty_mm") == pytest.approx(found.profile_uncertainty)
+    assert report.get("decision") == found.decision == measured.Decision
+    assert measured.ProfileKind.startswith("relative to datums A|B|C") and len(measured.Datums) == 3
+    path = str(tmp_path / "datums.FCStd")
+    doc.saveAs(path)
+    name = measured.Name
+    closed(doc.Name)
+    again = FreeCAD.openDocument(path)
+    try:
+        back = again.getObject(name).Proxy.inspection(again.getObject(name))
+        assert back.decision == found.decision and back.profile_uncertainty == found.profile_uncertainty
+        assert [datum.text() for datum in back.datums] == [datum.text() for datum in found.datums]
+        assert back.summary().splitlines()[-1] == found.summary().splitlines()[-1]
     finally:
         closed(again.Name)
