@@ -35,7 +35,8 @@ class ViewProviderMeasuredPoints(Annotated):
         vobj.Proxy = self
 
     def updateData(self, obj, prop):
-        if prop in ("Points", "Bands", "Deviation", "Tolerance", "ZoneOffset", "Profile", "Verdict") and \
+        if prop in ("Points", "Bands", "Deviation", "Tolerance", "ZoneOffset", "Profile", "Verdict", "Uncertainty",
+                    "Decision") and \
                 obj.ViewObject is not None:
             self.redraw(obj.ViewObject)
 

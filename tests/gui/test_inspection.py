@@ -191,3 +191,49 @@ def test_the_command_says_what_to_select_and_echoes_every_choice(blade_points):
                      "locked=('z',), zone_offset=0.005)")
     assert add == f"group = cmmsampling.add_inspection_to_document(inspection, App.getDocument({doc.Name!r}), " \
                   f"source={source})"
+
+
+@pytest.fixture
+def block_plan(workbench):
+    """A document with the datum block and a plan of its top and its three datum faces (16 points
+    each); (document, the plan's group)."""
+    from cmmsampling.geometry.blocks import datum_block
+
+    for doc in document_with("DatumBlock", {"Block": datum_block()}):
+        plan = cmmsampling.plan(doc.Block.Shape, n_total=64, strategy="uniform_parametric", faces=[3, 1, 5, 4],
+                                processes=1)
+        yield doc, cmmsampling.add_plan_to_document(plan, doc, doc.Block)
+
+
+def test_a_profile_relative_to_datums_shows_its_uncertainty_and_decision(block_plan, tmp_path, artifacts):
+    doc, group = block_plan
+    measured = str(tmp_path / "block.dmi")
+    cmmsampling.simulate_measurement(group, measured, form_error=0.02, noise=0.001, seed=7, misplacement=MISPLACED)
+
+    def choose(dialog):
+        dialog.path.setText(measured)
+        dialog.tolerance.setValue(0.05)
+        dialog.datums.setText("Face1, Face5, Face4")
+        dialog.uncertainty.setValue(0.001)
+        dialog.grab().save(os.path.join(artifacts, "inspect_dialog_datums.png"))
+        dialog.accept()
+
+    console = dock_text("Python console")
+    inspect_with(group, choose, timeout_s=60)
+    expected = cmmsampling.inspect(group, measured, tolerance=0.05, datums=("Face1", "Face5", "Face4"),
+                                   uncertainty=0.001)
+    echoed = dock_text("Python console")[len(console):]
+    assert "tolerance=0.05, datums=('Face1', 'Face5', 'Face4'), uncertainty=0.001)" in echoed
+    [inspected] = [obj for obj in doc.Objects if obj.Label.startswith("Inspection ") and hasattr(obj, "Group")]
+    measured_points, report = inspected.Group
+    assert measured_points.Decision == expected.decision and report.get("decision") == expected.decision
+    assert measured_points.Uncertainty.Value == pytest.approx(expected.profile_uncertainty)
+    assert f"ISO 14253-1: {expected.decision}" in main_window().statusBar().currentMessage()
+    legend = texts(measured_points.ViewObject.Proxy.annotation)[-1]
+    assert legend.endswith(f"; U {mm_text(expected.profile_uncertainty)}: {expected.decision}")
+    view = FreeCADGui.ActiveDocument.ActiveView
+    view.viewIsometric()
+    FreeCADGui.SendMsgToActiveView("ViewFit")
+    process_events(0.5)
+    view.saveImage(os.path.join(artifacts, "inspection_datum_block.png"), 1200, 900, "White")
+    print(f"datum block: {expected.summary()}")
