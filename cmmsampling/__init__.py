@@ -50,6 +50,7 @@ _API = {
     "inspect": "inspection.judge",
     "Inspection": "inspection.judge",
     "Datum": "inspection.datums",
+    "points_for_verdict": "inspection.verdict_points",
     "simulate_measurement": "inspection.simulate",
     "measure": "cmm.client",
     "MeasuredRun": "cmm.client",
