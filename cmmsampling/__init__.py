@@ -43,6 +43,7 @@ _API = {
     "SamplingResult": "strategies.result",
     "SurfaceModel": "geometry.surface",
     "reference_face": "geometry.surface",
+    "datum_block": "geometry.blocks",
     "default_pole_count": "fitting.substitute",
     "export": "formats.exporting",
     "ExportError": "formats.files",

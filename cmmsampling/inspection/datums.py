@@ -19,11 +19,13 @@ where the start put them and named. Pure numpy/scipy: the closest points come fr
 """
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass
 
 import numpy as np
 from scipy.linalg import eigh
 
+from ..formats.pointset import PointSet
 from ..geometry.validation import InputError
 from .align import (DEGREES_OF_FREEDOM, WEAK_SENSITIVITY, Alignment, _least_squares, _min_max, _motion_names,
                     _offset_by, signed_distances, tangent, transform)
@@ -45,8 +47,8 @@ class Datum:
     """
 
     label: str
-    face: object
-    points: object = None
+    face: str | object
+    points: str | os.PathLike | PointSet | np.ndarray | None = None
     criterion: str = "tangent"
 
 

@@ -18,12 +18,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..formats.pointset import PointSet
+from ..geometry.freecad_env import import_part
 from ..geometry.validation import InputError, check_real
 from ..strategies.face_setup import reused
 from ..strategies.sampling import sample
 from .align import align
 from .closest import FaceCloser
 from .simulate import form_waves
+
+Part = import_part()
 
 # The counts of points tried, the simulated parts and the share of the tolerance by default;
 # the quantile of the gaps taken as the uncertainty from sampling.
@@ -69,8 +72,9 @@ class VerdictPoints:
                 f"(mm) per N: {table}")
 
 
-def points_for_verdict(face, tolerance, form_error, *, share=SHARE, strategy="uniform_parametric", counts=COUNTS,
-                       parts=PARTS, seed=0, alignment="min_max"):
+def points_for_verdict(face: Part.Face, tolerance: float, form_error: float, *, share: float = SHARE,
+                       strategy: str = "uniform_parametric", counts: tuple = COUNTS, parts: int = PARTS, seed: int = 0,
+                       alignment: str = "min_max") -> VerdictPoints:
     """The VerdictPoints of a face (Part.Face): the fewest N of ``counts`` that ``strategy``
     places so that, on ``parts`` simulated parts with a form error of at most form_error mm
     (seeded from seed), the profile the N points give (aligned by ``alignment``) misses the
