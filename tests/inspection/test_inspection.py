@@ -4,6 +4,8 @@ The alignment is checked against an independent point-to-plane fit written here 
 closest points (distToShape) and scipy's rotations, on a built rational face and on a face of the
 shared CAD files (skipped without them)."""
 
+import re
+
 import numpy as np
 import pytest
 from scipy.optimize import least_squares
@@ -250,6 +252,11 @@ def test_the_demo_closes_the_loop_and_draws_the_measured_face(tmp_path, capsys):
     assert "Inspection of the Halton points measured on a virtual CMM" in said and "tolerance 0.1 mm: PASS" in said
     assert "(minimum zone, ISO 1101)" in said and "capped" not in said, "the minimum-zone verdict, a settled fit"
     assert "motions the points do not hold (kept where their labels put them): none" in said
+    assert "ISO 14253-1: conforms (profile " in said and "probing u = 0.001 mm per point" in said
+    block = said[said.index("The datum block's top (Face3) measured with its datums A = Face1"):]
+    assert "aligned on datums A|B|C" in block and "(relative to datums A|B|C: location and form, ISO 1101)" in block
+    assert re.search(r"ISO 14253-1: (conforms|does not conform|undecided) \(profile \d\.\d{4} mm, tolerance 0.05 mm, "
+                     r"guard band U\): U = \d\.\d{4} mm \(k = 2", block), block
     assert cmmsampling.read_points(tmp_path / "loop" / "measured.dmi").metadata["dmis_features"] == "actual"
     assert (tmp_path / "loop" / "deviation.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     cmmsampling.simulate_measurement(result, tmp_path / "bad.dmi", form_error=0.05, seed=3)
