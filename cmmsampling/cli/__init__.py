@@ -258,9 +258,10 @@ def _datum_inspection(folder):
     from ..inspection.judge import inspect
     from ..inspection.simulate import simulate_measurement
     from ..planning.part_plan import plan
+    from ..strategies.registry import baseline
 
     block = datum_block()
-    planned = plan(block, n_total=64, strategy="uniform_parametric", faces=[3, 1, 5, 4], processes=1)
+    planned = plan(block, n_total=64, strategy=baseline(), faces=[3, 1, 5, 4], processes=1)
     measured = simulate_measurement(planned, os.path.join(folder, "measured_block.dmi"), **DEMO_MEASUREMENT)
     found = inspect(planned, measured.path, part=block, tolerance=DEMO_DATUM_TOLERANCE, datums=DATUM_FACES,
                     uncertainty=DEMO_MEASUREMENT["noise"])

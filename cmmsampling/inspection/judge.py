@@ -371,7 +371,7 @@ def inspect(source, measured, alignment="min_max", tolerance=None, locked=(), pa
         told("propagating the probing uncertainty (Monte Carlo)")
         inspection.uncertainty = profile_uncertainty(frame, _frame_normals(frame, stages, normals), owner,
                                                      planned.names, uncertainty, zone_offset, seed)
-    if isinstance(source, SamplingResult) and not wanted:
+    if isinstance(source, SamplingResult):
         rebuild(inspection, source, order[1])
     return inspection
 

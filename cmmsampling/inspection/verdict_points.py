@@ -21,6 +21,7 @@ from ..formats.pointset import PointSet
 from ..geometry.freecad_env import import_part
 from ..geometry.validation import InputError, check_real
 from ..strategies.face_setup import reused
+from ..strategies.registry import baseline
 from ..strategies.sampling import sample
 from .align import align
 from .closest import FaceCloser
@@ -73,12 +74,13 @@ class VerdictPoints:
 
 
 def points_for_verdict(face: Part.Face, tolerance: float, form_error: float, *, share: float = SHARE,
-                       strategy: str = "uniform_parametric", counts: tuple = COUNTS, parts: int = PARTS, seed: int = 0,
+                       strategy: str | None = None, counts: tuple = COUNTS, parts: int = PARTS, seed: int = 0,
                        alignment: str = "min_max") -> VerdictPoints:
-    """The VerdictPoints of a face (Part.Face): the fewest N of ``counts`` that ``strategy``
-    places so that, on ``parts`` simulated parts with a form error of at most form_error mm
+    """The VerdictPoints of a face (Part.Face): the fewest N of ``counts`` that ``strategy`` (None:
+    the registry's baseline, uniform parametric) places so that, on ``parts`` simulated parts with a form error of at most form_error mm
     (seeded from seed), the profile the N points give (aligned by ``alignment``) misses the
     part's true profile by less than share x tolerance (tolerance mm) on COVERAGE of the parts."""
+    strategy = baseline() if strategy is None else strategy
     tolerance = check_real("tolerance", tolerance, above=0.0)
     form_error = check_real("form_error", form_error, above=0.0)
     share = check_real("share", share, above=0.0)
