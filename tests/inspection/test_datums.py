@@ -122,3 +122,12 @@ def test_a_datum_that_cannot_work_is_named_in_one_line(block, datums, words):
     with pytest.raises(InputError) as raised:
         cmmsampling.inspect(plan, measured(nominal), part=shape, datums=datums)
     assert words in str(raised.value) and "\n" not in str(raised.value)
+
+
+def test_a_free_form_datum_fixes_what_its_surface_holds(block):
+    shape, plan, nominal = block
+    found = cmmsampling.inspect(plan, measured(nominal, shift={"Face1": 0.01}, faces={"Face1", "Face3"}), part=shape,
+                                datums=["Face3"])
+    assert [fit.held for fit in found.datums] == [5] and found.free_motions == ("y",)
+    assert found.datums[0].form == pytest.approx(0.0, abs=1e-6)
+    assert found.profile == pytest.approx(0.02, abs=1e-6), "the base 0.01 mm low, relative to the top"

@@ -21,7 +21,7 @@ def profile_on(source, points, normals, field):
 
 @pytest.mark.quality
 def test_the_count_found_holds_on_fresh_simulated_parts(reference):
-    found = points_for_verdict(reference, TOLERANCE, FORM_ERROR, share=SHARE, counts=(16, 25, 36, 49), parts=40)
+    found = points_for_verdict(reference, TOLERANCE, FORM_ERROR, share=SHARE, counts=(16, 25, 36), parts=24)
     assert found.n in found.counts[1:]
     assert found.uncertainties[found.counts.index(found.n) - 1] >= SHARE * TOLERANCE, "the count before fell short"
     assert (found.gaps > -1e-6).all(), "no sample of a part is wider than the part"
