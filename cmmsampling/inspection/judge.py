@@ -368,9 +368,9 @@ def inspect(source, measured, alignment="min_max", tolerance=None, locked=(), pa
         told("aligning each face alone")
         inspection.face_forms = _face_forms(points, owner, closers, planned.names, found, locked, zone_offset, notes)
     if uncertainty is not None:
-        told("propagating the probing uncertainty (Monte Carlo)")
-        inspection.uncertainty = profile_uncertainty(frame, _frame_normals(frame, stages, normals), owner,
-                                                     planned.names, uncertainty, zone_offset, seed)
+        inspection.uncertainty = profile_uncertainty(
+            frame, _frame_normals(frame, stages, normals), owner, planned.names, uncertainty, seed,
+            lambda trials: told(f"propagating the probing uncertainty (Monte Carlo): {trials} trials"))
     if isinstance(source, SamplingResult):
         rebuild(inspection, source, order[1])
     return inspection

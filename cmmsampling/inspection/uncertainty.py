@@ -28,6 +28,8 @@ COVERAGE_FACTOR = 2.0
 SAMPLING_ERROR = 0.05
 BATCH = 250
 MAX_TRIALS = 20000
+# A run's Cancel is asked this often (trials) inside a batch's linear programmes.
+CHECK_EVERY = 25
 CONFORMS, DOES_NOT_CONFORM, UNDECIDED = "conforms", "does not conform", "undecided"
 DECISIONS = (CONFORMS, DOES_NOT_CONFORM, UNDECIDED)
 NO_UNCERTAINTY = "no uncertainty given: the verdict takes the measured profile as exact"
@@ -83,19 +85,26 @@ def decide(profile, expanded, tolerance):
     return UNDECIDED
 
 
-def profile_uncertainty(frame, normals, owner, names, probing, offset=0.0, seed=0):
+def profile_uncertainty(frame, normals, owner, names, probing, seed=0, check=None):
     """The ProfileUncertainty of a Frame (cmmsampling.inspection.datums: its Links, the datums'
-    then the toleranced surface's) under probing error u = probing mm per point and axis.
+    then the toleranced surface's, the last one's deviations from the zone's centre) under
+    probing error u = probing mm per point and axis.
 
     normals: (P, 3) the outward normals at all P points of the links, in their order; owner:
     (N,) int, the face of each toleranced point (the last link's rows); names: the faces' names;
-    offset: mm, the zone's centre (the last link's deviations are from it already)."""
+    check: callable(trials done) before each batch and every CHECK_EVERY trials of a batch's
+    linear programmes (it may raise to stop the run: the inspection's Cancel)."""
     rng = np.random.default_rng(seed)
     faces = [np.flatnonzero(owner == index) for index in range(len(names))]
     profiles = np.empty((0, len(names)))
     while True:
+        done = len(profiles)
+        asked = None if check is None else lambda trials: check(done + trials)
+        if asked is not None:
+            asked(0)
         noise = rng.normal(0.0, probing, size=(BATCH, len(normals), 3))
-        profiles = np.vstack([profiles, trial_profiles(frame.links, np.einsum("tpi,pi->tp", noise, normals), faces)])
+        profiles = np.vstack([profiles, trial_profiles(frame.links, np.einsum("tpi,pi->tp", noise, normals), faces,
+                                                       asked)])
         error = relative_error(profiles.max(axis=1))
         if error <= SAMPLING_ERROR or len(profiles) >= MAX_TRIALS:
             break
@@ -120,15 +129,16 @@ def relative_error(values):
     return 0.5 * np.sqrt(max(kurtosis - 1.0, 0.0) / len(values))
 
 
-def trial_profiles(links, errors, faces):
+def trial_profiles(links, errors, faces, check=None):
     """(T, F) mm: each trial's profile per face (2 max |d - o| over its rows of the last link;
     faces: F arrays of row numbers), the links solved in order on their linear models with the
-    errors (T, P) mm along the normals of all P points added to their deviations."""
+    errors (T, P) mm along the normals of all P points added to their deviations; check:
+    callable(trials done) every CHECK_EVERY trials of a linear programme's link, or None."""
     twist = np.zeros((len(errors), 6))
     for link in links:
         deviations = link.deviations + errors[:, link.rows] + twist @ link.jacobian.T
         if link.held.shape[1] and link.criterion != "none":
-            step = _solve(link.criterion, deviations, link.jacobian @ link.held)
+            step = _solve(link.criterion, deviations, link.jacobian @ link.held, check)
             twist = twist + step @ link.held.T
             deviations = deviations + step @ (link.jacobian @ link.held).T
     reach = np.abs(deviations)
@@ -136,13 +146,19 @@ def trial_profiles(links, errors, faces):
                             for rows in faces])
 
 
-def _solve(criterion, deviations, jacobian):
+def _solve(criterion, deviations, jacobian, check=None):
     """(T, H): each trial's step x minimising the criterion of deviations (T, M) + jacobian (M,
-    H) x: least squares for all trials at once, a linear programme per trial otherwise."""
+    H) x: least squares for all trials at once, a linear programme per trial otherwise (check
+    called with the trials done every CHECK_EVERY of them)."""
     if criterion in ("least_squares", "best_fit"):
         return -np.linalg.lstsq(jacobian, deviations.T, rcond=None)[0].T
     step = _tangent_programme if criterion == "tangent" else _chebyshev_programme
-    return np.array([step(row, jacobian) for row in deviations])
+    steps = []
+    for start in range(0, len(deviations), CHECK_EVERY):
+        if check is not None and start:
+            check(start)
+        steps += [step(row, jacobian) for row in deviations[start:start + CHECK_EVERY]]
+    return np.array(steps)
 
 
 def _chebyshev_programme(deviations, jacobian):

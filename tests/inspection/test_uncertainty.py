@@ -103,3 +103,20 @@ def test_decide_follows_iso_14253_1():
     assert decide(0.041, 0.010, 0.05) == "undecided"
     assert decide(0.059, 0.010, 0.05) == "undecided"
     assert decide(0.061, 0.010, 0.05) == "does not conform"
+
+
+def test_the_monte_carlo_reports_its_trials_and_stops_on_cancel(block):
+    from cmmsampling.inspection.judge import InspectionCancelled
+
+    shape, plan, nominal = block
+    said = []
+
+    def progress(message):
+        said.append(message)
+        return message is not None and message.endswith(": 50 trials")
+
+    with pytest.raises(InspectionCancelled):
+        cmmsampling.inspect(plan, shifted(nominal, 0.02), part=shape, datums=FRAME, uncertainty=0.002,
+                            progress=progress)
+    trials = [message for message in said if message and "Monte Carlo" in message]
+    assert trials == [f"propagating the probing uncertainty (Monte Carlo): {count} trials" for count in (0, 25, 50)]
