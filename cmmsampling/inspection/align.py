@@ -299,8 +299,13 @@ def _model(points, closest, basis, pivot=None):
     about: pivot (3,) mm where given, else the points' centroid)."""
     feet, normals = closest(points)
     centre = points.mean(axis=0) if pivot is None else pivot
-    jacobian = np.hstack([np.cross(points - centre, normals), normals]) @ basis
-    return signed_distances(points, feet, normals), jacobian, centre
+    return signed_distances(points, feet, normals), twist_jacobian(points, normals, centre) @ basis, centre
+
+
+def twist_jacobian(points, normals, pivot):
+    """(M, 6): how the signed distances of points (M, 3) mm (outward normals (M, 3)) change by a
+    twist (rotation vector w rad about pivot (3,) mm, shift s mm): ((p - pivot) x n, n)."""
+    return np.hstack([np.cross(points - pivot, normals), normals])
 
 
 def _step_matrix(step, basis, centre):
@@ -399,19 +404,24 @@ def _linear_programmes(points, closest, basis, matrix, pivot, step_of, merit):
 
 
 def _chebyshev_step(deviations, jacobian, radius):
-    """The step x (F,) within |x| <= radius minimising max |d + J x| (a linear programme in
-    (x, s): minimise s with -s <= d + J x <= s)."""
+    """The step x (F,) within |x| <= radius minimising max |d + J x|; no step where the
+    programme has no solution."""
+    found = chebyshev_programme(deviations, jacobian, [(-r, r) for r in radius])
+    return np.zeros(jacobian.shape[1]) if found is None else found
+
+
+def chebyshev_programme(deviations, jacobian, limits):
+    """The x (F,) within limits (F pairs (low, high), None: unbounded) minimising max |d + J x|
+    for deviations d (M,) mm and jacobian J (M, F): a linear programme in (x, s), minimise s
+    with -s <= d + J x <= s; None where it has no solution."""
     count, size = jacobian.shape
     cost = np.zeros(size + 1)
     cost[-1] = 1.0
     ones = np.ones((count, 1))
     upper = np.vstack([np.hstack([jacobian, -ones]), np.hstack([-jacobian, -ones])])
     bound = np.concatenate([-deviations, deviations])
-    limits = [(-r, r) for r in radius] + [(0, None)]
-    solved = linprog(cost, A_ub=upper, b_ub=bound, bounds=limits, method="highs")
-    if not solved.success:
-        return np.zeros(size)
-    return solved.x[:size]
+    solved = linprog(cost, A_ub=upper, b_ub=bound, bounds=list(limits) + [(0, None)], method="highs")
+    return solved.x[:size] if solved.success else None
 
 
 def _tangent_step(deviations, jacobian, radius):

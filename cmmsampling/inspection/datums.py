@@ -20,7 +20,7 @@ where the start put them and named. Pure numpy/scipy: the closest points come fr
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.linalg import eigh
@@ -28,7 +28,7 @@ from scipy.linalg import eigh
 from ..formats.pointset import PointSet
 from ..geometry.validation import InputError
 from .align import (DEGREES_OF_FREEDOM, WEAK_SENSITIVITY, Alignment, _least_squares, _min_max, _motion_names,
-                    _offset_by, signed_distances, tangent, transform)
+                    _offset_by, signed_distances, tangent, transform, twist_jacobian)
 
 DATUM_CRITERIA = ("tangent", "least_squares")
 # The regularisation of a datum's motion metric, as a share of its trace: a motion that moves
@@ -118,18 +118,16 @@ class Link:
 class Frame:
     """A datum reference frame found: alignment (of the toleranced points: its matrix maps the
     measured frame to the CAD one), datums: a DatumFit each, links: the Links of every step
-    (datums, then the toleranced surface), pivot: (3,) mm."""
+    (datums, then the toleranced surface)."""
 
     alignment: Alignment
     datums: list
     links: list
-    pivot: np.ndarray
 
 
-def twist_jacobian(points, normals, pivot):
-    """(M, 6): how the signed distances of points (M, 3) mm (outward normals (M, 3)) change by a
-    twist (rotation vector w rad about pivot (3,) mm, shift s mm): ((p - pivot) x n, n)."""
-    return np.hstack([np.cross(points - pivot, normals), normals])
+def free_twists(locked):
+    """(6, K): the unit twists of the degrees of freedom not locked (DEGREES_OF_FREEDOM order)."""
+    return np.eye(6)[:, [index for index, name in enumerate(DEGREES_OF_FREEDOM) if name not in locked]]
 
 
 def split_motions(points, normals, allowed, pivot):
@@ -166,7 +164,7 @@ def align_on_datums(datums, toleranced, start, locked=(), offset=0.0):
     than the motions it fixes."""
     matrix = np.asarray(start, dtype=float)
     pivot = transform(matrix, toleranced.points).mean(axis=0)
-    allowed = np.eye(6)[:, [index for index, name in enumerate(DEGREES_OF_FREEDOM) if name not in locked]]
+    allowed = free_twists(locked)
     fits, links, first = [], [], 0
     for stage in datums:
         moved = transform(matrix, stage.points)
@@ -189,14 +187,13 @@ def align_on_datums(datums, toleranced, start, locked=(), offset=0.0):
         if toleranced.criterion == "min_max":
             matrix, more, _ = _min_max(toleranced.points, zone, held, matrix, pivot)
             iterations += more
-    last = _link(Stage(toleranced.label, toleranced.face, toleranced.criterion, toleranced.points, zone), matrix,
-                 held, pivot, first)
+    last = _link(replace(toleranced, closest=zone), matrix, held, pivot, first)
     moved = transform(matrix, toleranced.points)
     length = float(np.sqrt(((moved - pivot) ** 2).sum(axis=1).mean())) or 1.0
     alignment = Alignment(matrix, toleranced.criterion, tuple(locked), iterations,
                           float(np.linalg.norm(moved - toleranced.points, axis=1).max()),
                           last.deviations + offset, motion_names(weak, length), False)
-    return Frame(alignment, fits, links + [last], pivot)
+    return Frame(alignment, fits, links + [last])
 
 
 def _check_datum(stage, held):
@@ -244,8 +241,8 @@ def floating_frame(toleranced, alignment, locked=(), offset=0.0):
     zone = _offset_by(toleranced.closest, offset)
     moved = alignment.apply(toleranced.points)
     pivot = moved.mean(axis=0)
-    allowed = np.eye(6)[:, [index for index, name in enumerate(DEGREES_OF_FREEDOM) if name not in locked]]
+    allowed = free_twists(locked)
     held = (split_motions(moved, zone(moved)[1], allowed, pivot)[0] if alignment.method != "none"
             else allowed[:, :0])
-    stage = Stage(toleranced.label, toleranced.face, alignment.method, toleranced.points, zone)
-    return Frame(alignment, [], [_link(stage, alignment.matrix, held, pivot, 0)], pivot)
+    stage = replace(toleranced, criterion=alignment.method, closest=zone)
+    return Frame(alignment, [], [_link(stage, alignment.matrix, held, pivot, 0)])

@@ -27,7 +27,7 @@ from ..strategies import handover
 from ..strategies.face_setup import reused
 from ..planning.part_plan import PartPlan
 from ..strategies.result import SamplingResult
-from .align import ALIGNMENTS, PROFILE_KINDS, Alignment, AlignmentCancelled, align, check_locked, kabsch, transform
+from .align import ALIGNMENTS, PROFILE_KINDS, Alignment, AlignmentCancelled, align, check_locked, kabsch
 from .datums import Datum, Stage, align_on_datums, as_datums, floating_frame
 from .uncertainty import NO_UNCERTAINTY, decide, profile_uncertainty
 from .closest import OCC_AGREEMENT_MM, OCC_CONFIRMED, FaceCloser, confirm_with_occ
@@ -352,25 +352,24 @@ def inspect(source, measured, alignment="min_max", tolerance=None, locked=(), pa
     told(f"aligning {len(points)} points" + (f" on datums {'|'.join(d.label for d in wanted)}" if wanted else ""))
     start = None if locked else _start([source.points for source in sources] + [points],
                                        [source.nominal for source in sources] + [nominal])
-    found, frame = _aligned(points, closest, alignment, locked, start, zone_offset, stages, progress)
+    found, frame = _aligned(points, closest, alignment, locked, start, zone_offset, stages, progress,
+                            uncertainty is not None)
     told("confirming the decisive points with OCC")
     aligned = found.apply(points)
     deviations, disagreement = confirm_with_occ(planned.faces, owner, aligned, found.deviations, zone_offset)
     if disagreement > OCC_AGREEMENT_MM:
         notes.append(f"OCC's distances at the {OCC_CONFIRMED} points farthest from the zone's centre differ from the "
                      f"alignment's by up to {disagreement:.2g} mm; OCC's are reported")
-    normals = closest(aligned)[1]
     inspection = Inspection([read.labels[i] for i in order[0]], nominal, points, aligned,
                             deviations, found.matrix, found, tolerance, [planned.names[i] for i in owner], notes,
                             measured_file=os.fspath(measured) if isinstance(measured, (str, os.PathLike)) else "",
-                            zone_offset=zone_offset, normals=normals, datums=frame.datums)
+                            zone_offset=zone_offset, normals=closest(aligned)[1], datums=[] if frame is None else frame.datums)
     if len(set(owner.tolist())) > 1 and alignment != "none":
         told("aligning each face alone")
         inspection.face_forms = _face_forms(points, owner, closers, planned.names, found, locked, zone_offset, notes)
     if uncertainty is not None:
         inspection.uncertainty = profile_uncertainty(
-            frame, _frame_normals(frame, stages, normals), owner, planned.names, uncertainty, seed,
-            lambda trials: told(f"propagating the probing uncertainty (Monte Carlo): {trials} trials"))
+            frame, owner, planned.names, uncertainty, seed, lambda trials: told(f"propagating the probing uncertainty (Monte Carlo): {trials} trials"))
     if isinstance(source, SamplingResult):
         rebuild(inspection, source, order[1])
     return inspection
@@ -427,9 +426,10 @@ def datum_points(datums, planned, order, owner, contact, part, probe_radius):
     return sources, kept
 
 
-def _aligned(points, closest, alignment, locked, start, offset, stages, progress):
+def _aligned(points, closest, alignment, locked, start, offset, stages, progress, linear):
     """(Alignment, Frame) of the toleranced points: on the datum stages where there are any,
-    else the floating fit of :func:`align` (its Frame the one link of its solution)."""
+    else the floating fit of :func:`align` (its Frame, the one link of its solution, only where
+    ``linear``: the Monte Carlo needs it; else None)."""
     toleranced = Stage("", "toleranced", alignment, points, closest)
     if stages:
         frame = align_on_datums(stages, toleranced, np.eye(4) if start is None else start, locked, offset)
@@ -439,14 +439,7 @@ def _aligned(points, closest, alignment, locked, start, offset, stages, progress
                       None if progress is None else lambda step: progress(None))
     except AlignmentCancelled:
         raise InspectionCancelled from None
-    return found, floating_frame(toleranced, found, locked, offset)
-
-
-def _frame_normals(frame, stages, normals):
-    """(P, 3): the outward normals at every point of the frame's links (datums', then the
-    toleranced points' normals (N, 3)), in the links' order."""
-    datum = [stage.closest(transform(frame.alignment.matrix, stage.points))[1] for stage in stages]
-    return np.vstack(datum + [normals])
+    return found, floating_frame(toleranced, found, locked, offset) if linear else None
 
 
 def _face_forms(points, owner, closers, names, found, locked, offset, notes):
@@ -535,8 +528,9 @@ def _datum_face(datum, planned, part):
     by name, or of part=; InputError where none is found."""
     if not isinstance(datum.face, str):
         return as_face(datum.face)
-    if planned_face(planned, datum.face) is not None:
-        return planned.faces[planned_face(planned, datum.face)]
+    index = planned_face(planned, datum.face)
+    if index is not None:
+        return planned.faces[index]
     if part is None:
         raise InputError(f"datum {datum.label}: {datum.face} is no face of the plan; give part= the shape it is a "
                          "face of, or the Part.Face itself")

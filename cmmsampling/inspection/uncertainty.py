@@ -24,6 +24,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import linprog
 
+from .align import chebyshev_programme
+
 COVERAGE_FACTOR = 2.0
 SAMPLING_ERROR = 0.05
 BATCH = 250
@@ -54,11 +56,6 @@ class ProfileUncertainty:
     notes: list = field(default_factory=list)
     profiles: np.ndarray = None
 
-    @property
-    def standard(self):
-        """u_c, mm: the profile's combined standard uncertainty, U / k."""
-        return self.expanded / self.coverage
-
     def as_record(self):
         """The figures as a JSON-friendly dict (the trials' profiles left out)."""
         return {key: value for key, value in vars(self).items() if key != "profiles"}
@@ -85,16 +82,17 @@ def decide(profile, expanded, tolerance):
     return UNDECIDED
 
 
-def profile_uncertainty(frame, normals, owner, names, probing, seed=0, check=None):
+def profile_uncertainty(frame, owner, names, probing, seed=0, check=None):
     """The ProfileUncertainty of a Frame (cmmsampling.inspection.datums: its Links, the datums'
     then the toleranced surface's, the last one's deviations from the zone's centre) under
-    probing error u = probing mm per point and axis.
+    probing error u = probing mm per point and axis, taken along the outward normals each
+    link's model holds (its Jacobian's shift columns).
 
-    normals: (P, 3) the outward normals at all P points of the links, in their order; owner:
-    (N,) int, the face of each toleranced point (the last link's rows); names: the faces' names;
+    owner: (N,) int, the face of each toleranced point (the last link's rows); names: the faces' names;
     check: callable(trials done) before each batch and every CHECK_EVERY trials of a batch's
     linear programmes (it may raise to stop the run: the inspection's Cancel)."""
     rng = np.random.default_rng(seed)
+    normals = np.vstack([link.jacobian[:, 3:] for link in frame.links])
     faces = [np.flatnonzero(owner == index) for index in range(len(names))]
     profiles = np.empty((0, len(names)))
     while True:
@@ -162,24 +160,21 @@ def _solve(criterion, deviations, jacobian, check=None):
 
 
 def _chebyshev_programme(deviations, jacobian):
-    """x (H,) minimising max |d + J x| (d (M,), J (M, H)): minimise s, -s <= d + J x <= s."""
-    count, size = jacobian.shape
-    ones = np.ones((count, 1))
-    upper = np.vstack([np.hstack([jacobian, -ones]), np.hstack([-jacobian, -ones])])
-    return _programme(np.r_[np.zeros(size), 1.0], upper, np.concatenate([-deviations, deviations]), size, 1)
+    """x (H,) minimising max |d + J x| (d (M,), J (M, H)), unbounded (align's programme)."""
+    return _solved(chebyshev_programme(deviations, jacobian, [(None, None)] * jacobian.shape[1]))
 
 
 def _tangent_programme(deviations, jacobian):
     """x (H,) minimising max -(d + J x) with every d + J x <= 0: minimise s, -s <= d + J x <= 0."""
     count, size = jacobian.shape
     upper = np.vstack([np.hstack([jacobian, np.zeros((count, 1))]), np.hstack([-jacobian, -np.ones((count, 1))])])
-    return _programme(np.r_[np.zeros(size), 1.0], upper, np.concatenate([-deviations, deviations]), size, 1)
+    solved = linprog(np.r_[np.zeros(size), 1.0], A_ub=upper, b_ub=np.concatenate([-deviations, deviations]),
+                     bounds=[(None, None)] * size + [(0, None)], method="highs")
+    return _solved(solved.x[:size] if solved.success else None)
 
 
-def _programme(cost, upper, bound, size, extra):
-    """The first ``size`` unknowns of min cost . z, upper z <= bound, the last ``extra`` >= 0."""
-    limits = [(None, None)] * size + [(0, None)] * extra
-    solved = linprog(cost, A_ub=upper, b_ub=bound, bounds=limits, method="highs")
-    if not solved.success:
-        raise ArithmeticError(f"a Monte Carlo trial's fit has no solution ({solved.message})")
-    return solved.x[:size]
+def _solved(step):
+    """A trial's step, or ArithmeticError where its programme had no solution."""
+    if step is None:
+        raise ArithmeticError("a Monte Carlo trial's fit has no solution")
+    return step
