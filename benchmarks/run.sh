@@ -49,11 +49,13 @@ run_one() {
     inspection-speed-busy) page inspection-speed-busy \
                              "Inspecting 2,000 and 20,000 measured points beside a CPU-bound process" \
                              "$PY" benchmarks/inspection_speed.py --beside-busy ;;
+    series-error) page series-error "Sampling aimed at a series' error: points a next part needs, with and without the model" \
+                    "$PY" benchmarks/series_error.py ;;
     memory) page memory "Peak memory against sample()'s estimate" "$PY" benchmarks/memory.py --quick ;;
     *) echo "unknown benchmark '$1'; choose from: $ALL" >&2; return 2 ;;
   esac
 }
-ALL="inspection-speed inspection-speed-busy speed part-plan-speed part-plan-ventilator part-plan-ventilator-optimal speed-busy long-runs memory near-optimal probe-plans probe-plans-busy probe-path part-plan-points delivered-deviation paper-run-spread"
+ALL="inspection-speed inspection-speed-busy speed part-plan-speed part-plan-ventilator part-plan-ventilator-optimal speed-busy long-runs memory near-optimal probe-plans probe-plans-busy probe-path part-plan-points delivered-deviation paper-run-spread series-error"
 status=0
 for name in ${@:-$ALL}; do
   echo "== $name"

@@ -13,7 +13,8 @@ from ..formats.files import remove_killed_saves
 from ..formats.pointfiles import FORMATS
 from ..geometry.surface import reference_face
 from ..geometry.validation import InputError, check_real
-from ..strategies.sampling import BEST_STRATEGY, PROBE_EDGE_OFFSET_MM, STRATEGIES, probe_edge_offset, sample
+from ..strategies.sampling import (BEST_STRATEGY, PROBE_EDGE_OFFSET_MM, STRATEGIES, probe_edge_offset, sample,
+                                   self_contained)
 from .terminal import FaceProgress, StudyProgress, TerminalProgress, format_table
 
 # --probe's choices: the presets of cmmsampling.PROBES by their ball diameter (mm).
@@ -87,7 +88,7 @@ def _plan_arguments(parser):
                       help="each face gets the fewest points whose substitute deviates at most this")
     goal.add_argument("--points", type=int, metavar="N",
                       help="points for the whole part, spent where the worst face gains most")
-    parser.add_argument("--strategy", default=BEST_STRATEGY, choices=list(STRATEGIES), metavar="STRATEGY",
+    parser.add_argument("--strategy", default=BEST_STRATEGY, choices=self_contained(), metavar="STRATEGY",
                         help=f"where the points go on each face (default {BEST_STRATEGY})")
     parser.add_argument("--max-points", type=int, default=400, metavar="N",
                         help="with --tolerance, the most points a face may get (default 400)")
@@ -156,6 +157,10 @@ def _sample_arguments(parser):
                              "(default a tenth of the even spacing sqrt(area / N), at least 0.005 mm)")
     _strategy_settings(parser)
     parser.add_argument("--seed", type=int, default=0, help="seed of the random parts (default 0)")
+    parser.add_argument("--prior", action="append", default=[], metavar="FILE",
+                        help="part_error: the measured points of an earlier part of the series on this face (DMIS "
+                             "output, CSV, XYZIJK or labelled x y z text, in the part's frame: read without "
+                             "alignment); repeat for each earlier part")
     parser.add_argument("--out", action="append", default=[], metavar="FILE",
                         help=f"write the probe points; format from the extension: {formats()} "
                              "(repeat for several files)")
@@ -199,6 +204,14 @@ def strategy_options(name, args):
     return options
 
 
+def prior_inspections(face, paths):
+    """The Inspections of earlier parts' measured files on face (a Part.Face), each read in the
+    part's frame (no alignment): the series a part_error run learns from."""
+    from ..inspection.judge import inspect
+
+    return [inspect(face, path, alignment="none") for path in paths]
+
+
 def finish_progress(options):
     """End the progress line of a run whose display had no known total (a bar ends itself)."""
     progress = options.get("progress")
@@ -216,7 +229,7 @@ def run_demo(args):
     print(f"Reference surface: degree 5 x 5, 9 x 9 poles, 100 x 100 mm; N = {args.points}, "
           "substitute: bicubic, default poles; grid 60 x 60")
     results = []
-    for name in STRATEGIES:
+    for name in self_contained():
         options = strategy_options(name, args)
         results.append(sample(face, args.points, name, seed=args.seed, **options))
         finish_progress(options)
@@ -316,8 +329,13 @@ def run_sample(args):
     shape = read_shape(args.file)
     if not 1 <= args.face <= len(shape.Faces):
         raise InputError(f"--face must be between 1 and {len(shape.Faces)} for {args.file}, got {args.face}")
+    if "prior" in STRATEGIES[args.strategy].requires and not args.prior:
+        raise InputError(f"{args.strategy} learns where the series' parts err from earlier parts: give --prior FILE "
+                         "(an earlier part's measured points on this face) once per part")
     options = strategy_options(args.strategy, args)
     face = shape.Faces[args.face - 1]
+    if args.prior:
+        options["prior"] = prior_inspections(face, args.prior)
     edge_offset = probe_edge_offset(face) if args.edge_offset is None else args.edge_offset
     result = sample(face, args.points, args.strategy, seed=args.seed,
                     edge_offset=edge_offset, min_spacing=args.min_spacing, **probe_arguments(args, shape), **options)

@@ -32,6 +32,7 @@ from .datums import Datum, Stage, align_on_datums, as_datums, floating_frame
 from .uncertainty import NO_UNCERTAINTY, decide, profile_uncertainty
 from .closest import OCC_AGREEMENT_MM, OCC_CONFIRMED, FaceCloser, confirm_with_occ
 from .measured import read_measured
+from .series import deviation_map, face_rows
 
 Part = import_part()
 import FreeCAD  # noqa: E402  (importable once import_part() has set the path)
@@ -85,6 +86,23 @@ class Inspection:
     normals: np.ndarray = None
     datums: list = field(default_factory=list)
     uncertainty: object = None
+    planned_faces: dict = field(default_factory=dict)
+
+    def deviation_map(self, uv, prior=None, face=None):
+        """The measured part's signed deviation from the CAD face at uv (M, 2) in the face's
+        parameter range: (M,) mm, + out of the material, in this inspection's alignment.
+
+        From this inspection's points on the face alone (prior None: kriging, a Gaussian process
+        with a Matern 5/2 covariance fitted by maximum likelihood) or also from the earlier parts
+        of the series (prior: their Inspections, or cmmsampling.series_model(face, them): the
+        posterior mean given the series' systematic error and scatter; see
+        cmmsampling.fitting.series). face: the face's name where the inspection covers several.
+        """
+        rows, name = face_rows(self, face)
+        if name not in self.planned_faces:
+            raise InputError(f"this inspection does not hold the CAD face {name!r} (one read back from a file or "
+                             "document): inspect the measured points again with their plan")
+        return deviation_map(self, self.planned_faces[name], uv, prior, name if face is not None else None)
 
     @property
     def feet(self):
@@ -363,7 +381,8 @@ def inspect(source, measured, alignment="min_max", tolerance=None, locked=(), pa
     inspection = Inspection([read.labels[i] for i in order[0]], nominal, points, aligned,
                             deviations, found.matrix, found, tolerance, [planned.names[i] for i in owner], notes,
                             measured_file=os.fspath(measured) if isinstance(measured, (str, os.PathLike)) else "",
-                            zone_offset=zone_offset, normals=closest(aligned)[1], datums=[] if frame is None else frame.datums)
+                            zone_offset=zone_offset, normals=closest(aligned)[1], datums=[] if frame is None else frame.datums,
+                            planned_faces=dict(zip(planned.names, planned.faces)))
     if len(set(owner.tolist())) > 1 and alignment != "none":
         told("aligning each face alone")
         inspection.face_forms = _face_forms(points, owner, closers, planned.names, found, locked, zone_offset, notes)

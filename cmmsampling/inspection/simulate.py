@@ -18,8 +18,10 @@ import numpy as np
 from ..formats.dmis import DMIS_VERSION, dmis_program_name, dmis_statement
 from ..formats.exporting import as_point_set, export
 from ..formats.files import write_atomically
+from ..formats.pointset import PointSet
 from ..formats.text import COORDINATE_DECIMALS, VECTOR_DECIMALS, fixed
 from ..geometry.validation import InputError, check_real
+from ..strategies.face_setup import setup_of
 from .align import rotation_matrix, transform
 
 # The form error's waves: their number and wavelengths as fractions of the points' extent.
@@ -132,3 +134,59 @@ def dmis_output(nominal, actual, name):
         lines += dmis_statement([f"FA({label})=FEAT/POINT", "CART", *measured], vector)
     lines.append("ENDFIL")
     return "\n".join(lines) + "\n"
+
+
+# The errors a series of parts may carry (simulated_series): a smooth wave across the face, a
+# bump near one of its edges (a worn tool's), a twist; each part's sizes scatter about the
+# series' by SIZE_SPREAD (relative), its face is offset and tilted by SETUP_SPREAD times the size.
+SERIES_KINDS = ("wave", "edge_bump", "twist")
+SIZE_SPREAD = 0.2
+SETUP_SPREAD = 0.15
+BUMP_WIDTH = 0.12
+
+
+@dataclass
+class SeriesPart:
+    """One simulated part of a series on a face: ``error(uv)`` its true signed deviation from
+    the CAD face at uv (M, 2) in the face's parameter range, mm (+ out of the material)."""
+
+    kind: str
+    sizes: np.ndarray
+    setup: np.ndarray
+    lower: np.ndarray
+    span: np.ndarray
+
+    def error(self, uv):
+        """(M,) mm at uv (M, 2)."""
+        s, t = ((np.asarray(uv, float).reshape(-1, 2) - self.lower) / self.span).T
+        shapes = {"wave": np.sin(2 * np.pi * (0.9 * s + 0.4 * t) + 0.5) * np.cos(np.pi * (t - 0.3)),
+                  "edge_bump": np.exp(-((s - 0.92) ** 2 + (t - 0.55) ** 2) / (2 * BUMP_WIDTH ** 2)),
+                  "twist": 4.0 * (s - 0.5) * (t - 0.5)}
+        kinds = SERIES_KINDS if self.kind == "all" else (self.kind,)
+        field = sum(size * shapes[kind] for size, kind in zip(self.sizes, kinds))
+        return field + self.setup[0] + self.setup[1] * (s - 0.5) + self.setup[2] * (t - 0.5)
+
+
+def simulated_series(face, count, kind="all", size=0.02, seed=0):
+    """``count`` SeriesParts of a series on face (a Part.Face): error kind one of SERIES_KINDS
+    or 'all' (their sum), of ``size`` mm (each part's sizes scattered by SIZE_SPREAD), each part
+    offset and tilted (SETUP_SPREAD x size, standard deviation); seeded."""
+    if kind != "all" and kind not in SERIES_KINDS:
+        raise InputError(f"kind must be one of {', '.join(SERIES_KINDS)} or 'all', got {kind!r}")
+    u0, u1, v0, v1 = face.ParameterRange
+    rng = np.random.default_rng(seed)
+    kinds = len(SERIES_KINDS) if kind == "all" else 1
+    return [SeriesPart(kind, size * (1.0 + SIZE_SPREAD * rng.standard_normal(kinds)),
+                       SETUP_SPREAD * size * rng.standard_normal(3), np.array([u0, v0]), np.array([u1 - u0, v1 - v0]))
+            for _ in range(count)]
+
+
+def measured_part(face, uv, part, noise=0.0, seed=0):
+    """What a CMM reads on ``part`` (a SeriesPart) at the face's parameters uv (M, 2): a PointSet
+    of contact points, the face's points moved by the part's error along its normals plus a
+    probing error (``noise`` mm, standard deviation), with the face's normals."""
+    uv = np.asarray(uv, float).reshape(-1, 2)
+    model = setup_of(face).model
+    points, normals = model.points(uv), model.normals(uv)
+    touched = part.error(uv) + noise * np.random.default_rng(seed).standard_normal(len(uv))
+    return PointSet([f"P{i + 1}" for i in range(len(uv))], points + touched[:, None] * normals, normals)

@@ -129,7 +129,7 @@ def respace(problem, uv):
     if len(kept) == len(uv):
         return uv, 0
     spacing = problem.min_spacing
-    candidates = _feasible_candidates(problem, 64 * len(uv))
+    candidates = feasible_candidates(problem, 64 * len(uv))
     places = problem.model.points(candidates)
     uv = uv.copy()
     free = cKDTree(points[kept]).query(places, distance_upper_bound=spacing)[0] >= spacing
@@ -144,7 +144,7 @@ def respace(problem, uv):
     return uv, len(uv) - len(kept)
 
 
-def _feasible_candidates(problem, count):
+def feasible_candidates(problem, count):
     """About ``count`` feasible (u, v) of the domain from a Halton set: (M, 2)."""
     index = np.arange(1, 4 * count + 1)
     uv = problem.domain.from_unit(np.column_stack([radical_inverse(index, 2), radical_inverse(index, 3)]))

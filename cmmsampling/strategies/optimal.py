@@ -337,7 +337,7 @@ def _check_optimal_options(options):
     if options["stop_at"] is not None:
         clean["stop_at"] = check_real("stop_at", options["stop_at"], minimum=0.0)
     if isinstance(options["start"], str):
-        starts = ["best"] + [name for name, entry in STRATEGIES.items() if not entry.optimiser]
+        starts = ["best"] + [name for name, entry in STRATEGIES.items() if not entry.optimiser and not entry.requires]
         check_choice("start", options["start"], starts)
     return clean
 

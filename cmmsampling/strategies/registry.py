@@ -56,7 +56,9 @@ class Strategy:
     studies' and tables' ratios divide by (one strategy has it);
     settings: the options the command line and the comparison panel offer (Setting);
     memory: (n, poles (n_u, n_v), grid nodes, options, workers) -> bytes it needs beyond every
-    run's base (cmmsampling.strategies.memory), None for nothing that grows with N.
+    run's base (cmmsampling.strategies.memory), None for nothing that grows with N;
+    requires: the options it cannot run without (part_error's prior): studies, plans and panels
+    run it only where those are given (:func:`self_contained`).
     Every strategy keeps the same default minimum spacing (cmmsampling.strategies.optimal.default_min_spacing).
     """
 
@@ -75,6 +77,7 @@ class Strategy:
     baseline: bool = False
     settings: tuple = ()
     memory: object = None
+    requires: tuple = ()
 
     def checked_options(self, options):
         """The defaults updated by ``options``, validated: TypeError for an option it does not take."""
@@ -127,6 +130,12 @@ def strategy_options(strategy, options):
     Raises TypeError for an option the strategy does not take (listing those it does).
     """
     return STRATEGIES[strategy].checked_options(options)
+
+
+def self_contained():
+    """Names of the strategies that need nothing beyond the face (no ``requires``), in order:
+    those a study, a plan or a panel runs without being told more."""
+    return [name for name, entry in STRATEGIES.items() if not entry.requires]
 
 
 def layouts(problem, required=(), optional=()):

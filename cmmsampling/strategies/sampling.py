@@ -1,6 +1,6 @@
 """The scripting entry points: :func:`sample` runs a strategy, :func:`evaluate` judges any point set.
 
-The built-in strategies' records (blind, pso, optimal) are registered here, in the order the
+The built-in strategies' records (blind, pso, optimal, part_error) are registered here, in the order the
 tables and panels list them; the registry's names are the public ones (``__all__``)."""
 from __future__ import annotations
 
@@ -21,11 +21,11 @@ from ..geometry.domain import face_domain
 from ..geometry.freecad_env import import_part
 from ..geometry.surface import lies_on
 from ..geometry.validation import InputError, InputTypeError, check_choice, check_int, check_pair, check_real, check_uv
-from . import blind, handover, memory, optimal, pso
+from . import blind, handover, memory, optimal, part_error, pso
 from .face_setup import setup_of
 from .optimal import BALL_SEPARATION_MM, default_min_spacing
 from .problem import SamplingProblem, resolve_fit_poles
-from .registry import (STRATEGIES, Setting, Strategy, StrategyOutcome, baseline, register_strategy,
+from .registry import (STRATEGIES, Setting, Strategy, StrategyOutcome, baseline, register_strategy, self_contained,
                        strategy_label, strategy_options, unregister_strategy)
 from .result import EXACT_FIT, SamplingResult
 from .threads import blas_threads
@@ -33,7 +33,7 @@ from .threads import blas_threads
 Part = import_part()
 
 __all__ = ["STRATEGIES", "Setting", "Strategy", "StrategyOutcome", "register_strategy", "unregister_strategy",
-           "strategy_label", "strategy_options", "baseline", "make_problem", "sample", "evaluate", "lower_bound",
+           "strategy_label", "strategy_options", "baseline", "self_contained", "make_problem", "sample", "evaluate", "lower_bound",
            "probe_edge_offset", "hand_over", "check_arguments", "DEFAULT_STRATEGY", "BEST_STRATEGY", "PROBE_EDGE_OFFSET_MM",
            "MIN_POINTS"]
 
@@ -49,7 +49,7 @@ Progress = Callable[[int, float], bool | None]
 MIN_AREA_RATIO = 1e-12
 
 
-for _record in (*blind.RECORDS, pso.RECORD, optimal.RECORD):
+for _record in (*blind.RECORDS, pso.RECORD, optimal.RECORD, part_error.RECORD):
     register_strategy(_record)
 DEFAULT_STRATEGY = "pso"
 # What the command line starts with: the strategy that goes furthest.

@@ -245,7 +245,7 @@ def compare(face: Part.Face, ns: tuple = DEFAULT_NS, strategies: tuple | None = 
     if handed is not None:
         return handed
     ns = _check_ns(ns)
-    strategies = _check_strategies(strategies)
+    strategies = _check_strategies(strategies, options)
     seeds = _check_seeds(seeds)
     if seeded is None:
         seeded = [name for name in strategies if STRATEGIES[name].seeded]
@@ -266,7 +266,7 @@ def _study(face, ns, strategies, seeds, seeded, options, fit, figure_n, workers,
     make_problem(face, ns[0], **fit, workers=workers)
     study = Study(face, ns, strategies, figure_n=figure_n, settings={
         "ns": list(ns), "strategies": list(strategies), "seeds": list(seeds), "seeded": list(seeded),
-        "options": options, **fit, "figure_n": figure_n, "baseline": baseline_strategy(), "workers": workers})
+        "options": {name: _described(given) for name, given in options.items()}, **fit, "figure_n": figure_n, "baseline": baseline_strategy(), "workers": workers})
     began = time.perf_counter()
     _execute(study, study_steps(ns, strategies, seeds, seeded), options, fit, progress, workers)
     study.rows = derive(study.rows, study.bounds)
@@ -303,7 +303,7 @@ def study_time(face, ns=DEFAULT_NS, strategies=None, *, seeds=DEFAULT_SEEDS, opt
     workers (as in compare()).
     """
     ns = _check_ns(ns)
-    strategies = _check_strategies(strategies)
+    strategies = _check_strategies(strategies, options)
     options = _check_options(options, strategies)
     seeded = [name for name in strategies if STRATEGIES[name].seeded]
     runs = Counter((step.n, step.strategy) for step in study_steps(ns, strategies, _check_seeds(seeds), seeded)
@@ -428,14 +428,32 @@ def _check_ns(ns):
     return tuple(values)
 
 
-def _check_strategies(strategies):
-    """Strategy names (None: all), at least one."""
+def _check_strategies(strategies, options=None):
+    """Strategy names (None: all those whose required options, e.g. part_error's prior, are
+    given in ``options``, in their order), at least one."""
     if strategies is None:
-        return tuple(STRATEGIES)
+        given = options if isinstance(options, dict) else {}
+        return tuple(name for name, entry in STRATEGIES.items()
+                     if all(option in (given.get(name) or {}) for option in entry.requires))
     names = _check_names("strategy", strategies)
     if not names:
         raise InputError(f"strategies must name at least one of {', '.join(STRATEGIES)}")
     return names
+
+
+def _described(options):
+    """A strategy's options for the study's settings (JSON): objects such as a prior's
+    inspections named by their count and kind."""
+    def described(value):
+        if isinstance(value, (bool, int, float, str)) or value is None:
+            return value
+        if isinstance(value, (list, tuple)) and all(isinstance(item, (bool, int, float, str)) for item in value):
+            return list(value)
+        if isinstance(value, (list, tuple)):
+            return f"{len(value)} {type(value[0]).__name__} objects" if value else []
+        return type(value).__name__
+
+    return {option: described(value) for option, value in options.items()}
 
 
 def _check_names(kind, names):

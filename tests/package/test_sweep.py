@@ -26,7 +26,7 @@ def every_face():
 def check_face(name, number):
     face = SHAPES[name].Faces[number - 1]
     failures = []
-    for strategy in sweep.cmmsampling.STRATEGIES:
+    for strategy in sweep.cmmsampling.self_contained():
         for offset in sweep.OFFSETS:
             kind, detail = sweep.outcome(face, strategy, offset)
             if kind == "failure":

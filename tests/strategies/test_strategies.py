@@ -9,7 +9,7 @@ from cmmsampling.strategies import blind
 from cmmsampling.strategies.blind import allocate, grid_shape, thin_evenly
 from cmmsampling.strategies.sampling import make_problem
 
-BLIND = [name for name, s in cmmsampling.STRATEGIES.items() if not s.optimiser]
+BLIND = [name for name, s in cmmsampling.STRATEGIES.items() if not s.optimiser and not s.requires]
 FACES = {
     "reference": cmmsampling.reference_face,
     "rational": rational_patch_face,

@@ -14,7 +14,7 @@ from support.toy_strategy import TOY
 
 PACKAGE = pathlib.Path(cmmsampling.__file__).parent
 # The modules that hold the records and the strategies' own code.
-RECORD_HOLDERS = {"sampling.py", "blind.py", "optimal.py", "pso.py"}
+RECORD_HOLDERS = {"sampling.py", "blind.py", "optimal.py", "pso.py", "part_error.py"}
 
 
 @pytest.fixture

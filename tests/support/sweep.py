@@ -129,7 +129,7 @@ def main(names=()):
         counter = counts.setdefault(name, collections.Counter())
         for number, face in enumerate(shape.Faces, start=1):
             print(f"{name} Face{number}", file=sys.stderr, flush=True)
-            for strategy in cmmsampling.STRATEGIES:
+            for strategy in cmmsampling.self_contained():
                 for offset in OFFSETS:
                     kind, detail = outcome(face, strategy, offset)
                     counter[(kind, detail)] += 1

@@ -18,7 +18,7 @@ from ...document import settings
 from ...fitting.deviation import DEFAULT_GRID
 from ...geometry.validation import InputError
 from ...strategies.estimates import about_text
-from ...strategies.sampling import STRATEGIES
+from ...strategies.sampling import STRATEGIES, self_contained
 from ...study import DEFAULT_NS, DEFAULT_SEEDS, compare, study_time, write_report
 from ..background import BackgroundTask
 from ..echo import echo_study, face_expression, source_text
@@ -233,12 +233,12 @@ class CompareTaskPanel(BackgroundRunPanel):
         the item's data and its description as tooltip; the list shows them all once the panel is
         shown (when the rows' height is known)."""
         strategies = self.form.strategies
-        for name, strategy in STRATEGIES.items():
-            item = QtGui.QListWidgetItem(strategy.label, strategies)
+        for name in self_contained():
+            item = QtGui.QListWidgetItem(STRATEGIES[name].label, strategies)
             item.setData(QtCore.Qt.UserRole, name)
             item.setFlags(item.flags() | QtCore.Qt.ItemIsUserCheckable)
             item.setCheckState(QtCore.Qt.Unchecked)
-            item.setToolTip(strategy.description)
+            item.setToolTip(STRATEGIES[name].description)
         QtCore.QTimer.singleShot(0, self.fit_strategy_list)
 
     def _add_constraints(self):

@@ -21,7 +21,7 @@ from ...document.object_types import in_document
 from ...fitting.deviation import DEFAULT_GRID
 from ...planning.part_plan import CANCELLED_REASON, PLAN_TIME_LIMIT_S, plan
 from ...planning.points_needed import DEFAULT_MAX_POINTS
-from ...strategies.sampling import BEST_STRATEGY, STRATEGIES
+from ...strategies.sampling import BEST_STRATEGY, STRATEGIES, self_contained
 from ..background import BackgroundTask
 from ..echo import add_plan
 from ..view_providers import redraw_plan_points
@@ -144,8 +144,8 @@ class PlanPartTaskPanel(BackgroundRunPanel):
         self._set_up("plan_part.ui", "PlanPart.svg", source)
         obj, numbers = source
         self.form.partLabel.setText(part_text(obj, numbers))
-        for name, entry in STRATEGIES.items():
-            add_choice(self.form.strategy, name, entry.label, entry.description)
+        for name in self_contained():
+            add_choice(self.form.strategy, name, STRATEGIES[name].label, STRATEGIES[name].description)
         self._add_setting_boxes()
         self.edge_offset = self._add_edge_offset()
         self.probe = self._add_probe_choice()

@@ -144,7 +144,8 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
         entry shows the strategy's label and holds its name, with its description as tooltip."""
         best = ", ".join(sampling.STRATEGIES[name].label for name in optimal.BEST_STARTS)
         add_choice(self.form.start, "best", "best start", f"the best of {best} for this face")
-        for name, strategy in sampling.STRATEGIES.items():
+        for name in sampling.self_contained():
+            strategy = sampling.STRATEGIES[name]
             add_choice(self.form.strategy, name, strategy.label, strategy.description)
             if not strategy.optimiser:
                 add_choice(self.form.start, name, strategy.label, strategy.description)

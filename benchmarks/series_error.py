@@ -1,0 +1,127 @@
+"""Sampling aimed at a series' error: how many points a next part needs, with and without the
+series model.
+
+    /usr/bin/python3 benchmarks/series_error.py
+
+For each error kind (a wave, a bump near an edge, a twist; cmmsampling.simulated_series: each
+part's sizes scattered by 20 %, its face offset and tilted, probing noise), the first PRIOR parts
+of a simulated series on the reference face are measured densely (DENSE points, uniform
+parametric) and the series model is built from their inspections; the NEXT parts after them are
+measured at each N with uniform parametric, Halton and part_error points. Each next part's
+error map (Inspection.deviation_map) with the model (prior = the first parts) and without it is
+compared with the part's true error over a RASTER x RASTER raster of the face: RMS and largest
+error (mm), and how often the map's profile (2 max |map|) gives the wrong verdict against a
+tolerance (the median true profile of the next parts, so about half of them pass). Then, for
+each RMS asked, the fewest N reaching it: part_error with the model against uniform parametric
+without it (the goal: a quarter of the points or fewer). Prints figures; asserts nothing.
+"""
+import argparse
+import os
+import sys
+
+import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+import cmmsampling  # noqa: E402
+from cmmsampling.inspection.simulate import SERIES_KINDS  # noqa: E402
+from cmmsampling.strategies.registry import baseline  # noqa: E402
+
+PRIOR, NEXT, DENSE, RASTER = 3, 8, 400, 40
+COUNTS = (4, 9, 16, 25, 36, 49, 64, 100)
+TARGETS_UM = (2.0, 1.0, 0.75, 0.5)
+
+
+def raster(face):
+    """(RASTER^2, 2) uv over the face's parameter range."""
+    u0, u1, v0, v1 = face.ParameterRange
+    u, v = np.meshgrid(np.linspace(u0, u1, RASTER), np.linspace(v0, v1, RASTER), indexing="ij")
+    return np.column_stack([u.ravel(), v.ravel()])
+
+
+def layouts(face, series, strategies):
+    """{(strategy, N): uv (N, 2)} of every strategy at every N (the same points for every next part)."""
+    found = {}
+    for name in strategies:
+        for n in COUNTS:
+            options = {"prior": series} if cmmsampling.STRATEGIES[name].requires else {}
+            found[name, n] = cmmsampling.sample(face, n, name, occ_check=False, **options).uv
+    return found
+
+
+def judged(face, part, uv, series, grid, noise, seed):
+    """(RMS with, RMS without, max with, max without, profile with, profile without) of one
+    next part measured at uv, in mm."""
+    inspection = cmmsampling.inspect(face, cmmsampling.measured_part(face, uv, part, noise, seed), alignment="none")
+    truth = part.error(grid)
+    maps = (inspection.deviation_map(grid, prior=series), inspection.deviation_map(grid))
+    errors = [m - truth for m in maps]
+    return (*(float(np.sqrt((e ** 2).mean())) for e in errors), *(float(np.abs(e).max()) for e in errors),
+            *(2 * float(np.abs(m).max()) for m in maps))
+
+
+def one_kind(face, kind, args, strategies):
+    """The table of one error kind; returns {(strategy, with model?): {N: mean RMS mm}}."""
+    parts = cmmsampling.simulated_series(face, PRIOR + NEXT, kind, args.size, seed=args.seed)
+    dense = cmmsampling.sample(face, DENSE, baseline(), occ_check=False).uv
+    prior = [cmmsampling.inspect(face, cmmsampling.measured_part(face, dense, part, args.noise, seed=k),
+                                 alignment="none") for k, part in enumerate(parts[:PRIOR])]
+    series = cmmsampling.series_model(face, prior)
+    grid = raster(face)
+    truths = [2 * float(np.abs(part.error(grid)).max()) for part in parts[PRIOR:]]
+    tolerance = float(np.median(truths))
+    points = layouts(face, series, strategies)
+    print(f"\n{kind}: size {args.size} mm, {PRIOR} first parts x {DENSE} points, {NEXT} next parts, noise "
+          f"{args.noise} mm; true RMS error {np.mean([np.sqrt((p.error(grid) ** 2).mean()) for p in parts[PRIOR:]]):.4f} mm; "
+          f"tolerance {tolerance:.4f} mm (median true profile)")
+    print("RMS error of the error map, um (largest error um; wrong verdicts of the map's profile of the 8 parts), "
+          "with the series model | without")
+    print(f"{'N':>4}  " + "  ".join(f"{cmmsampling.STRATEGIES[name].label:>38}" for name in strategies))
+    rms = {}
+    for n in COUNTS:
+        cells = []
+        for name in strategies:
+            figures = np.array([judged(face, part, points[name, n], series, grid, args.noise, 100 + k)
+                                for k, part in enumerate(parts[PRIOR:])])
+            wrong = [int(((figures[:, 4 + w] <= tolerance) != (np.array(truths) <= tolerance)).sum()) for w in (0, 1)]
+            for w, label in ((0, True), (1, False)):
+                rms.setdefault((name, label), {})[n] = figures[:, w].mean()
+            cells.append(f"{1e3 * figures[:, 0].mean():5.2f} ({1e3 * figures[:, 2].mean():5.1f}; {wrong[0]}) | "
+                         f"{1e3 * figures[:, 1].mean():5.2f} ({1e3 * figures[:, 3].mean():5.1f}; {wrong[1]})")
+        print(f"{n:>4}  " + "  ".join(f"{cell:>38}" for cell in cells), flush=True)
+    return rms
+
+
+def fewest(figures, target_mm):
+    """The fewest N whose mean RMS is at most target_mm, or None."""
+    return next((n for n in COUNTS if figures[n] <= target_mm), None)
+
+
+def summary(kind, rms, strategies):
+    """The points each RMS needs: part_error with the model against uniform parametric without."""
+    uniform, aimed = baseline(), next(name for name in strategies if cmmsampling.STRATEGIES[name].requires)
+    for target in TARGETS_UM:
+        without = fewest(rms[uniform, False], target / 1e3)
+        with_model = fewest(rms[aimed, True], target / 1e3)
+        uniform_with = fewest(rms[uniform, True], target / 1e3)
+        ratio = f"{without / with_model:.1f}x fewer" if without and with_model else "n/a"
+        print(f"{kind}: RMS <= {target:g} um: uniform parametric without the model needs "
+              f"{without or f'more than {COUNTS[-1]}'}, with it {uniform_with or f'more than {COUNTS[-1]}'}; "
+              f"part_error with it {with_model or f'more than {COUNTS[-1]}'} ({ratio})")
+    never_worse = all(rms[aimed, True][n] <= rms[uniform, True][n] for n in COUNTS)
+    print(f"{kind}: at every N part_error with the model is at most uniform parametric with it: {never_worse}")
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--size", type=float, default=0.02, help="the error's size, mm")
+    parser.add_argument("--noise", type=float, default=0.0005, help="probing noise, mm (standard deviation)")
+    parser.add_argument("--seed", type=int, default=1)
+    args = parser.parse_args()
+    face = cmmsampling.reference_face()
+    strategies = [baseline(), "halton", "part_error"]
+    for kind in SERIES_KINDS:
+        summary(kind, one_kind(face, kind, args, strategies), strategies)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,65 @@
+"""A series' error from inspections: the series model of one face and a part's error map.
+
+The numbers are cmmsampling.fitting.series's (kriging of one part; the series' systematic error
+and scatter); this module finds each inspection's points on the face and their parameters.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..fitting.series import SeriesModel, error_map, parameters_on
+from ..geometry.validation import InputError, InputTypeError
+from ..strategies.face_setup import setup_of
+
+
+def face_rows(inspection, name=None):
+    """(rows (M,) int, the face's name) of an inspection's points on the face called ``name``
+    (None: the inspection's only face; InputError when it has several)."""
+    names = list(dict.fromkeys(inspection.faces or [""]))
+    if name is None:
+        if len(names) > 1:
+            raise InputError(f"the inspection covers faces {', '.join(names)}: name the face, e.g. name={names[0]!r}")
+        name = names[0]
+    rows = np.flatnonzero(np.asarray(inspection.faces or [""] * len(inspection.deviations)) == name)
+    if not rows.size:
+        raise InputError(f"the inspection has no points on {name!r}; its faces are {', '.join(names)}")
+    return rows, name
+
+
+def measured_parameters(face, inspection, name=None):
+    """(uv (M, 2) on face, signed deviations (M,) mm) of the inspection's points on ``face`` (a
+    Part.Face; name: the face's name in the inspection, None for its only face)."""
+    rows, _ = face_rows(inspection, name)
+    setup = setup_of(face)
+    on_face = setup.domain().on_face if setup.model.trimmed else None
+    return parameters_on(setup.model, inspection.points[rows], on_face), inspection.deviations[rows]
+
+
+def series_model(face, prior, name=None) -> SeriesModel:
+    """The series model of ``face`` (a Part.Face) from the inspections of earlier parts.
+
+    prior: a list of Inspections (cmmsampling.inspect), at least one, each with points on the
+    face (name: its name in them, None where each covers that face only). Returns a SeriesModel
+    (cmmsampling.fitting.series): ``systematic(uv)``, ``predict(uv, deviations, query)``; it is
+    what ``sample(face, n, 'part_error', prior=...)`` and ``Inspection.deviation_map`` take.
+    """
+    if isinstance(prior, SeriesModel):
+        return prior
+    parts = list(prior) if isinstance(prior, (list, tuple)) else None
+    if not parts:
+        raise InputTypeError("prior takes a list of Inspections of earlier parts (cmmsampling.inspect), at least one")
+    setup = setup_of(face)
+    return SeriesModel(setup.model, [measured_parameters(face, inspection, name) for inspection in parts])
+
+
+def deviation_map(inspection, face, uv, prior=None, name=None):
+    """The measured part's signed deviation from the CAD face at uv (M, 2) of its parameter
+    range: (M,) mm, from the inspection's points on ``face`` alone (prior None: kriging,
+    cmmsampling.fitting.series.fit_field) or with the series model of ``prior`` (a list of
+    earlier parts' Inspections or a SeriesModel: its posterior mean)."""
+    uv = np.asarray(uv, dtype=float).reshape(-1, 2)
+    measured, deviations = measured_parameters(face, inspection, name)
+    model = setup_of(face).model
+    if prior is None:
+        return error_map(model, measured, deviations, uv)
+    return series_model(face, prior, name).predict(measured, deviations, uv)[0]
