@@ -34,19 +34,31 @@ def argument_text(value):
     return f"cmmsampling.PROBES[{name!r}]" if name is not None else repr(value)
 
 
-def add_result(source, face, arguments, result):
+def prior_expression(objects):
+    """Console text of a part_error prior: the Inspections of the measured-points objects."""
+    return "[" + ", ".join(f"{_object_expression(obj)}.Proxy.inspection({_object_expression(obj)})"
+                           for obj in objects) + "]"
+
+
+def _object_expression(obj):
+    """App.getDocument('Doc').getObject('Name') for a document object."""
+    return f"App.getDocument({obj.Document.Name!r}).getObject({obj.Name!r})"
+
+
+def add_result(source, face, arguments, result, prior=None):
     """Write a finished run into the source's document through the console API; returns the
     result's group.
 
     The echo replays as a macro: ``face = ...``, ``result = cmmsampling.sample(face, ...)`` with
     the run's arguments, then ``add_to_document``. Here the sample() line does not run again: the
     run made in the worker thread is handed over to it (cmmsampling.strategies.sampling.hand_over).
-    face: the face the run was made on, as the panel took it from the source.
+    face: the face the run was made on, as the panel took it from the source; prior: the console
+    text of a part_error run's prior (:func:`prior_expression`), None without one.
     """
     obj, name = source
     doc = f"App.getDocument({obj.Document.Name!r})"
     source_expr = f"{doc}.getObject({obj.Name!r})"
-    call = call_text(arguments, {"part": f"{source_expr}.Shape"})
+    call = call_text(arguments, {"part": f"{source_expr}.Shape", "prior": prior})
     before = set(o.Name for o in obj.Document.Objects)
     FreeCADGui.doCommand("import cmmsampling")
     FreeCADGui.doCommand(f"face = {source_expr}.getSubObject({name!r})")

@@ -94,5 +94,5 @@ def _check_part_error_options(options):
 
 RECORD = Strategy(
     "part_error", run_part_error,
-    "where the series' earlier parts leave the next part's error least known (needs prior=)",
+    "where the series' earlier parts leave the next part's error least known (needs their inspections)",
     "part error (series)", {"prior": None}, _check_part_error_options, requires=("prior",))

@@ -72,9 +72,9 @@ def test_panel_defaults_are_the_papers_and_options_follow_the_strategy(doc):
         assert words in form.edge_offset.toolTip()
     assert "auto" in form.min_spacing.toolTip() and "every strategy" in form.min_spacing.toolTip()
     assert form.strategy.currentData() == "pso" and form.start_from_uniform.isChecked()
-    assert [form.strategy.itemData(i) for i in range(form.strategy.count())] == cmmsampling.self_contained()
+    assert [form.strategy.itemData(i) for i in range(form.strategy.count())] == list(cmmsampling.STRATEGIES)
     assert [form.strategy.itemText(i) for i in range(form.strategy.count())] == [
-        cmmsampling.STRATEGIES[name].label for name in cmmsampling.self_contained()]
+        s.label for s in cmmsampling.STRATEGIES.values()]
     assert not child(form, "expertSettings").isVisible() and not form.psoGroup.isVisible()
     child(form, "showExpert").click()
     assert child(form, "expertSettings").isVisible() and form.psoGroup.isVisible()
@@ -794,4 +794,35 @@ def test_the_preferences_page_sets_what_the_panel_starts_with(doc, artifacts):
     assert settings.load({"n": 0})["n"] == 49
     form = open_panel(doc)
     assert form.n.value() == 49
+    task_button(CANCEL).click()
+
+
+def test_part_error_through_the_panel_learns_from_the_checked_inspections(doc, artifacts):
+    """part_error is offered with the document's inspections as the series' earlier parts: without
+    one checked the panel says what to do; with two it samples, and the echo rebuilds the prior."""
+    face = doc.Body.Shape.Faces[0]
+    dense = cmmsampling.sample(face, 64, "uniform_parametric", occ_check=False).uv
+    for k, part in enumerate(cmmsampling.simulated_series(face, 2, "all", 0.02, seed=4)):
+        found = cmmsampling.inspect(face, cmmsampling.measured_part(face, dense, part, 0.0005, k), alignment="none")
+        cmmsampling.add_inspection_to_document(found, doc)
+    form = open_panel(doc)
+    fill(form, "part_error", n=9)
+    assert form.priorGroup.isEnabled() and form.priorParts.count() == 2
+    task_button(OK).click()
+    process_events(0.2)
+    assert FreeCADGui.Control.activeDialog() and "Check at least one earlier part" in form.status.text()
+    for row in range(2):
+        form.priorParts.item(row).setCheckState(QtCore.Qt.Checked)
+    process_events(0.3)
+    form.grab().save(os.path.join(artifacts, "task_panel_part_error.png"))
+    task_button(OK).click()
+    assert wait_until(lambda: not FreeCADGui.Control.activeDialog(), 60), form.status.text()
+    points = next(group for group in groups(doc) if "part_error" in group.Label).Group[0]
+    assert points.Strategy == "part_error" and len(points.Labels) == 9
+    assert json.loads(points.Parameters)["prior"] == "2 earlier parts"
+    console = dock_text("Python console")
+    assert "strategy='part_error'" in console and ".Proxy.inspection(App.getDocument('GuiTest')" in console
+    form = open_panel(doc)
+    fill(form, "pso")
+    assert not form.priorGroup.isEnabled()
     task_button(CANCEL).click()

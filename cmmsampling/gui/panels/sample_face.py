@@ -18,7 +18,7 @@ from ...access.probe import PROBES
 from ...fitting.deviation import DEFAULT_GRID
 from ...fitting.substitute import DEFAULT_DEGREE, default_pole_count
 from ...document import settings
-from ...document.object_types import source_face
+from ...document.object_types import is_measured_points, source_face
 from ...strategies import estimates, memory, optimal, sampling
 from ...strategies.problem import resolve_fit_poles
 from .. import echo
@@ -44,6 +44,9 @@ PANEL_OPTION_DEFAULTS = {"time_limit": 60.0}
 # Steps of the progress bar of a run bounded by its time limit only.
 TIME_STEPS = 1000
 AUTOMATIC = ("edge_offset", "min_spacing")
+PRIOR_LIST_HEIGHT = 110
+PRIOR_TIP = ("The inspections of earlier parts of the same series on this face (their measured points, each in the "
+             "part's frame): part_error places the points where, given them, the next part's error is least known")
 
 
 def option_defaults():
@@ -115,6 +118,7 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
         self._fill_strategies()
         self._set_up_automatic_values()
         self._add_probe_choice()
+        self._add_prior_choice()
         self._collapse_expert_settings()
         self.fields = Fields({name: self.widget(name) for name in panel_defaults() if self.widget(name) is not None})
         self.set_values(settings.load(panel_defaults()))
@@ -144,10 +148,9 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
         entry shows the strategy's label and holds its name, with its description as tooltip."""
         best = ", ".join(sampling.STRATEGIES[name].label for name in optimal.BEST_STARTS)
         add_choice(self.form.start, "best", "best start", f"the best of {best} for this face")
-        for name in sampling.self_contained():
-            strategy = sampling.STRATEGIES[name]
+        for name, strategy in sampling.STRATEGIES.items():
             add_choice(self.form.strategy, name, strategy.label, strategy.description)
-            if not strategy.optimiser:
+            if not strategy.optimiser and not strategy.requires:
                 add_choice(self.form.start, name, strategy.label, strategy.description)
 
     def _set_up_automatic_values(self):
@@ -173,6 +176,40 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
                               "The probe whose reach on the whole part (the selected face's object) the points keep to")
         self.form.probe = choice
         self.form.constraintsGroup.layout().addRow(QtGui.QLabel("Probe", self.form), choice)
+
+    def _add_prior_choice(self):
+        """The earlier parts of a series a part_error run learns from (``form.priorParts``): the
+        measured points of the document's inspections, each checkable; enabled for a strategy
+        that requires a prior."""
+        self.form.priorGroup = QtGui.QGroupBox("Earlier parts of the series", self.form)
+        self.form.priorGroup.setObjectName("priorGroup")
+        self.form.priorGroup.setToolTip(PRIOR_TIP)
+        layout = QtGui.QVBoxLayout(self.form.priorGroup)
+        self.form.priorParts = QtGui.QListWidget(self.form.priorGroup)
+        self.form.priorParts.setObjectName("priorParts")
+        self.form.priorParts.setToolTip(PRIOR_TIP)
+        for obj in self.source[0].Document.Objects if self.source is not None else []:
+            if is_measured_points(obj):
+                group = obj.getParentGroup()
+                where = f"{group.Label}: " if group is not None else ""
+                item = QtGui.QListWidgetItem(f"{where}{obj.Label} ({len(obj.Labels)} points)", self.form.priorParts)
+                item.setToolTip(obj.MeasuredFile or obj.Label)
+                item.setData(QtCore.Qt.UserRole, obj.Name)
+                item.setFlags(item.flags() | QtCore.Qt.ItemIsUserCheckable)
+                item.setCheckState(QtCore.Qt.Unchecked)
+        if not self.form.priorParts.count():
+            QtGui.QListWidgetItem("no inspection in this document: inspect earlier parts first", self.form.priorParts)
+        self.form.priorParts.setMaximumHeight(PRIOR_LIST_HEIGHT)
+        layout.addWidget(self.form.priorParts)
+        main = self.form.layout()
+        main.insertWidget(main.indexOf(self.form.constraintsGroup) + 1, self.form.priorGroup)
+
+    def prior_objects(self):
+        """The measured-points objects checked in the earlier parts' list, in its order."""
+        parts = self.form.priorParts
+        doc = self.source[0].Document
+        return [doc.getObject(parts.item(row).data(QtCore.Qt.UserRole)) for row in range(parts.count())
+                if parts.item(row).checkState() == QtCore.Qt.Checked]
 
     def _collapse_expert_settings(self):
         """Put the strategies' options, the fit and the grid in an "Expert settings" section
@@ -232,6 +269,8 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
         if values["probe"] in PROBES and self.source_face() is not None:
             arguments["part"] = self.source[0].Shape
             arguments["probe"] = PROBES[values["probe"]]
+        if "prior" in strategy.requires:
+            arguments["prior"] = [obj.Proxy.inspection(obj) for obj in self.prior_objects()]
         return arguments
 
     def _add_memory_line(self):
@@ -339,6 +378,7 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
         self.form.fit_poles_u.setEnabled(manual)
         self.form.fit_poles_v.setEnabled(manual)
         self.form.strategy.setEnabled(not running)
+        self.form.priorGroup.setEnabled("prior" in strategy.requires and not running)
         self.form.pickFace.setEnabled(not running)
         if self.buttons is not None:
             self.buttons.button(QtGui.QDialogButtonBox.Ok).setEnabled(not running and self.memory_fits)
@@ -391,6 +431,10 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
         face = self.source_face()
         if face is None:
             self.source_gone()
+            return
+        if "prior" in sampling.STRATEGIES[self.form.strategy.currentData()].requires and not self.prior_objects():
+            self.show_status("Check at least one earlier part in 'Earlier parts of the series': part_error learns "
+                             "where the next part's error is least known from their inspections.", error=True)
             return
         arguments = self.sample_arguments()
         self.run_face = face
@@ -455,7 +499,8 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
             self.source_gone()
             return
         try:
-            group = echo.add_result(self.source, self.run_face, self.run_arguments, run.result)
+            group = echo.add_result(self.source, self.run_face, self.run_arguments, run.result,
+                                    echo.prior_expression(self.prior_objects()) if "prior" in self.run_arguments else None)
         except Exception as exc:  # shown in the panel; the console has the traceback
             self.show_status(f"The result could not be added: {exc}", error=True)
             return
