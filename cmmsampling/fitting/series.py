@@ -81,7 +81,7 @@ def error_map(model, uv, deviations, query):
 
 def matern(a, b, length, variance):
     """Matern 5/2 covariance between plane points a (A, 2) and b (B, 2) mm: (A, B) mm^2."""
-    r = np.sqrt(np.maximum(((a[:, None, :] - b[None, :, :]) ** 2).sum(-1), 0.0)) * (np.sqrt(5.0) / length)
+    r = np.hypot(a[:, None, 0] - b[None, :, 0], a[:, None, 1] - b[None, :, 1]) * (np.sqrt(5.0) / length)
     return variance * (1.0 + r + r * r / 3.0) * np.exp(-r)
 
 

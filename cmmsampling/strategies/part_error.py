@@ -38,7 +38,7 @@ def series_of(problem, prior):
 def run_part_error(problem, progress, prior):
     """Near the fewest-unknowns design for the next part (see the module docstring)."""
     series = series_of(problem, prior)
-    candidates = feasible_candidates(problem, max(CANDIDATES, 8 * problem.n))
+    candidates = feasible_candidates(problem, candidate_count(problem.n))
     if len(candidates) < problem.n:
         raise InputError(f"only {len(candidates)} feasible places found on the face for {problem.n} points; "
                          "lower n or edge_offset")
@@ -75,6 +75,16 @@ def _best_design(problem, series, candidates, greedy, variances):
     return best
 
 
+def candidate_count(n):
+    """How many feasible places the N points are chosen among: CANDIDATES, or 4 N for more points."""
+    return max(CANDIDATES, 4 * n)
+
+
+def _part_error_memory(n, poles, nodes, options, workers):
+    """The candidates' posterior covariance and the temporaries of its updates: 4 (C, C) arrays."""
+    return 4 * 8 * candidate_count(n) ** 2
+
+
 def _check_part_error_options(options):
     """The prior must be given: a SeriesModel or a non-empty list of inspections."""
     prior = options["prior"]
@@ -95,4 +105,5 @@ def _check_part_error_options(options):
 RECORD = Strategy(
     "part_error", run_part_error,
     "where the series' earlier parts leave the next part's error least known (needs their inspections)",
-    "part error (series)", {"prior": None}, _check_part_error_options, requires=("prior",))
+    "part error (series)", {"prior": None}, _check_part_error_options, requires=("prior",),
+    memory=_part_error_memory)
