@@ -499,8 +499,8 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
             self.source_gone()
             return
         try:
-            group = echo.add_result(self.source, self.run_face, self.run_arguments, run.result,
-                                    echo.prior_expression(self.prior_objects()) if "prior" in self.run_arguments else None)
+            prior = {"prior": echo.prior_expression(self.prior_objects())} if "prior" in self.run_arguments else {}
+            group = echo.add_result(self.source, self.run_face, self.run_arguments, run.result, **prior)
         except Exception as exc:  # shown in the panel; the console has the traceback
             self.show_status(f"The result could not be added: {exc}", error=True)
             return
