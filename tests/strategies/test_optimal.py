@@ -151,8 +151,8 @@ def test_the_time_limit_counts_from_the_start_of_the_run(reference, monkeypatch)
     limit, the descent stops at its first evaluation (the start is returned)."""
     choose = optimal._start_layout
 
-    def slow(problem, start):
-        chosen = choose(problem, start)
+    def slow(*arguments):
+        chosen = choose(*arguments)
         time.sleep(0.6)
         return chosen
 
