@@ -8,6 +8,7 @@ normals follow from ``problem.model``. :data:`RECORDS` describes them to the res
 import numpy as np
 from scipy.spatial import cKDTree
 
+from ..fitting.series import mm_per_parameter
 from ..geometry.bspline import radical_inverse
 from ..geometry.validation import InputError
 from .registry import Strategy, StrategyOutcome
@@ -222,11 +223,7 @@ def uniform_parametric(problem):
 
 def spatial_aspect(model, raster=9):
     """Mean length of the face along v over its mean length along u (both in mm)."""
-    uv = model.raster((raster, raster)).reshape(-1, 2)
-    d = model.derivatives(uv, 1)
-    du, dv = model.span
-    along_u = np.linalg.norm(d[(1, 0)], axis=1).mean() * du
-    along_v = np.linalg.norm(d[(0, 1)], axis=1).mean() * dv
+    along_u, along_v = mm_per_parameter(model, raster) * model.span
     return along_v / along_u if along_u > 0 and along_v > 0 else 1.0
 
 
