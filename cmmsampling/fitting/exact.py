@@ -29,7 +29,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ..geometry.bspline import kron_rows
-from .nodes import edge_curve_uv
+from .nodes import edge_curve_uv, face_nodes
 from .peaks import FineStarts, peak_search
 from .sides import Side, normals_or
 from .stretch import stretched_places
@@ -261,6 +261,29 @@ def _nearer(side, rows, other):
     kept = side.copy()
     kept.put(rows[nearer], other.rows(nearer))
     return kept
+
+
+class NearestParameters:
+    """The parameters of the closest points on a face's model, for many points at once, from a
+    raster built once per face: call with points (M, 3) mm -> uv (M, 2) in the model's parameter
+    range. model: SurfaceModel; on_face: uv -> bool, the face's trim (None: the whole rectangle);
+    grid: raster nodes per direction; starts: how many of the nearest nodes each damped Newton
+    search (:func:`closest_parameters`) starts from, the nearest result kept."""
+
+    def __init__(self, model, on_face=None, grid=60, starts=4):
+        self.model = model
+        self.nodes = face_nodes(model, grid, on_face)
+        self.starts = node_parameters(self.nodes)
+        self.count = min(starts, len(self.starts))
+
+    def locate(self, points):
+        """(uv (M, 2), near (M, count) indices of the raster nodes searched from) for points (M, 3) mm."""
+        points = np.asarray(points, dtype=float).reshape(-1, 3)
+        near = self.nodes.point_tree.query(points, k=self.count)[1].reshape(len(points), self.count)
+        return _nearest_of(self.model, points, self.starts[near]), near
+
+    def __call__(self, points):
+        return self.locate(points)[0]
 
 
 def _nearest_of(model, targets, starts):

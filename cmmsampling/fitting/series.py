@@ -34,8 +34,6 @@ import numpy as np
 from scipy.linalg import cho_factor, cho_solve
 
 from ..geometry.validation import InputError
-from .exact import _nearest_of, node_parameters
-from .nodes import face_nodes
 
 # Length scales tried by the maximum likelihood, log-spaced between half the points' typical
 # spacing and twice the face's extent; noise variance as a share of the field's variance.
@@ -242,14 +240,3 @@ def greedy_design(series, candidates, n, spaced_out=None):
         if spaced_out is not None:
             free[spaced_out(best)] = False
     return np.array(chosen), np.maximum(np.diag(posterior), 0.0)
-
-
-def parameters_on(model, points, on_face=None, grid=60):
-    """uv (M, 2) of the closest points on the face's model to points (M, 3) mm (damped Newton
-    from the nearest raster nodes; on_face: uv -> bool of the face's trim, None for the whole
-    rectangle)."""
-    nodes = face_nodes(model, grid, on_face)
-    starts = node_parameters(nodes)
-    points = np.asarray(points, float).reshape(-1, 3)
-    near = nodes.point_tree.query(points, k=min(4, len(starts)))[1].reshape(len(points), -1)
-    return _nearest_of(model, points, starts[near])

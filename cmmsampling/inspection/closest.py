@@ -10,8 +10,7 @@ points nearest the zone's limits, are measured again with OCC (:func:`confirm_wi
 """
 import numpy as np
 
-from ..fitting.exact import _nearest_of, _nearest_on_edge_curves, node_normals, node_parameters
-from ..fitting.nodes import face_nodes
+from ..fitting.exact import NearestParameters, _nearest_on_edge_curves, node_normals
 from ..fitting.sides import normals_or
 from ..measurement import closest_points
 from ..strategies.face_setup import setup_of
@@ -33,14 +32,13 @@ class FaceCloser:
         setup = setup_of(face)
         self.model = setup.model
         self.on_face = setup.domain().on_face if self.model.trimmed else None
-        self.nodes = face_nodes(self.model, CLOSEST_GRID, self.on_face)
-        self.starts, self.fallback = node_parameters(self.nodes), node_normals(self.nodes)
+        self.parameters = NearestParameters(self.model, self.on_face, CLOSEST_GRID, CLOSEST_STARTS)
+        self.nodes = self.parameters.nodes
+        self.fallback = node_normals(self.nodes)
 
     def __call__(self, points):
         points = np.asarray(points, dtype=float).reshape(-1, 3)
-        count = min(CLOSEST_STARTS, len(self.starts))
-        near = self.nodes.point_tree.query(points, k=count)[1].reshape(len(points), count)
-        feet = _nearest_of(self.model, points, self.starts[near])
+        feet, near = self.parameters.locate(points)
         nearest, normals = self.model.points(feet), self.model.normals(feet)
         if self.on_face is not None:
             off = ~self.on_face(feet)

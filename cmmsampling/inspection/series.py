@@ -7,7 +7,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..fitting.series import SeriesModel, error_map, parameters_on
+from ..fitting.exact import NearestParameters
+from ..fitting.series import SeriesModel, error_map
 from ..geometry.validation import InputError, InputTypeError
 from ..strategies.face_setup import setup_of
 
@@ -26,13 +27,20 @@ def face_rows(inspection, name=None):
     return rows, name
 
 
-def measured_parameters(face, inspection, name=None):
-    """(uv (M, 2) on face, signed deviations (M,) mm) of the inspection's points on ``face`` (a
-    Part.Face; name: the face's name in the inspection, None for its only face)."""
-    rows, _ = face_rows(inspection, name)
+def nearest_parameters(face):
+    """The NearestParameters (cmmsampling.fitting.exact) of ``face`` (a Part.Face): points (M, 3)
+    mm -> the parameters (M, 2) of their closest points on it, inside its trim."""
     setup = setup_of(face)
-    on_face = setup.domain().on_face if setup.model.trimmed else None
-    return parameters_on(setup.model, inspection.points[rows], on_face), inspection.deviations[rows]
+    return NearestParameters(setup.model, setup.domain().on_face if setup.model.trimmed else None)
+
+
+def measured_parameters(face, inspection, name=None, nearest=None):
+    """(uv (M, 2) on face, signed deviations (M,) mm) of the inspection's points on ``face`` (a
+    Part.Face; name: the face's name in the inspection, None for its only face; nearest: the
+    face's :func:`nearest_parameters` where already built)."""
+    rows, _ = face_rows(inspection, name)
+    nearest = nearest or nearest_parameters(face)
+    return nearest(inspection.points[rows]), inspection.deviations[rows]
 
 
 def series_model(face, prior, name=None) -> SeriesModel:
@@ -48,8 +56,8 @@ def series_model(face, prior, name=None) -> SeriesModel:
     parts = list(prior) if isinstance(prior, (list, tuple)) else None
     if not parts:
         raise InputTypeError("prior takes a list of Inspections of earlier parts (cmmsampling.inspect), at least one")
-    setup = setup_of(face)
-    return SeriesModel(setup.model, [measured_parameters(face, inspection, name) for inspection in parts])
+    nearest = nearest_parameters(face)
+    return SeriesModel(nearest.model, [measured_parameters(face, inspection, name, nearest) for inspection in parts])
 
 
 def deviation_map(inspection, face, uv, prior=None, name=None):
@@ -58,8 +66,8 @@ def deviation_map(inspection, face, uv, prior=None, name=None):
     cmmsampling.fitting.series.fit_field) or with the series model of ``prior`` (a list of
     earlier parts' Inspections or a SeriesModel: its posterior mean)."""
     uv = np.asarray(uv, dtype=float).reshape(-1, 2)
-    measured, deviations = measured_parameters(face, inspection, name)
-    model = setup_of(face).model
+    nearest = nearest_parameters(face)
+    measured, deviations = measured_parameters(face, inspection, name, nearest)
     if prior is None:
-        return error_map(model, measured, deviations, uv)
+        return error_map(nearest.model, measured, deviations, uv)
     return series_model(face, prior, name).predict(measured, deviations, uv)[0]

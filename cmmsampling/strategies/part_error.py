@@ -13,7 +13,8 @@ map's expected RMS and largest standard deviation over the face (``expected_rms_
 import numpy as np
 from scipy.spatial import cKDTree
 
-from ..fitting.series import SeriesModel, greedy_design, parameters_on
+from ..fitting.exact import NearestParameters
+from ..fitting.series import SeriesModel, greedy_design
 from ..geometry.validation import InputError
 from .blind import feasible_candidates
 from .optimal import BEST_STARTS
@@ -30,9 +31,8 @@ def series_of(problem, prior):
     built from its inspections' points (each with ``points`` (M, 3) mm and ``deviations`` (M,) mm)."""
     if isinstance(prior, SeriesModel):
         return prior
-    on_face = problem.domain.on_face
-    return SeriesModel(problem.model, [(parameters_on(problem.model, part.points, on_face), part.deviations)
-                                       for part in prior])
+    nearest = NearestParameters(problem.model, problem.domain.on_face)
+    return SeriesModel(problem.model, [(nearest(part.points), part.deviations) for part in prior])
 
 
 def run_part_error(problem, progress, prior):
