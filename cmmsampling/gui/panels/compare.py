@@ -23,7 +23,7 @@ from ...study import DEFAULT_NS, DEFAULT_SEEDS, compare, study_time, write_repor
 from ..background import BackgroundTask
 from ..echo import echo_study, face_expression, source_text
 from .base import BackgroundRunPanel
-from .fields import AUTO, Fields, edge_offset_argument, snap_to_auto, spacing_argument
+from .fields import AUTO, Fields, add_checkable, checked_data, edge_offset_argument, snap_to_auto, spacing_argument
 
 # The panel's values are stored under these names with this prefix, apart from Sample face's.
 SETTINGS_PREFIX = "Compare_"
@@ -234,11 +234,7 @@ class CompareTaskPanel(BackgroundRunPanel):
         shown (when the rows' height is known)."""
         strategies = self.form.strategies
         for name in self_contained():
-            item = QtGui.QListWidgetItem(STRATEGIES[name].label, strategies)
-            item.setData(QtCore.Qt.UserRole, name)
-            item.setFlags(item.flags() | QtCore.Qt.ItemIsUserCheckable)
-            item.setCheckState(QtCore.Qt.Unchecked)
-            item.setToolTip(STRATEGIES[name].description)
+            add_checkable(strategies, STRATEGIES[name].label, name, STRATEGIES[name].description)
         QtCore.QTimer.singleShot(0, self.fit_strategy_list)
 
     def _add_constraints(self):
@@ -301,7 +297,7 @@ class CompareTaskPanel(BackgroundRunPanel):
 
     def checked(self):
         """Names of the checked strategies, in STRATEGIES order."""
-        return [item.data(QtCore.Qt.UserRole) for item in self.items() if item.checkState() == QtCore.Qt.Checked]
+        return checked_data(self.form.strategies)
 
     def values(self):
         """The panel's values by name (see :func:`panel_defaults`)."""

@@ -32,6 +32,23 @@ def add_choice(choice, name, label, tip):
     choice.setItemData(choice.count() - 1, tip, QtCore.Qt.ToolTipRole)
 
 
+def add_checkable(listing, text, data, tip):
+    """Add an unchecked line showing ``text`` to the QListWidget ``listing``, holding ``data``
+    (its UserRole), with the tooltip ``tip``; returns the item."""
+    item = QtGui.QListWidgetItem(text, listing)
+    item.setData(QtCore.Qt.UserRole, data)
+    item.setFlags(item.flags() | QtCore.Qt.ItemIsUserCheckable)
+    item.setCheckState(QtCore.Qt.Unchecked)
+    item.setToolTip(tip)
+    return item
+
+
+def checked_data(listing):
+    """The data of the checked lines of the QListWidget ``listing``, in its order."""
+    items = (listing.item(row) for row in range(listing.count()))
+    return [item.data(QtCore.Qt.UserRole) for item in items if item.checkState() == QtCore.Qt.Checked]
+
+
 def probe_choice(parent, none_tip, outcome, tip):
     """A choice of the probe whose reach is judged (object name "probe"): "not judged" (tooltip
     ``none_tip``) or a preset of cmmsampling.PROBES, each entry holding its name (tooltip: what it

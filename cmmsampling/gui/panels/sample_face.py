@@ -26,7 +26,8 @@ from ..background import BackgroundSampling
 from ..selection import SelectionError, selected_face
 from .base import ERROR_STYLE, BackgroundRunPanel
 from .fields import (
-    AUTO, Fields, add_choice, detached, edge_offset_argument, probe_choice, snap_to_auto, spacing_argument,
+    AUTO, Fields, add_checkable, add_choice, checked_data, detached, edge_offset_argument, probe_choice, snap_to_auto,
+    spacing_argument,
 )
 
 CANCEL_WAIT_S = 1.0
@@ -192,11 +193,8 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
             if is_measured_points(obj):
                 group = obj.getParentGroup()
                 where = f"{group.Label}: " if group is not None else ""
-                item = QtGui.QListWidgetItem(f"{where}{obj.Label} ({len(obj.Labels)} points)", self.form.priorParts)
-                item.setToolTip(obj.MeasuredFile or obj.Label)
-                item.setData(QtCore.Qt.UserRole, obj.Name)
-                item.setFlags(item.flags() | QtCore.Qt.ItemIsUserCheckable)
-                item.setCheckState(QtCore.Qt.Unchecked)
+                add_checkable(self.form.priorParts, f"{where}{obj.Label} ({len(obj.Labels)} points)", obj.Name,
+                              obj.MeasuredFile or obj.Label)
         if not self.form.priorParts.count():
             QtGui.QListWidgetItem("no inspection in this document: inspect earlier parts first", self.form.priorParts)
         self.form.priorParts.setMaximumHeight(PRIOR_LIST_HEIGHT)
@@ -206,10 +204,8 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
 
     def prior_objects(self):
         """The measured-points objects checked in the earlier parts' list, in its order."""
-        parts = self.form.priorParts
         doc = self.source[0].Document
-        return [doc.getObject(parts.item(row).data(QtCore.Qt.UserRole)) for row in range(parts.count())
-                if parts.item(row).checkState() == QtCore.Qt.Checked]
+        return [doc.getObject(name) for name in checked_data(self.form.priorParts)]
 
     def _collapse_expert_settings(self):
         """Put the strategies' options, the fit and the grid in an "Expert settings" section
