@@ -27,7 +27,8 @@ def reference():
 QUICK = {"fitting/test_closest_points.py", "fitting/test_edge_nodes.py", "fitting/test_fitting.py",
          "fitting/test_lattice_fit.py", "fitting/test_neighbour_searches.py", "fitting/test_peaks.py",
          "formats/test_export.py", "formats/test_format_records.py", "formats/test_golden_files.py", "formats/test_qif.py",
-         "geometry/test_bspline.py", "geometry/test_freecad_env.py", "geometry/test_occ_distance.py",
+         "geometry/test_bspline.py", "geometry/test_congruence.py", "geometry/test_freecad_env.py",
+         "geometry/test_occ_distance.py",
          "geometry/test_surface.py", "strategies/test_memory.py", "strategies/test_pso.py",
          "strategies/test_strategy_records.py", "strategies/test_swarm_screen.py"}
 

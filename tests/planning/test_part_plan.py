@@ -16,6 +16,7 @@ from support.wording import DURATION, LEFT
 
 import cmmsampling
 from cmmsampling import cli
+from cmmsampling.planning import part_plan
 from cmmsampling.planning.part_plan import named_faces
 from cmmsampling.planning.points_needed import step_counts
 
@@ -372,3 +373,69 @@ def test_a_face_notes_where_more_points_gave_a_larger_maximum():
     assert rising.notes == "more points gave a larger maximum: N = 81 reached 0.2749 mm, N = 49 0.0084 mm"
     falling = FacePlan("Face3", 10.0, n=49, tried=[Tried(16, 0.9), Tried(49, 0.04), Tried(81, 0.045)])
     assert falling.notes == "", "within the factor a larger N's maximum is no news"
+
+
+@pytest.fixture(scope="module")
+def patterned():
+    """Face1 a saddle, Face2 the plate with a hole, Face3 the saddle turned 90 deg about z and
+    moved, Face4 the saddle turned 180 deg about y and moved: Face3 and Face4 copy Face1."""
+    saddle = rational_saddle()
+
+    def moved(angle_deg, axis, shift):
+        placement = FreeCAD.Placement(FreeCAD.Vector(*shift), FreeCAD.Rotation(FreeCAD.Vector(*axis), angle_deg))
+        return saddle.transformGeometry(placement.toMatrix()).Faces[0]
+
+    return Part.Compound([saddle, holed_face(), moved(90.0, (0, 0, 1), (250, 0, 0)),
+                          moved(180.0, (0, 1, 0), (0, 0, 60))])
+
+
+COPIED = dict(tolerance=0.5, strategy="uniform_parametric", edge_offset=0.0, n_max=200, **FAST)
+
+
+def test_a_rigid_copy_takes_its_originals_points_judged_on_itself(patterned):
+    reports = []
+    plan = cmmsampling.plan(patterned, processes=2, progress=lambda *report: reports.append(report), **COPIED)
+    faces = {face.name: face for face in plan.faces}
+    original = faces["Face1"]
+    assert original.met and not original.copy_of and not faces["Face2"].copy_of
+    assert [(done, total) for done, total, message in reports if message.split("\n")[0]] == [
+        (1, 4), (2, 4), (3, 4), (4, 4)]
+    for name in ("Face3", "Face4"):
+        copy = faces[name]
+        assert copy.copy_of.startswith("Face1 (turned ") and "a rigid copy of Face1" in copy.notes
+        assert copy.n == original.n and copy.met == original.met
+        assert [(t.n, t.maximum) for t in copy.tried] == [(t.n, t.maximum) for t in original.tried]
+        np.testing.assert_allclose(copy.uv, original.uv, atol=1e-12)
+        assert max(plan.shapes[name].distToShape(Part.Vertex(*point))[0] for point in copy.points) < 1e-6
+        assert plan.result(name).deviation.maximum == pytest.approx(copy.maximum, rel=1e-9)
+        alone = cmmsampling.plan(patterned, processes=1, faces=[int(name[4:])], **COPIED).faces[0]
+        assert not alone.copy_of and alone.n == copy.n and alone.maximum == pytest.approx(copy.maximum, rel=1e-6)
+        np.testing.assert_allclose(alone.uv, copy.uv, atol=1e-9)
+
+
+def test_where_the_originals_search_misses_one_copy_searches_again_and_the_best_serves_the_rest(patterned):
+    """With the 1.5 mm edge offset no N meets the tolerance on the saddle: Face3 searches again
+    (uniform parametric is no draw: it finds the same), Face4 takes the first of the two best."""
+    plan = cmmsampling.plan(patterned, processes=1, **{**COPIED, "edge_offset": 1.5})
+    first, _, again, copy = plan.faces
+    assert not first.met and not again.copy_of and again.tried is not first.tried
+    assert again.n == first.n and again.maximum == pytest.approx(first.maximum, rel=1e-6)
+    assert copy.copy_of.startswith("Face1 (turned 180 deg") and copy.maximum == pytest.approx(first.maximum, rel=1e-9)
+
+
+def test_a_copy_whose_figure_differs_from_its_originals_runs_its_own_search(patterned, monkeypatch):
+    monkeypatch.setattr(part_plan, "COPY_AGREEMENT", -1.0)   # no figure agrees: the copy is searched itself
+    plan = cmmsampling.plan(patterned, processes=1, faces=[1, 3], **COPIED)
+    assert [face.copy_of for face in plan.faces] == ["", ""]
+    copy, original = plan.faces[1], plan.faces[0]
+    assert copy.tried is not original.tried, "its own search ran"
+    assert copy.n == original.n and copy.maximum == pytest.approx(original.maximum, rel=1e-6)
+
+
+def test_copies_of_a_cancelled_plan_wait_for_their_original_and_resume_from_it(patterned):
+    cancelled = cmmsampling.plan(patterned, processes=1, progress=lambda done, total, message: done == 1, **COPIED)
+    assert cancelled.cancelled and cancelled.faces[0].placed
+    assert [face.reason for face in cancelled.faces[1:]] == ["cancelled before this face was planned"] * 3
+    resumed = cmmsampling.plan(patterned, processes=1, resume=cancelled, **COPIED)
+    assert resumed.faces[0] == cancelled.faces[0]
+    assert [face.copy_of.split(" ")[0] for face in resumed.faces] == ["", "", "Face1", "Face1"]
