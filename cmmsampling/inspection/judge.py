@@ -96,7 +96,9 @@ class Inspection:
         with a Matern 5/2 covariance fitted by maximum likelihood) or also from the earlier parts
         of the series (prior: their Inspections, or cmmsampling.series_model(face, them): the
         posterior mean given the series' systematic error and scatter; see
-        cmmsampling.fitting.series). face: the face's name where the inspection covers several.
+        cmmsampling.fitting.series; a list is fitted anew at each call: to map many parts, build
+        the model once with series_model and pass it). face: the face's name where the inspection
+        covers several.
         """
         rows, name = face_rows(self, face)
         if name not in self.planned_faces:
