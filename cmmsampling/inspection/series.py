@@ -39,7 +39,8 @@ def measured_parameters(face, inspection, name=None, nearest=None):
     Part.Face; name: the face's name in the inspection, None for its only face; nearest: the
     face's :func:`nearest_parameters` where already built)."""
     rows, _ = face_rows(inspection, name)
-    nearest = nearest or nearest_parameters(face)
+    if nearest is None:
+        nearest = nearest_parameters(face)
     return nearest(inspection.points[rows]), inspection.deviations[rows]
 
 
@@ -51,12 +52,18 @@ def series_model(face, prior, name=None) -> SeriesModel:
     (cmmsampling.fitting.series): ``systematic(uv)``, ``predict(uv, deviations, query)``; it is
     what ``sample(face, n, 'part_error', prior=...)`` and ``Inspection.deviation_map`` take.
     """
+    return _series_model(face, prior, name)
+
+
+def _series_model(face, prior, name, nearest=None):
+    """:func:`series_model`, with the face's :func:`nearest_parameters` where already built."""
     if isinstance(prior, SeriesModel):
         return prior
     parts = list(prior) if isinstance(prior, (list, tuple)) else None
     if not parts:
         raise InputTypeError("prior takes a list of Inspections of earlier parts (cmmsampling.inspect), at least one")
-    nearest = nearest_parameters(face)
+    if nearest is None:
+        nearest = nearest_parameters(face)
     return SeriesModel(nearest.model, [measured_parameters(face, inspection, name, nearest) for inspection in parts])
 
 
@@ -70,4 +77,4 @@ def deviation_map(inspection, face, uv, prior=None, name=None):
     measured, deviations = measured_parameters(face, inspection, name, nearest)
     if prior is None:
         return error_map(nearest.model, measured, deviations, uv)
-    return series_model(face, prior, name).predict(measured, deviations, uv)[0]
+    return _series_model(face, prior, name, nearest).predict(measured, deviations, uv)[0]
