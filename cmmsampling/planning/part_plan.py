@@ -100,7 +100,7 @@ class FacePlan:
     access: how the probe reaches each point and where on the face it reaches none
     (cmmsampling.access.reach.Access) when the plan judged the probe's reach, else None;
     copy_of: where the face is a rigid copy of another whose points it took, that face's name
-    and the motion, e.g. 'Face55 turned 30 deg, moved 41.2 mm' ('' for a face searched itself).
+    and the motion, e.g. 'Face55 (turned 30 deg, moved 41.2 mm)' ('' for a face searched itself).
     """
 
     name: str
@@ -515,36 +515,40 @@ def _tolerance_runs(named, kept, job, processes, scheduler, progress):
     """(outcomes in the order of named (None where cancelled), cancelled, notes) of a tolerance
     plan, run in rounds: the faces kept (a resumed plan's, {name: FacePlan}) as they are; every
     face that copies none searched in the first round; each copy once its group's searches are
-    done (:func:`_group_job`). job: (name, Part.Face) -> its tolerance FaceJob."""
+    done (:func:`_group_job`). job: (name, Part.Face) -> its tolerance FaceJob (made once a face:
+    it writes the face's BREP)."""
+    faces = dict(named)
     originals = {name: original for name, original in copied_faces(named).items() if name not in kept}
+    groups = {original: [copy for copy, of in originals.items() if of == original] for original in originals.values()}
+    job_of = functools.lru_cache(maxsize=None)(lambda name: job(name, faces[name]))
     tally = PlanTally(len(named), len(kept), sum(face.n for face in kept.values()))
     done, cancelled, notes = dict(kept), False, []
-    jobs = _round(named, originals, done, job)
+    jobs = _round(named, originals, groups, done, job_of)
     while jobs and not cancelled:
         outcomes, cancelled, round_notes = _run(jobs, processes, scheduler, progress, tally)
         done.update((ran.name, outcome) for ran, outcome in zip(jobs, outcomes) if outcome is not None)
         notes += [note for note in round_notes if note not in notes]
-        jobs = _round(named, originals, done, job)
+        jobs = _round(named, originals, groups, done, job_of)
     return [done.get(name) for name, _ in named], cancelled, notes
 
 
-def _round(named, originals, done, job):
+def _round(named, originals, groups, done, job_of):
     """The jobs of a plan's next round: each face not done that copies none, and each copy whose
-    :func:`_group_job` is ready (originals: {copy's name: original's name})."""
-    faces, jobs, searching = dict(named), [], set()
-    for name, face in named:
+    :func:`_group_job` is ready (originals: {copy's name: original's name}; groups: {original's
+    name: its copies' names}; job_of: name -> the face's tolerance FaceJob)."""
+    jobs, searching = [], set()
+    for name, _ in named:
         if name in done:
             continue
         original = originals.get(name)
-        ready = job(name, face) if original is None else _group_job(
-            job(name, face), original, [copy for copy, of in originals.items() if of == original], done, searching,
-            faces)
+        ready = job_of(name) if original is None else _group_job(name, original, groups[original], done, searching,
+                                                                 job_of)
         jobs += [ready] if ready is not None else []
     return jobs
 
 
-def _group_job(copy_job, original, copies, done, searching, faces):
-    """The job of a copy (copy_job: its search) once its group's searches allow, None until then.
+def _group_job(name, original, copies, done, searching, job_of):
+    """The job of the copy ``name`` once its group's searches allow, None until then.
 
     A group is an original and its copies (names). Its searches are its faces done by a search
     of their own. Once the original is done: where the best search (:func:`_best_search`) meets
@@ -554,12 +558,12 @@ def _group_job(copy_job, original, copies, done, searching, faces):
     the whole group."""
     if original not in done or original in searching:
         return None
-    searched = [name for name in [original, *copies] if name in done and not done[name].copy_of]
-    best = _best_search([done[name] for name in searched])
+    searched = [face for face in [original, *copies] if face in done and not done[face].copy_of]
+    best = _best_search([done[face] for face in searched])
     if done[best].met or not done[best].placed or len(searched) > RETRIES:
-        return _copy_job(copy_job, done[best], faces[best])
+        return _copy_job(job_of(name), done[best], job_of(best).brep)
     searching.add(original)
-    return copy_job
+    return job_of(name)
 
 
 def _best_search(plans):
@@ -585,12 +589,12 @@ def copied_faces(named):
     return {name: named[copy.original][0] for (name, _), copy in zip(named, found) if copy is not None}
 
 
-def _copy_job(job, original, original_face):
-    """The job of a face that copies ``original_face`` (a Part.Face): judged with the original's
-    points (its FacePlan) where the original holds some, else searched like any face."""
-    if original is None or not original.placed:
+def _copy_job(job, original, original_brep):
+    """The job of a face that copies the face in ``original_brep`` (BREP text): judged with the
+    original's points (its FacePlan) where the original holds some, else searched like any face."""
+    if not original.placed:
         return job
-    return replace(job, mode="copy", original=original, original_brep=original_face.exportBrepToString())
+    return replace(job, mode="copy", original=original, original_brep=original_brep)
 
 
 def _run(jobs, processes, scheduler, progress, tally=None):
