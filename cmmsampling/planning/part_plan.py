@@ -569,10 +569,11 @@ def _group_job(name, original, copies, done, searching, job_of):
 def _best_search(plans):
     """The name of the best of a group's searched FacePlans: those that meet the tolerance where
     any does, among them the first (the original first) whose maximum is within COPY_AGREEMENT
-    (and 1e-9 mm) of the least: a lower figure by rounding alone does not count."""
+    and COPY_AGREEMENT_MM of the least: a lower figure by rounding alone does not count."""
     plans = [plan for plan in plans if plan.met] or plans
     least = min((plan.maximum for plan in plans if plan.placed), default=float("nan"))
-    return next((plan.name for plan in plans if plan.maximum <= least * (1 + COPY_AGREEMENT) + 1e-9), plans[0].name)
+    return next((plan.name for plan in plans if plan.maximum <= least * (1 + COPY_AGREEMENT) + COPY_AGREEMENT_MM),
+                plans[0].name)
 
 
 def copied_faces(named):
