@@ -194,49 +194,58 @@ class SeriesModel:
         (fa, _), (fb, _) = self._features(a), self._features(b)
         return fa @ fb.T + matern(a, b, self.length, self.residual_variance)
 
-    def predict(self, uv, deviations, uv_query):
-        """The error map of a part measured at uv (N, 2) with signed deviations (N,) mm, at
-        uv_query (Q, 2): (mean (Q,) mm, standard deviation (Q,) mm of the error there)."""
-        uv, d, query = np.asarray(uv, float), np.asarray(deviations, float), np.asarray(uv_query, float)
-        prior = self.systematic(query)
-        if len(d) == 0:
-            return prior, np.sqrt(np.maximum(np.diag(self.covariance(query, query)), 0.0))
-        factor = cho_factor(self.covariance(uv, uv) + self.noise * np.eye(len(d)))
-        cross = self.covariance(query, uv)
-        mean = prior + cross @ cho_solve(factor, d - self.systematic(uv))
-        own = self._variance(query)
-        return mean, np.sqrt(np.maximum(own - (cross * cho_solve(factor, cross.T).T).sum(1), 0.0))
-
-    def _variance(self, uv):
-        """(Q,) mm^2: the prior variance at uv (Q, 2)."""
+    def variance(self, uv):
+        """The next part's error variance at uv (Q, 2) before any point is measured on it: (Q,) mm^2."""
         features, _ = self._features(self.plane(uv))
         return (features ** 2).sum(1) + self.residual_variance
 
+    def predict(self, uv, deviations, uv_query):
+        """The error map of a part measured at uv (N, 2) with signed deviations (N,) mm, at
+        uv_query (Q, 2): (mean (Q,) mm, standard deviation (Q,) mm of the error there)."""
+        d = np.asarray(deviations, float)
+        x, query = self.plane(uv), self.plane(uv_query)
+        (features, prior), (measured, systematic) = self._features(query), self._features(x)
+        own = (features ** 2).sum(1) + self.residual_variance
+        if len(d) == 0:
+            return prior, np.sqrt(np.maximum(own, 0.0))
+        among = measured @ measured.T + matern(x, x, self.length, self.residual_variance)
+        factor = cho_factor(among + self.noise * np.eye(len(d)))
+        cross = features @ measured.T + matern(query, x, self.length, self.residual_variance)
+        mean = prior + cross @ cho_solve(factor, d - systematic)
+        return mean, np.sqrt(np.maximum(own - (cross * cho_solve(factor, cross.T).T).sum(1), 0.0))
 
-def greedy_design(series, candidates, n, spaced_out=None):
+
+def greedy_design(series, candidates, n, spaced_out=None, judged=None):
     """The n candidates that leave the next part's error least known on average, chosen one at
     a time: each the candidate whose measurement lowers the sum of the posterior variances over
-    all the candidates most (integrated mean squared error, the RMS the error map is judged by).
+    the judged places most (integrated mean squared error, the RMS the error map is judged by).
 
-    series: a SeriesModel; candidates: (C, 2) feasible uv, spread over the face (they are also
-    the places the variance is summed over); spaced_out: callable(index) -> the candidate
-    indices too close to a chosen one (None: only the chosen one itself).
-    Returns (chosen indices (n,) int, the posterior variances (C,) mm^2 after them).
+    series: a SeriesModel; candidates: (C, 2) feasible uv; judged: (Q, 2) uv spread over the
+    whole face, where the error map is wanted (None: the candidates themselves); spaced_out:
+    callable(index) -> the candidate indices too close to a chosen one (None: only the chosen
+    one itself).
+    Returns (chosen indices (n,) int, the posterior variances (Q,) mm^2 at the judged places after them).
     Raises InputError when fewer than n candidates can be chosen.
     """
-    posterior = series.covariance(candidates, candidates)
+    judged = candidates if judged is None else judged
+    # Rows: the judged places, then the candidates; columns: the candidates.
+    posterior = series.covariance(np.vstack([judged, candidates]), candidates)
+    count = len(judged)
+    variances = series.variance(judged)
     free = np.ones(len(candidates), dtype=bool)
     chosen = []
     for _ in range(n):
         if not free.any():
             raise InputError(f"only {len(chosen)} of {n} points fit on the face's feasible domain at the "
                              "strategy's spacing; lower n or min_spacing")
-        gain = np.where(free, (posterior ** 2).sum(0) / (np.diag(posterior) + series.noise), -np.inf)
+        own = np.diag(posterior[count:])
+        gain = np.where(free, (posterior[:count] ** 2).sum(0) / (own + series.noise), -np.inf)
         best = int(np.argmax(gain))
         column = posterior[:, best].copy()
-        posterior -= np.outer(column, column) / (column[best] + series.noise)
+        posterior -= np.outer(column, column[count:]) / (column[count + best] + series.noise)
+        variances -= column[:count] ** 2 / (column[count + best] + series.noise)
         chosen.append(best)
         free[best] = False
         if spaced_out is not None:
             free[spaced_out(best)] = False
-    return np.array(chosen), np.maximum(np.diag(posterior), 0.0)
+    return np.array(chosen), np.maximum(variances, 0.0)

@@ -21,6 +21,7 @@ from .optimal import BEST_STARTS
 from .registry import STRATEGIES, Strategy, StrategyOutcome, layouts
 
 CANDIDATES = 1200
+JUDGED = 30
 NO_PRIOR = ("part_error places points where the series' earlier parts leave the next part's error least known: "
             "give prior=[the Inspection of an earlier part, ...] (cmmsampling.inspect) or a series model "
             "(cmmsampling.series_model)")
@@ -49,8 +50,9 @@ def run_part_error(problem, progress, prior):
     def spaced_out(index):
         return tree.query_ball_point(places[index], spacing) if spacing > 0 else [index]
 
-    chosen, variances = greedy_design(series, candidates, problem.n, spaced_out)
-    uv, variances, layout = _best_design(problem, series, candidates, candidates[chosen], variances)
+    judged = judged_places(problem, candidates)
+    chosen, variances = greedy_design(series, candidates, problem.n, spaced_out, judged)
+    uv, variances, layout = _best_design(problem, series, judged, candidates[chosen], variances)
     rms, largest = float(np.sqrt(variances.mean())), float(np.sqrt(variances.max()))
     notes = [f"placed where {series.parts} earlier part{'s' if series.parts > 1 else ''} leave the error least "
              f"known: the error map is expected within {rms:.3g} mm RMS (1 standard deviation; at most "
@@ -62,14 +64,22 @@ def run_part_error(problem, progress, prior):
     return StrategyOutcome(uv, details=details, notes=notes)
 
 
-def _best_design(problem, series, candidates, greedy, variances):
-    """(uv (N, 2), posterior variances (C,) mm^2 over the candidates, the blind layout's name or
+def judged_places(problem, candidates):
+    """(Q, 2) uv where the error map is judged: a JUDGED x JUDGED raster of the face's parameter
+    range, those on the face (inside its trim); the candidates (C, 2) where none is."""
+    raster = problem.model.raster((JUDGED, JUDGED)).reshape(-1, 2)
+    on_face = raster[problem.domain.on_face(raster)]
+    return on_face if len(on_face) else candidates
+
+
+def _best_design(problem, series, judged, greedy, variances):
+    """(uv (N, 2), posterior variances (Q,) mm^2 at the judged places (Q, 2), the blind layout's name or
     None): the greedy design, or a blind layout of BEST_STARTS (those the face takes) where the
     model expects a smaller sum of variances after it; choosing one point at a time is not
     always the best set of N."""
     best = (greedy, variances, None)
     for name, uv in layouts(problem, optional=BEST_STARTS).items():
-        spread = series.predict(uv, np.zeros(len(uv)), candidates)[1] ** 2
+        spread = series.predict(uv, np.zeros(len(uv)), judged)[1] ** 2
         if spread.sum() < best[1].sum():
             best = (uv, spread, name)
     return best
@@ -81,8 +91,10 @@ def candidate_count(n):
 
 
 def _part_error_memory(n, poles, nodes, options, workers):
-    """The candidates' posterior covariance and the temporaries of its updates: 4 (C, C) arrays."""
-    return 4 * 8 * candidate_count(n) ** 2
+    """The posterior covariance of the judged places and candidates with the candidates, and the
+    temporaries of its updates: 4 (Q + C, C) arrays."""
+    count = candidate_count(n)
+    return 4 * 8 * (JUDGED ** 2 + count) * count
 
 
 def _check_part_error_options(options):

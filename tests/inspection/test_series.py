@@ -9,7 +9,8 @@ import pytest
 
 import cmmsampling
 from cmmsampling.cli import main as cli_main
-from cmmsampling.fitting.series import SeriesModel, fit_field
+from cmmsampling.fitting.series import SeriesModel, fit_field, greedy_design
+from cmmsampling.strategies import part_error
 from cmmsampling.strategies.registry import baseline
 
 NOISE = 0.0005
@@ -67,11 +68,40 @@ def test_part_error_with_the_model_maps_the_next_parts_better_than_uniform_point
     assert expected["part_error"] < expected[baseline()], "the model knows the next part better at its points"
 
 
+def test_the_maps_posterior_is_the_textbook_one_of_the_models_covariance(series):
+    face, parts, _, model, grid = series
+    uv = cmmsampling.sample(face, 16, "halton", occ_check=False).uv
+    measured = parts[4].error(uv)
+    mean, sd = model.predict(uv, measured, grid)
+    among = model.covariance(uv, uv) + model.noise * np.eye(len(uv))
+    cross = model.covariance(grid, uv)
+    expected = model.systematic(grid) + cross @ np.linalg.solve(among, measured - model.systematic(uv))
+    variance = np.diag(model.covariance(grid, grid)) - np.einsum("ij,ji->i", cross, np.linalg.solve(among, cross.T))
+    assert np.allclose(mean, expected, rtol=0, atol=1e-6 * rms(expected))
+    assert np.allclose(sd ** 2, variance, rtol=0, atol=1e-6 * variance.max())
+    assert np.allclose(model.variance(grid), np.diag(model.covariance(grid, grid)))
+
+
+def test_the_greedy_designs_variances_are_those_the_map_finds_at_its_points(series):
+    face, _, _, model, grid = series
+    candidates = cmmsampling.sample(face, 200, "halton", occ_check=False, edge_offset=2.0).uv
+    chosen, variances = greedy_design(model, candidates, 10, judged=grid)
+    assert len(set(chosen.tolist())) == 10
+    assert np.allclose(variances, model.predict(candidates[chosen], np.zeros(10), grid)[1] ** 2,
+                       rtol=0, atol=1e-6 * variances.max())
+    own = greedy_design(model, candidates, 10)[1]
+    assert own.shape == (len(candidates),), "without judged places the variance is summed over the candidates"
+
+
 def test_part_error_records_what_the_model_expects(series):
     face, _, prior, _, _ = series
     result = cmmsampling.sample(face, 12, "part_error", prior=prior, occ_check=False)
     assert result.n == 12 and 0 < result.settings["expected_rms_mm"] <= result.settings["expected_max_sd_mm"]
     assert result.settings["prior"] == "3 earlier parts"
+    u0, u1, v0, v1 = face.ParameterRange
+    u, v = np.meshgrid(np.linspace(u0, u1, part_error.JUDGED), np.linspace(v0, v1, part_error.JUDGED), indexing="ij")
+    sd = cmmsampling.series_model(face, prior).predict(result.uv, np.zeros(12), np.column_stack([u.ravel(), v.ravel()]))[1]
+    assert result.settings["expected_rms_mm"] == pytest.approx(rms(sd), rel=1e-6), "over the whole face"
     assert any("least known" in note for note in result.notes)
 
 
