@@ -13,11 +13,16 @@ compared with the part's true error over a RASTER x RASTER raster of the face: R
 error (mm), and how often the map's profile (2 max |map|) gives the wrong verdict against a
 tolerance (the median true profile of the next parts, so about half of them pass). Then, for
 each RMS asked, the fewest N reaching it: part_error with the model against uniform parametric
-without it (the goal: a quarter of the points or fewer). Prints figures; asserts nothing.
+without it (the goal: a quarter of the points or fewer); and at each N, part_error with the model
+less uniform parametric with it, part by part (the same parts, the same probing noise' seeds):
+its mean and standard error over the NEXT parts (the goal: never above). The kinds run on
+separate processes, BLAS on one thread each. Prints figures; asserts nothing.
 """
 import argparse
+import multiprocessing
 import os
 import sys
+from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
 
@@ -25,8 +30,9 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 import cmmsampling  # noqa: E402
 from cmmsampling.inspection.simulate import SERIES_KINDS  # noqa: E402
 from cmmsampling.strategies.registry import baseline  # noqa: E402
+from cmmsampling.strategies.threads import blas_threads  # noqa: E402
 
-PRIOR, NEXT, DENSE, RASTER = 3, 16, 400, 40
+PRIOR, NEXT, DENSE, RASTER = 3, 32, 400, 40
 COUNTS = (4, 9, 16, 25, 36, 49, 64, 100)
 TARGETS_UM = (2.0, 1.0, 0.75, 0.5)
 
@@ -59,8 +65,15 @@ def judged(face, part, uv, series, grid, noise, seed):
             *(2 * float(np.abs(m).max()) for m in maps))
 
 
-def one_kind(face, kind, args, strategies):
-    """The table of one error kind; returns {(strategy, with model?): {N: mean RMS mm}}."""
+def one_kind(kind, args, strategies):
+    """The table of one error kind: (its lines, {(strategy, with model?): {N: mean RMS mm}},
+    {N: (NEXT,) mm, part_error with the model less uniform parametric with it, part by part})."""
+    with blas_threads(1):
+        return _one_kind(cmmsampling.reference_face(), kind, args, strategies)
+
+
+def _one_kind(face, kind, args, strategies):
+    """:func:`one_kind` on face."""
     parts = cmmsampling.simulated_series(face, PRIOR + NEXT, kind, args.size, seed=args.seed)
     dense = cmmsampling.sample(face, DENSE, baseline(), occ_check=False).uv
     prior = [cmmsampling.inspect(face, cmmsampling.measured_part(face, dense, part, args.noise, seed=k),
@@ -70,25 +83,27 @@ def one_kind(face, kind, args, strategies):
     truths = [2 * float(np.abs(part.error(grid)).max()) for part in parts[PRIOR:]]
     tolerance = float(np.median(truths))
     points = layouts(face, series, strategies)
-    print(f"\n{kind}: size {args.size} mm, {PRIOR} first parts x {DENSE} points, {NEXT} next parts, noise "
-          f"{args.noise} mm; true RMS error {np.mean([np.sqrt((p.error(grid) ** 2).mean()) for p in parts[PRIOR:]]):.4f} mm; "
-          f"tolerance {tolerance:.4f} mm (median true profile)")
-    print(f"RMS error of the error map, um (largest error um; wrong verdicts of the map's profile of the {NEXT} parts), "
-          "with the series model | without")
-    print(f"{'N':>4}  " + "  ".join(f"{cmmsampling.STRATEGIES[name].label:>38}" for name in strategies))
-    rms = {}
+    true_rms = np.mean([np.sqrt((p.error(grid) ** 2).mean()) for p in parts[PRIOR:]])
+    lines = [f"\n{kind}: size {args.size} mm, {PRIOR} first parts x {DENSE} points, {NEXT} next parts, noise "
+             f"{args.noise} mm; true RMS error {true_rms:.4f} mm; tolerance {tolerance:.4f} mm (median true profile)",
+             f"RMS error of the error map, um (largest error um; wrong verdicts of the map's profile of the {NEXT} "
+             "parts), with the series model | without",
+             f"{'N':>4}  " + "  ".join(f"{cmmsampling.STRATEGIES[name].label:>38}" for name in strategies)]
+    rms, differences = {}, {}
     for n in COUNTS:
-        cells = []
+        cells, with_model = [], {}
         for name in strategies:
             figures = np.array([judged(face, part, points[name, n], series, grid, args.noise, 100 + k)
                                 for k, part in enumerate(parts[PRIOR:])])
             wrong = [int(((figures[:, 4 + w] <= tolerance) != (np.array(truths) <= tolerance)).sum()) for w in (0, 1)]
             for w, label in ((0, True), (1, False)):
                 rms.setdefault((name, label), {})[n] = figures[:, w].mean()
+            with_model[name] = figures[:, 0]
             cells.append(f"{1e3 * figures[:, 0].mean():5.2f} ({1e3 * figures[:, 2].mean():5.1f}; {wrong[0]}) | "
                          f"{1e3 * figures[:, 1].mean():5.2f} ({1e3 * figures[:, 3].mean():5.1f}; {wrong[1]})")
-        print(f"{n:>4}  " + "  ".join(f"{cell:>38}" for cell in cells), flush=True)
-    return rms
+        differences[n] = with_model[strategies[-1]] - with_model[baseline()]
+        lines.append(f"{n:>4}  " + "  ".join(f"{cell:>38}" for cell in cells))
+    return lines, rms, differences
 
 
 def fewest(figures, target_mm):
@@ -96,9 +111,10 @@ def fewest(figures, target_mm):
     return next((n for n in COUNTS if figures[n] <= target_mm), None)
 
 
-def summary(kind, rms, strategies, args):
-    """The points each RMS needs: part_error with the model against uniform parametric without."""
-    uniform, aimed = baseline(), next(name for name in strategies if cmmsampling.STRATEGIES[name].requires)
+def summary(kind, rms, differences, strategies):
+    """The points each RMS needs, part_error with the model against uniform parametric without;
+    part_error against uniform parametric, both with the model, at equal N."""
+    uniform, aimed = baseline(), strategies[-1]
     for target in TARGETS_UM:
         without = fewest(rms[uniform, False], target / 1e3)
         with_model = fewest(rms[aimed, True], target / 1e3)
@@ -107,14 +123,18 @@ def summary(kind, rms, strategies, args):
         print(f"{kind}: RMS <= {target:g} um: uniform parametric without the model needs "
               f"{without or f'more than {COUNTS[-1]}'}, with it {uniform_with or f'more than {COUNTS[-1]}'}; "
               f"part_error with it {with_model or f'more than {COUNTS[-1]}'} ({ratio})")
-    excess = {n: rms[aimed, True][n] - rms[uniform, True][n] for n in COUNTS}
-    worst = max(excess, key=excess.get)
-    if excess[worst] <= 0:
+    means = {n: float(values.mean()) for n, values in differences.items()}
+    errors = {n: float(values.std(ddof=1) / np.sqrt(len(values))) for n, values in differences.items()}
+    print(f"{kind}: part_error less uniform parametric, both with the model, um (mean over the {NEXT} parts, "
+          "standard error): " + ", ".join(f"N = {n} {1e3 * means[n]:+.3f} ({1e3 * errors[n]:.3f})" for n in COUNTS))
+    above = [n for n in COUNTS if means[n] > 0]
+    beyond = [n for n in above if means[n] > 2 * errors[n]]
+    if not above:
         print(f"{kind}: at every N part_error with the model is at most uniform parametric with it")
     else:
-        print(f"{kind}: at equal N part_error with the model is above uniform parametric with it at "
-              f"{sum(value > 0 for value in excess.values())} of {len(COUNTS)} N, by at most "
-              f"{1e3 * excess[worst]:.2f} um (N = {worst}; the probing noise is {1e3 * args.noise:g} um)")
+        print(f"{kind}: at equal N part_error with the model is above uniform parametric with it at N = "
+              f"{', '.join(map(str, above))}; beyond two standard errors at "
+              f"{'N = ' + ', '.join(map(str, beyond)) if beyond else 'none'}")
 
 
 def main():
@@ -123,10 +143,12 @@ def main():
     parser.add_argument("--noise", type=float, default=0.0005, help="probing noise, mm (standard deviation)")
     parser.add_argument("--seed", type=int, default=1)
     args = parser.parse_args()
-    face = cmmsampling.reference_face()
     strategies = [baseline(), "halton", "part_error"]
-    for kind in SERIES_KINDS:
-        summary(kind, one_kind(face, kind, args, strategies), strategies, args)
+    with ProcessPoolExecutor(2, mp_context=multiprocessing.get_context("fork")) as pool:
+        tables = list(pool.map(one_kind, SERIES_KINDS, [args] * len(SERIES_KINDS), [strategies] * len(SERIES_KINDS)))
+    for kind, (lines, rms, differences) in zip(SERIES_KINDS, tables):
+        print("\n".join(lines))
+        summary(kind, rms, differences, strategies)
 
 
 if __name__ == "__main__":
