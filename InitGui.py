@@ -25,7 +25,7 @@ class CMMSamplingWorkbench(FreeCADGui.Workbench):
         import os
 
         from cmmsampling.gui import commands, resource
-        from cmmsampling.strategies.parallel import ignore_broken_pipes
+        from cmmsampling.runtime.parallel import ignore_broken_pipes
 
         ignore_broken_pipes()   # FreeCAD 1.0 and 1.1 would end on a write to a stopped process's pipe
         toolbar, menu = commands.register()

@@ -34,7 +34,7 @@ def versions():
     calls with the kernels it chose for this processor (OpenBLAS falls back to old generic ones
     on a processor it does not know, which makes the many small solves of a swarm slower), one line."""
     probe = ("import sys; sys.path.insert(0, sys.argv[1]); import cmmsampling, FreeCAD, numpy, scipy; "
-             "from cmmsampling.strategies.threads import blas_description; "
+             "from cmmsampling.runtime.threads import blas_description; "
              "print('FreeCAD ' + '.'.join(FreeCAD.Version()[:3]) + ', numpy ' + numpy.__version__ "
              "+ ', scipy ' + scipy.__version__ + '; BLAS ' + blas_description())")
     found = subprocess.run([sys.executable, "-c", probe, ROOT],

@@ -30,7 +30,7 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 import cmmsampling  # noqa: E402
 from cmmsampling.inspection.simulate import SERIES_KINDS  # noqa: E402
 from cmmsampling.strategies.registry import baseline  # noqa: E402
-from cmmsampling.strategies.threads import blas_threads  # noqa: E402
+from cmmsampling.runtime.threads import blas_threads  # noqa: E402
 
 PRIOR, NEXT, DENSE, RASTER = 3, 32, 400, 40
 COUNTS = (4, 9, 16, 25, 36, 49, 64, 100)

@@ -29,7 +29,7 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 import cmmsampling  # noqa: E402
 from cmmsampling.fitting.deviation import curvature_matrices  # noqa: E402
 from cmmsampling.strategies.sampling import make_problem  # noqa: E402
-from cmmsampling.strategies.threads import ThreadpoolController, blas_threads  # noqa: E402
+from cmmsampling.runtime.threads import ThreadpoolController, blas_threads  # noqa: E402
 
 
 def timed(function, repeat=1):
@@ -219,7 +219,7 @@ def peak_memory():
     """Peak resident set of this process and of its finished or running children, MiB."""
     own = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     children = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
-    from cmmsampling.strategies import parallel
+    from cmmsampling.runtime import parallel
 
     if parallel._worker is not None:
         with open(f"/proc/{parallel._worker.process.pid}/status") as status:

@@ -91,7 +91,7 @@ def plan_on_two_processes(cmmsampling):
 def main():
     signal.signal(signal.SIGPIPE, signal.SIG_DFL)
     import cmmsampling
-    from cmmsampling.strategies import parallel
+    from cmmsampling.runtime import parallel
 
     face = cmmsampling.reference_face()
     with tempfile.TemporaryDirectory() as folder:

@@ -23,7 +23,7 @@ from ..formats.files import check_writable
 from ..formats.pointfiles import resolve_format
 from ..formats.pointset import PointSet
 from ..geometry.validation import InputError, check_real
-from ..strategies import handover
+from ..runtime import handover
 from .answers import ResponseError, parse_response
 from .protocol import LINE_END, point_arguments, tag_text
 

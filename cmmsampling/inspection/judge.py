@@ -23,7 +23,7 @@ from ..geometry.validation import InputError, InputTypeError, check_real
 from ..fitting.deviation import NUMERICAL_ZERO_MM
 from ..fitting.occ_surface import substitute_surface
 from ..measurement import check_extent, stated_radius
-from ..strategies import handover
+from ..runtime import handover
 from ..strategies.face_setup import reused
 from ..planning.part_plan import PartPlan
 from ..strategies.result import SamplingResult
@@ -489,7 +489,7 @@ def hand_over(source, measured, inspection, alignment="min_max", tolerance=None,
               probe_radius=None, zone_offset=0.0, datums=(), uncertainty=None, seed=0):
     """Let the next :func:`inspect` of ``source`` with exactly these arguments return
     ``inspection`` at once (a background run's, echoed in FreeCAD's console: see
-    :mod:`cmmsampling.strategies.handover`)."""
+    :mod:`cmmsampling.runtime.handover`)."""
     handover.give(inspect, source, _call(measured, alignment, tolerance, locked, part, probe_radius, zone_offset,
                                          datums, uncertainty, seed), inspection)
 

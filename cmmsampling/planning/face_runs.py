@@ -25,8 +25,8 @@ import zipfile
 from concurrent.futures.process import BrokenProcessPool
 
 from ..geometry.validation import check_int
-from ..strategies.memory import free_bytes, gib
-from ..strategies.parallel import ignore_broken_pipes, package_parent, python_executable
+from ..runtime.memory import free_bytes, gib
+from ..runtime.parallel import ignore_broken_pipes, package_parent, python_executable
 
 # Memory one local process takes for a face (FreeCAD, numpy, scipy and a face's arrays), bytes:
 # a Ventilator face's process peaked at about 180 MB; this leaves room for larger grids.

@@ -33,11 +33,11 @@ from ..geometry.congruence import FacePrint, face_copies, raster, rigid_copy
 from ..geometry.freecad_env import import_part
 from ..geometry.surface import as_face
 from ..geometry.validation import InputError, InputTypeError, check_int, check_pair, check_real
-from ..strategies import handover
+from ..runtime import handover
+from ..runtime.threads import blas_threads
 from ..strategies.estimates import duration_text, time_left_text
 from ..strategies.face_setup import reused, setup_of
 from ..strategies.sampling import BEST_STRATEGY, STRATEGIES, check_arguments, evaluate, probe_edge_offset, sample
-from ..strategies.threads import blas_threads
 from . import face_runs
 from .points_needed import (DEFAULT_MAX_POINTS, RISE_FACTOR, check_max_points, fewest_points, points_needed,
                             step_counts)
@@ -332,7 +332,7 @@ def _part(shape_or_faces, part, probe):
 
 def hand_over(shape, arguments, part_plan):
     """Let the next ``plan(shape, **arguments)`` in this process return ``part_plan`` at once (the
-    Plan part panel's plan, echoed in the console: see :mod:`cmmsampling.strategies.handover`).
+    Plan part panel's plan, echoed in the console: see :mod:`cmmsampling.runtime.handover`).
 
     shape: the Part.Shape planned; arguments: plan()'s keyword arguments other than the shape
     and progress.

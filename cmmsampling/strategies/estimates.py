@@ -11,9 +11,9 @@ from ..fitting.deviation import DEFAULT_GRID
 from ..fitting.substitute import DEFAULT_DEGREE
 from ..geometry.freecad_env import import_part
 from ..geometry.validation import check_choice, check_int, check_pair
+from ..runtime.threads import blas_threads
 from .registry import STRATEGIES, strategy_options
 from .sampling import DEFAULT_STRATEGY, MIN_POINTS, Pair, baseline, check_workers, make_problem, memory_bytes
-from .threads import blas_threads
 
 Part = import_part()
 
@@ -30,7 +30,7 @@ def memory_needed(n: int, strategy: str | None = DEFAULT_STRATEGY, *, fit_degree
     """Estimated peak memory (bytes) of :func:`sample` with these arguments, before any run.
 
     The arguments as in :func:`sample` (strategy None: what every run needs). sample() refuses
-    a run whose estimate exceeds 80 % of the memory the machine has free (cmmsampling.strategies.memory).
+    a run whose estimate exceeds 80 % of the memory the machine has free (cmmsampling.runtime.memory).
     """
     n = check_int("n", n, MIN_POINTS)
     degree = check_pair("fit_degree", fit_degree, 1)

@@ -5,7 +5,7 @@ from ..fitting.bound import minimax_bound, minimax_bracket
 from ..fitting.deviation import DeviationStats, EvaluationGrid, deviation_objective
 from ..fitting.exact import exact_deviation
 from ..fitting.substitute import SubstituteSpace, default_pole_count
-from .parallel import TwoProcessObjective
+from ..runtime.parallel import TwoProcessObjective
 
 
 CHECK_DENSITY = 3

@@ -20,7 +20,8 @@ import numpy as np
 
 from ..fitting.lattice import LATTICE_LIMIT_BYTES
 from ..geometry.validation import InputError, check_int, check_real
-from . import blind, memory
+from ..runtime import memory
+from . import blind
 from .registry import STRATEGIES, Setting, Strategy, StrategyOutcome, layouts
 
 

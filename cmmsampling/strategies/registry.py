@@ -56,7 +56,7 @@ class Strategy:
     studies' and tables' ratios divide by (one strategy has it);
     settings: the options the command line and the comparison panel offer (Setting);
     memory: (n, poles (n_u, n_v), grid nodes, options, workers) -> bytes it needs beyond every
-    run's base (cmmsampling.strategies.memory), None for nothing that grows with N;
+    run's base (cmmsampling.runtime.memory), None for nothing that grows with N;
     requires: the options it cannot run without (part_error's prior): studies, plans and panels
     run it only where those are given (:func:`self_contained`).
     Every strategy keeps the same default minimum spacing (cmmsampling.strategies.optimal.default_min_spacing).

@@ -21,14 +21,15 @@ from ..geometry.domain import face_domain
 from ..geometry.freecad_env import import_part
 from ..geometry.surface import lies_on
 from ..geometry.validation import InputError, InputTypeError, check_choice, check_int, check_pair, check_real, check_uv
-from . import blind, handover, memory, optimal, part_error, pso
+from ..runtime import handover, memory
+from ..runtime.threads import blas_threads
+from . import blind, optimal, part_error, pso
 from .face_setup import setup_of
 from .optimal import BALL_SEPARATION_MM, default_min_spacing
 from .problem import SamplingProblem, resolve_fit_poles
 from .registry import (STRATEGIES, Setting, Strategy, StrategyOutcome, baseline, register_strategy, self_contained,
                        strategy_label, strategy_options, unregister_strategy)
 from .result import EXACT_FIT, SamplingResult
-from .threads import blas_threads
 
 Part = import_part()
 
@@ -284,7 +285,7 @@ def sample(face: Part.Face, n: int = 81, strategy: str = DEFAULT_STRATEGY, *, fi
 
 def hand_over(face, arguments, result):
     """Let the next ``sample(face, **arguments)`` in this process return ``result`` at once (the
-    task panel's run, echoed in the console: see :mod:`cmmsampling.strategies.handover`).
+    task panel's run, echoed in the console: see :mod:`cmmsampling.runtime.handover`).
 
     arguments: the keyword arguments of sample() other than face and progress.
     """

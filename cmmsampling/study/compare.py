@@ -19,12 +19,12 @@ import numpy as np
 from ..fitting.deviation import DEFAULT_GRID
 from ..fitting.substitute import DEFAULT_DEGREE, DEFAULT_SMOOTHING
 from ..geometry.validation import InputError, InputTypeError, check_choice, check_int
-from ..strategies import handover
+from ..runtime import handover
+from ..runtime.threads import blas_threads
 from ..strategies.face_setup import reused
 from ..strategies.estimates import time_needed
 from ..strategies.sampling import MIN_POINTS, STRATEGIES, Pair, Part, make_problem, sample, strategy_options
 from ..strategies.sampling import baseline as baseline_strategy
-from ..strategies.threads import blas_threads
 
 DEFAULT_NS = (25, 36, 49, 64, 81, 100, 121, 144)
 DEFAULT_SEEDS = (0, 1, 2, 3, 4)
@@ -276,7 +276,7 @@ def _study(face, ns, strategies, seeds, seeded, options, fit, figure_n, workers,
 
 def hand_over(face, arguments, study):
     """Let the next ``compare(face, **arguments)`` in this process return ``study`` at once (the
-    Compare panel's study, echoed in the console: see :mod:`cmmsampling.strategies.handover`).
+    Compare panel's study, echoed in the console: see :mod:`cmmsampling.runtime.handover`).
 
     arguments: the keyword arguments of compare() other than face and progress.
     """

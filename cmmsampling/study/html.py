@@ -8,7 +8,7 @@ import os
 import numpy as np
 
 from ..geometry.surface import SurfaceModel
-from ..strategies import handover
+from ..runtime import handover
 from ..strategies.sampling import strategy_label
 from .compare import Study
 from .figures import write_figures
@@ -39,7 +39,7 @@ def write_report(study: Study, folder: str | os.PathLike) -> str:
 def hand_over_report(study, folder, path):
     """Let the next ``write_report(study, folder)`` in this process return ``path`` at once (the
     Compare panel wrote it in its worker thread; its echoed call must not write it again: see
-    :mod:`cmmsampling.strategies.handover`). study: that very Study; folder: as it was given."""
+    :mod:`cmmsampling.runtime.handover`). study: that very Study; folder: as it was given."""
     handover.give(write_report, study, {"folder": folder}, path)
 
 

@@ -63,7 +63,7 @@ def test_a_worker_killed_mid_run_leaves_freecad_alive_and_says_so(doc, monkeypat
     import os
     import signal
 
-    from cmmsampling.strategies import parallel
+    from cmmsampling.runtime import parallel
 
     interrupt_run(monkeypatch, lambda: os.kill(parallel.shared_worker()[0].pid, signal.SIGKILL), at=10)
     form = open_panel(doc)

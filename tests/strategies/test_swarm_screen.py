@@ -6,10 +6,10 @@ import pytest
 from support.faces import collapsed_face, holed_face, rational_saddle, strip_face
 
 import cmmsampling
-from cmmsampling.strategies.parallel import TwoProcessObjective
+from cmmsampling.runtime.parallel import TwoProcessObjective
 from cmmsampling.strategies.pso import SwarmSettings, particle_swarm
 from cmmsampling.strategies.sampling import make_problem
-from cmmsampling.strategies.threads import blas_threads
+from cmmsampling.runtime.threads import blas_threads
 
 FACES = {
     "reference": cmmsampling.reference_face,

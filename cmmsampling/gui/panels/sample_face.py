@@ -19,7 +19,8 @@ from ...fitting.deviation import DEFAULT_GRID
 from ...fitting.substitute import DEFAULT_DEGREE, default_pole_count
 from ...document import settings
 from ...document.object_types import is_measured_points, source_face
-from ...strategies import estimates, memory, optimal, sampling
+from ...runtime import memory
+from ...strategies import estimates, optimal, sampling
 from ...strategies.problem import resolve_fit_poles
 from .. import echo
 from ..background import BackgroundSampling

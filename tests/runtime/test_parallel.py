@@ -5,9 +5,9 @@ import numpy as np
 import pytest
 
 import cmmsampling
-from cmmsampling.strategies import parallel
-from cmmsampling.strategies.parallel import TwoProcessObjective
-from cmmsampling.strategies.threads import ThreadpoolController, blas_description, blas_threads
+from cmmsampling.runtime import parallel
+from cmmsampling.runtime.parallel import TwoProcessObjective
+from cmmsampling.runtime.threads import ThreadpoolController, blas_description, blas_threads
 
 
 @pytest.fixture(scope="module")
@@ -67,7 +67,7 @@ def test_the_channel_carries_messages_and_reports_a_closed_end_without_a_signal(
     import signal
     import socket
 
-    from cmmsampling.strategies.channel import Channel, ChannelClosed
+    from cmmsampling.runtime.channel import Channel, ChannelClosed
 
     here, there = (Channel(s) for s in socket.socketpair())
     assert not here.ready(0.05)

@@ -1,6 +1,6 @@
-"""The worker process of :mod:`cmmsampling.strategies.parallel`.
+"""The worker process of :mod:`cmmsampling.runtime.parallel`.
 
-Started as ``python -c BOOT PACKAGE_PARENT SOCKET_FD`` (see :data:`cmmsampling.strategies.parallel.BOOT`):
+Started as ``python -c BOOT PACKAGE_PARENT SOCKET_FD`` (see :data:`cmmsampling.runtime.parallel.BOOT`):
 it first answers ("ready", its pid), then receives a batched objective once (pickled, pure numpy)
 and evaluates the point sets it is sent, until the parent closes the channel or dies. Requests:
 ("load", token, objective), ("eval", token, uv (P, N, 2), above (P,) or None), ("ping",).

@@ -12,7 +12,7 @@ worker's ``sys.path``. So it imports the same code from any current folder and a
 When it cannot: the worker answers ("ready", pid) before anything is sent to it; a worker that
 exits first (it cannot import the package, no Python of this version) or does not answer within
 START_SECONDS is ended, and the swarm runs in this process alone. A worker that dies during a run
-is noticed on its closed channel (never a signal: see :mod:`cmmsampling.strategies.channel`), and
+is noticed on its closed channel (never a signal: see :mod:`cmmsampling.runtime.channel`), and
 its share is computed here. Each particle's fitness is computed exactly as in one process, so the
 result is the same either way; :attr:`TwoProcessObjective.fallback` says why one process was used.
 """
@@ -34,7 +34,7 @@ from .channel import Channel
 MIN_PARTICLES = 4
 START_SECONDS = 60.0
 BOOT = ("import sys; sys.path.insert(0, sys.argv[1]); "
-        "from cmmsampling.strategies.worker import main; main(int(sys.argv[2]))")
+        "from cmmsampling.runtime.worker import main; main(int(sys.argv[2]))")
 _tokens = itertools.count()
 
 
