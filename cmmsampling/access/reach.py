@@ -15,7 +15,7 @@ A point ``p`` with normal ``n`` (out of the material) is reachable along an axis
 - from ``s`` the probe can leave along ``a`` out of the part's box (grown by the ball radius
   and the clearance): the ball's, stylus's and body's sweeps along ``a`` are clear of the part.
   Moves along the probe's own axis (the approach, this exit) need not keep the clearance, which
-  a narrow slot may not leave; travel moves do (:mod:`cmmsampling.planning.probe_moves`).
+  a narrow slot may not leave; travel moves do (:mod:`cmmsampling.access.probe_moves`).
 
 The head tries the axes nearest the normal first (:func:`cmmsampling.access.probe.candidate_axes`).
 """

@@ -267,7 +267,7 @@ def _planned_path(source):
     """(the planned PointSet in measuring order, the travel before each point or None): a
     PointSet with its travel (already in the path's order) as it is, a plan or result made with
     a probe along its collision-free path."""
-    from ..planning.probe_moves import probe_moves
+    from ..access.probe_moves import probe_moves
 
     if isinstance(source, PointSet) and source.travel is not None:
         return source, source.travel

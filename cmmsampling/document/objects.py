@@ -15,7 +15,7 @@ from ..geometry.freecad_env import import_part
 from ..geometry.surface import SurfaceModel
 from ..geometry.validation import InputError
 from ..inspection.judge import Planned
-from ..planning.probe_moves import moves_through
+from ..access.probe_moves import moves_through
 from .object_types import PART_PLAN, PROBE_POINTS, SUBSTITUTE_SURFACE, plan_probe_points, source_face
 
 Part = import_part()
@@ -68,7 +68,7 @@ PATH_COLOURS = {"moves": (0.15, 0.35, 0.85), "touches": (0.85, 0.15, 0.1)}
 
 
 def make_probe_path(doc, moves):
-    """Two wire objects of a probe path (cmmsampling.planning.probe_moves.ProbeMoves): "Probe
+    """Two wire objects of a probe path (cmmsampling.access.probe_moves.ProbeMoves): "Probe
     moves" (travel and axis moves, blue) and "Probe touches" (approach and retract, red), ball
     centres in mm; returns them."""
     objects = []
@@ -225,7 +225,7 @@ class ProbePoints(TypedProxy):
                        np.zeros(len(point_set), dtype=int))
 
     def probe_moves(self, obj, motion=None):
-        """The collision-free probe path through the points (cmmsampling.planning.probe_moves.
+        """The collision-free probe path through the points (cmmsampling.access.probe_moves.
         ProbeMoves) on their source object's shape, with the probe and axes of their run; motion:
         the CMM's speeds (cmmsampling.access.probe.Motion). ValueError naming what is missing
         (:meth:`path_probe`)."""

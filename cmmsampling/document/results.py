@@ -12,7 +12,7 @@ from ..geometry.freecad_env import import_part
 from ..geometry.surface import lies_on
 from ..geometry.validation import InputError, InputTypeError
 from ..planning.part_plan import PartPlan
-from ..planning.probe_moves import probe_moves
+from ..access.probe_moves import probe_moves
 from ..strategies.result import SamplingResult
 from ..strategies.sampling import evaluate
 from .object_types import in_document, source_face

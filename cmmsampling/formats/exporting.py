@@ -9,15 +9,14 @@ atomically (:mod:`cmmsampling.formats.files`): a failed export leaves an existin
 from __future__ import annotations
 
 import os
-from dataclasses import asdict, dataclass, replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from ..access.probe import Motion
+from ..access.probe_moves import probe_moves
+from ..geometry.probe_path import PathOrder, short_path, unchanged
 from ..geometry.validation import InputError, InputTypeError, check_choice, check_real
-from ..planning.part_plan import PartPlan
-from ..planning.probe_moves import probe_moves
-from ..planning.probe_path import PathOrder, short_path, unchanged
 from ..strategies.result import SamplingResult
 from .dmis import dmis_program_name
 from .files import write_atomically
@@ -136,7 +135,7 @@ def export_results(inspection, path, fmt, label=None, **asked):
     return ResultsReport(target, fmt, len(inspection.labels), inspection.profile, inspection.passed)
 
 
-def export(source: SamplingResult | PartPlan | PointSet | object, path: str | os.PathLike, format: str | None = None,
+def export(source: SamplingResult | PointSet | object, path: str | os.PathLike, format: str | None = None,
            *, frame: object = None, probe_radius: float = 0.0, order: str = "as_optimised", name: str | None = None,
            approach: float = 2.0, retract: float = 2.0, search: float = 5.0, comments: bool = True,
            motion: Motion | None = None, label: str | None = None) -> ExportReport | ResultsReport:
@@ -157,9 +156,9 @@ def export(source: SamplingResult | PartPlan | PointSet | object, path: str | os
     file keeps the contact points and states the radius (``$$ ball_radius_mm``); its GOTO moves
     are ball centres.
     order: 'as_optimised' keeps the source's order, 'short_path' visits the points along a short
-    path (nearest neighbour + 2-opt, :mod:`cmmsampling.planning.probe_path`), 'probe_path' along
+    path (nearest neighbour + 2-opt, :mod:`cmmsampling.geometry.probe_path`), 'probe_path' along
     the collision-free path of a run made with the part (``sample(..., part=)``,
-    :mod:`cmmsampling.planning.probe_moves`): DMIS then gets the sensors (SNSDEF, SNSLCT) and the
+    :mod:`cmmsampling.access.probe_moves`): DMIS then gets the sensors (SNSDEF, SNSLCT) and the
     GOTO moves between the points, CSV the probe axis of each point; motion: the CMM's speeds for
     the time estimate (cmmsampling.access.probe.Motion).
     name: DMIS program name (default: the file name without extension); approach, retract,
@@ -219,54 +218,29 @@ def _stem(path):
 
 
 def as_point_set(source):
-    """The PointSet of a PointSet, a SamplingResult, a PartPlan or a document object whose Proxy
-    has point_set(obj)."""
+    """The PointSet of a PointSet, a SamplingResult, a document object whose Proxy has
+    point_set(obj), or a source that hands its own points over with point_set() (a PartPlan)."""
     if isinstance(source, PointSet):
         return source
     if isinstance(source, SamplingResult):
         return PointSet.from_result(source)
-    if isinstance(source, PartPlan):
-        return plan_point_set(source)
     method = getattr(getattr(source, "Proxy", None), "point_set", None)
     if callable(method):
-        point_set = method(source)
-        if isinstance(point_set, PointSet):
-            return point_set
-        raise InputTypeError(
-            f"{source.Name}.Proxy.point_set() returned {type(point_set).__name__}, not a PointSet"
-        )
+        return _handed(method(source), f"{source.Name}.Proxy.point_set()")
+    method = getattr(source, "point_set", None)
+    if callable(method):
+        return _handed(method(), f"{type(source).__name__}.point_set()")
     raise InputTypeError(
         f"cannot export a {type(source).__name__}; give a PointSet, a SamplingResult or a document "
         "object whose Proxy has point_set(obj)"
     )
 
 
-def plan_point_set(plan):
-    """The points of a PartPlan as one PointSet: labels '<face>_P<i>' (unique across the faces),
-    the face of each point, and the plan's facts (strategy, tolerance or budget, the worst face's
-    deviation, each face's edge offset and point spacing as used, the faces without points and
-    why)."""
-    placed = plan.placed
-    if not placed:
-        raise InputError("the plan has no points: " + "; ".join(f"{f.name}: {f.reason}" for f in plan.faces))
-    labels = [f"{face.name}_P{i}" for face in placed for i in range(1, face.n + 1)]
-    metadata = {"source": "part plan", "strategy": plan.strategy, "mode": plan.mode, "faces": len(plan.faces),
-                "points_per_face": {face.name: face.n for face in placed}, "worst_max_mm": plan.worst,
-                "max_deviation_mm": {face.name: float(face.maximum) for face in placed},
-                **spacing_by_face({face.name: face.settings for face in placed})}
-    if plan.tolerance is not None:
-        metadata["tolerance_mm"] = plan.tolerance
-    if plan.budget is not None:
-        metadata["budget"] = plan.budget
-    if plan.refused:
-        metadata["faces_without_points"] = {face.name: face.reason for face in plan.refused}
-    if plan.probe is not None:
-        metadata["probe"] = asdict(plan.probe)
-        metadata["points_tilted"] = sum(face.tilted for face in placed)
-    axes = np.concatenate([f.axes for f in placed]) if all(f.axes is not None for f in placed) else None
-    return PointSet(labels, np.concatenate([f.points for f in placed]), np.concatenate([f.normals for f in placed]),
-                    np.concatenate([f.uv for f in placed]), None, metadata,
-                    [face.name for face in placed for _ in range(face.n)], axes)
+def _handed(point_set, said):
+    """point_set when it is a PointSet; TypeError naming what handed it (``said``) otherwise."""
+    if isinstance(point_set, PointSet):
+        return point_set
+    raise InputTypeError(f"{said} returned {type(point_set).__name__}, not a PointSet")
 
 
 def prepared(point_set, placement, radius, frame_name="", contact_nominals=False):

@@ -91,7 +91,7 @@ def measurement_call(points, arguments):
 def planned_points(points):
     """The points to measure, read in the GUI thread: along the collision-free path where they
     were planned with a probe (the PointSet's travel), else as planned."""
-    from ..planning.probe_moves import probe_moves
+    from ..access.probe_moves import probe_moves
 
     point_set = as_point_set(points)
     try:

@@ -39,6 +39,7 @@ from ..strategies.estimates import duration_text, time_left_text
 from ..strategies.face_setup import reused, setup_of
 from ..strategies.sampling import BEST_STRATEGY, STRATEGIES, check_arguments, evaluate, probe_edge_offset, sample
 from . import face_runs
+from .plan_points import plan_moves, plan_point_set
 from .points_needed import (DEFAULT_MAX_POINTS, RISE_FACTOR, check_max_points, fewest_points, points_needed,
                             step_counts)
 
@@ -233,6 +234,16 @@ class PartPlan:
         result.access = face.access
         result.settings = {**result.settings, **face.settings}
         return result
+
+    def point_set(self):
+        """The plan's points as one PointSet (cmmsampling.formats.pointset): labels '<face>_P<i>',
+        each point's face, the plan's facts (:func:`cmmsampling.planning.plan_points.plan_point_set`)."""
+        return plan_point_set(self)
+
+    def probe_moves(self, motion=None):
+        """The collision-free probe path through every point of a plan made with a probe
+        (cmmsampling.access.probe_moves.ProbeMoves; motion: the CMM's speeds, a Motion)."""
+        return plan_moves(self, motion)
 
     def table(self):
         """The per-part table as text: face, area, N, deviation, bound, tolerance met, notes;

@@ -6,7 +6,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..access.probe_moves import NO_PART, moves_through
 from ..fitting.occ_surface import substitute_surface, trimmed_like
+from ..geometry.validation import InputError
 from .blind import projection_frame
 
 if TYPE_CHECKING:   # for the annotations only: the modules import this one
@@ -165,6 +167,21 @@ class SamplingResult:
             return uv, self.uv, ("u (face parameter)", "v (face parameter)")
         xy, names, frame = view
         return xy, self.points @ frame[:2].T, tuple(f"{name} (mm)" for name in names)
+
+    def probe_moves(self, motion=None):
+        """The collision-free probe path through the points (cmmsampling.access.probe_moves.ProbeMoves;
+        motion: the CMM's speeds for the time estimate, a Motion). ValueError for a run made without
+        the part (``sample(..., part=)``) or with points the probe cannot reach."""
+        access = self.access
+        if access is None:
+            raise InputError(NO_PART)
+        if not access.reachable.all():
+            blocked = ", ".join(f"P{k + 1}" for k in np.flatnonzero(~access.reachable)[:10])
+            raise InputError(f"the probe cannot reach {np.count_nonzero(~access.reachable)} of the points ({blocked}); "
+                             "sample again with part= (the run keeps to what the probe reaches) or export with "
+                             "order='short_path'")
+        reachability = self.problem.reachability
+        return moves_through(reachability.probe, reachability.obstacles, self.points, self.normals, access.axes, motion)
 
     def point_table(self):
         """Per-point rows (label, x, y, z, i, j, k, u, v) as a list of tuples."""

@@ -15,7 +15,7 @@ from cmmsampling.access.obstacles import Obstacles
 from cmmsampling.access.probe import Probe, candidate_axes, head_angles
 from cmmsampling.access.reach import Reachability, reach
 from cmmsampling.document.export_defaults import starting_options
-from cmmsampling.planning.probe_moves import moves_through
+from cmmsampling.access.probe_moves import moves_through
 
 PROBE = Probe()
 UP = np.array([0.0, 0.0, 1.0])

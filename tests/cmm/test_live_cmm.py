@@ -71,7 +71,7 @@ def test_a_plan_goes_along_its_probe_path_and_is_inspected(walled, tmp_path):
         run = measure(plan, cmm.address, tmp_path / "part.csv", tool="Ball2")
     assert len(run.labels) == plan.n_total and run.radius == 1.0
     assert "Home()" not in " ".join(run.commands), "a homed machine is not homed again"
-    from cmmsampling.planning.probe_moves import probe_moves
+    from cmmsampling.access.probe_moves import probe_moves
 
     moves = probe_moves(plan)
     gotos = [c for c in run.commands if " GoTo(" in c]

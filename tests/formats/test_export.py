@@ -20,7 +20,7 @@ from cmmsampling.formats.frames import placement_from_metadata
 from cmmsampling.measurement import measured_deviation
 from cmmsampling.formats.pointfiles import read_points
 from cmmsampling.formats.pointset import PointSet
-from cmmsampling.planning.probe_path import path_length, short_path
+from cmmsampling.geometry.probe_path import path_length, short_path
 
 EXTENSIONS = {"dmis": "dmi", "xyz": "xyz", "csv": "csv"}
 PLACEMENT = FreeCAD.Placement(FreeCAD.Vector(12.5, -40.0, 7.25),

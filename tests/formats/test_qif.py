@@ -114,12 +114,12 @@ def test_a_part_plan_with_a_probe_path_passes_the_schemas(walled, tmp_path):
     targets = {e.get("id"): np.array(e.findtext("q:Point", namespaces=NS).split(), float)
                for e in root.iter(f"{{{QIF_NS}}}MeasurePoint")}
     visited = np.array([targets[m.get("to")] for m in moves[:-1]])
-    from cmmsampling.planning.probe_moves import probe_moves
+    from cmmsampling.access.probe_moves import probe_moves
 
     order = probe_moves(plan).order
-    assert np.array_equal(visited, cmmsampling.formats.exporting.plan_point_set(plan).points[order])
+    assert np.array_equal(visited, plan.point_set().points[order])
     back = cmmsampling.read_points(tmp_path / "part.qif")
-    assert sorted(back.labels) == sorted(cmmsampling.formats.exporting.plan_point_set(plan).labels)
+    assert sorted(back.labels) == sorted(plan.point_set().labels)
 
 
 def test_an_inspections_results_pass_the_schemas_and_read_back(result, tmp_path):
@@ -151,7 +151,7 @@ def test_an_inspections_results_pass_the_schemas_and_read_back(result, tmp_path)
 
 def test_a_failed_part_and_one_without_a_tolerance_say_so(walled, tmp_path):
     part, plan = walled
-    planned = cmmsampling.formats.exporting.plan_point_set(plan)
+    planned = plan.point_set()
     bent = measured_like(planned, noise=0.05)
     failed = cmmsampling.inspect(plan, bent, part=part, tolerance=0.02)
     assert failed.passed is False
@@ -262,7 +262,7 @@ def test_decimals_are_positional_and_exact_to_1e_24_mm(value):
 def test_a_datum_referenced_verdict_with_its_uncertainty_passes_the_schemas(tmp_path):
     block = datum_block()
     plan = cmmsampling.plan(block, n_total=80, strategy="uniform_parametric", faces=[3, 1, 5, 4], processes=1)
-    planned = cmmsampling.formats.exporting.plan_point_set(plan)
+    planned = plan.point_set()
     out = np.array([0.024 if face == "Face3" else 0.0 for face in planned.faces])
     read = cmmsampling.PointSet(list(planned.labels), planned.points + out[:, None] * planned.normals, planned.normals)
     inspection = cmmsampling.inspect(plan, read, part=block, tolerance=0.05, datums=["Face1", "Face5", "Face4"],

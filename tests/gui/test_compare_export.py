@@ -19,7 +19,7 @@ from cmmsampling import document
 from cmmsampling.document import export_defaults, settings
 from cmmsampling.gui.panels import compare as compare_panel
 from cmmsampling.gui import commands, export_options
-from cmmsampling.planning.probe_path import path_length
+from cmmsampling.geometry.probe_path import path_length
 from cmmsampling.study import html as report_html
 
 from support.toy_strategy import TOY

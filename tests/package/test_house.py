@@ -1,6 +1,6 @@
 """The package's rooms and the one-way imports between them, read from the code itself.
 
-geometry <- runtime (process plumbing) <- access <- fitting <- strategies <- planning <- formats <- the hall
+geometry <- runtime (process plumbing) <- access <- fitting <- strategies <- formats <- planning <- the hall
 (the package's face, measurement, the rooms inspection/, cmm/ (a live CMM), study/ and document/, cli) <- gui:
 a module imports from its own room or from rooms below it,
 and no modules import each other in a circle. The arrows allowed up are FreeCAD's pattern for
@@ -13,7 +13,7 @@ import pytest
 from support.paths import ROOT
 
 PACKAGE = os.path.join(ROOT, "cmmsampling")
-ROOMS = ("geometry", "runtime", "access", "fitting", "strategies", "planning", "formats", "hall", "gui")
+ROOMS = ("geometry", "runtime", "access", "fitting", "strategies", "formats", "planning", "hall", "gui")
 HALL = ("__init__", "measurement", "inspection", "cmm", "study", "document", "cli", "__main__")
 ALLOWED_UP = {("document.objects", "gui.view_providers"), ("document.inspections", "gui.inspection_view")}
 

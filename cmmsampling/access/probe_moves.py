@@ -18,16 +18,16 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial.distance import cdist
 
-from ..access.obstacles import Obstacles, along_segments
-from ..access.probe import Motion
+from ..geometry.probe_path import nearest_neighbour, two_opt
 from ..geometry.validation import InputError
-from ..strategies.result import SamplingResult
-from .part_plan import PartPlan
-from .probe_path import nearest_neighbour, two_opt
+from .obstacles import along_segments
+from .probe import Motion
 
 # Poses checked along a straight travel move are at most this many mm apart.
 POSE_STEP = 2.0
 AXIS_TOLERANCE = 1e-9
+NO_PART = ("a probe path needs the part the points must keep clear of: sample the face with part=<the solid> "
+           "(and probe=), or export with order='short_path'")
 
 
 @dataclass
@@ -98,43 +98,19 @@ def _end_lengths(ready, exits, above):
     return np.linalg.norm(exits - ready, axis=1) + np.linalg.norm(above - exits, axis=1)
 
 
-def probe_moves(source: SamplingResult | PartPlan, motion: Motion | None = None) -> ProbeMoves:
-    """The ProbeMoves of a SamplingResult run with the part (``sample(face, ..., part=)``), of a
-    PartPlan made with a probe, or of a document object whose Proxy has ``probe_moves(obj,
-    motion)`` (the document's probe points), through its points (motion: the time estimate).
-    ValueError for a run without the part, or with points the probe cannot reach."""
-    if isinstance(source, PartPlan):
-        return _plan_moves(source, motion)
+def probe_moves(source: object, motion: Motion | None = None) -> ProbeMoves:
+    """The ProbeMoves through a source's points (motion: the time estimate): a SamplingResult
+    run with the part (``sample(face, ..., part=)``), a PartPlan made with a probe (each has
+    ``probe_moves(motion)``), or a document object whose Proxy has ``probe_moves(obj, motion)``
+    (the document's probe points). ValueError for a run without the part, for points the
+    probe cannot reach and for a source without a probe path (e.g. a PointSet)."""
     own = getattr(getattr(source, "Proxy", None), "probe_moves", None)
     if callable(own):
         return own(source, motion)
-    access = getattr(source, "access", None)
-    if access is None:
-        raise InputError("a probe path needs the part the points must keep clear of: sample the face with "
-                         "part=<the solid> (and probe=), or export with order='short_path'")
-    if not access.reachable.all():
-        blocked = ", ".join(f"P{k + 1}" for k in np.flatnonzero(~access.reachable)[:10])
-        raise InputError(f"the probe cannot reach {np.count_nonzero(~access.reachable)} of the points ({blocked}); "
-                         "sample again with part= (the run keeps to what the probe reaches) or export with "
-                         "order='short_path'")
-    reachability = source.problem.reachability
-    return moves_through(reachability.probe, reachability.obstacles, source.points, source.normals, access.axes, motion)
-
-
-def _plan_moves(plan, motion):
-    """The ProbeMoves through every point of a plan made with a probe (see :func:`probe_moves`)."""
-    placed = plan.placed
-    if plan.probe is None or any(face.axes is None for face in placed):
-        raise InputError("a probe path needs the probe's reach on the part: plan with probe=cmmsampling.Probe(...), "
-                         "or export with order='short_path'")
-    axes = np.concatenate([face.axes for face in placed])
-    unreached = [face.name for face in placed if face.unreached]
-    if unreached:
-        raise InputError(f"the probe cannot reach some points of {', '.join(unreached)}; export with "
-                         "order='short_path', or plan again")
-    points = np.concatenate([face.points for face in placed])
-    normals = np.concatenate([face.normals for face in placed])
-    return moves_through(plan.probe, Obstacles(plan.part), points, normals, axes, motion)
+    own = getattr(source, "probe_moves", None)
+    if callable(own):
+        return own(motion)
+    raise InputError(NO_PART)
 
 
 def _direct_moves(probe, obstacles, ready, axes):

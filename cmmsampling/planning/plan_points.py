@@ -1,0 +1,60 @@
+"""What a plan hands the formats and the CMM: its points as one PointSet, its probe path.
+
+PartPlan.point_set() and PartPlan.probe_moves() call these; export(), QIF plans and a live CMM
+take any source that has them, so the formats need not know a plan."""
+from __future__ import annotations
+
+from dataclasses import asdict
+
+import numpy as np
+
+from ..access.obstacles import Obstacles
+from ..access.probe_moves import moves_through
+from ..formats.exporting import spacing_by_face
+from ..formats.pointset import PointSet
+from ..geometry.validation import InputError
+
+
+def plan_point_set(plan):
+    """The points of a PartPlan as one PointSet: labels '<face>_P<i>' (unique across the faces),
+    the face of each point, and the plan's facts (strategy, tolerance or budget, the worst face's
+    deviation, each face's edge offset and point spacing as used, the faces without points and
+    why)."""
+    placed = plan.placed
+    if not placed:
+        raise InputError("the plan has no points: " + "; ".join(f"{f.name}: {f.reason}" for f in plan.faces))
+    labels = [f"{face.name}_P{i}" for face in placed for i in range(1, face.n + 1)]
+    metadata = {"source": "part plan", "strategy": plan.strategy, "mode": plan.mode, "faces": len(plan.faces),
+                "points_per_face": {face.name: face.n for face in placed}, "worst_max_mm": plan.worst,
+                "max_deviation_mm": {face.name: float(face.maximum) for face in placed},
+                **spacing_by_face({face.name: face.settings for face in placed})}
+    if plan.tolerance is not None:
+        metadata["tolerance_mm"] = plan.tolerance
+    if plan.budget is not None:
+        metadata["budget"] = plan.budget
+    if plan.refused:
+        metadata["faces_without_points"] = {face.name: face.reason for face in plan.refused}
+    if plan.probe is not None:
+        metadata["probe"] = asdict(plan.probe)
+        metadata["points_tilted"] = sum(face.tilted for face in placed)
+    axes = np.concatenate([f.axes for f in placed]) if all(f.axes is not None for f in placed) else None
+    return PointSet(labels, np.concatenate([f.points for f in placed]), np.concatenate([f.normals for f in placed]),
+                    np.concatenate([f.uv for f in placed]), None, metadata,
+                    [face.name for face in placed for _ in range(face.n)], axes)
+
+
+def plan_moves(plan, motion=None):
+    """The ProbeMoves through every point of a plan made with a probe (motion: the CMM's speeds
+    for the time estimate); ValueError for a plan without a probe or with points it cannot reach."""
+    placed = plan.placed
+    if plan.probe is None or any(face.axes is None for face in placed):
+        raise InputError("a probe path needs the probe's reach on the part: plan with probe=cmmsampling.Probe(...), "
+                         "or export with order='short_path'")
+    axes = np.concatenate([face.axes for face in placed])
+    unreached = [face.name for face in placed if face.unreached]
+    if unreached:
+        raise InputError(f"the probe cannot reach some points of {', '.join(unreached)}; export with "
+                         "order='short_path', or plan again")
+    points = np.concatenate([face.points for face in placed])
+    normals = np.concatenate([face.normals for face in placed])
+    return moves_through(plan.probe, Obstacles(plan.part), points, normals, axes, motion)
