@@ -2,6 +2,7 @@
 the face parameters u, v and the deviation where known."""
 import csv
 import io
+import re
 
 import numpy as np
 
@@ -123,4 +124,10 @@ def _known(values, name, path):
     return values
 
 
-FORMAT = FileFormat("csv", NAME, DESCRIPTION, EXTENSIONS, ENCODING, write, read)
+def recognises(first):
+    """True for a header that names label, x, y, z, i, j, k (first: the file's first line that is
+    no comment, lower case without blanks)."""
+    return all(name in re.split(r"[,;]", first) for name in CSV_COLUMNS[:7])
+
+
+FORMAT = FileFormat("csv", NAME, DESCRIPTION, EXTENSIONS, ENCODING, write, read, measured=True, recognises=recognises)

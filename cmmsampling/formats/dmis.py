@@ -336,4 +336,20 @@ def dmis_statement(*groups):
     return lines + [line]
 
 
-FORMAT = FileFormat("dmis", NAME, DESCRIPTION, EXTENSIONS, ENCODING, write, read, contact_nominals=True)
+def dmis_output(nominal, actual, name):
+    """DMIS output text: for each point its nominal F(label)=FEAT/POINT and the measured actual
+    FA(label)=FEAT/POINT (with the nominal vector), as a CMM writes them after a run.
+    nominal: PointSet; actual: (N, 3) mm; name: the program's name."""
+    lines = [f"DMISMN/'{dmis_program_name(name)}',{DMIS_VERSION}", "$$ measured by cmmsampling's virtual CMM",
+             "UNITS/MM,ANGDEC"]
+    vectors = fixed(nominal.normals, VECTOR_DECIMALS).tolist()
+    for label, planned, measured, vector in zip(nominal.labels, fixed(nominal.points, COORDINATE_DECIMALS).tolist(),
+                                                fixed(actual, COORDINATE_DECIMALS).tolist(), vectors):
+        lines += dmis_statement([f"F({label})=FEAT/POINT", "CART", *planned], vector)
+        lines += dmis_statement([f"FA({label})=FEAT/POINT", "CART", *measured], vector)
+    lines.append("ENDFIL")
+    return "\n".join(lines) + "\n"
+
+
+FORMAT = FileFormat("dmis", NAME, DESCRIPTION, EXTENSIONS, ENCODING, write, read, contact_nominals=True,
+                    measured=True, write_measured=dmis_output)

@@ -24,7 +24,14 @@ class FileFormat:
     contact_nominals: the format's points are nominal surface points whose probe radius the CMM
     takes off itself (DMIS's FEAT/POINT and PTMEAS): a probe radius is stated (ball_radius_mm),
     never added to the points; write_results: (Inspection, part name) -> the file's text, for a
-    format that holds an inspection's results (QIF), else None.
+    format that holds an inspection's results (QIF), else None; measured: a CMM's measured points
+    are written in it and read back as a measurement (cmmsampling.simulate_measurement writes
+    them, inspect reads them); write_measured: (nominal PointSet, measured points (N, 3) mm,
+    program name) -> the text a CMM writes after measuring, for a format whose measured file
+    differs from its planned one (DMIS output), else None (``write`` of the measured points);
+    recognises: (the file's first line that is no comment, lower case without blanks) -> True
+    where a file with one of its extensions is the format's own (its header), None for every
+    such file (a file not recognised is read as a labelled table of measured points).
     """
 
     name: str
@@ -36,6 +43,9 @@ class FileFormat:
     read: object
     contact_nominals: bool = False
     write_results: object = None
+    measured: bool = False
+    write_measured: object = None
+    recognises: object = None
 
     @property
     def patterns(self):
@@ -69,6 +79,18 @@ def unregister_format(name):
 def extensions():
     """{extension: format name} of every registered format."""
     return {extension: name for name, record in FORMATS.items() for extension in record.extensions}
+
+
+def measured_records():
+    """The FileFormats a measurement is written in and read back from (``measured``)."""
+    return [record for record in FORMATS.values() if record.measured]
+
+
+def measured_filter():
+    """The file-dialog filters for measured points: every registered format's extensions (the
+    readers of measured files take them all, and labelled tables of any of them), then all files."""
+    patterns = " ".join(record.patterns for record in FORMATS.values())
+    return f"Measured points ({patterns});;All files (*)"
 
 
 def export_filter():

@@ -45,4 +45,10 @@ def read(text, path="<text>"):
                     metadata={"xyz_units": units, "labels": "by order"})
 
 
-FORMAT = FileFormat("xyz", NAME, DESCRIPTION, EXTENSIONS, ENCODING, write, read)
+def recognises(first):
+    """True for the XYZIJK header (first: the file's first line that is no comment, lower case
+    without blanks)."""
+    return first.startswith("xyzijk")
+
+
+FORMAT = FileFormat("xyz", NAME, DESCRIPTION, EXTENSIONS, ENCODING, write, read, recognises=recognises)

@@ -13,6 +13,7 @@ import FreeCADGui
 from PySide import QtCore, QtGui
 
 from ..document import settings
+from ..formats.registry import measured_filter
 from ..inspection.align import ALIGNMENTS, DEGREES_OF_FREEDOM
 from ..inspection.judge import InspectionCancelled, inspect, verdict_words
 from . import icon
@@ -31,7 +32,6 @@ ALIGNMENT_TEXTS = {
 }
 DEFAULTS = {"InspectFile": "", "InspectAlignment": "min_max", "InspectTolerance": 0.1, "InspectLocked": "",
             "InspectZoneOffset": 0.0, "InspectDatums": "", "InspectUncertainty": 0.0}
-MEASURED_FILTERS = ("Measured points (*.dmi *.dmis *.dmo *.dms *.csv *.xyz *.txt *.qif);;All files (*)")
 MAX_TOLERANCE_MM = 100.0
 MAX_UNCERTAINTY_MM = 1.0
 
@@ -119,7 +119,7 @@ class InspectDialog(QtGui.QDialog):
     def browse(self):
         """Pick the measured file."""
         path = QtGui.QFileDialog.getOpenFileName(self, "Measured points", self.path.text() or self.folder,
-                                                 MEASURED_FILTERS)[0]
+                                                 measured_filter())[0]
         if path:
             self.path.setText(path)
 

@@ -15,10 +15,10 @@ import re
 
 import numpy as np
 
-from ..formats.csv_points import CSV_COLUMNS
 from ..formats.files import check_readable
 from ..formats.pointfiles import read_points, resolve_format
 from ..formats.pointset import PointSet
+from ..formats.registry import FORMATS
 from ..formats.text import number
 from ..geometry.validation import InputError
 from .columns import COORDINATES, header_columns
@@ -65,20 +65,18 @@ def read_measured(path):
 
 
 def _project_file(path):
-    """True for a file one of the project's readers takes: DMIS, XYZIJK (its header), CSV (its
-    header with label,x,y,z,i,j,k)."""
+    """True for a file one of the registered formats reads as its own: by its extension, and where
+    the format tells its files by their header (``FileFormat.recognises``: CSV's label,x,y,z,i,j,k,
+    XYZIJK's), by the file's first line that is no comment."""
     try:
-        fmt = resolve_format(path, None)
+        record = FORMATS[resolve_format(path, None)]
     except InputError:
         return False
+    if record.recognises is None:
+        return True
     with open(path, encoding="utf-8-sig", errors="replace") as stream:
         head = [line for line in stream.read(4096).splitlines() if line.strip() and not line.startswith("#")][:1]
-    first = head[0].lower().replace(" ", "") if head else ""
-    if fmt == "csv":
-        return all(name in re.split(r"[,;]", first) for name in CSV_COLUMNS[:7])
-    if fmt == "xyz":
-        return first.startswith("xyzijk")
-    return True
+    return bool(record.recognises(head[0].lower().replace(" ", "") if head else ""))
 
 
 def read_labelled_text(text, path="<text>"):

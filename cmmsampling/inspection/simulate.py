@@ -15,11 +15,10 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..formats.dmis import DMIS_VERSION, dmis_program_name, dmis_statement
 from ..formats.exporting import as_point_set, export
 from ..formats.files import write_atomically
 from ..formats.pointset import PointSet
-from ..formats.text import COORDINATE_DECIMALS, VECTOR_DECIMALS, fixed
+from ..formats.registry import measured_records
 from ..geometry.validation import InputError, check_real
 from ..strategies.face_setup import setup_of
 from .align import rotation_matrix, transform
@@ -27,7 +26,6 @@ from .align import rotation_matrix, transform
 # The form error's waves: their number and wavelengths as fractions of the points' extent.
 WAVES = 3
 WAVELENGTHS = (0.6, 1.4)
-FORMATS = {".dmi": "dmis", ".dmis": "dmis", ".csv": "csv"}
 
 
 @dataclass
@@ -93,18 +91,29 @@ def form_waves(points, amplitude, seed=0):
     return waves
 
 
+def _measured_format(path):
+    """The FileFormat (registered, ``measured``) a measurement is written in, by path's extension;
+    InputError naming those there are."""
+    extension = os.path.splitext(os.fspath(path))[1].lower()
+    records = measured_records()
+    found = [record for record in records if extension in record.extensions]
+    if not found:
+        kinds = " or ".join(f"{record.title} ({', '.join(record.extensions)})" for record in records)
+        raise InputError(f"{path}: a measurement is written as {kinds}")
+    return found[0]
+
+
 def simulate_measurement(source, path, *, form_error=0.0, noise=0.0, misplacement=None, seed=0):
     """Measure the planned points of ``source`` on a virtual part and write what the CMM reports.
 
     source: a SamplingResult, PartPlan, PointSet or probe-points object (the nominal points and
-    their approach vectors); path: the file, DMIS output (.dmi, .dmis) or CSV (.csv);
+    their approach vectors); path: the file, in a format a measurement is read back from
+    (DMIS output: .dmi, .dmis, .dmo, .dms; CSV: .csv; cmmsampling.formats.registry.measured_records);
     form_error: mm, the largest form error; noise: mm, the probing error's standard deviation;
     misplacement: a Misplacement, or a dict of its fields (deg and mm); seed: the random form
     error's and noise's seed. Returns a SimulatedMeasurement.
     """
-    extension = os.path.splitext(os.fspath(path))[1].lower()
-    if extension not in FORMATS:
-        raise InputError(f"{path}: a measurement is written as DMIS output (.dmi, .dmis) or CSV (.csv)")
+    record = _measured_format(path)
     form_error = check_real("form_error", form_error, minimum=0.0)
     noise = check_real("noise", noise, minimum=0.0)
     placed = misplacement if isinstance(misplacement, Misplacement) else Misplacement(**(misplacement or {}))
@@ -114,26 +123,12 @@ def simulate_measurement(source, path, *, form_error=0.0, noise=0.0, misplacemen
                                 )[:, None] * nominal.normals
     matrix = placed.matrix(nominal.points.mean(axis=0))
     actual = transform(matrix, touched)
-    if FORMATS[extension] == "dmis":
-        write_atomically(path, dmis_output(nominal, actual, os.path.splitext(os.path.basename(path))[0]), "ascii")
+    if record.write_measured is not None:
+        text = record.write_measured(nominal, actual, os.path.splitext(os.path.basename(path))[0])
+        write_atomically(path, text, record.encoding)
     else:
         export(replace(nominal, points=actual, uv=None, deviation=None, travel=None), path)
     return SimulatedMeasurement(os.fspath(path), list(nominal.labels), nominal.points, actual, form, matrix)
-
-
-def dmis_output(nominal, actual, name):
-    """DMIS output text: for each point its nominal F(label)=FEAT/POINT and the measured actual
-    FA(label)=FEAT/POINT (with the nominal vector), as a CMM writes them after a run.
-    nominal: PointSet; actual: (N, 3) mm; name: the program's name."""
-    lines = [f"DMISMN/'{dmis_program_name(name)}',{DMIS_VERSION}", "$$ measured by cmmsampling's virtual CMM",
-             "UNITS/MM,ANGDEC"]
-    vectors = fixed(nominal.normals, VECTOR_DECIMALS).tolist()
-    for label, planned, measured, vector in zip(nominal.labels, fixed(nominal.points, COORDINATE_DECIMALS).tolist(),
-                                                fixed(actual, COORDINATE_DECIMALS).tolist(), vectors):
-        lines += dmis_statement([f"F({label})=FEAT/POINT", "CART", *planned], vector)
-        lines += dmis_statement([f"FA({label})=FEAT/POINT", "CART", *measured], vector)
-    lines.append("ENDFIL")
-    return "\n".join(lines) + "\n"
 
 
 # The errors a series of parts may carry (simulated_series): a smooth wave across the face, a

@@ -66,3 +66,24 @@ def test_an_unregistered_format_is_gone_and_a_bad_record_is_refused():
         cmmsampling.register_format({"name": "dict"})
     with pytest.raises(ValueError, match="extensions must be lower case"):
         cmmsampling.FileFormat("bad", "bad", "bad", ("TOY",), "ascii", None, None)
+
+
+def test_a_format_registered_as_measured_holds_a_simulated_measurement_read_back_by_inspect(result, tmp_path):
+    from dataclasses import replace
+
+    from cmmsampling.formats.registry import measured_filter
+    from cmmsampling.inspection.measured import read_measured
+
+    with pytest.raises(ValueError, match=r"a measurement is written as DMIS \(.dmi, .dmis, .dmo, .dms\) or CSV"):
+        cmmsampling.simulate_measurement(result, tmp_path / "m.toy")
+    cmmsampling.register_format(replace(TOY_FORMAT, measured=True, recognises=lambda first: first.startswith("toy")))
+    try:
+        assert "*.toy" in measured_filter() and measured_filter().endswith(";;All files (*)")
+        measured = cmmsampling.simulate_measurement(result, tmp_path / "m.toy", form_error=0.01, seed=2)
+        back = read_measured(tmp_path / "m.toy")
+        assert back.metadata["format"] == "toy", "read by the format's own reader"
+        np.testing.assert_allclose(back.points, measured.actual, atol=1e-6)
+        (tmp_path / "table.toy").write_text("label x y z\nA 1 2 3\nB 4 5 6\nC 7 8 9\n")
+        assert read_measured(tmp_path / "table.toy").metadata["format"] == "labelled text", "not the format's header"
+    finally:
+        cmmsampling.unregister_format(TOY_FORMAT.name)
