@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -16,7 +17,10 @@ from .geometry.occ_distance import distances_to_face
 from .geometry.surface import as_face
 from .geometry.validation import InputError, check_real
 
-Part = import_part()
+if TYPE_CHECKING:   # FreeCAD ships no type stubs: to the type checker Part's classes are Any
+    import Part
+else:
+    Part = import_part()
 import FreeCAD  # noqa: E402  (importable once import_part() has set the path)
 
 

@@ -7,10 +7,11 @@
 # --list prints the package names instead (scripts/test-matrix.sh installs the same into its roots).
 # HOST_PACKAGES go on this machine only, not into those roots: g++ builds NIST's I++ DME command
 # checker and response parser for the tests (tests/support/ippdme.py), which run once, on the host.
+# mypy type-checks the package (tests/package/test_types.py, the quality layer).
 set -euo pipefail
 PACKAGES=(freecad python3-numpy python3-scipy xvfb xauth python3-pytest python3-matplotlib
           python3-hypothesis python3-threadpoolctl python3-distributed)
-HOST_PACKAGES=(g++)
+HOST_PACKAGES=(g++ mypy)
 if [ "${1:-}" = "--list" ]; then
   printf '%s\n' "${PACKAGES[@]}"
   exit 0

@@ -49,7 +49,7 @@ class Access:
     tilts: np.ndarray
     angles: np.ndarray
     ranks: np.ndarray
-    unreached: np.ndarray = None
+    unreached: np.ndarray | None = None
     unreached_area: float = 0.0
 
     @property

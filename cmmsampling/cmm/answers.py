@@ -129,6 +129,13 @@ def _need(ok: bool, form: str, msg: str = BAD) -> None:
         raise ResponseError(f'{form}Response: {msg}' if form else msg)
 
 
+def _matched(found: re.Match[str] | None, msg: str) -> re.Match[str]:
+    """found, or NIST's message ``msg`` raised where the pattern did not match."""
+    if found is None:
+        raise ResponseError(msg)
+    return found
+
+
 def _check_tag(buf: str) -> None:
     """parserRes::parseTag: Num UnsInt or E UnsInt, then a space; 00000 never, E0000 only for ! #."""
     _need(len(buf) > 5 and all(c in DIGITS for c in buf[1:5]), '', 'BAD TAG CHARACTER')
@@ -173,7 +180,7 @@ def _number(u: str, i: int) -> tuple[_Tok, int]:
     _need(k - start - dot <= 16, '', 'BAD NUMBER MORE THAN 16 DIGITS')
     if u[k:k + 1] in ('E', 'e'):
         k += 1 + (u[k + 1:k + 2] in ('+', '-'))
-        j = _DIGIT_RUN.match(u, k).end() - k
+        j = _matched(_DIGIT_RUN.match(u, k), BAD).end() - k
         _need(1 <= j <= 3, '', 'BAD E NUMBER EXPONENT MUST HAVE ONE TWO OR THREE DIGITS')
         k += j
     return _Tok('D', float(u[i:k]), u[i:k]), k
@@ -189,8 +196,7 @@ def _tokenize(u: str) -> list[_Tok]:
             toks.append(_Tok(c))
             i += 1
         elif c == '"':
-            m = _STRING.match(u, i)
-            _need(m is not None, '', 'BAD STRING')
+            m = _matched(_STRING.match(u, i), 'BAD STRING')
             toks.append(_Tok('S', m.group(1)))
             i = m.end()
         elif c in '+-.' or c in DIGITS:
@@ -198,8 +204,8 @@ def _tokenize(u: str) -> list[_Tok]:
             toks.append(tok)
         else:
             _need('A' <= c <= 'Z', '')
-            kw = next((k for k in KEYWORDS if u.startswith(k, i)), None)
-            _need(kw is not None, '', 'BAD KEYWORD')
+            kw = next((k for k in KEYWORDS if u.startswith(k, i)), '')
+            _need(kw != '', '', 'BAD KEYWORD')
             i += len(kw)
             _need(u[i:i + 1] in ('.', ',', '(', ')'), '', 'BAD CHARACTER AFTER KEYWORD')
             toks.append(_Tok('K', kw))

@@ -230,9 +230,10 @@ def measure(source, server: str, out: str | os.PathLike = "measured.csv", tool: 
                                  "is the address right?") from None
     sock.settimeout(POLL_S)
     sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-    transcript = []
+    transcript: list[str] = []
     connection = Connection(sock, timeout_s, progress, transcript)
-    touched, state = {}, {"tool": "", "radius": 0.0, "cancelled": False}
+    touched: dict[str, tuple] = {}
+    state = {"tool": "", "radius": 0.0, "cancelled": False}
     stopped = None
     try:
         _session(connection, planned, moves, tool, progress, touched, state)

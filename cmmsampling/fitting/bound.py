@@ -41,7 +41,7 @@ class MinimaxBound:
     iterations: int
     converged: bool
     grid: tuple
-    poles: np.ndarray = None
+    poles: np.ndarray | None = None
 
     @property
     def gap(self):

@@ -497,12 +497,12 @@ class DeviationStats:
     signed: np.ndarray
     grid_uv: np.ndarray
     nodes: np.ndarray
-    edge_signed: np.ndarray = None
-    edge_nodes: np.ndarray = None
+    edge_signed: np.ndarray | None = None
+    edge_nodes: np.ndarray | None = None
     spacing: float = float("nan")
     occ_maximum: float = float("nan")
-    peak_signed: np.ndarray = None
-    peak_nodes: np.ndarray = None
+    peak_signed: np.ndarray | None = None
+    peak_nodes: np.ndarray | None = None
 
     def max_location(self):
         """(3,) mm: the face's point of largest deviation, a raster, edge or peak node."""

@@ -67,7 +67,7 @@ class FaceNodes:
     loops: list
     edge_runs: np.ndarray
     spacing: float
-    edge_counted: np.ndarray = None
+    edge_counted: np.ndarray | None = None
 
     @property
     def size(self):

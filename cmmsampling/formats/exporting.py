@@ -23,25 +23,13 @@ from .files import write_atomically
 from .frames import FRAME_KEYS, frame_facts, resolve_frame, to_local
 from .pointfiles import FORMATS, READER_KEYS, resolve_format
 from .pointset import PointSet
+from .registry import WriteOptions
 
 ORDERS = ("as_optimised", "short_path", "probe_path")
 UNIT_TOLERANCE = 1e-3
 PROBE_KEYS = ("probe_radius_mm", "ball_radius_mm", "points")
 ORDER_KEYS = ("order", "path_length_mm")
 WRITTEN_KEYS = FRAME_KEYS + PROBE_KEYS + ORDER_KEYS + ("count", "units") + READER_KEYS
-
-
-@dataclass(frozen=True)
-class WriteOptions:
-    """What the writers need besides the points: DMIS program name, approach, retract and search
-    distances (mm), and whether to write the descriptive comments."""
-
-    name: str
-    approach: float
-    retract: float
-    search: float
-    comments: bool
-    probe: dict = None
 
 
 @dataclass(frozen=True)
@@ -66,7 +54,7 @@ class ExportReport:
     frame: str
     probe_radius: float
     detours: int = 0
-    seconds: float = None
+    seconds: float | None = None
     ball_radius: float = 0.0
 
     @property
@@ -104,7 +92,7 @@ class ResultsReport:
     format: str
     count: int
     profile: float
-    passed: bool = None
+    passed: bool | None = None
 
     def __str__(self):
         verdict = "" if self.passed is None else f", {'PASS' if self.passed else 'FAIL'}"

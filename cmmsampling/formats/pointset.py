@@ -23,12 +23,12 @@ class PointSet:
     labels: list
     points: np.ndarray
     normals: np.ndarray
-    uv: np.ndarray = None
-    deviation: np.ndarray = None
+    uv: np.ndarray | None = None
+    deviation: np.ndarray | None = None
     metadata: dict = field(default_factory=dict)
-    faces: list = None
-    axes: np.ndarray = None
-    travel: list = None
+    faces: list | None = None
+    axes: np.ndarray | None = None
+    travel: list | None = None
 
     def __len__(self):
         return len(self.labels)

@@ -5,11 +5,66 @@ the Export panel and File > Export read.
 The built-in formats are registered by :mod:`.pointfiles`; a user's module calls
 :func:`register_format` with its own :class:`FileFormat`.
 """
+from __future__ import annotations
+
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, Protocol
 
 from ..geometry.validation import InputError, InputTypeError
 
+if TYPE_CHECKING:   # for the annotations only: the formats' modules import this one
+    import numpy as np
+
+    from .pointset import PointSet
+
 EXPORT_TITLE = "CMM probe points"
+
+
+@dataclass(frozen=True)
+class WriteOptions:
+    """What the writers need besides the points: DMIS program name, approach, retract and search
+    distances (mm), and whether to write the descriptive comments."""
+
+    name: str
+    approach: float
+    retract: float
+    search: float
+    comments: bool
+    probe: dict | None = None
+
+
+class Writer(Protocol):
+    """A format's writer: (the PointSet as written, the facts that say what its numbers mean, the
+    WriteOptions) -> the file's text."""
+
+    def __call__(self, point_set: PointSet, facts: dict[str, Any], options: WriteOptions, /) -> str: ...
+
+
+class Reader(Protocol):
+    """A format's reader: (the file's text, its path for messages) -> PointSet; ValueError naming
+    the path and the line."""
+
+    def __call__(self, text: str, path: str, /) -> PointSet: ...
+
+
+class ResultsWriter(Protocol):
+    """(an Inspection, the part's name) -> the text of a file of its results (QIF)."""
+
+    def __call__(self, inspection: Any, part: str, /) -> str: ...
+
+
+class MeasuredWriter(Protocol):
+    """(the nominal PointSet, the measured points (N, 3) mm, the program's name) -> the text a
+    CMM writes after measuring them (DMIS output)."""
+
+    def __call__(self, nominal: PointSet, actual: np.ndarray, name: str, /) -> str: ...
+
+
+class Recogniser(Protocol):
+    """(a file's first line that is no comment, lower case without blanks) -> whether the file
+    is the format's own."""
+
+    def __call__(self, first: str, /) -> bool: ...
 
 
 @dataclass(frozen=True)
@@ -37,18 +92,18 @@ class FileFormat:
     name: str
     title: str
     description: str
-    extensions: tuple
+    extensions: tuple[str, ...]
     encoding: str
-    write: object
-    read: object
+    write: Writer
+    read: Reader
     contact_nominals: bool = False
-    write_results: object = None
+    write_results: ResultsWriter | None = None
     measured: bool = False
-    write_measured: object = None
-    recognises: object = None
+    write_measured: MeasuredWriter | None = None
+    recognises: Recogniser | None = None
 
     @property
-    def patterns(self):
+    def patterns(self) -> str:
         """Its extensions as file-dialog patterns, e.g. '*.dmi *.dmis'."""
         return " ".join("*" + extension for extension in self.extensions)
 
@@ -59,10 +114,10 @@ class FileFormat:
                              f"e.g. ('.dmi',), got {self.extensions!r}")
 
 
-FORMATS = {}
+FORMATS: dict[str, FileFormat] = {}
 
 
-def register_format(record):
+def register_format(record: FileFormat) -> FileFormat:
     """Add a FileFormat (replacing one of the same name): export(), read_points(), the command
     line and the Export panel offer it from then on. Returns the record."""
     if not isinstance(record, FileFormat):
@@ -71,29 +126,29 @@ def register_format(record):
     return record
 
 
-def unregister_format(name):
+def unregister_format(name: str) -> None:
     """Remove the format named ``name`` (KeyError when there is none)."""
     del FORMATS[name]
 
 
-def extensions():
+def extensions() -> dict[str, str]:
     """{extension: format name} of every registered format."""
     return {extension: name for name, record in FORMATS.items() for extension in record.extensions}
 
 
-def measured_records():
+def measured_records() -> list[FileFormat]:
     """The FileFormats a measurement is written in and read back from (``measured``)."""
     return [record for record in FORMATS.values() if record.measured]
 
 
-def measured_filter():
+def measured_filter() -> str:
     """The file-dialog filters for measured points: every registered format's extensions (the
     readers of measured files take them all, and labelled tables of any of them), then all files."""
     patterns = " ".join(record.patterns for record in FORMATS.values())
     return f"Measured points ({patterns});;All files (*)"
 
 
-def export_filter():
+def export_filter() -> str:
     """One file-dialog filter for every format, as FreeCAD's File > Export lists it, e.g.
     'CMM probe points: DMIS, XYZIJK text, CSV (*.dmi *.dmis *.xyz *.txt *.csv)'."""
     titles = ", ".join(record.title for record in FORMATS.values())

@@ -3,11 +3,16 @@ three planes square to each other (the demo's and the tests' part for profiles r
 datums A | B | C). Lengths in mm."""
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from .freecad_env import import_part
 
-Part = import_part()
+if TYPE_CHECKING:   # FreeCAD ships no type stubs: to the type checker Part's classes are Any
+    import Part
+else:
+    Part = import_part()
 import FreeCAD  # noqa: E402  (importable once import_part() has set the path)
 
 # The block's faces by role: the wavy top (the toleranced face) and the datums A, B, C.

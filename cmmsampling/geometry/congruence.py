@@ -109,7 +109,8 @@ def face_copies(prints: list) -> list:
     """For each FacePrint (None: a face left out, copying none and copied by none), the RigidCopy
     of the first earlier face it copies that copies no other (an original), or None where it
     copies none: a list as long as prints."""
-    found, originals = [], []
+    found: list[RigidCopy | None] = []
+    originals: list[int] = []
     for print_ in prints:
         copy = None
         if print_ is not None:

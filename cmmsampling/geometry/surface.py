@@ -8,6 +8,7 @@ from the original analytic one).
 from __future__ import annotations
 
 from functools import cached_property
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -16,7 +17,10 @@ from .freecad_env import import_part
 from .nurbs import NurbsPatch
 from .validation import InputError, InputTypeError
 
-Part = import_part()
+if TYPE_CHECKING:   # FreeCAD ships no type stubs: to the type checker Part's classes are Any
+    import Part
+else:
+    Part = import_part()
 import FreeCAD  # noqa: E402  (importable once import_part() has set the path)
 
 # How far a probe point may lie from its face, mm, by OCC's distance (BRepExtrema): points

@@ -74,16 +74,16 @@ class Inspection:
     deviations: np.ndarray
     transform: np.ndarray
     alignment: Alignment
-    tolerance: float = None
-    faces: list = None
+    tolerance: float | None = None
+    faces: list | None = None
     notes: list = field(default_factory=list)
-    substitute_poles: np.ndarray = None
+    substitute_poles: np.ndarray | None = None
     substitute_deviation: object = None
     space: object = None
     measured_file: str = ""
     zone_offset: float = 0.0
     face_forms: dict = field(default_factory=dict)
-    normals: np.ndarray = None
+    normals: np.ndarray | None = None
     datums: list = field(default_factory=list)
     uncertainty: object = None
     planned_faces: dict = field(default_factory=dict)

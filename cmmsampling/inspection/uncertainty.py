@@ -54,7 +54,7 @@ class ProfileUncertainty:
     seed: int
     coverage: float = COVERAGE_FACTOR
     notes: list = field(default_factory=list)
-    profiles: np.ndarray = None
+    profiles: np.ndarray | None = None
 
     def as_record(self):
         """The figures as a JSON-friendly dict (the trials' profiles left out)."""

@@ -14,6 +14,7 @@ a verdict needs are the fewest N tried whose quantile is below a share of the to
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -27,7 +28,10 @@ from .align import align
 from .closest import FaceCloser
 from .simulate import form_waves
 
-Part = import_part()
+if TYPE_CHECKING:   # FreeCAD ships no type stubs: to the type checker Part's classes are Any
+    import Part
+else:
+    Part = import_part()
 
 # The counts of points tried, the simulated parts and the share of the tolerance by default;
 # the quantile of the gaps taken as the uncertainty from sampling.

@@ -23,6 +23,7 @@ import functools
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -43,7 +44,10 @@ from .plan_points import plan_moves, plan_point_set
 from .points_needed import (DEFAULT_MAX_POINTS, RISE_FACTOR, check_max_points, fewest_points, points_needed,
                             step_counts)
 
-Part = import_part()
+if TYPE_CHECKING:   # FreeCAD ships no type stubs: to the type checker Part's classes are Any
+    import Part
+else:
+    Part = import_part()
 FIT_KEYS = ("fit_degree", "fit_poles", "smoothing", "grid")
 CANCELLED_REASON = "cancelled before this face was planned"
 # A copy takes its original's points where its judged maximum deviation agrees with the
@@ -78,7 +82,7 @@ class FaceJob:
     brep: str
     mode: str
     strategy: str
-    tolerance: float = None
+    tolerance: float | None = None
     n: int = 0
     n_max: int = DEFAULT_MAX_POINTS
     arguments: dict = field(default_factory=dict)
@@ -107,19 +111,19 @@ class FacePlan:
     name: str
     area: float
     n: int = 0
-    uv: np.ndarray = None
-    points: np.ndarray = None
-    normals: np.ndarray = None
+    uv: np.ndarray | None = None
+    points: np.ndarray | None = None
+    normals: np.ndarray | None = None
     maximum: float = float("nan")
     bound: float = float("nan")
-    met: bool = None
+    met: bool | None = None
     edge_offset: float = 0.0
     strategy: str = ""
     settings: dict = field(default_factory=dict)
     tried: list = field(default_factory=list)
     reason: str = ""
     seconds: float = 0.0
-    access: Access = None
+    access: Access | None = None
     copy_of: str = ""
 
     @property
@@ -190,8 +194,8 @@ class PartPlan:
     faces: list
     mode: str
     strategy: str
-    tolerance: float = None
-    budget: int = None
+    tolerance: float | None = None
+    budget: int | None = None
     seconds: float = 0.0
     cancelled: bool = False
     shapes: dict = field(default_factory=dict, repr=False)

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import os
 import time
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -15,7 +16,10 @@ from ..runtime.threads import blas_threads
 from .registry import STRATEGIES, strategy_options
 from .sampling import DEFAULT_STRATEGY, MIN_POINTS, Pair, baseline, check_workers, make_problem, memory_bytes
 
-Part = import_part()
+if TYPE_CHECKING:   # FreeCAD ships no type stubs: to the type checker Part's classes are Any
+    import Part
+else:
+    Part = import_part()
 
 # Swarms timed by time_needed (the first one warms the caches and is not counted).
 TIMED_SWARMS = 4

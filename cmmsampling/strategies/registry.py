@@ -4,11 +4,29 @@
 A strategy module declares its runner and its :class:`Strategy` record; ``sampling`` registers
 the built-in ones, a user's module calls :func:`register_strategy`.
 """
+from __future__ import annotations
+
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any, Protocol
 
 import numpy as np
 
 from ..geometry.validation import InputError, InputTypeError
+
+
+class OptionsCheck(Protocol):
+    """A strategy's check of its options: the options (merged with the defaults) -> the cleaned
+    options; InputError or InputTypeError naming the first bad one."""
+
+    def __call__(self, options: dict[str, Any], /) -> dict[str, Any]: ...
+
+
+class MemoryNeed(Protocol):
+    """The bytes a strategy's run needs beyond every run's base: (n points, the substitute's
+    poles (n_u, n_v), the evaluation grid's nodes, its options, worker processes) -> bytes."""
+
+    def __call__(self, n: int, poles: tuple[int, int], nodes: int, options: dict[str, Any], workers: int, /) -> int: ...
 
 
 @dataclass
@@ -21,7 +39,7 @@ class StrategyOutcome:
     """
 
     uv: np.ndarray
-    history: np.ndarray = None
+    history: np.ndarray | None = None
     evaluations: int = 0
     cancelled: bool = False
     details: dict = field(default_factory=dict)
@@ -38,6 +56,12 @@ class Setting:
     option: str
     kind: type
     help: str
+
+
+# A strategy's run: (problem: the SamplingProblem, progress: callable(iteration, best maximum mm)
+# -> True to cancel, or None, **its options) -> StrategyOutcome. The options differ from strategy
+# to strategy (part_error's prior, pso's population), so the type states what comes back.
+Runner = Callable[..., StrategyOutcome]
 
 
 @dataclass(frozen=True)
@@ -63,21 +87,21 @@ class Strategy:
     """
 
     name: str
-    run: object
+    run: Runner
     description: str
     label: str
-    options: dict = field(default_factory=dict)
-    check: object = None
+    options: dict[str, Any] = field(default_factory=dict)
+    check: OptionsCheck | None = None
     optimiser: bool = False
     progress_unit: str = "step"
-    progress_total: str = None
+    progress_total: str | None = None
     seeded: bool = False
     figures: bool = False
     reference: bool = False
     baseline: bool = False
-    settings: tuple = ()
-    memory: object = None
-    requires: tuple = ()
+    settings: tuple[Setting, ...] = ()
+    memory: MemoryNeed | None = None
+    requires: tuple[str, ...] = ()
 
     def checked_options(self, options):
         """The defaults updated by ``options``, validated: TypeError for an option it does not take."""
@@ -96,10 +120,10 @@ class Strategy:
         return options.get(self.progress_total, self.options.get(self.progress_total))
 
 
-STRATEGIES = {}
+STRATEGIES: dict[str, Strategy] = {}
 
 
-def register_strategy(strategy):
+def register_strategy(strategy: Strategy) -> Strategy:
     """Add a Strategy record (replacing one of the same name): sample(), compare(), the report, the
     command line and both panels offer it from then on. Returns the record."""
     if not isinstance(strategy, Strategy):
@@ -108,12 +132,12 @@ def register_strategy(strategy):
     return strategy
 
 
-def unregister_strategy(name):
+def unregister_strategy(name: str) -> None:
     """Remove the strategy named ``name`` (KeyError when there is none)."""
     del STRATEGIES[name]
 
 
-def strategy_label(name):
+def strategy_label(name: str) -> str:
     """The display name of a strategy (its record's label; the name itself for one not registered,
     e.g. a result of ``evaluate(strategy="given")``)."""
     return STRATEGIES[name].label if name in STRATEGIES else name

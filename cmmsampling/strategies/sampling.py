@@ -8,6 +8,7 @@ import os
 import time
 from collections.abc import Callable
 from dataclasses import asdict
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -31,7 +32,10 @@ from .registry import (STRATEGIES, Setting, Strategy, StrategyOutcome, baseline,
                        strategy_label, strategy_options, unregister_strategy)
 from .result import EXACT_FIT, SamplingResult
 
-Part = import_part()
+if TYPE_CHECKING:   # FreeCAD ships no type stubs: to the type checker Part's classes are Any
+    import Part
+else:
+    Part = import_part()
 
 __all__ = ["STRATEGIES", "Setting", "Strategy", "StrategyOutcome", "register_strategy", "unregister_strategy",
            "strategy_label", "strategy_options", "baseline", "self_contained", "make_problem", "sample", "evaluate", "lower_bound",

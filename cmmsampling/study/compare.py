@@ -108,7 +108,7 @@ class Study:
     bound_about: dict = field(default_factory=dict)
     refused: dict = field(default_factory=dict)
     results: dict = field(default_factory=dict)
-    figure_n: int = None
+    figure_n: int | None = None
     settings: dict = field(default_factory=dict)
     cancelled: bool = False
     elapsed_s: float = 0.0
@@ -174,8 +174,8 @@ class Step:
     """One unit of work: one run of a strategy at N with a seed, or the bound at N (strategy None)."""
 
     n: int
-    strategy: str = None
-    seed: int = None
+    strategy: str | None = None
+    seed: int | None = None
 
     def describe(self):
         """A short line for progress messages."""
@@ -247,9 +247,8 @@ def compare(face: Part.Face, ns: tuple = DEFAULT_NS, strategies: tuple | None = 
     ns = _check_ns(ns)
     strategies = _check_strategies(strategies, options)
     seeds = _check_seeds(seeds)
-    if seeded is None:
-        seeded = [name for name in strategies if STRATEGIES[name].seeded]
-    seeded = _check_names("seeded strategy", seeded)
+    seeded = _check_names("seeded strategy", [name for name in strategies if STRATEGIES[name].seeded]
+                          if seeded is None else seeded)
     options = _check_options(options, strategies)
     figure_n = _check_figure_n(figure_n, ns)
     if progress is not None and not callable(progress):
@@ -428,7 +427,7 @@ def _check_ns(ns):
     return tuple(values)
 
 
-def _check_strategies(strategies, options=None):
+def _check_strategies(strategies: tuple | list | str | None, options: dict | None = None) -> tuple[str, ...]:
     """Strategy names (None: all those whose required options, e.g. part_error's prior, are
     given in ``options``, in their order), at least one."""
     if strategies is None:
