@@ -191,13 +191,19 @@ class SeriesModel:
     def covariance(self, uv_a, uv_b):
         """The next part's error covariance between uv_a (A, 2) and uv_b (B, 2): (A, B) mm^2."""
         a, b = self.plane(uv_a), self.plane(uv_b)
-        (fa, _), (fb, _) = self._features(a), self._features(b)
-        return fa @ fb.T + matern(a, b, self.length, self.residual_variance)
+        return self._covariance(a, self._features(a)[0], b, self._features(b)[0])
+
+    def _covariance(self, a, features_a, b, features_b):
+        """(A, B) mm^2 between plane points a (A, 2) and b (B, 2) whose :meth:`_features` are given."""
+        return features_a @ features_b.T + matern(a, b, self.length, self.residual_variance)
+
+    def _variance(self, features):
+        """(Q,) mm^2: the prior variance at the plane points whose :meth:`_features` are given."""
+        return (features ** 2).sum(1) + self.residual_variance
 
     def variance(self, uv):
         """The next part's error variance at uv (Q, 2) before any point is measured on it: (Q,) mm^2."""
-        features, _ = self._features(self.plane(uv))
-        return (features ** 2).sum(1) + self.residual_variance
+        return self._variance(self._features(self.plane(uv))[0])
 
     def predict(self, uv, deviations, uv_query):
         """The error map of a part measured at uv (N, 2) with signed deviations (N,) mm, at
@@ -205,12 +211,12 @@ class SeriesModel:
         d = np.asarray(deviations, float)
         x, query = self.plane(uv), self.plane(uv_query)
         (features, prior), (measured, systematic) = self._features(query), self._features(x)
-        own = (features ** 2).sum(1) + self.residual_variance
+        own = self._variance(features)
         if len(d) == 0:
             return prior, np.sqrt(np.maximum(own, 0.0))
-        among = measured @ measured.T + matern(x, x, self.length, self.residual_variance)
+        among = self._covariance(x, measured, x, measured)
         factor = cho_factor(among + self.noise * np.eye(len(d)))
-        cross = features @ measured.T + matern(query, x, self.length, self.residual_variance)
+        cross = self._covariance(query, features, x, measured)
         mean = prior + cross @ cho_solve(factor, d - systematic)
         return mean, np.sqrt(np.maximum(own - (cross * cho_solve(factor, cross.T).T).sum(1), 0.0))
 
