@@ -23,7 +23,6 @@ from ..formats.files import check_writable
 from ..formats.pointfiles import resolve_format
 from ..formats.pointset import PointSet
 from ..geometry.validation import InputError, check_real
-from ..runtime import handover
 from .answers import ResponseError, parse_response
 from .protocol import LINE_END, point_arguments, tag_text
 
@@ -207,14 +206,8 @@ def measure(source, server: str, out: str | os.PathLike = "measured.csv", tool: 
     log: a file for the session's transcript ('> ' sent, '< ' received).
     Returns a MeasuredRun (a path-like of out). A Cancel returns the points measured so far
     (``cancelled``); an I++ error, a lost connection or a time-out raises MeasurementStopped
-    after writing them (its ``run``). InputError before connecting for bad arguments. A run
-    handed over by the workbench's background measurement (:func:`hand_over`) to exactly this
-    call is returned at once: the echoed call does not move the machine again.
+    after writing them (its ``run``). InputError before connecting for bad arguments.
     """
-    call = {"server": server, "out": out, "tool": tool, "timeout_s": timeout_s, "log": log}
-    handed = handover.take(measure, source, call)
-    if handed is not None:
-        return handed
     host, port = server_address(server)
     fmt = resolve_format(out)
     if fmt not in MEASURED_FORMATS:
@@ -255,13 +248,6 @@ def measure(source, server: str, out: str | os.PathLike = "measured.csv", tool: 
     if stopped is not None:
         raise MeasurementStopped(f"{stopped}; {run}", run) from None
     return run
-
-
-def hand_over(source, run, server, out="measured.csv", tool=None, timeout_s=60.0, log=None):
-    """Let the next :func:`measure` of source with exactly these arguments return run at once
-    (the GUI's background run, echoed in FreeCAD's console)."""
-    handover.give(measure, source, {"server": server, "out": out, "tool": tool, "timeout_s": timeout_s, "log": log},
-                  run)
 
 
 def _planned_path(source):

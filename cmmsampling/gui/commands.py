@@ -207,7 +207,7 @@ class InspectMeasured(GuardedCommand):
         return one_source_reason("that were measured", "select the one that was measured")
 
     def act(self):
-        from ..inspection.judge import hand_over
+        from .handover import handed
         from .inspect_dialog import ask_inspection, inspection_call, report_inspection, run_with_progress, show_busy
 
         [points] = selected_export_sources()
@@ -223,10 +223,10 @@ class InspectMeasured(GuardedCommand):
                 FreeCADGui.getMainWindow().statusBar().showMessage(
                     "Inspection cancelled: nothing was judged or added", 20000)
                 return
-            hand_over(points, inspection=made, **arguments)
             FreeCADGui.doCommand("import cmmsampling")
             QtGui.QApplication.setOverrideCursor(QtCore.Qt.WaitCursor)
-            FreeCADGui.doCommand(judge)
+            with handed("inspect", points, arguments, made):
+                FreeCADGui.doCommand(judge)
             inspection = getattr(__main__, "inspection", None)
             if inspection is before[0]:
                 raise RuntimeError("The measured points were not inspected: the Report view says why.")
@@ -262,7 +262,8 @@ class MeasureOnCMM(GuardedCommand):
         return one_source_reason("to measure", "select the one to measure")
 
     def act(self):
-        from ..cmm.client import MeasurementStopped, hand_over
+        from ..cmm.client import MeasurementStopped
+        from .handover import handed
         from .measure_dialog import ask_measurement, measurement_call, run_with_progress
 
         [points] = selected_export_sources()
@@ -280,9 +281,9 @@ class MeasureOnCMM(GuardedCommand):
             status.showMessage(f"Not measured: {str(exc).splitlines()[0] if str(exc) else type(exc).__name__}", 20000)
             warn(self.TITLE, str(exc))
             return
-        hand_over(points, run, **arguments)
         FreeCADGui.doCommand("import cmmsampling")
-        FreeCADGui.doCommand(measurement_call(points, arguments))
+        with handed("measure", points, arguments, run):
+            FreeCADGui.doCommand(measurement_call(points, arguments))
         FreeCAD.Console.PrintMessage(f"cmmsampling: {run}\n")
         status.showMessage(str(run), 20000)
         if run.labels and not run.cancelled:

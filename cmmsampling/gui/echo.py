@@ -1,8 +1,8 @@
 """What the panels echo in the Python console: each action as the console API calls that
 replay it as a macro (``Gui.doCommand``). A run made in a worker thread is handed over to its
-echoed call (the engines' ``hand_over``), so the echoed line binds its result without running
-again here. The comparison's and the plan's engines are imported by the functions that echo
-them, so that Sample face does not load matplotlib."""
+echoed call (:mod:`cmmsampling.gui.handover`), so the echoed line binds its result without running
+again here. The comparison's and the plan's engines are loaded (cmmsampling's lazy names) only by
+the functions that echo them, so that Sample face does not load matplotlib."""
 import __main__
 
 import FreeCAD
@@ -11,6 +11,7 @@ import FreeCADGui
 from ..access.probe import PROBES
 from ..fitting.deviation import mm_text
 from ..strategies import sampling
+from .handover import handed
 
 
 def source_text(source):
@@ -51,7 +52,7 @@ def add_result(source, face, arguments, result, prior=None):
 
     The echo replays as a macro: ``face = ...``, ``result = cmmsampling.sample(face, ...)`` with
     the run's arguments, then ``add_to_document``. Here the sample() line does not run again: the
-    run made in the worker thread is handed over to it (cmmsampling.strategies.sampling.hand_over).
+    run made in the worker thread is handed over to it (:func:`cmmsampling.gui.handover.handed`).
     face: the face the run was made on, as the panel took it from the source; prior: the console
     text of a part_error run's prior (:func:`prior_expression`), None without one.
     """
@@ -62,8 +63,8 @@ def add_result(source, face, arguments, result, prior=None):
     before = set(o.Name for o in obj.Document.Objects)
     FreeCADGui.doCommand("import cmmsampling")
     FreeCADGui.doCommand(f"face = {source_expr}.getSubObject({name!r})")
-    sampling.hand_over(face, arguments, result)
-    FreeCADGui.doCommand(f"result = cmmsampling.sample({call})")
+    with handed("sample", face, arguments, result):
+        FreeCADGui.doCommand(f"result = cmmsampling.sample({call})")
     FreeCADGui.doCommand(
         f"group = cmmsampling.add_to_document(result, {doc}, source=({source_expr}, {name!r}))")
     return next(o for o in obj.Document.Objects
@@ -98,8 +99,6 @@ def echo_study(face, run, alive=True):
     worker thread is handed over to the echoed ``report = cmmsampling.write_report(study, folder)``
     the same way (a comment too when the face is gone).
     """
-    from .. import study
-
     note = "ran in the task panel"
     if run.study.cancelled:
         note += f", cancelled after {len(run.study.rows)} runs (a replay runs it whole)"
@@ -107,14 +106,14 @@ def echo_study(face, run, alive=True):
     FreeCADGui.doCommand("import cmmsampling")
     if alive:
         FreeCADGui.doCommand(f"face = {face}")
-        study.hand_over(run.taken_face, run.arguments, run.study)
-        FreeCADGui.doCommand(f"study = cmmsampling.compare({call})  # {note}")
+        with handed("compare", run.taken_face, run.arguments, run.study):
+            FreeCADGui.doCommand(f"study = cmmsampling.compare({call})  # {note}")
     else:
         FreeCADGui.doCommand(f"# face = {face}  # deleted since")
         FreeCADGui.doCommand(f"# study = cmmsampling.compare({call})  # {note}")
     if run.report is not None and alive:
-        study.hand_over_report(run.study, run.folder, run.report)
-        FreeCADGui.doCommand(f"report = cmmsampling.write_report(study, {run.folder!r})")
+        with handed("write_report", run.study, {"folder": run.folder}, run.report):
+            FreeCADGui.doCommand(f"report = cmmsampling.write_report(study, {run.folder!r})")
     elif run.report is not None:
         FreeCADGui.doCommand(f"# report = cmmsampling.write_report(study, {run.folder!r})  # ran in the task panel")
 
@@ -125,8 +124,6 @@ def add_plan(part, run, result, replace=None):
     the worker thread, so it does not run again here; ``resume=plan`` where it resumed the
     cancelled plan the console's ``plan`` holds) and ``add_plan_to_document`` (replacing the
     group ``replace`` of that cancelled plan). Returns the plan's group."""
-    from ..planning import part_plan
-
     doc = f"App.getDocument({part.Document.Name!r})"
     part_expr = f"{doc}.getObject({part.Name!r})"
     call = ", ".join([f"{part_expr}.Shape"] + [f"{key}={'plan' if key == 'resume' else argument_text(value)}"
@@ -135,8 +132,8 @@ def add_plan(part, run, result, replace=None):
     if result.cancelled:
         note += f", cancelled after {len(result.placed)} faces (a replay runs it whole)"
     FreeCADGui.doCommand("import cmmsampling")
-    part_plan.hand_over(run.shape, run.arguments, result)
-    FreeCADGui.doCommand(f"plan = cmmsampling.plan({call})  # {note}")
+    with handed("plan", run.shape, run.arguments, result):
+        FreeCADGui.doCommand(f"plan = cmmsampling.plan({call})  # {note}")
     replacing = "" if replace is None else f", replace={doc}.getObject({replace.Name!r})"
     FreeCADGui.doCommand(f"group = cmmsampling.add_plan_to_document(plan, {doc}, {part_expr}{replacing})")
     return part.Document.getObject(__main__.group.Name)

@@ -1,7 +1,7 @@
 """*Measure on CMM...*: the I++ DME server (host, port), the tool and the file for the measured
 points, asked in a small dialog; the measurement runs in the background behind a progress
 dialog (the point under way, Cancel), is echoed as ``run = cmmsampling.measure(...)`` (handed
-over, so the echo does not move the machine again) and ends in *Inspect measured points...* with
+over: cmmsampling.gui.handover, so the echo does not move the machine again) and ends in *Inspect measured points...* with
 the file it wrote.
 
 The values persist in the workbench's parameter group.

@@ -23,7 +23,6 @@ from ..geometry.validation import InputError, InputTypeError, check_real
 from ..fitting.deviation import NUMERICAL_ZERO_MM
 from ..fitting.occ_surface import substitute_surface
 from ..measurement import check_extent, stated_radius
-from ..runtime import handover
 from ..strategies.face_setup import reused
 from ..planning.part_plan import PartPlan
 from ..strategies.result import SamplingResult
@@ -327,13 +326,8 @@ def inspect(source, measured, alignment="min_max", tolerance=None, locked=(), pa
     seeded by ``seed``) and ISO 14253-1's decision (``Inspection.decision``).
     One alignment for all the points (a plan: the whole part). progress: callable(message) before
     each phase and after each step of the alignment (message None), returning True to cancel
-    (InspectionCancelled). Returns an Inspection; an inspection handed over by a background run
-    (:func:`hand_over`) to exactly this call is returned at once.
+    (InspectionCancelled). Returns an Inspection.
     """
-    call = _call(measured, alignment, tolerance, locked, part, probe_radius, zone_offset, datums, uncertainty, seed)
-    handed = handover.take(inspect, source, call)
-    if handed is not None:
-        return handed
 
     def told(message):
         if progress is not None and progress(message):
@@ -483,22 +477,6 @@ def _face_forms(points, owner, closers, names, found, locked, offset, notes):
             continue
         forms[names[index]] = 2.0 * float(np.abs(alone.deviations - offset).max())
     return forms
-
-
-def hand_over(source, measured, inspection, alignment="min_max", tolerance=None, locked=(), part=None,
-              probe_radius=None, zone_offset=0.0, datums=(), uncertainty=None, seed=0):
-    """Let the next :func:`inspect` of ``source`` with exactly these arguments return
-    ``inspection`` at once (a background run's, echoed in FreeCAD's console: see
-    :mod:`cmmsampling.runtime.handover`)."""
-    handover.give(inspect, source, _call(measured, alignment, tolerance, locked, part, probe_radius, zone_offset,
-                                         datums, uncertainty, seed), inspection)
-
-
-def _call(measured, alignment, tolerance, locked, part, probe_radius, zone_offset, datums, uncertainty, seed):
-    """inspect()'s arguments but the source, by name."""
-    return {"measured": measured, "alignment": alignment, "tolerance": tolerance, "locked": locked, "part": part,
-            "probe_radius": probe_radius, "zone_offset": zone_offset, "datums": tuple(datums or ()),
-            "uncertainty": uncertainty, "seed": seed}
 
 
 def rebuild(inspection, result, planned_rows):

@@ -34,7 +34,6 @@ from ..geometry.congruence import FacePrint, face_copies, raster, rigid_copy
 from ..geometry.freecad_env import import_part
 from ..geometry.surface import as_face
 from ..geometry.validation import InputError, InputTypeError, check_int, check_pair, check_real
-from ..runtime import handover
 from ..runtime.threads import blas_threads
 from ..strategies.estimates import duration_text, time_left_text
 from ..strategies.face_setup import reused, setup_of
@@ -289,12 +288,6 @@ def plan(shape_or_faces: Part.Shape | list, tolerance: float | None = None, n_to
     tolerance plan of the same faces, tolerance and strategy, whose faces done are kept and not
     run again. Returns a PartPlan.
     """
-    handed = handover.take(plan, shape_or_faces, {
-        "tolerance": tolerance, "n_total": n_total, "strategy": strategy, "faces": faces, "n_max": n_max,
-        "edge_offset": edge_offset, "processes": processes, "scheduler": scheduler, "probe": probe, "part": part,
-        "resume": resume, **arguments})
-    if handed is not None:
-        return handed
     if (tolerance is None) == (n_total is None):
         raise InputError("give either tolerance= (mm, the deviation every face must meet) or n_total= "
                          "(the points of the whole part), not both or neither")
@@ -343,16 +336,6 @@ def _part(shape_or_faces, part, probe):
     if not isinstance(part, Part.Shape):
         raise InputError("a probe's reach is judged on the whole part: give part= (the solid) with a list of faces")
     return part, part.exportBrepToString()
-
-
-def hand_over(shape, arguments, part_plan):
-    """Let the next ``plan(shape, **arguments)`` in this process return ``part_plan`` at once (the
-    Plan part panel's plan, echoed in the console: see :mod:`cmmsampling.runtime.handover`).
-
-    shape: the Part.Shape planned; arguments: plan()'s keyword arguments other than the shape
-    and progress.
-    """
-    handover.give(plan, shape, arguments, part_plan)
 
 
 def named_faces(shape_or_faces, numbers=None):

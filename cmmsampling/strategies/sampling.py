@@ -22,7 +22,7 @@ from ..geometry.domain import face_domain
 from ..geometry.freecad_env import import_part
 from ..geometry.surface import lies_on
 from ..geometry.validation import InputError, InputTypeError, check_choice, check_int, check_pair, check_real, check_uv
-from ..runtime import handover, memory
+from ..runtime import memory
 from ..runtime.threads import blas_threads
 from . import blind, optimal, part_error, pso
 from .face_setup import setup_of
@@ -39,7 +39,7 @@ else:
 
 __all__ = ["STRATEGIES", "Setting", "Strategy", "StrategyOutcome", "register_strategy", "unregister_strategy",
            "strategy_label", "strategy_options", "baseline", "self_contained", "make_problem", "sample", "evaluate", "lower_bound",
-           "probe_edge_offset", "hand_over", "check_arguments", "DEFAULT_STRATEGY", "BEST_STRATEGY", "PROBE_EDGE_OFFSET_MM",
+           "probe_edge_offset", "check_arguments", "DEFAULT_STRATEGY", "BEST_STRATEGY", "PROBE_EDGE_OFFSET_MM",
            "MIN_POINTS"]
 
 MIN_POINTS = 4
@@ -264,13 +264,6 @@ def sample(face: Part.Face, n: int = 81, strategy: str = DEFAULT_STRATEGY, *, fi
     w2, c1, c2, velocity_limit, start_from_uniform).
     Returns a SamplingResult.
     """
-    handed = handover.take(sample, face, {"n": n, "strategy": strategy, "fit_degree": fit_degree,
-                                      "fit_poles": fit_poles, "smoothing": smoothing, "grid": grid,
-                                      "seed": seed, "occ_check": occ_check, "workers": workers,
-                                      "edge_offset": edge_offset, "min_spacing": min_spacing, "part": part,
-                                      "probe": probe, **options})
-    if handed is not None:
-        return handed
     check_choice("strategy", strategy, list(STRATEGIES))
     options = strategy_options(strategy, options)
     n = check_int("n", n, MIN_POINTS)
@@ -285,15 +278,6 @@ def sample(face: Part.Face, n: int = 81, strategy: str = DEFAULT_STRATEGY, *, fi
     settings = {"strategy": strategy, "n": problem.n, **_common_settings(problem),
                 **_json_friendly({**options, **outcome.details})}
     return _judge(problem, outcome, strategy, settings, strategy_s, occ_check)
-
-
-def hand_over(face, arguments, result):
-    """Let the next ``sample(face, **arguments)`` in this process return ``result`` at once (the
-    task panel's run, echoed in the console: see :mod:`cmmsampling.runtime.handover`).
-
-    arguments: the keyword arguments of sample() other than face and progress.
-    """
-    handover.give(sample, face, arguments, result)
 
 
 def _exact_outcome(problem, strategy):

@@ -2,9 +2,9 @@
 room's modules are compare (the runs and their statistics), figures (matplotlib, PNG) and html
 (report.html).
 """
-from .compare import DEFAULT_NS, DEFAULT_SEEDS, MEASURES, Study, compare, hand_over, study_time
+from .compare import DEFAULT_NS, DEFAULT_SEEDS, MEASURES, Study, compare, study_time
 from .figures import FIGURES
-from .html import hand_over_report, write_report
+from .html import write_report
 
-__all__ = ["DEFAULT_NS", "DEFAULT_SEEDS", "FIGURES", "MEASURES", "Study", "compare", "hand_over", "hand_over_report",
-           "study_time", "write_report"]
+__all__ = ["DEFAULT_NS", "DEFAULT_SEEDS", "FIGURES", "MEASURES", "Study", "compare", "study_time",
+           "write_report"]

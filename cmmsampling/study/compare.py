@@ -19,7 +19,6 @@ import numpy as np
 from ..fitting.deviation import DEFAULT_GRID
 from ..fitting.substitute import DEFAULT_DEGREE, DEFAULT_SMOOTHING
 from ..geometry.validation import InputError, InputTypeError, check_choice, check_int
-from ..runtime import handover
 from ..runtime.threads import blas_threads
 from ..strategies.face_setup import reused
 from ..strategies.estimates import time_needed
@@ -238,12 +237,6 @@ def compare(face: Part.Face, ns: tuple = DEFAULT_NS, strategies: tuple | None = 
     workers: processes for the optimisers (as in sample()).
     Returns a Study.
     """
-    handed = handover.take(compare, face, {
-        "ns": ns, "strategies": strategies, "seeds": seeds, "seeded": seeded, "options": options,
-        "fit_degree": fit_degree, "fit_poles": fit_poles, "smoothing": smoothing, "grid": grid,
-        "edge_offset": edge_offset, "min_spacing": min_spacing, "figure_n": figure_n, "workers": workers})
-    if handed is not None:
-        return handed
     ns = _check_ns(ns)
     strategies = _check_strategies(strategies, options)
     seeds = _check_seeds(seeds)
@@ -271,15 +264,6 @@ def _study(face, ns, strategies, seeds, seeded, options, fit, figure_n, workers,
     study.rows = derive(study.rows, study.bounds)
     study.elapsed_s = time.perf_counter() - began
     return study
-
-
-def hand_over(face, arguments, study):
-    """Let the next ``compare(face, **arguments)`` in this process return ``study`` at once (the
-    Compare panel's study, echoed in the console: see :mod:`cmmsampling.runtime.handover`).
-
-    arguments: the keyword arguments of compare() other than face and progress.
-    """
-    handover.give(compare, face, arguments, study)
 
 
 class StudyTime(NamedTuple):

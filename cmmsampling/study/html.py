@@ -8,7 +8,6 @@ import os
 import numpy as np
 
 from ..geometry.surface import SurfaceModel
-from ..runtime import handover
 from ..strategies.sampling import strategy_label
 from .compare import Study
 from .figures import write_figures
@@ -25,22 +24,12 @@ def write_report(study: Study, folder: str | os.PathLike) -> str:
     study: a Study from :func:`cmmsampling.compare`; folder: created if missing.
     Returns the path of report.html.
     """
-    handed = handover.take(write_report, study, {"folder": folder})
-    if handed is not None:
-        return handed
     os.makedirs(folder, exist_ok=True)
     figures = write_figures(study, folder)
     path = os.path.join(folder, "report.html")
     with open(path, "w", encoding="utf-8") as stream:
         stream.write(report_html(study, figures))
     return path
-
-
-def hand_over_report(study, folder, path):
-    """Let the next ``write_report(study, folder)`` in this process return ``path`` at once (the
-    Compare panel wrote it in its worker thread; its echoed call must not write it again: see
-    :mod:`cmmsampling.runtime.handover`). study: that very Study; folder: as it was given."""
-    handover.give(write_report, study, {"folder": folder}, path)
 
 
 CSS = """

@@ -6,6 +6,7 @@ from support.faces import Part, strip_face
 
 import cmmsampling
 from cmmsampling.cli import main as cli_main
+from cmmsampling.gui.handover import handed
 from cmmsampling.strategies import sampling
 from cmmsampling.strategies.estimates import JUDGINGS, duration_text, sharing_processes, time_left_text
 from cmmsampling.strategies.sampling import PROBE_EDGE_OFFSET_MM
@@ -56,24 +57,28 @@ def test_an_optimiser_on_a_curved_face_still_runs():
 
 
 def test_a_handed_over_run_is_returned_once_for_exactly_its_call():
+    """The console's echo of a panel's run (cmmsampling.gui.handover, pure Python) binds the run
+    made in the worker thread, once; the engine itself keeps no state."""
     face = cmmsampling.reference_face()
     arguments = {"n": 16, "strategy": "halton", "edge_offset": 1.5, "grid": 20}
     made = cmmsampling.sample(face, **arguments)
-    sampling.hand_over(face, arguments, made)
-    assert cmmsampling.sample(face, 16, "halton", edge_offset=1.5, grid=20) is made
-    again = cmmsampling.sample(face, **arguments)
-    assert again is not made
+    real = cmmsampling.sample
+    with handed("sample", face, arguments, made):
+        assert cmmsampling.sample(face, 16, "halton", edge_offset=1.5, grid=20) is made
+        again = cmmsampling.sample(face, **arguments)
+    assert cmmsampling.sample is real and again is not made
     np.testing.assert_array_equal(again.uv, made.uv)
+    assert sampling.sample(face, **arguments) is not made
 
 
 def test_a_handed_over_run_is_not_taken_by_another_call_or_face():
     face = cmmsampling.reference_face()
     made = cmmsampling.sample(face, 16, "halton")
-    sampling.hand_over(face, {"n": 16, "strategy": "halton"}, made)
-    assert cmmsampling.sample(face, 16, "hammersley") is not made
+    with handed("sample", face, {"n": 16, "strategy": "halton"}, made):
+        assert cmmsampling.sample(face, 16, "hammersley") is not made
+        assert cmmsampling.sample(cmmsampling.reference_face(), 16, "halton") is not made
+        assert cmmsampling.sample(face, 16, "halton") is made
     assert cmmsampling.sample(face, 16, "halton") is not made
-    sampling.hand_over(face, {"n": 16, "strategy": "halton"}, made)
-    assert cmmsampling.sample(cmmsampling.reference_face(), 16, "halton") is not made
 
 
 def test_the_time_estimate_follows_the_strategys_steps():

@@ -9,7 +9,8 @@ from support.faces import Part
 import cmmsampling
 from cmmsampling.study import FIGURES, write_report
 from cmmsampling.strategies.result import footprint
-from cmmsampling.study import MEASURES, compare, hand_over, hand_over_report, study_time
+from cmmsampling.gui.handover import handed
+from cmmsampling.study import MEASURES, compare, study_time
 from cmmsampling.geometry.surface import SurfaceModel
 
 SAMPLE_OPTIONS = {"pso": {"iterations": 20, "population": 10}, "optimal": {"max_evaluations": 150}}
@@ -142,12 +143,13 @@ def test_cancel_inside_the_swarm_drops_the_interrupted_run(reference):
 
 def test_a_report_handed_over_is_taken_once_by_the_same_study_and_folder(study, tmp_path):
     folder = str(tmp_path / "report")
-    hand_over_report(study, folder, "written/elsewhere.html")
-    assert write_report(study, folder) == "written/elsewhere.html" and not (tmp_path / "report").exists()
-    assert write_report(study, folder) == str(tmp_path / "report" / "report.html")
-    hand_over_report(study, folder, "written/elsewhere.html")
-    assert write_report(study, str(tmp_path / "other")) == str(tmp_path / "other" / "report.html")
-    assert write_report(study, folder) == str(tmp_path / "report" / "report.html")
+    with handed("write_report", study, {"folder": folder}, "written/elsewhere.html"):
+        assert cmmsampling.write_report(study, folder) == "written/elsewhere.html"
+        assert not (tmp_path / "report").exists()
+        assert cmmsampling.write_report(study, folder) == str(tmp_path / "report" / "report.html")
+    with handed("write_report", study, {"folder": folder}, "written/elsewhere.html"):
+        assert cmmsampling.write_report(study, str(tmp_path / "other")) == str(tmp_path / "other" / "report.html")
+    assert cmmsampling.write_report(study, folder) == str(tmp_path / "report" / "report.html")
 
 
 def test_report_writes_every_figure_and_embeds_them(study, tmp_path):
@@ -236,11 +238,11 @@ def test_the_study_time_counts_every_run_and_names_the_open_ended(reference):
 def test_a_handed_over_study_is_returned_once_for_exactly_its_call(reference):
     arguments = {"ns": [16], "strategies": ["halton"], "grid": 20}
     made = compare(reference, **arguments)
-    hand_over(reference, arguments, made)
-    assert compare(reference, grid=20, ns=[16], strategies=["halton"]) is made
-    again = compare(reference, **arguments)
+    with handed("compare", reference, arguments, made):
+        assert cmmsampling.compare(reference, grid=20, ns=[16], strategies=["halton"]) is made
+        again = cmmsampling.compare(reference, **arguments)
     assert again is not made and again.rows[0].max_mm == made.rows[0].max_mm
-    hand_over(reference, arguments, made)
-    assert compare(reference, ns=[16], strategies=["hammersley"], grid=20) is not made
-    hand_over(reference, arguments, made)
-    assert compare(cmmsampling.reference_face(), **arguments) is not made
+    with handed("compare", reference, arguments, made):
+        assert cmmsampling.compare(reference, ns=[16], strategies=["hammersley"], grid=20) is not made
+        assert cmmsampling.compare(cmmsampling.reference_face(), **arguments) is not made
+    assert cmmsampling.compare is compare
