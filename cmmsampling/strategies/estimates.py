@@ -11,10 +11,11 @@ from ..access.probe import Probe
 from ..fitting.deviation import DEFAULT_GRID
 from ..fitting.substitute import DEFAULT_DEGREE
 from ..geometry.freecad_env import import_part
-from ..geometry.validation import check_choice, check_int, check_pair
+from ..geometry.validation import check_choice
 from ..runtime.threads import blas_threads
 from .registry import STRATEGIES, strategy_options
-from .sampling import DEFAULT_STRATEGY, MIN_POINTS, Pair, baseline, check_workers, make_problem, memory_bytes
+from .sampling import DEFAULT_STRATEGY, baseline, make_problem, memory_bytes
+from .settings import Pair, SampleSettings
 
 if TYPE_CHECKING:   # FreeCAD ships no type stubs: to the type checker Part's classes are Any
     import Part
@@ -36,12 +37,9 @@ def memory_needed(n: int, strategy: str | None = DEFAULT_STRATEGY, *, fit_degree
     The arguments as in :func:`sample` (strategy None: what every run needs). sample() refuses
     a run whose estimate exceeds 80 % of the memory the machine has free (cmmsampling.runtime.memory).
     """
-    n = check_int("n", n, MIN_POINTS)
-    degree = check_pair("fit_degree", fit_degree, 1)
-    given_poles = None if fit_poles is None else check_pair("fit_poles", fit_poles, 2)
+    settings = SampleSettings.checked(n, fit_degree=fit_degree, fit_poles=fit_poles, grid=grid, workers=workers)
     checked = strategy_options(strategy, options) if strategy is not None else {}
-    return memory_bytes(n, degree, given_poles, check_pair("grid", grid, 2), check_workers(workers),
-                         strategy, checked)
+    return memory_bytes(settings, strategy, checked)
 
 
 def time_needed(face: Part.Face, n: int = 81, strategy: str = DEFAULT_STRATEGY, *, fit_degree: Pair = DEFAULT_DEGREE,
@@ -64,7 +62,7 @@ def time_needed(face: Part.Face, n: int = 81, strategy: str = DEFAULT_STRATEGY, 
     entry = STRATEGIES[strategy]
     options = strategy_options(strategy, options)
     start = time.perf_counter()
-    problem = make_problem(face, n, fit_degree, fit_poles, grid=grid, workers=workers,
+    problem = make_problem(face, n, fit_degree=fit_degree, fit_poles=fit_poles, grid=grid, workers=workers,
                            edge_offset=edge_offset, min_spacing=min_spacing, strategy=strategy,
                            options=options, part=part, probe=probe)
     built_s = time.perf_counter() - start

@@ -1,11 +1,16 @@
 """SamplingProblem: everything a strategy needs to place N points on one face."""
+from __future__ import annotations
+
 import numpy as np
 
 from ..fitting.bound import minimax_bound, minimax_bracket
 from ..fitting.deviation import DeviationStats, EvaluationGrid, deviation_objective
 from ..fitting.exact import exact_deviation
-from ..fitting.substitute import SubstituteSpace, default_pole_count
+from ..fitting.substitute import SubstituteSpace
+from ..geometry.domain import FaceDomain
+from ..geometry.surface import SurfaceModel
 from ..runtime.parallel import TwoProcessObjective
+from .settings import SampleSettings
 
 
 CHECK_DENSITY = 3
@@ -17,34 +22,34 @@ JUDGED_KEPT = 4
 class SamplingProblem:
     """A face, N, the substitute space, the evaluation grid and the seed.
 
-    model: SurfaceModel; n: points wanted; fit_degree, fit_poles: (k_u, k_v), (n_u, n_v) of the
-    substitute; smoothing: its second-difference weight; grid: (g_u, g_v) evaluation raster;
-    seed: for the random parts of the strategies; workers: processes an optimiser's swarm is
-    spread over (1 or 2); domain: the face's FaceDomain (cmmsampling.geometry.domain: the
-    trim, the edge offset, what the probe reaches); min_spacing: mm between any two points;
-    spacing_by_default: min_spacing is the default, not the caller's; measured_split: workers
-    is the default, so a swarm is split only where that is measured faster; reachability: None, or
+    model: SurfaceModel; settings: the checked SampleSettings (n, the substitute's degree,
+    poles and smoothing, the grid, seed, workers), whose n, seed and workers the problem
+    carries as attributes; domain: the face's FaceDomain (cmmsampling.geometry.domain: the
+    trim, the edge offset, what the probe reaches); min_spacing: mm between any two points, the
+    settings' or the face's default (spacing_by_default True); measured_split: workers is the
+    default, so a swarm is split only where that is measured faster; reachability: None, or
     where a probe reaches the part the face belongs to (cmmsampling.access.reach.Reachability),
     the one the domain was built with.
     """
 
-    def __init__(self, model, n, fit_degree, fit_poles, smoothing, grid, seed, workers, domain,
-                 min_spacing=0.0, reachability=None):
+    def __init__(self, model: SurfaceModel, settings: SampleSettings, domain: FaceDomain, *,
+                 min_spacing: float, spacing_by_default: bool = False, reachability=None) -> None:
         self.model = model
+        self.settings = settings
         self.reachability = reachability
-        self.n = n
-        self.seed = seed
-        self.workers = workers
+        self.n = settings.n
+        self.seed = settings.seed
+        self.workers = settings.workers
         self.min_spacing = min_spacing
-        self.spacing_by_default = False
-        self.measured_split = False
+        self.spacing_by_default = spacing_by_default
+        self.measured_split = not settings.workers_given
         self.domain = domain
-        self.space = SubstituteSpace(fit_degree, fit_poles, model.bounds, smoothing)
-        self.grid = EvaluationGrid(model, grid)
+        self.space = SubstituteSpace(settings.fit_degree, settings.fit_poles, model.bounds, settings.smoothing)
+        self.grid = EvaluationGrid(model, settings.grid)
         self._objective = None
         self._check = None
         self._bounds = None
-        self._judged = {}
+        self._judged: dict[bool, list] = {}
 
     @property
     def reached(self):
@@ -167,9 +172,3 @@ class LocalBounds(dict):
         self[key] = self._compute(key == "check")
         return self[key]
 
-
-def resolve_fit_poles(fit_poles, n, fit_degree):
-    """(n_u, n_v): the given pole counts, or :func:`default_pole_count` for N in each direction."""
-    if fit_poles is None:
-        return (default_pole_count(n, fit_degree[0]), default_pole_count(n, fit_degree[1]))
-    return fit_poles

@@ -4,7 +4,6 @@ The built-in strategies' records (blind, pso, optimal, part_error) are registere
 tables and panels list them; the registry's names are the public ones (``__all__``)."""
 from __future__ import annotations
 
-import os
 import time
 from collections.abc import Callable
 from dataclasses import asdict
@@ -21,16 +20,17 @@ from ..fitting.substitute import DEFAULT_DEGREE, DEFAULT_SMOOTHING
 from ..geometry.domain import face_domain
 from ..geometry.freecad_env import import_part
 from ..geometry.surface import lies_on
-from ..geometry.validation import InputError, InputTypeError, check_choice, check_int, check_pair, check_real, check_uv
+from ..geometry.validation import InputError, InputTypeError, check_choice, check_real, check_uv
 from ..runtime import memory
 from ..runtime.threads import blas_threads
 from . import blind, optimal, part_error, pso
 from .face_setup import setup_of
 from .optimal import BALL_SEPARATION_MM, default_min_spacing
-from .problem import SamplingProblem, resolve_fit_poles
+from .problem import SamplingProblem
 from .registry import (STRATEGIES, Setting, Strategy, StrategyOutcome, baseline, register_strategy, self_contained,
                        strategy_label, strategy_options, unregister_strategy)
 from .result import EXACT_FIT, SamplingResult
+from .settings import KEYWORDS, MIN_POINTS, Pair, SampleSettings, resolve_fit_poles
 
 if TYPE_CHECKING:   # FreeCAD ships no type stubs: to the type checker Part's classes are Any
     import Part
@@ -38,17 +38,13 @@ else:
     Part = import_part()
 
 __all__ = ["STRATEGIES", "Setting", "Strategy", "StrategyOutcome", "register_strategy", "unregister_strategy",
-           "strategy_label", "strategy_options", "baseline", "self_contained", "make_problem", "sample", "evaluate", "lower_bound",
-           "probe_edge_offset", "check_arguments", "DEFAULT_STRATEGY", "BEST_STRATEGY", "PROBE_EDGE_OFFSET_MM",
-           "MIN_POINTS"]
+           "strategy_label", "strategy_options", "baseline", "self_contained", "SampleSettings", "make_problem",
+           "problem_for", "sample", "evaluate", "lower_bound", "probe_edge_offset", "check_arguments",
+           "DEFAULT_STRATEGY", "BEST_STRATEGY", "PROBE_EDGE_OFFSET_MM", "MIN_POINTS"]
 
-MIN_POINTS = 4
-# sample()'s keyword arguments that every strategy takes (the others are the strategy's options),
-# and those of them that _checked_settings checks whatever the face.
-SETTINGS = ("fit_degree", "fit_poles", "smoothing", "grid", "seed", "workers", "edge_offset", "min_spacing")
-COMMON_ARGUMENTS = SETTINGS + ("progress", "occ_check", "part", "probe")
-# An int for both parameter directions or a (u, v) pair of them.
-Pair = int | tuple[int, int]
+# sample()'s keyword arguments that every strategy takes (the others are the strategy's options):
+# those SampleSettings checks whatever the face, and these.
+COMMON_ARGUMENTS = KEYWORDS + ("progress", "occ_check", "part", "probe")
 # progress(iteration, best maximum deviation mm) -> True to cancel.
 Progress = Callable[[int, float], bool | None]
 MIN_AREA_RATIO = 1e-12
@@ -64,64 +60,52 @@ BEST_STRATEGY = "optimal"
 PROBE_EDGE_OFFSET_MM = 1.5
 
 
-def make_problem(face, n, fit_degree=DEFAULT_DEGREE, fit_poles=None, smoothing=DEFAULT_SMOOTHING,
-                 grid=DEFAULT_GRID, seed=0, workers=None, edge_offset=0.0, min_spacing=0.0,
-                 strategy=None, options=None, part=None, probe=None):
+def make_problem(face: Part.Face, n: int, *, strategy: str | None = None, options: dict | None = None,
+                 part: Part.Shape | None = None, probe: Probe | None = None, **settings) -> SamplingProblem:
     """Validate the common inputs and build a SamplingProblem (see :func:`sample`).
+
+    settings: sample()'s common settings by name (fit_degree, fit_poles, smoothing, grid, seed,
+    workers, edge_offset, min_spacing), checked once into a SampleSettings; min_spacing defaults
+    to 0 here (any spacing: a given point set is judged as it is), None asks for sample()'s
+    default; the rest as in :func:`problem_for`.
+    """
+    checked = SampleSettings.checked(n, **{"min_spacing": 0.0, **settings})
+    return problem_for(face, checked, strategy=strategy, options=options, part=part, probe=probe)
+
+
+def problem_for(face: Part.Face, settings: SampleSettings, *, strategy: str | None = None,
+                options: dict | None = None, part: Part.Shape | None = None,
+                probe: Probe | None = None) -> SamplingProblem:
+    """The SamplingProblem of checked settings on a face.
 
     min_spacing None: the default (cmmsampling.strategies.optimal.default_min_spacing), lowered where the
     face's feasible part cannot hold N points that far apart. strategy, options (checked): the
     run it is for, whose memory is checked (:func:`memory_needed`) before anything is built;
-    None checks every run's base.
+    None checks every run's base. part, probe: as in :func:`sample`.
     """
-    measured_split = workers is None
-    n, degree, given_poles, poles, smoothing, grid, seed, workers, edge_offset, min_spacing = _checked_settings(
-        n, fit_degree, fit_poles, smoothing, grid, seed, workers, edge_offset, min_spacing)
-    _check_memory(n, degree, given_poles, grid, workers, strategy, options or {})
+    _check_memory(settings, strategy, options or {})
     setup = setup_of(face)
     model = setup.model
     _check_area(model)
     reachability = _reachability(part, probe, model.source_face)
-    problem = SamplingProblem(model, n, degree, poles, smoothing, grid, seed, workers,
-                              setup.domain(edge_offset, reachability), min_spacing or 0.0, reachability)
-    problem.measured_split = measured_split
-    if min_spacing is None:
-        problem.min_spacing = default_min_spacing(model.area, n, problem.domain.feasible_area)
-        problem.spacing_by_default = True
+    domain = setup.domain(settings.edge_offset, reachability)
+    by_default = settings.min_spacing is None
+    min_spacing = (default_min_spacing(model.area, settings.n, domain.feasible_area) if by_default
+                   else settings.min_spacing)
+    problem = SamplingProblem(model, settings, domain, min_spacing=min_spacing, spacing_by_default=by_default,
+                              reachability=reachability)
     _check_room(problem)
     return problem
 
 
-def _checked_settings(n, fit_degree=DEFAULT_DEGREE, fit_poles=None, smoothing=DEFAULT_SMOOTHING, grid=DEFAULT_GRID,
-                      seed=0, workers=None, edge_offset=0.0, min_spacing=None):
-    """sample()'s common settings checked, whatever the face: (n, degree pair, given poles pair or
-    None, poles pair, smoothing, grid pair, seed, workers, edge_offset mm, min_spacing mm or None);
-    InputError or InputTypeError naming the first bad one."""
-    n = check_int("n", n, MIN_POINTS)
-    degree = check_pair("fit_degree", fit_degree, 1)
-    given_poles = None if fit_poles is None else check_pair("fit_poles", fit_poles, 2)
-    poles = resolve_fit_poles(given_poles, n, degree)
-    for axis, (d, p) in enumerate(zip(degree, poles)):
-        if p < d + 1:
-            raise InputError(f"fit_poles along {'uv'[axis]} ({p}) must be at least fit_degree + 1 ({d + 1})")
-    smoothing = check_real("smoothing", smoothing, above=0.0)
-    grid = check_pair("grid", grid, 2)
-    seed = check_int("seed", seed, 0)
-    workers = check_workers(workers)
-    edge_offset = check_real("edge_offset", edge_offset, 0.0)
-    if min_spacing is not None:
-        min_spacing = check_real("min_spacing", min_spacing, 0.0)
-    return n, degree, given_poles, poles, smoothing, grid, seed, workers, edge_offset, min_spacing
-
-
-def check_arguments(strategy, arguments, n=MIN_POINTS):
+def check_arguments(strategy: str, arguments: dict, n: int = MIN_POINTS) -> None:
     """InputError (or InputTypeError) naming the first of sample()'s arguments it would refuse
     whatever the face, before a plan or a search runs any: the strategy, its options, the common
     settings, part= and probe=. arguments: sample()'s keyword arguments other than face, n and
     strategy (the options among them); n: the points of the runs to come."""
     check_choice("strategy", strategy, list(STRATEGIES))
     strategy_options(strategy, {name: value for name, value in arguments.items() if name not in COMMON_ARGUMENTS})
-    _checked_settings(n, **{name: arguments[name] for name in SETTINGS if name in arguments})
+    SampleSettings.checked(n, **{name: arguments[name] for name in KEYWORDS if name in arguments})
     check_probe(arguments.get("probe"))
 
 
@@ -156,35 +140,34 @@ def _refuse_off_part(part, on):
                          "the face belongs to")
 
 
-def memory_bytes(n, degree, given_poles, grid, workers, strategy, options):
-    """Estimated bytes of a run (see :func:`memory_needed`); arguments already checked."""
-    poles = resolve_fit_poles(given_poles, n, degree)
-    needed = memory.base_bytes(poles, grid[0] * grid[1])
-    entry = STRATEGIES.get(strategy)
+def memory_bytes(settings: SampleSettings, strategy: str | None, options: dict) -> int:
+    """Estimated bytes of a run (see :func:`memory_needed`); strategy and options checked."""
+    cells = settings.grid[0] * settings.grid[1]
+    needed = memory.base_bytes(settings.fit_poles, cells)
+    entry = STRATEGIES.get(strategy) if strategy is not None else None
     if entry is not None and entry.memory is not None:
-        needed += entry.memory(n, poles, grid[0] * grid[1], options, workers)
+        needed += entry.memory(settings.n, settings.fit_poles, cells, options, settings.workers)
     return needed
 
 
-def _check_memory(n, degree, given_poles, grid, workers, strategy, options):
-    """ValueError, before anything is built, when the run would not fit in the free memory.
-    The arguments already checked (grid: the (g_u, g_v) pair)."""
-    needed = memory_bytes(n, degree, given_poles, grid, workers, strategy, options)
-    poles = resolve_fit_poles(given_poles, n, degree)
+def _check_memory(settings: SampleSettings, strategy: str | None, options: dict) -> None:
+    """ValueError, before anything is built, when the run would not fit in the free memory."""
+    needed = memory_bytes(settings, strategy, options)
+    poles = settings.fit_poles
     what = f"{strategy or 'the fit'}, a substitute of {poles[0]} x {poles[1]} poles"
 
     def largest_n(free):
-        low, high = MIN_POINTS, n
-        if memory_bytes(low, degree, given_poles, grid, workers, strategy, options) > free:
+        low, high = MIN_POINTS, settings.n
+        if memory_bytes(settings.with_n(low), strategy, options) > free:
             return None
         while low < high:
             middle = (low + high + 1) // 2
-            if memory_bytes(middle, degree, given_poles, grid, workers, strategy, options) <= free:
+            if memory_bytes(settings.with_n(middle), strategy, options) <= free:
                 low = middle
             else:
                 high = middle - 1
         return low
-    memory.check_fits(needed, n, largest_n, what)
+    memory.check_fits(needed, settings.n, largest_n, what)
 
 
 def _check_room(problem):
@@ -215,16 +198,6 @@ def _round_down(value):
         return 0.0
     scale = 10.0 ** (np.floor(np.log10(value)) - 1)
     return float(f"{np.floor(value / scale) * scale:.2g}")
-
-
-def check_workers(workers):
-    """1 or 2 processes for the optimisers; None picks 2 where the machine has 2 or more cores."""
-    if workers is None:
-        return 2 if (os.cpu_count() or 1) >= 2 else 1
-    workers = check_int("workers", workers, 1)
-    if workers > 2:
-        raise InputError(f"workers must be 1 or 2, got {workers}")
-    return workers
 
 
 def _check_area(model):
@@ -266,18 +239,18 @@ def sample(face: Part.Face, n: int = 81, strategy: str = DEFAULT_STRATEGY, *, fi
     """
     check_choice("strategy", strategy, list(STRATEGIES))
     options = strategy_options(strategy, options)
-    n = check_int("n", n, MIN_POINTS)
-    problem = make_problem(face, n, fit_degree, fit_poles, smoothing, grid, seed, workers, edge_offset,
-                           min_spacing, strategy, options, part, probe)
+    settings = SampleSettings.checked(n, fit_degree=fit_degree, fit_poles=fit_poles, smoothing=smoothing, grid=grid,
+                                      seed=seed, workers=workers, edge_offset=edge_offset, min_spacing=min_spacing)
+    problem = problem_for(face, settings, strategy=strategy, options=options, part=part, probe=probe)
     start = time.perf_counter()
     with blas_threads(1):
         outcome = _exact_outcome(problem, strategy) or STRATEGIES[strategy].run(problem, progress, **options)
     _move_onto_face(problem, outcome)
     outcome.notes += _fit_notes(problem) + _spacing_notes(problem)
     strategy_s = time.perf_counter() - start
-    settings = {"strategy": strategy, "n": problem.n, **_common_settings(problem),
+    recorded = {"strategy": strategy, "n": problem.n, **_common_settings(problem),
                 **_json_friendly({**options, **outcome.details})}
-    return _judge(problem, outcome, strategy, settings, strategy_s, occ_check)
+    return _judge(problem, outcome, strategy, recorded, strategy_s, occ_check)
 
 
 def _exact_outcome(problem, strategy):
@@ -323,7 +296,7 @@ def _fit_notes(problem):
     poles = problem.space.poles
     if poles[0] * poles[1] <= problem.n:
         return []
-    usual = resolve_fit_poles(None, problem.n, problem.space.degrees)
+    usual = resolve_fit_poles(None, problem.n, tuple(problem.space.degrees))
     return [f"the substitute has {poles[0]} x {poles[1]} poles for {problem.n} points: between the "
             f"points its shape comes from the smoothing, not from the measurement (the default for "
             f"{problem.n} points is {usual[0]} x {usual[1]})"]
@@ -354,7 +327,7 @@ def lower_bound(face: Part.Face, n: int = 81, *, fit_degree: Pair = DEFAULT_DEGR
     uses the check grid (3x denser). Returns a MinimaxBound: ``lower`` (mm), ``upper`` (a reshaped
     surface that reaches it within ``gap``), ``converged``.
     """
-    problem = make_problem(face, n, fit_degree, fit_poles, smoothing, grid)
+    problem = make_problem(face, n, fit_degree=fit_degree, fit_poles=fit_poles, smoothing=smoothing, grid=grid)
     with blas_threads(1):
         return problem.bounds()["check" if check else "grid"]
 
@@ -369,7 +342,8 @@ def evaluate(face: Part.Face, uv: np.ndarray, *, strategy: str = "given", fit_de
     :func:`sample`. Returns a SamplingResult labelled with ``strategy``.
     """
     uv = check_uv(uv)
-    problem = make_problem(face, len(uv), fit_degree, fit_poles, smoothing, grid, part=part, probe=probe)
+    problem = make_problem(face, len(uv), fit_degree=fit_degree, fit_poles=fit_poles, smoothing=smoothing, grid=grid,
+                           part=part, probe=probe)
     settings = {"strategy": strategy, "n": problem.n, **_common_settings(problem)}
     return _judge(problem, StrategyOutcome(uv), strategy, settings, 0.0, occ_check, given=True)
 

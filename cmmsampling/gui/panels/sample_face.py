@@ -21,7 +21,7 @@ from ...document import settings
 from ...document.object_types import is_measured_points, source_face
 from ...runtime import memory
 from ...strategies import estimates, optimal, sampling
-from ...strategies.problem import resolve_fit_poles
+from ...strategies.settings import resolve_fit_poles
 from .. import echo
 from ..background import BackgroundSampling
 from ..selection import SelectionError, selected_face
