@@ -16,8 +16,10 @@ and the linearisation then moves there (:func:`descend`). The best point set tha
 points at least ``min_spacing`` mm apart is returned; a quadratic penalty on closer pairs steers
 the descent.
 """
+from __future__ import annotations
+
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.optimize import minimize
@@ -173,51 +175,92 @@ def descend(objective, start, lower, upper, judge, min_spacing=0.0, time_limit=N
     scale = upper - lower
     start = np.asarray(start, dtype=float)
     began = time.perf_counter() if began is None else began
-    best = {"closest": _spacing_penalty(objective.model.points(start), min_spacing, 0.0)[2]}
-    _take(best, start, judge(start), objective)
-    state = {"count": 0, "history": [], "cancelled": False, "hopeless": False}
-    penalty = 100.0 * best["max"] / max(min_spacing, 1e-12) ** 2
+    best = _Best.judged(start, judge(start), objective,
+                        _spacing_penalty(objective.model.points(start), min_spacing, 0.0)[2])
+    tally = _Tally()
+    penalty = 100.0 * best.maximum / max(min_spacing, 1e-12) ** 2
 
     def fun(x, tau, chunk):
         uv = lower + x.reshape(-1, 2) * scale
         if project is not None:
             uv = project(uv)
-        s = surrogate(best["model"], uv, tau, min_spacing, penalty)
-        state["count"] += 1
-        if s.maximum < chunk["max"] and s.closest >= min_spacing:
-            chunk.update(uv=uv.copy(), max=s.maximum, closest=s.closest)
-        state["history"].append(best["max"])
-        stopped = progress is not None and progress(state["count"], best["max"])
+        s = surrogate(best.model, uv, tau, min_spacing, penalty)
+        tally.count += 1
+        if s.maximum < chunk.maximum and s.closest >= min_spacing:
+            chunk.uv, chunk.maximum, chunk.closest = uv.copy(), s.maximum, s.closest
+        tally.history.append(best.maximum)
+        stopped = progress is not None and progress(tally.count, best.maximum)
         elapsed = time.perf_counter() - began
-        state["hopeless"] = _hopeless(best["max"], stop_at, elapsed, time_limit)
-        out_of_budget = (max_evaluations is not None and state["count"] >= max_evaluations) or (
+        tally.hopeless = _hopeless(best.maximum, stop_at, elapsed, time_limit)
+        out_of_budget = (max_evaluations is not None and tally.count >= max_evaluations) or (
             time_limit is not None and elapsed >= time_limit)
-        if stopped or out_of_budget or state["hopeless"] or _enough(best, stop_at):
-            state["cancelled"] = bool(stopped)
+        if stopped or out_of_budget or tally.hopeless or _enough(best, stop_at):
+            tally.cancelled = bool(stopped)
             raise Stop
         return s.value, (s.gradient * scale).ravel()
 
     def run_chunk(tau, length):
         """One chunk of ``length`` iterations from the best point set; True when it improved on it."""
-        chunk = {"uv": None, "max": np.inf, "closest": np.inf}
+        chunk = _Chunk()
         try:
-            minimize(fun, ((best["uv"] - lower) / scale).ravel(), args=(tau, chunk), jac=True,
+            minimize(fun, ((best.uv - lower) / scale).ravel(), args=(tau, chunk), jac=True,
                      method="L-BFGS-B", bounds=[(0.0, 1.0)] * start.size,
                      options={"maxiter": length, "ftol": 1e-15, "gtol": 1e-12})
         finally:
-            if not state["cancelled"]:
+            if not tally.cancelled:
                 _accept(chunk, best, judge, objective)
-        return best["uv"] is chunk["uv"]
+        return best.uv is chunk.uv
 
     try:
         for kappa in KAPPAS:
             if _enough(best, stop_at):
                 break
-            _stage(lambda length: run_chunk(kappa / max(best["max"], 1e-12), length))
+            _stage(lambda length: run_chunk(kappa / max(best.maximum, 1e-12), length))
     except Stop:
         pass
-    return DescentResult(best["uv"], best["max"], np.array(state["history"]), state["count"],
-                         state["cancelled"], best["closest"], state["hopeless"])
+    return DescentResult(best.uv, best.maximum, np.array(tally.history), tally.count, tally.cancelled, best.closest,
+                         tally.hopeless)
+
+
+@dataclass
+class _Best:
+    """A descent's best point set: uv (N, 2), its exact maximum deviation (mm), the deviations
+    linearised about its substitute (model) and its smallest point distance (mm)."""
+
+    uv: np.ndarray
+    maximum: float
+    model: Linearisation
+    closest: float
+
+    @classmethod
+    def judged(cls, uv, exact, objective, closest) -> _Best:
+        """uv (N, 2) as the best point set, exact: the ExactDeviation of its substitute."""
+        return cls(uv, exact.maximum, Linearisation(objective.model, objective.space, exact), closest)
+
+    def take(self, other: _Best) -> None:
+        """Make other the best point set."""
+        self.uv, self.maximum, self.model, self.closest = other.uv, other.maximum, other.model, other.closest
+
+
+@dataclass
+class _Chunk:
+    """The best iterate of one chunk of a descent: uv (N, 2) or None yet, its surrogate maximum
+    (mm) and its smallest point distance (mm)."""
+
+    uv: np.ndarray | None = None
+    maximum: float = np.inf
+    closest: float = np.inf
+
+
+@dataclass
+class _Tally:
+    """A descent's course: surrogate evaluations, the best maximum (mm) after each, whether
+    progress cancelled it and whether it ended hopeless (:func:`_hopeless`)."""
+
+    count: int = 0
+    history: list[float] = field(default_factory=list)
+    cancelled: bool = False
+    hopeless: bool = False
 
 
 def _hopeless(maximum, stop_at, elapsed, time_limit):
@@ -229,7 +272,7 @@ def _hopeless(maximum, stop_at, elapsed, time_limit):
 
 def _enough(best, stop_at):
     """True when the best point set's exact maximum (mm) is at most stop_at (mm, None: never)."""
-    return stop_at is not None and best["max"] <= stop_at
+    return stop_at is not None and best.maximum <= stop_at
 
 
 def _stage(run_chunk):
@@ -246,20 +289,13 @@ def _stage(run_chunk):
 
 
 def _accept(chunk, best, judge, objective):
-    """Judge the chunk's best iterate exactly; take it when it is better."""
-    if chunk["uv"] is None:
+    """Judge the chunk's best iterate exactly; make it the best point set, linearised about its
+    substitute, when it is better."""
+    if chunk.uv is None:
         return
-    judged = judge(chunk["uv"])
-    if judged.maximum < best["max"]:
-        _take(best, chunk["uv"], judged, objective, chunk["closest"])
-
-
-def _take(best, uv, judged, objective, closest=None):
-    """Make uv (N, 2) the best point set, judged: the ExactDeviation of its substitute, and
-    linearise the deviations about it."""
-    best.update(uv=uv, max=judged.maximum, model=Linearisation(objective.model, objective.space, judged))
-    if closest is not None:
-        best["closest"] = closest
+    judged = judge(chunk.uv)
+    if judged.maximum < best.maximum:
+        best.take(_Best.judged(chunk.uv, judged, objective, chunk.closest))
 
 
 # The strategy: the descent on a sampling problem, from the best blind layout.

@@ -7,7 +7,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 from dataclasses import asdict
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -61,7 +61,7 @@ PROBE_EDGE_OFFSET_MM = 1.5
 
 
 def make_problem(face: Part.Face, n: int, *, strategy: str | None = None, options: dict | None = None,
-                 part: Part.Shape | None = None, probe: Probe | None = None, **settings) -> SamplingProblem:
+                 part: Part.Shape | None = None, probe: Probe | None = None, **settings: Any) -> SamplingProblem:
     """Validate the common inputs and build a SamplingProblem (see :func:`sample`).
 
     settings: sample()'s common settings by name (fit_degree, fit_poles, smoothing, grid, seed,
@@ -69,7 +69,8 @@ def make_problem(face: Part.Face, n: int, *, strategy: str | None = None, option
     to 0 here (any spacing: a given point set is judged as it is), None asks for sample()'s
     default; the rest as in :func:`problem_for`.
     """
-    checked = SampleSettings.checked(n, **{"min_spacing": 0.0, **settings})
+    settings.setdefault("min_spacing", 0.0)
+    checked = SampleSettings.checked(n, **settings)
     return problem_for(face, checked, strategy=strategy, options=options, part=part, probe=probe)
 
 
