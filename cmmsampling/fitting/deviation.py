@@ -21,14 +21,22 @@ with a_1 the edge's outward conormal (a_2 = 0), or the whole offset at a collaps
 figure reported is the exact deviation. Pure numpy: the objective can be shipped to a worker
 process.
 """
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 from scipy.spatial import cKDTree
 
 from ..geometry.bspline import design_matrices, kron_rows
 from .lattice import LATTICE_LIMIT_BYTES, LatticeFit
-from .nodes import DEFAULT_GRID, face_nodes, grid_size, length_raster
+from .nodes import DEFAULT_GRID, FaceNodes, face_nodes, grid_size, length_raster
+
+if TYPE_CHECKING:
+    from .exact import ExactDeviation
+    from .substitute import SubstituteSpace
 
 # closest_squared compares all pairs of each point set up to this many pairs in all (32 MB of
 # distances), and searches neighbours beyond.
@@ -42,12 +50,14 @@ class EvaluationGrid:
     uv: (g_u, g_v, 2) in the face's parameter range (the substitute spans the same range).
     """
 
-    def __init__(self, model, size=DEFAULT_GRID):
+    def __init__(self, model: Any, size: int | Sequence[int] = DEFAULT_GRID) -> None:
         self.size = grid_size(size)
         self.uv = length_raster(model, self.size)
 
 
-def deviation_objective(model, space, grid, on_face=None, reached=None):
+def deviation_objective(model: Any, space: SubstituteSpace, grid: EvaluationGrid,
+                        on_face: Callable[[np.ndarray], np.ndarray] | None = None,
+                        reached: Callable[[np.ndarray], np.ndarray] | None = None) -> DeviationObjective:
     """The DeviationObjective on ``grid``'s nodes of the face.
 
     model: SurfaceModel of the face; space: SubstituteSpace; grid: EvaluationGrid; on_face: uv
@@ -70,7 +80,7 @@ class DeviationObjective:
 
     beats = True
 
-    def __init__(self, model, space, grid, nodes):
+    def __init__(self, model: Any, space: SubstituteSpace, grid: EvaluationGrid, nodes: FaceNodes) -> None:
         self.model = model.patch()
         self.space = space
         self.grid = grid
@@ -80,9 +90,9 @@ class DeviationObjective:
         self.grid_u = design_matrices(space.uknots, space.degrees[0], u)[0]
         self.grid_v_t = design_matrices(space.vknots, space.degrees[1], v)[0].T.copy()
         self.evaluations = 0
-        self._scratch = None
-        self._last = (None, None, 0.0)
-        self._lattice = None
+        self._scratch: Scratch | None = None
+        self._last: tuple[Any, Any, float] = (None, None, 0.0)
+        self._lattice: LatticeFit | Literal[False] | None = None
         halves, directions = principal_terms(curvature_matrices(
             self.model, nodes.uv.reshape(-1, 2), np.nan_to_num(nodes.normals.reshape(-1, 3))))
         shape = nodes.uv.shape[:2]
@@ -98,11 +108,11 @@ class DeviationObjective:
         self._screen = NodeScreen(self._exact, single_rounding(nodes))
 
     @property
-    def counted(self):
+    def counted(self) -> np.ndarray:
         """(g_u, g_v) bool: the raster nodes the objective measures."""
         return self.nodes.counted
 
-    def fit(self, uv):
+    def fit(self, uv: np.ndarray) -> np.ndarray:
         """Substitute poles for point sets at uv: (..., N, 2) -> (..., n_u, n_v, 3).
 
         Points and basis rows are laid out coordinate (or basis) before the points, so that every
@@ -112,28 +122,28 @@ class DeviationObjective:
         uv = np.asarray(uv, dtype=float)
         return self._fit_points(uv, self.points(uv))
 
-    def _fit_points(self, uv, points):
+    def _fit_points(self, uv: np.ndarray, points: np.ndarray) -> np.ndarray:
         """:meth:`fit` given the face points at uv, (..., 3, N) mm."""
         u, v = np.ascontiguousarray(uv[..., 0]), np.ascontiguousarray(uv[..., 1])
         return self.space.solve(self.space.u_basis.values(u), self.space.v_basis.values(v), points)
 
-    def surface(self, poles):
+    def surface(self, poles: np.ndarray) -> np.ndarray:
         """Substitute points on the grid: poles (..., n_u, n_v, 3) -> (..., 3, g_u, g_v) mm."""
         by_coord = np.ascontiguousarray(np.moveaxis(np.asarray(poles), -1, -3))
         return np.matmul(np.matmul(self.grid_u, by_coord), self.grid_v_t)
 
-    def expanded_field(self, poles):
+    def expanded_field(self, poles: np.ndarray) -> np.ndarray:
         """Signed expanded deviation on the raster's nodes: poles (..., n_u, n_v, 3) ->
         (..., g_u, g_v) mm, d2 = n . e - e^T K e / 2 with e = S(h) - F(h) (0 where a node does not
         count; see the module docstring)."""
         poles = np.asarray(poles, dtype=float)
         return self._exact.field(poles, Scratch(poles.shape[:-3], poles.dtype, self.space.poles, self.grid.size))
 
-    def expanded_edges(self, poles):
+    def expanded_edges(self, poles: np.ndarray) -> np.ndarray:
         """Signed expanded deviation at the edge nodes: poles (..., n_u, n_v, 3) -> (..., E) mm."""
         return self._exact.edges(np.asarray(poles, dtype=float))
 
-    def _swarm_field(self, poles):
+    def _swarm_field(self, poles: np.ndarray) -> np.ndarray:
         """:meth:`expanded_field` for a swarm, in single precision in work arrays kept between calls
         (overwritten by the next call). A swarm's arrays are large: allocating them anew costs more
         than the arithmetic, and single precision halves their traffic; the swarm only compares
@@ -147,7 +157,7 @@ class DeviationObjective:
         return self._single.field(poles, self._scratch.first(batch[0]))
 
     @property
-    def lattice(self):
+    def lattice(self) -> LatticeFit | None:
         """The LatticeFit the swarm's fits are made with, built on first use; None for a face whose
         tables would exceed LATTICE_LIMIT_BYTES (its fits evaluate the bases anew)."""
         if self._lattice is None:
@@ -155,14 +165,14 @@ class DeviationObjective:
             self._lattice = LatticeFit(self.model, self.space) if small else False
         return self._lattice or None
 
-    def __getstate__(self):
+    def __getstate__(self) -> dict[str, Any]:
         state = dict(self.__dict__)
         state["_scratch"] = None
         state["_last"] = (None, None, 0.0)
         state["_lattice"] = None
         return state
 
-    def __call__(self, uv, above=None):
+    def __call__(self, uv: np.ndarray, above: np.ndarray | None = None) -> np.ndarray:
         """Maximum expanded deviation of each point set's substitute: uv (P, N, 2) -> (P,) mm.
 
         The substitutes are fitted at uv rounded to the lattice of :attr:`lattice` where the face
@@ -191,7 +201,7 @@ class DeviationObjective:
             values[rows] = self._scored(poles[rows], learn=True)
         return values
 
-    def _scored(self, poles, learn=False):
+    def _scored(self, poles: np.ndarray, learn: bool = False) -> np.ndarray:
         """Maximum expanded deviation over the raster and the edge nodes of the substitutes with
         poles (P, n_u, n_v, 3): (P,) mm; learn: tell the screen where each maximum lies."""
         field = self._swarm_field(poles).reshape(poles.shape[0], -1)
@@ -208,11 +218,11 @@ class DeviationObjective:
             self._screen.learn(node)
         return worst
 
-    def points(self, uv):
+    def points(self, uv: np.ndarray) -> np.ndarray:
         """Face points of point sets, coordinate first: uv (..., N, 2) -> (..., 3, N) mm."""
         return self.model.points_by_coordinate(np.ascontiguousarray(uv[..., 0]), np.ascontiguousarray(uv[..., 1]))
 
-    def spaced(self, uv, min_spacing, rows=None):
+    def spaced(self, uv: np.ndarray, min_spacing: float, rows: np.ndarray | Sequence[int] | None = None) -> np.ndarray:
         """True for the point sets uv[rows] (uv: (P, N, 2)) whose points keep ``min_spacing`` mm:
         (len(rows),) bool, all of them when rows is None.
 
@@ -234,11 +244,11 @@ class DeviationObjective:
             spaced[unsure] = self._exactly_spaced(uv, min_spacing, rows[unsure])
         return spaced
 
-    def _exactly_spaced(self, uv, min_spacing, rows):
+    def _exactly_spaced(self, uv: np.ndarray, min_spacing: float, rows: np.ndarray) -> np.ndarray:
         """:meth:`spaced` from the face points at uv[rows] evaluated anew."""
         return closest_squared(self.points(np.asarray(uv, dtype=float)[rows])) >= min_spacing ** 2
 
-    def reference_poles(self):
+    def reference_poles(self) -> np.ndarray:
         """The substitute fitted to the face's points at every raster node: (n_u, n_v, 3) mm.
 
         What a fit to very many probe points tends to; the local bound is taken about it.
@@ -246,7 +256,7 @@ class DeviationObjective:
         return self.space.fit(self.grid.uv.reshape(-1, 2), self.model.points(self.grid.uv.reshape(-1, 2)))
 
 
-def closest_squared(points):
+def closest_squared(points: np.ndarray) -> np.ndarray:
     """Smallest squared distance between two points of each set: (P, 3, N) mm -> (P,) mm^2.
 
     Up to PAIRWISE_LIMIT pairs in all, from the sets' distance matrices; beyond, from one
@@ -264,7 +274,7 @@ def closest_squared(points):
     return squared.min(axis=(1, 2))
 
 
-def _closest_squared_by_tree(points):
+def _closest_squared_by_tree(points: np.ndarray) -> np.ndarray:
     """closest_squared by a k-d tree over all sets at once: (P, 3, N) mm -> (P,) mm^2."""
     sets, _, count = points.shape
     flat = np.swapaxes(points, 1, 2).copy()
@@ -276,7 +286,7 @@ def _closest_squared_by_tree(points):
     return distance.min(axis=1) ** 2
 
 
-def principal_terms(matrices):
+def principal_terms(matrices: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The two principal terms of symmetric (M, 3, 3) matrices K whose third eigenvalue is 0.
 
     Returns (lambdas (M, 2), directions (M, 2, 3) unit), with K = sum_k lambda_k t_k t_k^T: the
@@ -289,7 +299,7 @@ def principal_terms(matrices):
     return lambdas, np.swapaxes(directions, 1, 2)
 
 
-def curvature_matrices(model, uv, normals):
+def curvature_matrices(model: Any, uv: np.ndarray, normals: np.ndarray) -> np.ndarray:
     """Per-point K = P^T L P: (M, 3, 3) in 1/mm, at uv (M, 2) with unit normals (M, 3).
 
     P = (J^T J)^-1 J^T maps a small offset e from F(uv) to the parameter shift of its foot (J =
@@ -312,14 +322,14 @@ def curvature_matrices(model, uv, normals):
 class Scratch:
     """Work arrays of the expansion for one batch shape and precision."""
 
-    def __init__(self, batch, dtype, poles, grid):
+    def __init__(self, batch: Sequence[int], dtype: Any, poles: Sequence[int], grid: Sequence[int]) -> None:
         self.batch = tuple(batch)
         self.along_u = np.empty(self.batch + (3, grid[0], poles[1]), dtype)
         self.surface = np.empty(self.batch + (3,) + tuple(grid), dtype)
         self.field = np.empty(self.batch + tuple(grid), dtype)
         self.along = np.empty(self.batch + tuple(grid), dtype)
 
-    def first(self, count):
+    def first(self, count: int) -> Scratch:
         """These arrays' first ``count`` rows along the batch's first axis, as a Scratch (views)."""
         if count == self.batch[0]:
             return self
@@ -341,7 +351,7 @@ class Expansion:
     step runs along the edge nodes.
     """
 
-    def __init__(self, arrays, edges, dtype):
+    def __init__(self, arrays: Sequence[np.ndarray], edges: Sequence[np.ndarray], dtype: Any) -> None:
         self.dtype = dtype
         (self.grid_u, self.grid_v_t, self.foot_points, self.normals, self.halves,
          self.directions) = (np.ascontiguousarray(array, dtype=dtype) for array in arrays)
@@ -350,7 +360,7 @@ class Expansion:
         self.edge_points = np.ascontiguousarray(np.asarray(points).T, dtype=dtype)
         self.edge_directions = [np.ascontiguousarray(directions[:, k].T, dtype=dtype) for k in range(3)]
 
-    def field(self, poles, scratch):
+    def field(self, poles: np.ndarray, scratch: Scratch) -> np.ndarray:
         """d2 of poles (..., n_u, n_v, 3) computed in ``scratch``: (..., g_u, g_v) mm."""
         by_coord = np.ascontiguousarray(np.moveaxis(poles, -1, -3), dtype=self.dtype)
         np.matmul(self.grid_u, by_coord, out=scratch.along_u)
@@ -364,7 +374,7 @@ class Expansion:
             field -= along
         return field
 
-    def edges(self, poles):
+    def edges(self, poles: np.ndarray) -> np.ndarray:
         """d_edge of poles (..., n_u, n_v, 3) at the edge nodes: (..., E) mm."""
         poles = np.asarray(poles, dtype=self.dtype)
         by_coord = np.swapaxes(poles.reshape(poles.shape[:-3] + (-1, 3)), -1, -2)
@@ -393,14 +403,14 @@ class NodeScreen:
     SIZE = 32
     RELATIVE = 16.0 * float(np.finfo(np.float32).eps)
 
-    def __init__(self, expansion, margin):
+    def __init__(self, expansion: Expansion, margin: float) -> None:
         self.expansion = expansion
         self.margin = margin
         self.raster = expansion.foot_points.shape[1:]
         self.nodes = np.empty(0, dtype=np.int64)
         self._columns = None
 
-    def _gather(self):
+    def _gather(self) -> None:
         """The arrays :meth:`lower` needs at the screen's nodes (K of them): basis columns
         (n_u n_v, K), nodes (3, K) mm, projection directions (3, 3, K), curvature halves (2, K)
         1/mm (0 at edge nodes) and which are edge nodes (K,)."""
@@ -418,7 +428,7 @@ class NodeScreen:
         self._halves = np.concatenate([expansion.halves[:, rows, columns], np.zeros((2, edge.size))], axis=1)
         self._edge = np.arange(self.nodes.size) >= inner.size
 
-    def lower(self, poles):
+    def lower(self, poles: np.ndarray) -> np.ndarray:
         """Largest |d| at the screen's nodes: poles (P, n_u, n_v, 3) -> (P,) mm (0 with none).
 
         Every node's offset e is one matrix product of the poles with the nodes' basis columns;
@@ -437,12 +447,12 @@ class NodeScreen:
         at_edge = np.sqrt(projected[:, 0] ** 2 + squared.sum(axis=1))
         return np.abs(np.where(self._edge, at_edge, inner)).max(axis=1)
 
-    def slack(self, values):
+    def slack(self, values: np.ndarray | float) -> np.ndarray | float:
         """How far single-precision maxima near ``values`` (mm, any shape) can lie from the
         double-precision ones: the margin plus RELATIVE of their size, mm."""
         return self.margin + self.RELATIVE * np.abs(values)
 
-    def learn(self, found):
+    def learn(self, found: np.ndarray) -> None:
         """Take the nodes of the latest maxima: found (P,) int, a raster node's flat index, or the
         number of raster nodes plus an edge node's index."""
         recent = np.concatenate([found[::-1], self.nodes])
@@ -454,7 +464,7 @@ class NodeScreen:
             self._gather()
 
 
-def single_rounding(nodes):
+def single_rounding(nodes: FaceNodes) -> float:
     """How far, in mm, a single-precision expanded deviation can lie from the double-precision
     one on these FaceNodes: a few units in the last place of the largest coordinate (the
     substitute's and the face's points are rounded to that before they are subtracted)."""
@@ -466,7 +476,7 @@ def single_rounding(nodes):
 NUMERICAL_ZERO_MM = 1e-6
 
 
-def mm_text(value):
+def mm_text(value: float) -> str:
     """A deviation in words: '0.2749 mm' (four significant digits), '0 mm' below
     NUMERICAL_ZERO_MM (never '5.711e-13 mm'), '' for NaN."""
     value = float(value)
@@ -504,24 +514,25 @@ class DeviationStats:
     peak_signed: np.ndarray | None = None
     peak_nodes: np.ndarray | None = None
 
-    def max_location(self):
+    def max_location(self) -> np.ndarray:
         """(3,) mm: the face's point of largest deviation, a raster, edge or peak node."""
         field = np.nan_to_num(self.field, nan=-1.0)
         raster = np.unravel_index(int(np.argmax(field)), field.shape)
         places = [(field[raster], self.nodes[raster])]
+        points: Any   # the nodes beside values that are not None
         for values, points in ((self.edge_signed, self.edge_nodes), (self.peak_signed, self.peak_nodes)):
             if values is not None and len(values):
                 places.append((np.abs(values).max(), points[int(np.argmax(np.abs(values)))]))
         return np.asarray(max(places, key=lambda place: place[0])[1], dtype=float)
 
-    def figures(self):
+    def figures(self) -> dict[str, float]:
         """The summary figures by their keys in reports and point files, mm: max_mm, mean_mm,
         rms_mm, std_mm and occ_max_mm."""
         return {"max_mm": self.maximum, "mean_mm": self.mean, "rms_mm": self.rms, "std_mm": self.std,
                 "occ_max_mm": self.occ_maximum}
 
     @classmethod
-    def from_exact(cls, exact):
+    def from_exact(cls, exact: ExactDeviation) -> DeviationStats:
         """Statistics of an ExactDeviation (cmmsampling.fitting.exact) at its nodes and peaks."""
         values = exact.counted_signed()
         magnitude = np.abs(values)

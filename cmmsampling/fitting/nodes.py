@@ -16,9 +16,13 @@ besides the normal (``across``): the edge's outward conormal, so that a substitu
 inside the face (leaving the face's edge uncovered) or beyond it (reaching past the face) is seen;
 at a collapsed edge, where the conormal is undefined, the whole offset counts.
 """
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from functools import cached_property
 from types import SimpleNamespace
+from typing import Any
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -70,39 +74,41 @@ class FaceNodes:
     edge_counted: np.ndarray | None = None
 
     @property
-    def size(self):
+    def size(self) -> tuple[int, ...]:
         """(g_u, g_v) of the raster."""
         return self.counted.shape
 
     @property
-    def edge_weights(self):
+    def edge_weights(self) -> np.ndarray:
         """(E,) 1.0 at the edge nodes whose deviation counts, 0.0 at the others."""
         if self.edge_counted is None:
             return np.ones(len(self.edge_uv))
         return self.edge_counted.astype(float)
 
-    def node_weights(self):
+    def node_weights(self) -> np.ndarray:
         """(K,) 1.0 at the counted raster nodes then at the edge nodes whose deviation counts, 0.0
         at the other edge nodes: the nodes in the order of :meth:`all_points`."""
         return np.concatenate([np.ones(int(self.counted.sum())), self.edge_weights])
 
-    def all_points(self):
+    def all_points(self) -> np.ndarray:
         """The counted raster nodes then the edge nodes: (K, 3) mm."""
         return np.concatenate([self.points[self.counted], self.edge_points])
 
     @cached_property
-    def point_tree(self):
+    def point_tree(self) -> cKDTree:
         """A k-d tree of :meth:`all_points`, built once per face and kept."""
         return cKDTree(self.all_points())
 
     @cached_property
-    def edge_pieces(self):
+    def edge_pieces(self) -> SimpleNamespace:
         """The edge polygons' segments cut into pieces for the nearest edge point, built once
         per face and kept: see :func:`edge_pieces`."""
         return edge_pieces(self)
 
 
-def face_nodes(model, size=DEFAULT_GRID, on_face=None, reached=None):
+def face_nodes(model: Any, size: int | Sequence[int] = DEFAULT_GRID,
+               on_face: Callable[[np.ndarray], np.ndarray] | None = None,
+               reached: Callable[[np.ndarray], np.ndarray] | None = None) -> FaceNodes:
     """The FaceNodes of a face.
 
     model: SurfaceModel (its ``edge_spans`` and ``span_samples`` give the edges) or, for
@@ -135,7 +141,7 @@ def face_nodes(model, size=DEFAULT_GRID, on_face=None, reached=None):
                      across[keep], _ranges(bounds, keep), _runs(sizes, keep), spacing, edge_counted)
 
 
-def edge_node_uv(model, step, raster):
+def edge_node_uv(model: Any, step: float, raster: np.ndarray) -> list[list[np.ndarray]]:
     """The edge nodes' (u, v), a list per wire of (K, 2) arrays, one per edge span
     (``model.edge_spans``) in the wire's order. A span's nodes are at least as many as
     :func:`span_needs` asks for and EDGE_NODES_LEAST, doubled until the cubic through them
@@ -160,7 +166,7 @@ def edge_node_uv(model, step, raster):
     return _nested(spans, sizes)
 
 
-def span_needs(model, uv, step, raster):
+def span_needs(model: Any, uv: np.ndarray, step: float, raster: np.ndarray) -> int:
     """The nodes an edge span needs, from its points uv (P, 2) in order: enough that they are at
     most ``step`` mm apart along it (3D), and EDGE_NODES_PER_STEP per raster step it crosses in
     either parameter (raster (g_u, g_v, 2)), so that along an edge the nodes are as dense as the
@@ -173,18 +179,18 @@ def span_needs(model, uv, step, raster):
     return int(np.ceil(max(length / step, EDGE_NODES_PER_STEP * crossed))) + 1
 
 
-def _flat(wires):
+def _flat(wires: Sequence[Sequence[Any]]) -> list[Any]:
     """A list per wire of per-edge items as one list of the items."""
     return [item for wire in wires for item in wire]
 
 
-def _nested(items, sizes):
+def _nested(items: Sequence[Any] | np.ndarray, sizes: Sequence[int]) -> list[list[Any]]:
     """The per-edge items (E,) back as a list per wire of ``sizes`` (number of edges per wire)."""
     bounds = np.cumsum([0] + list(sizes))
     return [list(items[start:stop]) for start, stop in zip(bounds[:-1], bounds[1:])]
 
 
-def _strays(model, uv, halfway):
+def _strays(model: Any, uv: np.ndarray, halfway: np.ndarray) -> float:
     """mm, the largest 3D distance between the cubic through an edge's samples uv (K, 2)
     (edge_curve_uv) and the edge's true points halfway between them, halfway (K - 1, 2)."""
     if len(uv) < 2:
@@ -196,13 +202,13 @@ def _strays(model, uv, halfway):
     return float(np.nanmax(gap, initial=0.0))
 
 
-def grid_size(size):
+def grid_size(size: Any) -> tuple[int, ...]:
     """(n_u, n_v) from an int or a pair."""
     pair = (size, size) if np.ndim(size) == 0 else tuple(size)
     return tuple(int(s) for s in pair)
 
 
-def length_raster(model, size):
+def length_raster(model: Any, size: Sequence[int]) -> np.ndarray:
     """A (g_u, g_v, 2) raster of the parameter rectangle whose values along each direction are
     at equal steps of the face's longest iso-parametric length in that direction."""
     u0, u1, v0, v1 = model.bounds
@@ -216,7 +222,7 @@ def length_raster(model, size):
     return np.stack(np.meshgrid(u, v, indexing="ij"), axis=-1)
 
 
-def _equal_length_values(samples, steps, count):
+def _equal_length_values(samples: np.ndarray, steps: np.ndarray, count: int) -> np.ndarray:
     """``count`` parameter values from samples[0] to samples[-1] at equal steps of the cumulated
     lengths ``steps`` (len(samples) - 1,) between the samples (equal parameter steps where the
     face has no length)."""
@@ -229,7 +235,7 @@ def _equal_length_values(samples, steps, count):
     return values
 
 
-def edge_directions(points, normals, loops):
+def edge_directions(points: np.ndarray, normals: np.ndarray, loops: Sequence[tuple[int, int]]) -> np.ndarray:
     """(E, 2, 3) for edge nodes (E, 3) with unit normals (E, 3) on closed polygons ``loops``
     ((start, stop) ranges): the outward conormal and a zero row where the edge has a direction;
     two tangent directions spanning the plane across the normal where it has none (a collapsed
@@ -245,7 +251,7 @@ def edge_directions(points, normals, loops):
     return across
 
 
-def _across(tangent, normals, scale):
+def _across(tangent: np.ndarray, normals: np.ndarray, scale: float) -> np.ndarray:
     """The directions of :func:`edge_directions` for one loop."""
     rows = np.zeros((len(tangent), 2, 3))
     finite = np.isfinite(normals).all(1)
@@ -262,7 +268,7 @@ def _across(tangent, normals, scale):
     return rows
 
 
-def _plane_basis(normals):
+def _plane_basis(normals: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Two unit vectors (M, 3) each, across the unit normals (M, 3) and each other."""
     helper = np.where(np.abs(normals[:, :1]) < 0.9, [[1.0, 0.0, 0.0]], [[0.0, 1.0, 0.0]])
     first = np.cross(normals, helper)
@@ -270,27 +276,27 @@ def _plane_basis(normals):
     return first, np.cross(normals, first)
 
 
-def _largest_cell_diagonal(points):
+def _largest_cell_diagonal(points: np.ndarray) -> float:
     """The largest 3D diagonal (mm) of the raster's cells, points (g_u, g_v, 3)."""
     diagonals = cell_diagonals(points)
     return float(np.nanmax(diagonals)) if diagonals.size else 0.0
 
 
-def cell_diagonals(points):
+def cell_diagonals(points: np.ndarray) -> np.ndarray:
     """(g_u - 1, g_v - 1) the longer 3D diagonal (mm) of each raster cell, points (g_u, g_v, 3)."""
     first = np.linalg.norm(points[:-1, :-1] - points[1:, 1:], axis=-1)
     second = np.linalg.norm(points[1:, :-1] - points[:-1, 1:], axis=-1)
     return np.maximum(first, second)
 
 
-def _ranges(bounds, keep):
+def _ranges(bounds: np.ndarray, keep: np.ndarray) -> list[tuple[int, int]]:
     """The (start, stop) ranges of the loops after dropping the nodes ``keep`` marks False."""
     kept = np.concatenate([[0], np.cumsum(keep)])
     return [(int(kept[start]), int(kept[stop])) for start, stop in zip(bounds[:-1], bounds[1:])
             if kept[stop] > kept[start]]
 
 
-def _runs(sizes, keep):
+def _runs(sizes: Sequence[int], keep: np.ndarray) -> np.ndarray:
     """(E, 2) int: for each kept edge node, the [start, stop) range (among the kept nodes) of its
     run: the kept samples of one edge with no dropped sample between them. sizes: samples per
     edge, in order; keep: (sum(sizes),) bool."""
@@ -301,7 +307,7 @@ def _runs(sizes, keep):
     return np.column_stack([np.searchsorted(run, run, "left"), np.searchsorted(run, run, "right")])
 
 
-def edge_curve_uv(nodes, place, runs):
+def edge_curve_uv(nodes: Any, place: np.ndarray, runs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The edge's curve on the surface at ``place`` (M,), a fractional edge node index within its
     run runs (M, 2) [start, stop): the cubic through the 4 run samples around it (equal parameter
     steps), or the chord where the run has fewer than 4. Returns ((M, 2) uv, (M, 2) its
@@ -325,7 +331,7 @@ def edge_curve_uv(nodes, place, runs):
     return curve, slope
 
 
-def edge_pieces(nodes):
+def edge_pieces(nodes: Any) -> SimpleNamespace:
     """The segments of the face's closed edge polygons (nodes: FaceNodes, or anything with
     ``loops`` and ``edge_points``) cut into equal pieces no longer than PIECE_MEDIANS times the
     median segment, so that a few long segments among many short ones (a long straight edge beside
@@ -350,7 +356,7 @@ def edge_pieces(nodes):
                            half=0.5 * float(np.linalg.norm(b - a, axis=1).max(initial=0.0)))
 
 
-def _edge_segments(nodes):
+def _edge_segments(nodes: Any) -> tuple[np.ndarray, np.ndarray]:
     """(first, second) edge node indices (S,) of every segment of the face's closed edge polygons."""
     starts, ends = [], []
     for start, stop in nodes.loops:

@@ -17,6 +17,10 @@ LAPACK call (Cholesky, ``?pbsv``). Up to BANDED_LIMIT sub-diagonals LAPACK facto
 column by column, so each point set's poles come out the same whatever else is in its batch;
 wider bands are solved densely, one LU factorisation per point set.
 """
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+
 import numpy as np
 from scipy.linalg import lapack
 
@@ -34,7 +38,7 @@ BANDED_LIMIT = 64
 BLOCK_ALIGNMENT = 4
 
 
-def default_pole_count(n_points, degree=DEFAULT_DEGREE):
+def default_pole_count(n_points: int, degree: int = DEFAULT_DEGREE) -> int:
     """Poles per direction for N points: round(2 sqrt(N) / 3), at least degree + 1.
 
     About 2.25 points per pole: 6 x 6 for N = 81, 5 x 5 for 49, 8 x 8 for 144, 4 x 4 for 25.
@@ -48,7 +52,8 @@ class SubstituteSpace:
     degrees: (k_u, k_v); poles: (n_u, n_v); bounds: (u0, u1, v0, v1) of the face.
     """
 
-    def __init__(self, degrees, poles, bounds, smoothing=DEFAULT_SMOOTHING):
+    def __init__(self, degrees: Sequence[int], poles: Sequence[int], bounds: Sequence[float],
+                 smoothing: float = DEFAULT_SMOOTHING) -> None:
         self.degrees = tuple(int(d) for d in degrees)
         self.poles = tuple(int(p) for p in poles)
         self.bounds = tuple(float(b) for b in bounds)
@@ -68,11 +73,11 @@ class SubstituteSpace:
         self._band_regulariser = _padded_lower_band(self.regulariser, self.bandwidth, self._block, 0.0, 0.0)
 
     @property
-    def size(self):
+    def size(self) -> int:
         """Number of poles n_u * n_v."""
         return self.poles[0] * self.poles[1]
 
-    def bases(self, uv, n_derivatives=0):
+    def bases(self, uv: np.ndarray, n_derivatives: int = 0) -> tuple[np.ndarray, np.ndarray]:
         """Basis matrices along u and v at uv: (..., 2).
 
         Returns (bu, bv): (n_derivatives + 1, M, n_u) and (n_derivatives + 1, M, n_v), M = uv.size / 2.
@@ -81,7 +86,7 @@ class SubstituteSpace:
         return (design_matrices(self.uknots, self.degrees[0], uv[:, 0], n_derivatives),
                 design_matrices(self.vknots, self.degrees[1], uv[:, 1], n_derivatives))
 
-    def normal_matrix(self, along_u, along_v):
+    def normal_matrix(self, along_u: np.ndarray, along_v: np.ndarray) -> np.ndarray:
         """B^T B + lam R from the bases along u and v: (..., n_u, N), (..., n_v, N) -> (..., M, M).
 
         B's row for point i is kron(N(u_i), N(v_i)), so (B^T B)[(a, b), (c, d)] is the sum over the
@@ -92,13 +97,13 @@ class SubstituteSpace:
         return self.gram_from_pairs(self.pair_products(along_u, along_v),
                                     self.smoothing * along_u.shape[-1] / self.size)
 
-    def pair_products(self, along_u, along_v):
+    def pair_products(self, along_u: np.ndarray, along_v: np.ndarray) -> np.ndarray:
         """The pair-product matrix of :meth:`gram_from_pairs` from the bases along u and v,
         (..., n_u, N) and (..., n_v, N) -> (..., L_u, L_v)."""
         return np.matmul(band_products(along_u, self.degrees[0]),
                          np.swapaxes(band_products(along_v, self.degrees[1]), -1, -2))
 
-    def gram_from_pairs(self, pairs, weight):
+    def gram_from_pairs(self, pairs: np.ndarray, weight: float) -> np.ndarray:
         """B^T B + weight R from the pair-product matrix: pairs (..., L_u, L_v), entry [row(a, c),
         row(b, d)] the sum over the points of N_a N_c (u) N_b N_d (v) (rows as in
         :func:`band_products`); weight: the smoothing's weight lam. Returns (..., M, M)."""
@@ -108,7 +113,7 @@ class SubstituteSpace:
         gram += weight * self.regulariser
         return gram
 
-    def solve_normal(self, pairs, weight, rhs):
+    def solve_normal(self, pairs: np.ndarray, weight: float, rhs: np.ndarray) -> np.ndarray:
         """Poles from the normal equations of point sets: pairs (..., L_u, L_v) as in
         :meth:`gram_from_pairs`, weight the smoothing's lam, rhs B^T Q (..., M, 3) mm.
 
@@ -128,7 +133,7 @@ class SubstituteSpace:
         poles = poles[:sets * block].T.reshape(-1, sets, block)[:, :, :self.size]
         return np.moveaxis(poles, 0, -1).reshape(rhs.shape)
 
-    def padded_band(self, pairs, weight):
+    def padded_band(self, pairs: np.ndarray, weight: float) -> np.ndarray:
         """The lower band of the batch's block-diagonal B^T B + weight R from pairs (P, L_u, L_v):
         (P * block + tail, bandwidth + 1), row j the entries [j + d, j], d = 0..bandwidth.
 
@@ -149,14 +154,14 @@ class SubstituteSpace:
         band[sets.shape[0] * self._block:] = _identity_rows(self._tail, self.bandwidth)
         return band
 
-    def right_hand_side(self, along_u, along_v, points):
+    def right_hand_side(self, along_u: np.ndarray, along_v: np.ndarray, points: np.ndarray) -> np.ndarray:
         """B^T Q from the bases (..., n_u, N), (..., n_v, N) and points (..., 3, N) mm -> (..., M, 3)."""
         weighted = along_v[..., :, None, :] * points[..., None, :, :]
         weighted = weighted.reshape(weighted.shape[:-3] + (-1, weighted.shape[-1]))
         rhs = np.matmul(along_u, np.swapaxes(weighted, -1, -2))
         return rhs.reshape(rhs.shape[:-2] + (self.size, 3))
 
-    def solve(self, along_u, along_v, points):
+    def solve(self, along_u: np.ndarray, along_v: np.ndarray, points: np.ndarray) -> np.ndarray:
         """Least-squares poles from the bases along u and v, (..., n_u, N) and (..., n_v, N), and
         the points coordinate first, (..., 3, N) mm. Returns poles (..., n_u, n_v, 3) mm."""
         weight = self.smoothing * along_u.shape[-1] / self.size
@@ -164,7 +169,7 @@ class SubstituteSpace:
                                   self.right_hand_side(along_u, along_v, points))
         return poles.reshape(points.shape[:-2] + self.poles + (3,))
 
-    def fit(self, uv, points):
+    def fit(self, uv: np.ndarray, points: np.ndarray) -> np.ndarray:
         """Least-squares poles for each point set.
 
         uv: (P, N, 2) or (N, 2) parameters; points: matching (..., N, 3) mm.
@@ -174,7 +179,7 @@ class SubstituteSpace:
         along_u, along_v = self.u_basis.values(uv[..., 0]), self.v_basis.values(uv[..., 1])
         return self.solve(along_u, along_v, np.swapaxes(np.asarray(points, dtype=float), -1, -2))
 
-    def evaluate(self, poles, uv):
+    def evaluate(self, poles: np.ndarray, uv: np.ndarray) -> np.ndarray:
         """Substitute points at uv: poles (n_u, n_v, 3), uv (..., 2) -> (..., 3) mm."""
         uv = np.asarray(uv, dtype=float)
         bu, bv = self.bases(uv)
@@ -182,7 +187,7 @@ class SubstituteSpace:
         return np.einsum("njc,nj->nc", along_u, bv[0]).reshape(uv.shape[:-1] + (3,))
 
 
-def _regulariser(poles):
+def _regulariser(poles: tuple[int, ...]) -> np.ndarray:
     """R = Du^T Du (x) I + I (x) Dv^T Dv + ridge I for a pole net of (n_u, n_v); (M, M)."""
     n_u, n_v = poles
     du = second_difference_matrix(n_u)
@@ -191,19 +196,20 @@ def _regulariser(poles):
     return r + RIDGE * np.eye(n_u * n_v)
 
 
-def _pair_count(count, degree):
+def _pair_count(count: int, degree: int) -> int:
     """Rows L of :func:`band_products` for ``count`` basis functions of ``degree``."""
     return sum(count - d for d in range(degree + 1))
 
 
-def _bandwidth(paired, regulariser):
+def _bandwidth(paired: np.ndarray, regulariser: np.ndarray) -> int:
     """Sub-diagonals of the normal matrix: the largest |i - j| of an entry that can be non-zero,
     from paired (M, M) bool (a band pair's product) and the regulariser (M, M)."""
     rows, columns = np.nonzero(paired | (regulariser != 0))
     return int(np.abs(rows - columns).max())
 
 
-def _padded_lower_band(matrix, bandwidth, block, outside, identity):
+def _padded_lower_band(matrix: np.ndarray, bandwidth: int, block: int, outside: float,
+                       identity: float) -> np.ndarray:
     """The lower band of a symmetric (M, M) matrix padded to (block, block) with an identity, as
     (block, bandwidth + 1): row j holds the entries [j + d, j], d = 0..bandwidth; ``outside``
     off the matrix and ``identity`` on the padding's diagonal."""
@@ -216,14 +222,15 @@ def _padded_lower_band(matrix, bandwidth, block, outside, identity):
     return band
 
 
-def _identity_rows(count, bandwidth):
+def _identity_rows(count: int, bandwidth: int) -> np.ndarray:
     """The lower band of a (count, count) identity: (count, bandwidth + 1)."""
     rows = np.zeros((count, bandwidth + 1))
     rows[:, 0] = 1.0
     return rows
 
 
-def _banded_cholesky_solve(band, rhs, sets, size, dense_gram):
+def _banded_cholesky_solve(band: np.ndarray, rhs: np.ndarray, sets: int, size: int,
+                           dense_gram: Callable[[int], np.ndarray]) -> np.ndarray:
     """Solve P symmetric positive definite banded systems, stacked as one block-diagonal system.
 
     band: (P * size + tail, bandwidth + 1), the lower band (row j: entries [j + d, j]) of the
@@ -256,7 +263,7 @@ def _banded_cholesky_solve(band, rhs, sets, size, dense_gram):
     return solution
 
 
-def _pbsv(band, rhs):
+def _pbsv(band: np.ndarray, rhs: np.ndarray) -> tuple[np.ndarray, int]:
     """LAPACK ?pbsv on one lower band (R, bandwidth + 1) and rhs (R, c): (solution (R, c), info),
     info > 0 the first row whose pivot was not positive."""
     _, solved, info = _PBSV(band.T, rhs, lower=1)
@@ -268,7 +275,7 @@ def _pbsv(band, rhs):
 _PBSV = lapack.get_lapack_funcs("pbsv", (np.zeros(1),))
 
 
-def band_products(bases, degree):
+def band_products(bases: np.ndarray, degree: int) -> np.ndarray:
     """Products N_a N_c of the band pairs a <= c <= a + k: bases (..., n, N) -> (..., L, N).
 
     Rows run by offset c - a = 0..k, then by a; L = sum over the offsets of n - offset.
@@ -278,7 +285,7 @@ def band_products(bases, degree):
                           axis=-2)
 
 
-def _band_pair_rows(count, degree):
+def _band_pair_rows(count: int, degree: int) -> np.ndarray:
     """(count, count) row of the pair (a, c) in :func:`band_products`, -1 for pairs too far apart."""
     first = np.concatenate([np.arange(count - d) for d in range(degree + 1)])
     second = first + np.concatenate([np.full(count - d, d) for d in range(degree + 1)])
@@ -287,7 +294,7 @@ def _band_pair_rows(count, degree):
     return rows
 
 
-def _gram_index(poles, degrees):
+def _gram_index(poles: tuple[int, ...], degrees: tuple[int, ...]) -> np.ndarray:
     """(M, M) position of each normal-matrix entry in the flattened pair-product matrix.
 
     Entry [(a, b), (c, d)] is pair product [row(a, c), row(b, d)]; pairs too far apart point
@@ -307,17 +314,17 @@ class FittedSurface:
     """A substitute surface: poles (n_u, n_v, 3) mm in a SubstituteSpace, evaluated at any uv of
     its parameter rectangle ``bounds`` (the space's: the substitute is never extended beyond it)."""
 
-    def __init__(self, space, poles):
+    def __init__(self, space: SubstituteSpace, poles: np.ndarray) -> None:
         self.space = space
         self.poles = np.asarray(poles, dtype=float)
         self.bounds = space.bounds
         self._flat = self.poles.reshape(-1, 3)
 
-    def points(self, uv):
+    def points(self, uv: np.ndarray) -> np.ndarray:
         """Surface points: uv (M, 2) -> (M, 3) mm."""
         return self.space.evaluate(self.poles, uv)
 
-    def derivatives(self, uv, order=1):
+    def derivatives(self, uv: np.ndarray, order: int = 1) -> dict[tuple[int, int], np.ndarray]:
         """Point and partial derivatives up to ``order`` (1 or 2): {(a, b): (M, 3)} with the a-th
         u- and b-th v-derivative, mm per parameter unit."""
         bu, bv = self.space.bases(uv, order)
