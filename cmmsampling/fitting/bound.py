@@ -18,12 +18,20 @@ point sets reach other surfaces of the substitute space (tangential reshaping, o
 parametrisations) and the exact deviation is not linear; a result may end below it, and results
 are reported as a multiple of it only as a yardstick.
 """
+from __future__ import annotations
+
+from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from ..geometry.bspline import greville_abscissae, kron_rows
 from .exact import Linearisation
+
+if TYPE_CHECKING:
+    from .exact import ExactDeviation
+    from .substitute import SubstituteSpace
 
 # Rounds of minimax_bracket's reweighting at most.
 BRACKET_ROUNDS = 30
@@ -44,7 +52,7 @@ class MinimaxBound:
     poles: np.ndarray | None = None
 
     @property
-    def gap(self):
+    def gap(self) -> float:
         """Relative gap (upper - lower) / upper."""
         return (self.upper - self.lower) / self.upper if self.upper > 0 else 0.0
 
@@ -58,7 +66,7 @@ class _GridResiduals:
     N_m(at_k) (w_k . nu_m) over the poles m, its target -d_k.
     """
 
-    def __init__(self, space, exact):
+    def __init__(self, space: SubstituteSpace, exact: ExactDeviation) -> None:
         self.reference = np.asarray(exact.poles, dtype=float)
         linearisation = Linearisation(None, space, exact)
         values, along = linearisation.targets
@@ -68,25 +76,25 @@ class _GridResiduals:
         self.directions = directions
         self.inside = np.arange(len(values))
 
-    def rows(self, nodes):
+    def rows(self, nodes: np.ndarray) -> np.ndarray:
         """Rows (len(nodes), n_u n_v) at indices into the measured nodes."""
         return self._rows[nodes]
 
-    def target(self, nodes):
+    def target(self, nodes: np.ndarray) -> np.ndarray:
         """Targets (len(nodes),) mm at indices into the measured nodes."""
         return self._target[nodes]
 
-    def everywhere(self, x):
+    def everywhere(self, x: np.ndarray) -> np.ndarray:
         """Squared first-order deviations at every measured node: (K,) mm^2, for x (n_u n_v,)."""
         return (self._rows @ x - self._target) ** 2
 
-    def poles(self, x):
+    def poles(self, x: np.ndarray) -> np.ndarray:
         """The poles (n_u, n_v, 3) of S_x."""
         moved = self.reference.reshape(-1, 3) + x[:, None] * self.directions
         return moved.reshape(self.reference.shape)
 
 
-def pole_normals(space, poles):
+def pole_normals(space: SubstituteSpace, poles: np.ndarray) -> np.ndarray:
     """Unit normals nu (n_u n_v, 3) of the surface with ``poles`` at its poles' Greville points."""
     gu = greville_abscissae(space.uknots, space.degrees[0])
     gv = greville_abscissae(space.vknots, space.degrees[1])
@@ -98,7 +106,7 @@ def pole_normals(space, poles):
     return np.divide(normal, length, out=np.zeros_like(normal), where=length > 0)
 
 
-def minimax_bracket(space, exact, level=None):
+def minimax_bracket(space: SubstituteSpace, exact: ExactDeviation, level: float | None = None) -> tuple[float, float]:
     """(lower, upper) mm around :func:`minimax_bound`'s figure, in milliseconds, by Lawson's
     reweighted least squares: for probability weights w on the terms, sqrt(min_x sum_k w_k
     d_lin,k^2) is at most the minimax (weak duality, see the module docstring) and the largest
@@ -129,7 +137,7 @@ def minimax_bracket(space, exact, level=None):
     return lower * scale, upper * scale
 
 
-def minimax_bound(space, exact, grid):
+def minimax_bound(space: SubstituteSpace, exact: ExactDeviation, grid: Sequence[int]) -> MinimaxBound:
     """min_x max_k |d_lin,k| over both sides of every node, as a linear programme.
 
     space: SubstituteSpace; exact: the ExactDeviation of the substitute S0 the surfaces are
@@ -151,7 +159,7 @@ def minimax_bound(space, exact, grid):
     return MinimaxBound(min(float(answer.fun), upper), upper, int(answer.nit), True, tuple(grid), residuals.poles(x))
 
 
-def _programme(rows, target):
+def _programme(rows: np.ndarray, target: np.ndarray) -> Any:
     """HiGHS's answer to: minimise t subject to |rows x - target| <= t; rows (K, M), target (K,)
     (scaled to about 1 by the caller where the figures are small); scipy's OptimizeResult, x =
     (x (M,), t)."""

@@ -22,18 +22,26 @@ To first order in a change dS of the substitute, each side changes by w . dS(at)
 direction it is measured along and ``at`` the parameters on S (p forward, h reverse): exact there
 in value and gradient, which :class:`Linearisation` hands to the descent and the local bound.
 """
+from __future__ import annotations
+
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from functools import cached_property
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from scipy.spatial import cKDTree
 
 from ..geometry.bspline import kron_rows
-from .nodes import edge_curve_uv, face_nodes
+from .nodes import FaceNodes, edge_curve_uv, face_nodes
 from .peaks import FineStarts, peak_search
 from .sides import Side, normals_or
 from .stretch import stretched_places
 from .substitute import FittedSurface
+
+if TYPE_CHECKING:
+    from .stretch import FinePlaces
+    from .substitute import SubstituteSpace
 
 FOOT_ITERATIONS = 400
 FOOT_STEP_TOLERANCE = 1e-10
@@ -68,62 +76,64 @@ class ExactDeviation:
     """
 
     poles: np.ndarray
-    nodes: object
+    nodes: FaceNodes
     forward: Side
     reverse: Side
     peak_points: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
 
     @property
-    def signed(self):
+    def signed(self) -> np.ndarray:
         """(K + P,) the larger side at each node, signed, mm."""
         take_reverse = np.abs(self.reverse.values) > np.abs(self.forward.values)
         return np.where(take_reverse, self.reverse.values, self.forward.values)
 
     @property
-    def maximum(self):
+    def maximum(self) -> float:
         """The largest |deviation| over the nodes and the peak nodes, mm."""
         return float(np.abs(self.signed).max(initial=0.0))
 
-    def points(self):
+    def points(self) -> np.ndarray:
         """(K + P, 3) mm: the face's points at the nodes, then at the peak nodes."""
         return np.concatenate([self.nodes.all_points(), self.peak_points])
 
-    def node_signed(self):
+    def node_signed(self) -> np.ndarray:
         """(K,) signed deviations at the nodes (the peak nodes left out), mm."""
         return self.signed[:len(self.signed) - len(self.peak_points)]
 
-    def counted_signed(self):
+    def counted_signed(self) -> np.ndarray:
         """(K',) signed deviations at the nodes that count (the edge nodes out of a probe's reach
         left out, see FaceNodes.edge_counted), mm."""
         return self.node_signed()[self.nodes.node_weights() > 0]
 
-    def peak_signed(self):
+    def peak_signed(self) -> np.ndarray:
         """(P,) signed deviations at the peak nodes, mm."""
         return self.signed[len(self.signed) - len(self.peak_points):]
 
-    def grid_signed(self):
+    def grid_signed(self) -> np.ndarray:
         """(g_u, g_v) signed deviations at the raster, NaN where a node does not count."""
         out = np.full(self.nodes.size, np.nan)
         out[self.nodes.counted] = self.signed[:int(self.nodes.counted.sum())]
         return out
 
-    def edge_signed(self):
+    def edge_signed(self) -> np.ndarray:
         """(E,) signed deviations at the edge nodes, mm."""
         counted = int(self.nodes.counted.sum())
         return self.signed[counted:counted + len(self.nodes.edge_uv)]
 
 
-def node_parameters(nodes):
+def node_parameters(nodes: FaceNodes) -> np.ndarray:
     """(K, 2) the parameters of the counted raster nodes then the edge nodes."""
     return np.concatenate([nodes.uv[nodes.counted], nodes.edge_uv])
 
 
-def node_normals(nodes):
+def node_normals(nodes: FaceNodes) -> np.ndarray:
     """(K, 3) the face's unit normals at the counted raster nodes then the edge nodes."""
     return np.concatenate([nodes.normals[nodes.counted], nodes.edge_normals])
 
 
-def exact_deviation(space, poles, nodes, face, on_face=None, reached=None):
+def exact_deviation(space: SubstituteSpace, poles: np.ndarray, nodes: FaceNodes, face: Any,
+                    on_face: Callable[[np.ndarray], np.ndarray] | None = None,
+                    reached: Callable[[np.ndarray], np.ndarray] | None = None) -> ExactDeviation:
     """The ExactDeviation of the substitute with ``poles`` (n_u, n_v, 3) mm in ``space``, at the
     nodes and at the peaks searched between them (cmmsampling.fitting.peaks).
 
@@ -143,16 +153,16 @@ def exact_deviation(space, poles, nodes, face, on_face=None, reached=None):
     fallback = node_normals(nodes)
     raster = _sample_raster(surface, SETTLE_SAMPLES)
 
-    def counted(h, sides):
+    def counted(h: np.ndarray, sides: tuple[Side, Side]) -> tuple[Side, Side]:
         if reached is None:
             return sides
         counts = reached(h).astype(float)
         return sides[0].weighted(counts), sides[1].weighted(counts)
 
-    def settled(h, origin, start):
+    def settled(h: np.ndarray, origin: np.ndarray, start: np.ndarray) -> tuple[Side, Side]:
         return counted(h, _settled_sides(trimmed, face, h, start, raster, fallback[origin]))
 
-    def sides_at(h, origin, start):
+    def sides_at(h: np.ndarray, origin: np.ndarray, start: np.ndarray) -> tuple[Side, Side]:
         return counted(h, _sides_at(trimmed, face, h, start, fallback[origin], samples))
 
     forward, reverse = _settle_largest(node_parameters(nodes), forward, reverse, settled)
@@ -166,14 +176,16 @@ def exact_deviation(space, poles, nodes, face, on_face=None, reached=None):
                           reverse.joined(fine.reverse).joined(back), face.points(between))
 
 
-def _both(first, second):
+# first: a trim test or None; Any, since mypy 1.0 does not carry its narrowing into the lambda.
+def _both(first: Any, second: Callable[[np.ndarray], np.ndarray]) -> Callable[[np.ndarray], np.ndarray]:
     """uv (..., 2) -> (...) bool: True where both tests are (first None: the second alone)."""
     if first is None:
         return second
     return lambda uv: first(uv) & second(uv)
 
 
-def _fine_starts(places, settled, sides_at):
+def _fine_starts(places: FinePlaces, settled: Callable[[np.ndarray, np.ndarray, np.ndarray], tuple[Side, Side]],
+                 sides_at: Callable[[np.ndarray, np.ndarray, np.ndarray], tuple[Side, Side]]) -> FineStarts:
     """FineStarts (cmmsampling.fitting.peaks) at the FinePlaces ``places``: their Sides measured by
     ``sides_at`` and settled (``settled``) at the SETTLE_NODES largest, as the nodes' are."""
     if not len(places.uv):
@@ -184,7 +196,8 @@ def _fine_starts(places, settled, sides_at):
     return FineStarts(places, forward, reverse)
 
 
-def _sides_at(trimmed, face, h, start, fallback, samples):
+def _sides_at(trimmed: TrimmedSubstitute, face: Any, h: np.ndarray, start: np.ndarray, fallback: np.ndarray,
+              samples: tuple[np.ndarray, cKDTree]) -> tuple[Side, Side]:
     """(forward, reverse) Sides at the face's points F(h), h (M, 2) its parameters: forward
     searched from ``start`` (M, 2) on the substitute, reverse from h; each searched again from the
     nearest sample of the substitute or node of the face where that lies nearer than the foot found
@@ -203,7 +216,8 @@ def _sides_at(trimmed, face, h, start, fallback, samples):
     return trimmed.forward(targets, at, normals), _reverse_from_feet(face, nodes, on_face, points, h, feet, normals)
 
 
-def _settled_sides(trimmed, face, h, start, raster, fallback):
+def _settled_sides(trimmed: TrimmedSubstitute, face: Any, h: np.ndarray, start: np.ndarray,
+                   raster: tuple[np.ndarray, cKDTree], fallback: np.ndarray) -> tuple[Side, Side]:
     """(forward, reverse) Sides at the face's points F(h), h (M, 2) its parameters, each foot the
     nearest of searches from more starts than a node's: forward from ``start`` (M, 2) and the
     SETTLE_SAMPLE_STARTS nearest samples of ``raster`` ((parameters, k-d tree) of the substitute)
@@ -225,7 +239,7 @@ def _settled_sides(trimmed, face, h, start, raster, fallback):
     return trimmed.forward(targets, ahead, normals), _reverse_from_feet(face, nodes, on_face, points, h, feet, normals)
 
 
-def _nearest_on_sides(raster, targets):
+def _nearest_on_sides(raster: tuple[np.ndarray, cKDTree], targets: np.ndarray) -> np.ndarray:
     """(M, 4, 2) for each target (M, 3) mm the parameters of its nearest sample of ``raster`` (a
     count x count raster of the rectangle: :func:`_sample_raster`) on each side of the rectangle,
     u = u0, u = u1, v = v0 and v = v1: from there a foot search follows that side where the
@@ -238,7 +252,8 @@ def _nearest_on_sides(raster, targets):
     return grid[sides[np.arange(4), gap.argmin(-1)]]
 
 
-def _settle_largest(h, forward, reverse, settled):
+def _settle_largest(h: np.ndarray, forward: Side, reverse: Side,
+                    settled: Callable[[np.ndarray, np.ndarray, np.ndarray], tuple[Side, Side]]) -> tuple[Side, Side]:
     """The nodes' Sides with the feet of the SETTLE_NODES largest nodes settled (``settled``: (h,
     node index, start) -> Sides, see :func:`_settled_sides`), each side kept where it was nearer; again for
     the largest not yet settled, until the SETTLE_NODES largest all are (at most SETTLE_PASSES
@@ -255,7 +270,7 @@ def _settle_largest(h, forward, reverse, settled):
     return forward, reverse
 
 
-def _nearer(side, rows, other):
+def _nearer(side: Side, rows: np.ndarray, other: Side) -> Side:
     """side with its entries ``rows`` (M,) replaced by other's (M entries) where those are nearer."""
     nearer = np.abs(other.values) < np.abs(side.values[rows])
     kept = side.copy()
@@ -270,23 +285,24 @@ class NearestParameters:
     grid: raster nodes per direction; starts: how many of the nearest nodes each damped Newton
     search (:func:`closest_parameters`) starts from, the nearest result kept."""
 
-    def __init__(self, model, on_face=None, grid=60, starts=4):
+    def __init__(self, model: Any, on_face: Callable[[np.ndarray], np.ndarray] | None = None, grid: int = 60,
+                 starts: int = 4) -> None:
         self.model = model
         self.nodes = face_nodes(model, grid, on_face)
         self.starts = node_parameters(self.nodes)
         self.count = min(starts, len(self.starts))
 
-    def locate(self, points):
+    def locate(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(uv (M, 2), near (M, count) indices of the raster nodes searched from) for points (M, 3) mm."""
         points = np.asarray(points, dtype=float).reshape(-1, 3)
         near = self.nodes.point_tree.query(points, k=self.count)[1].reshape(len(points), self.count)
         return _nearest_of(self.model, points, self.starts[near]), near
 
-    def __call__(self, points):
+    def __call__(self, points: np.ndarray) -> np.ndarray:
         return self.locate(points)[0]
 
 
-def _nearest_of(model, targets, starts):
+def _nearest_of(model: Any, targets: np.ndarray, starts: np.ndarray) -> np.ndarray:
     """(M, 2) the parameters of the nearest of the closest points to targets (M, 3) searched on the
     model from each of starts (M, k, 2)."""
     count, k = starts.shape[:2]
@@ -295,7 +311,8 @@ def _nearest_of(model, targets, starts):
     return found[np.arange(count), np.argmin(gap, axis=1)]
 
 
-def forward_side(surface, nodes, samples=None, trimmed=None):
+def forward_side(surface: FittedSurface, nodes: FaceNodes, samples: tuple[np.ndarray, cKDTree] | None = None,
+                 trimmed: TrimmedSubstitute | None = None) -> Side:
     """Side: from each node F(h) to its closest point on the substitute (see
     :class:`TrimmedSubstitute`; None: its whole rectangle); samples: :func:`_sample_raster` of the
     substitute where it is already built."""
@@ -311,16 +328,17 @@ class TrimmedSubstitute:
     domain, nodes: the face's FaceNodes (their edge curves bound it), on_face: uv (M, 2) -> (M,)
     bool, the face's trim test (None: the whole rectangle)."""
 
-    def __init__(self, surface, nodes, on_face=None):
+    def __init__(self, surface: FittedSurface, nodes: FaceNodes,
+                 on_face: Callable[[np.ndarray], np.ndarray] | None = None) -> None:
         self.surface, self.nodes, self.on_face = surface, nodes, on_face
 
     @cached_property
-    def edges(self):
+    def edges(self) -> FaceNodes:
         """The nodes with the substitute's points at the edge nodes' parameters as edge points
         (its boundary polygons), built at first use."""
         return replace(self.nodes, edge_points=self.surface.points(self.nodes.edge_uv))
 
-    def forward(self, targets, at, normals):
+    def forward(self, targets: np.ndarray, at: np.ndarray, normals: np.ndarray) -> Side:
         """The forward Side from targets (M, 3) mm to the substitute: at its points at ``at`` (M,
         2), the closest points found on its rectangle, where they are inside the trim, else at the
         nearest point of its boundary; normals (M, 3) the face's at the targets."""
@@ -331,7 +349,8 @@ class TrimmedSubstitute:
         return _side(nearest - targets, at, normals)
 
 
-def reverse_side(surface, nodes, face, on_face):
+def reverse_side(surface: FittedSurface, nodes: FaceNodes, face: Any,
+                 on_face: Callable[[np.ndarray], np.ndarray] | None) -> Side:
     """Side: from the substitute's point S(h) at each node's parameters back to the face.
 
     Each foot is searched from the node's own parameters h and, where another node lies nearer to
@@ -347,7 +366,8 @@ def reverse_side(surface, nodes, face, on_face):
     return _reverse_from_feet(face, nodes, on_face, points, at, foot, node_normals(nodes))
 
 
-def _reverse_from_feet(face, nodes, on_face, points, at, feet, fallback):
+def _reverse_from_feet(face: Any, nodes: FaceNodes, on_face: Callable[[np.ndarray], np.ndarray] | None,
+                       points: np.ndarray, at: np.ndarray, feet: np.ndarray, fallback: np.ndarray) -> Side:
     """The reverse Side of the substitute's points (M, 3) mm at ``at`` (M, 2), their closest
     points on the face's surface at ``feet`` (M, 2): measured there where the foot is on the
     face, else to the nearest edge point; fallback (M, 3) the normals where the face has none."""
@@ -359,7 +379,7 @@ def _reverse_from_feet(face, nodes, on_face, points, at, feet, fallback):
     return _side(points - nearest, at, normals_or(normals, fallback))
 
 
-def _side(offsets, at, normals):
+def _side(offsets: np.ndarray, at: np.ndarray, normals: np.ndarray) -> Side:
     """A Side from offsets (K, 3) S - F, the parameters on S, and the face's normals (K, 3)."""
     length = np.linalg.norm(offsets, axis=1)
     side = np.where((offsets * normals).sum(1) < 0, -1.0, 1.0)
@@ -369,7 +389,7 @@ def _side(offsets, at, normals):
     return Side(side * length, at, directions)
 
 
-def _nearest_on_edge_curves(face, nodes, points):
+def _nearest_on_edge_curves(face: Any, nodes: FaceNodes, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The nearest point (M, 3) mm on the edges of ``face`` (the face, or the substitute with
     ``nodes`` whose edge points are its own) to each point (M, 3) mm, and its parameters (M, 2).
 
@@ -404,7 +424,7 @@ def _nearest_on_edge_curves(face, nodes, points):
     return face.points(uv), uv
 
 
-def _nearest_on_edges(nodes, points):
+def _nearest_on_edges(nodes: FaceNodes, points: np.ndarray) -> np.ndarray:
     """Where on the face's edge polygons the nearest point to each point (M, 3) mm lies: (M,) a
     fractional edge node index within the run of the node it is nearest to (a segment between
     two runs, at a corner or where a loop closes, gives its nearer end).
@@ -438,7 +458,8 @@ def _nearest_on_edges(nodes, points):
     return np.where(within, start + along, np.where(along < 0.5, start, end)).astype(float)
 
 
-def _closest_on_segments(points, starts, alongs, candidates):
+def _closest_on_segments(points: np.ndarray, starts: np.ndarray, alongs: np.ndarray,
+                         candidates: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Per point (M, 3), the closest point on the segments from starts[c] to starts[c] + alongs[c]
     (starts, alongs: (S, 3) mm) of its candidates c (M, K) int: (closest points (M, 3), the
     segment's index (M,), its fraction along the segment (M,) in [0, 1])."""
@@ -450,7 +471,7 @@ def _closest_on_segments(points, starts, alongs, candidates):
     return on_segment[rows, best], candidates[rows, best], t[rows, best]
 
 
-def _better(model, targets, first, second):
+def _better(model: Any, targets: np.ndarray, first: np.ndarray, second: np.ndarray) -> np.ndarray:
     """Per target, the parameters (K, 2) of ``first`` or ``second`` whose point is closer to it
     (searches from two starts: a search from a node's own parameters can stop at a collapsed edge,
     where the surface's derivative along the edge vanishes)."""
@@ -459,7 +480,8 @@ def _better(model, targets, first, second):
     return np.where(closer[:, None], second, first)
 
 
-def _restart_stuck(model, targets, uv, samples):
+def _restart_stuck(model: Any, targets: np.ndarray, uv: np.ndarray,
+                   samples: tuple[np.ndarray, np.ndarray]) -> np.ndarray:
     """Search again from the nearest sample (parameters (K, 2), distance (K,)) where the search from
     uv ended farther than that sample (a local minimum, e.g. on a closed surface); keep the better."""
     sample_uv, sample_distance = samples
@@ -473,7 +495,7 @@ def _restart_stuck(model, targets, uv, samples):
     return uv
 
 
-def _nearest_samples(samples, targets):
+def _nearest_samples(samples: tuple[np.ndarray, cKDTree], targets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The nearest of the samples ((parameters, k-d tree of their points): :func:`_sample_raster`)
     to each target (K, 3): (parameters (K, 2), distance (K,) mm)."""
     grid, tree = samples
@@ -481,7 +503,7 @@ def _nearest_samples(samples, targets):
     return grid[index], distance
 
 
-def _sample_raster(surface, count=SEARCH_SAMPLES):
+def _sample_raster(surface: FittedSurface, count: int = SEARCH_SAMPLES) -> tuple[np.ndarray, cKDTree]:
     """A count x count raster of the surface's rectangle: (parameters (count^2, 2), a k-d tree
     of its points)."""
     u0, u1, v0, v1 = surface.bounds
@@ -490,7 +512,7 @@ def _sample_raster(surface, count=SEARCH_SAMPLES):
     return grid, cKDTree(surface.points(grid))
 
 
-def closest_parameters(model, targets, uv):
+def closest_parameters(model: Any, targets: np.ndarray, uv: np.ndarray) -> np.ndarray:
     """Parameters (K, 2) of the closest points to targets (K, 3), from uv (K, 2), in the model's box.
 
     model: anything with ``bounds``, ``points(uv)`` and ``derivatives(uv, 2)`` (a NurbsPatch or a
@@ -527,7 +549,7 @@ def closest_parameters(model, targets, uv):
     return uv
 
 
-def _local_model(model, targets, uv):
+def _local_model(model: Any, targets: np.ndarray, uv: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The quadratic model of the squared distance at uv (K, 2): gradient (K, 2) = J^T r (half the
     gradient of |r|^2, r = F(uv) - target) and curvature (K, 3) = the columns a, b, c of half its
     Hessian, J^T J + r . F'' (Newton: quadratic convergence where the surface curves or the
@@ -542,14 +564,14 @@ def _local_model(model, targets, uv):
     return gradient, np.where(definite[:, None], hessian, normal)
 
 
-def _promised_gain(gradient, normal, step):
+def _promised_gain(gradient: np.ndarray, normal: np.ndarray, step: np.ndarray) -> np.ndarray:
     """(K,) the decrease of |r|^2 that the quadratic model promises for a step (K, 2)."""
     a, b, c = normal.T
     su, sv = step.T
     return -2.0 * (gradient * step).sum(1) - (a * su * su + 2.0 * b * su * sv + c * sv * sv)
 
 
-def _next_damping(damping, gain, promised):
+def _next_damping(damping: np.ndarray, gain: np.ndarray, promised: np.ndarray) -> np.ndarray:
     """(K,) the damping after a step that gained ``gain`` (K,) of the ``promised`` (K,) decrease."""
     kept = gain >= 0
     grown = np.where(kept, damping * 10.0, damping * 100.0)
@@ -557,7 +579,8 @@ def _next_damping(damping, gain, promised):
     return np.clip(np.where(good, damping * 0.1, grown), DAMPING_FLOOR, DAMPING_CEILING)
 
 
-def _newton_step(gradient, normal, uv, damping, low, high):
+def _newton_step(gradient: np.ndarray, normal: np.ndarray, uv: np.ndarray, damping: np.ndarray, low: np.ndarray,
+                 high: np.ndarray) -> np.ndarray:
     """Damped Newton step (K, 2) towards the closest points from the local model (gradient
     (K, 2), normal (K, 3): see :func:`_local_model`), damping (K,) relative. A parameter on its
     bound that the step would push out stays there, and the step is taken along the bound in the
@@ -590,7 +613,7 @@ class Linearisation:
     interface the descent's surrogate uses: ``model``, ``space``, ``grid_error``, ``grid_transpose``.
     """
 
-    def __init__(self, face, space, exact):
+    def __init__(self, face: Any, space: SubstituteSpace, exact: ExactDeviation) -> None:
         self.model, self.space = face, space
         sides = (exact.forward, exact.reverse)
         self._signed = np.concatenate([side.values for side in sides])
@@ -601,22 +624,22 @@ class Linearisation:
         self._start = self._rows @ np.asarray(exact.poles).reshape(-1, 3)
 
     @property
-    def rows(self):
+    def rows(self) -> np.ndarray:
         """(2K, n_u n_v) the basis rows at each side's parameters."""
         return self._rows
 
     @property
-    def targets(self):
+    def targets(self) -> tuple[np.ndarray, np.ndarray]:
         """(2K,) each side's deviation at S0, mm, and (2K, 3) the directions they are measured along."""
         return self._signed, self._directions
 
-    def grid_error(self, poles):
+    def grid_error(self, poles: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Over both sides of every node: poles (n_u n_v, 3) or (n_u, n_v, 3) -> (error (3, 2K) =
         d w, distance (2K,) = |d| mm, counted (2K,) all True)."""
         moved = self._rows @ np.asarray(poles).reshape(-1, 3) - self._start
         field = self._signed + (moved * self._directions).sum(1)
         return (field[:, None] * self._directions).T, np.abs(field), np.ones(len(field), dtype=bool)
 
-    def grid_transpose(self, field):
+    def grid_transpose(self, field: np.ndarray) -> np.ndarray:
         """B^T applied to a field (3, 2K) at the sides' parameters: the (n_u * n_v, 3) pole-space result."""
         return self._rows.T @ field.T

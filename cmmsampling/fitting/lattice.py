@@ -16,9 +16,16 @@ the exact figure, see cmmsampling.fitting.deviation); every result is judged exa
 parameters. A face whose tables would exceed LATTICE_LIMIT_BYTES (hundreds of poles along a
 direction) is fitted from the bases evaluated anew.
 """
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
 import numpy as np
 
 from .substitute import band_products
+
+if TYPE_CHECKING:
+    from .substitute import SubstituteSpace
 
 LATTICE_STEPS = 1 << 14
 LATTICE_LIMIT_BYTES = 16 * 2**20
@@ -35,7 +42,7 @@ class LatticeFit:
     table: the face's v basis (n_v); the substitute's v basis (n_v'); its band products (L_v).
     """
 
-    def __init__(self, model, space, steps=LATTICE_STEPS):
+    def __init__(self, model: Any, space: SubstituteSpace, steps: int = LATTICE_STEPS) -> None:
         self.model, self.space, self.steps = model, space, steps
         u0, u1, v0, v1 = model.bounds
         self.lower = np.array([u0, v0])
@@ -55,14 +62,14 @@ class LatticeFit:
         self.reach = float(np.dot(model.speed_bounds(), 1.0 / self.scale))
 
     @staticmethod
-    def _table(face, substitute, degree):
+    def _table(face: np.ndarray, substitute: np.ndarray, degree: int) -> np.ndarray:
         """(steps + 1, columns): the face's columns, the substitute's basis (n, steps + 1) and its
         band products, one row per lattice parameter."""
         return np.ascontiguousarray(np.concatenate([face, substitute.T, band_products(substitute, degree).T],
                                                    axis=1))
 
     @staticmethod
-    def table_bytes(model, space, steps=LATTICE_STEPS):
+    def table_bytes(model: Any, space: SubstituteSpace, steps: int = LATTICE_STEPS) -> int:
         """Bytes the two tables of a LatticeFit of ``model`` and ``space`` take."""
         count = model.weights.shape
         coordinates = 4 if model.rational else 3
@@ -70,16 +77,16 @@ class LatticeFit:
         columns = count[1] * coordinates + space.poles[0] + bands[0] + count[1] + space.poles[1] + bands[1]
         return 8 * (steps + 1) * columns
 
-    def rounded(self, uv):
+    def rounded(self, uv: np.ndarray) -> np.ndarray:
         """uv: (..., 2) rounded to the lattice, the parameters the fit is made at."""
         return self.lower + self._indices(uv) / self.scale
 
-    def _indices(self, uv):
+    def _indices(self, uv: np.ndarray) -> np.ndarray:
         """Lattice indices of uv: (..., 2) -> (..., 2) int in [0, steps]."""
         indices = np.rint((np.asarray(uv, dtype=float) - self.lower) * self.scale).astype(np.intp)
         return np.minimum(np.maximum(indices, 0), self.steps)
 
-    def points_and_poles(self, uv):
+    def points_and_poles(self, uv: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Face points and substitute poles of point sets at uv (P, N, 2) rounded to the lattice.
 
         Returns (points (P, 3, N) mm, coordinate first, poles (P, n_u, n_v, 3) mm).

@@ -12,11 +12,19 @@ nodes lies 33.3 mm from the face at its worst point while the nodes saw 19.1 mm.
 everywhere. At most as many places as the raster has nodes (a judge then costs up to about four
 times an unstretched one's): beyond, every cell's splits are scaled down alike.
 """
+from __future__ import annotations
+
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from .nodes import cell_diagonals
+
+if TYPE_CHECKING:
+    from .nodes import FaceNodes
+    from .substitute import FittedSurface
 
 STRETCH = 1.25
 MOST_SPLITS = 16
@@ -35,12 +43,13 @@ class FinePlaces:
     half: np.ndarray
 
     @classmethod
-    def none(cls):
+    def none(cls) -> FinePlaces:
         """No places."""
         return cls(np.zeros((0, 2)), np.zeros(0, dtype=int), np.zeros((0, 2)))
 
 
-def stretched_places(nodes, surface, on_face=None):
+def stretched_places(nodes: FaceNodes, surface: FittedSurface,
+                     on_face: Callable[[np.ndarray], np.ndarray] | None = None) -> FinePlaces:
     """The FinePlaces of the raster cells where the substitute is stretched (module docstring).
 
     nodes: FaceNodes; surface: the substitute (``points(uv)``, uv (M, 2) -> (M, 3) mm); on_face:
@@ -67,12 +76,12 @@ def stretched_places(nodes, surface, on_face=None):
     return FinePlaces(uv[keep], origin[keep], half[keep])
 
 
-def _within_budget(cells, ratio, most):
+def _within_budget(cells: np.ndarray, ratio: np.ndarray, most: int) -> tuple[np.ndarray, np.ndarray]:
     """(cells (C', 2), splits (C',)): the cells (C, 2) with their splits, the cell's ratio (C,) of
     diagonal to spacing rounded up (2 to MOST_SPLITS), all of them scaled down alike where the
     places would be more than ``most``, and the least stretched cells dropped where even two
     splits each are too many."""
-    def splits_at(scale):
+    def splits_at(scale: float) -> np.ndarray:
         return np.clip(np.ceil(ratio * scale).astype(int), 2, MOST_SPLITS)
 
     scale = 1.0
@@ -87,7 +96,8 @@ def _within_budget(cells, ratio, most):
     return cells[kept], splits[kept]
 
 
-def _cell_places(raster, cells, origin, splits):
+def _cell_places(raster: np.ndarray, cells: np.ndarray, origin: np.ndarray,
+                 splits: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(uv (C m, 2), origin (C m,), half (C m, 2)): the (splits + 1)^2 - 4 places of each cell (C, 2)
     of the raster (g_u, g_v, 2), its corners left out, at steps of a splits-th of the cell."""
     fraction = np.arange(splits + 1) / splits
