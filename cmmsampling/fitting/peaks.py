@@ -14,13 +14,20 @@ within a place's step of a larger one), over that place's step either side. The 
 search found more than its start join the nodes (cmmsampling.fitting.exact), so that the figure
 reported is the local maximum found, not the value at the node beside it.
 """
+from __future__ import annotations
+
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from .nodes import edge_curve_uv
 from .sides import Side
 from .stretch import FinePlaces
+
+if TYPE_CHECKING:
+    from .nodes import FaceNodes
 
 PEAK_SHARE = 0.8
 PEAK_NODES = 64
@@ -44,28 +51,28 @@ class FineStarts:
     reverse: Side
 
     @classmethod
-    def none(cls):
+    def none(cls) -> FineStarts:
         """No places."""
         return cls(FinePlaces.none(), Side.zeros(0), Side.zeros(0))
 
     @property
-    def sizes(self):
+    def sizes(self) -> np.ndarray:
         """(M,) |d| mm, the larger side at each place."""
         return np.maximum(np.abs(self.forward.values), np.abs(self.reverse.values))
 
     @property
-    def start(self):
+    def start(self) -> np.ndarray:
         """(M, 2) the forward sides' parameters on the substitute."""
         return self.forward.at
 
-    def largest(self, largest):
+    def largest(self, largest: float) -> np.ndarray:
         """Indices of at most PEAK_NODES places whose sizes lie within PEAK_SHARE of ``largest``
         mm, largest first, none within a step (FinePlaces.half) of one taken before: a search
         starts from each."""
         sizes = self.sizes
         order = np.argsort(-sizes, kind="stable")
         left = order[(sizes[order] >= PEAK_SHARE * largest) & (largest > 0)]
-        taken = []
+        taken: list[int] = []
         while left.size and len(taken) < PEAK_NODES:
             taken.append(left[0])
             uv, half = self.places.uv, self.places.half[left[0]]
@@ -84,7 +91,9 @@ class Peaks:
     reverse: Side
 
 
-def peak_search(nodes, sizes, start, sides_at, on_face, fine=None):
+def peak_search(nodes: FaceNodes, sizes: np.ndarray, start: np.ndarray,
+                sides_at: Callable[[np.ndarray, np.ndarray, np.ndarray], tuple[Side, Side]],
+                on_face: Callable[[np.ndarray], np.ndarray] | None, fine: FineStarts | None = None) -> Peaks:
     """The Peaks found about the largest nodes: the places where a search found more than its node.
 
     nodes: FaceNodes; sizes: (K,) |d| mm at the counted raster nodes then the edge nodes; start:
@@ -131,7 +140,8 @@ def peak_search(nodes, sizes, start, sides_at, on_face, fine=None):
     return rows.peaks()
 
 
-def _measured(sides_at, uv, keep, origin, start):
+def _measured(sides_at: Callable[[np.ndarray, np.ndarray, np.ndarray], tuple[Side, Side]], uv: np.ndarray,
+              keep: np.ndarray, origin: np.ndarray, start: np.ndarray) -> tuple[Side, Side, np.ndarray]:
     """(forward, reverse, size): the Sides' values, at and directions (M entries each, zero where
     ``keep`` (M,) is False) and |d| (M,) mm (-inf there) at the trials uv (M, 2), measured (by
     sides_at) only where keep says they are on the face."""
@@ -145,7 +155,7 @@ def _measured(sides_at, uv, keep, origin, start):
     return forward, reverse, size
 
 
-def largest_nodes(sizes, peaked, largest=None):
+def largest_nodes(sizes: np.ndarray, peaked: np.ndarray, largest: float | None = None) -> np.ndarray:
     """Indices of the nodes ``peaked`` marks (K,) bool whose sizes (K,) lie within PEAK_SHARE of
     ``largest`` (mm; None: the largest size), at most PEAK_NODES of them, largest first (none
     where that is 0)."""
@@ -154,7 +164,7 @@ def largest_nodes(sizes, peaked, largest=None):
     return order[peaked[order] & (sizes[order] >= PEAK_SHARE * largest) & (largest > 0)]
 
 
-def local_maxima(nodes, sizes):
+def local_maxima(nodes: FaceNodes, sizes: np.ndarray) -> np.ndarray:
     """(K,) True at the nodes whose size is no less than their neighbours': a raster node's 8
     counted raster neighbours, an edge node's neighbours along its run."""
     counted = int(nodes.counted.sum())
@@ -176,13 +186,13 @@ class _Rows:
     """The Side rows at each search's best place found so far (none until it gains); origin (S,)
     the node each search started from."""
 
-    def __init__(self, origin):
+    def __init__(self, origin: np.ndarray) -> None:
         self.origin = origin
         self.gained = np.zeros(len(origin), dtype=bool)
         self.uv = np.zeros((len(origin), 2))
         self.forward, self.reverse = Side.zeros(len(origin)), Side.zeros(len(origin))
 
-    def take(self, gain, pick, uv, forward, reverse):
+    def take(self, gain: np.ndarray, pick: np.ndarray, uv: np.ndarray, forward: Side, reverse: Side) -> None:
         """Keep the trials' rows ``pick`` (S,) where ``gain`` (S,) bool; uv (M, 2) the trials."""
         chosen = pick[gain]
         self.gained |= gain
@@ -190,7 +200,7 @@ class _Rows:
         self.forward.put(gain, forward.rows(chosen))
         self.reverse.put(gain, reverse.rows(chosen))
 
-    def peaks(self):
+    def peaks(self) -> Peaks:
         """The Peaks of the searches that gained."""
         gained = self.gained
         return Peaks(self.uv[gained], self.origin[gained], self.forward.rows(gained), self.reverse.rows(gained))
@@ -200,13 +210,14 @@ class _RasterZoom:
     """Searches over the face's parameters about places on it: centre (R, 2) the best place so
     far; half (R, 2) the next grid's half-widths; low, high (2,) the face's parameter rectangle."""
 
-    def __init__(self, centre, half, low, high, on_face):
+    def __init__(self, centre: np.ndarray, half: np.ndarray, low: np.ndarray, high: np.ndarray,
+                 on_face: Callable[[np.ndarray], np.ndarray] | None) -> None:
         self.centre, self.half = centre, half
         self.low, self.high = low, high
         self.on_face = on_face
         self.grid = np.zeros((len(centre), len(_PLANE), 2))
 
-    def trials(self):
+    def trials(self) -> tuple[np.ndarray, np.ndarray]:
         """(R, T, 2) the grid's places, within the face's rectangle, and (R, T) bool: on the face."""
         self.grid = np.clip(self.centre[:, None, :] + _PLANE * self.half[:, None, :], self.low, self.high)
         keep = np.ones(self.grid.shape[:2], dtype=bool)
@@ -214,7 +225,7 @@ class _RasterZoom:
             keep = self.on_face(self.grid.reshape(-1, 2)).reshape(keep.shape)
         return self.grid, keep
 
-    def move(self, gain, index):
+    def move(self, gain: np.ndarray, index: np.ndarray) -> None:
         """Centre the next grid on trial ``index`` (R,) where ``gain`` (R,) bool; narrow it."""
         rows = np.flatnonzero(gain)
         self.centre[rows] = self.grid[rows, index[rows]]
@@ -226,28 +237,28 @@ class _EdgeZoom:
     the best place so far, a fractional edge node index within its run; half (E,) the next grid's
     half-width, in edge node steps."""
 
-    def __init__(self, nodes, origin):
+    def __init__(self, nodes: FaceNodes, origin: np.ndarray) -> None:
         self.nodes = nodes
         self.place = origin.astype(float)
         self.runs = nodes.edge_runs[origin]
         self.half = np.ones(len(origin))
         self.grid = np.zeros((len(origin), len(_LINE)))
 
-    def trials(self):
+    def trials(self) -> np.ndarray:
         """(E, T, 2) the grid's places on the face, along the edges' curves within their runs."""
         self.grid = np.clip(self.place[:, None] + _LINE * self.half[:, None],
                             self.runs[:, :1], self.runs[:, 1:] - 1.0)
         runs = np.repeat(self.runs, len(_LINE), axis=0)
         return edge_curve_uv(self.nodes, self.grid.ravel(), runs)[0].reshape(len(self.place), len(_LINE), 2)
 
-    def move(self, gain, index):
+    def move(self, gain: np.ndarray, index: np.ndarray) -> None:
         """Centre the next grid on trial ``index`` (E,) where ``gain`` (E,) bool; narrow it."""
         rows = np.flatnonzero(gain)
         self.place[rows] = self.grid[rows, index[rows]]
         self.half /= ZOOM_STEPS
 
 
-def _raster_cells(nodes, origin):
+def _raster_cells(nodes: FaceNodes, origin: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(centre (R, 2), half (R, 2)) of searches about the counted raster nodes ``origin`` (R,):
     the node, and the larger raster step either side of it in u and in v."""
     cells = np.argwhere(nodes.counted)[origin]
@@ -255,7 +266,7 @@ def _raster_cells(nodes, origin):
     return nodes.uv[nodes.counted][origin], half.reshape(-1, 2)
 
 
-def _cell_steps(values, index):
+def _cell_steps(values: np.ndarray, index: np.ndarray) -> np.ndarray:
     """The larger of the raster steps either side of raster value ``index`` (M,) in values (g,)."""
     steps = np.diff(values)
     before = steps[np.maximum(index - 1, 0)]

@@ -28,7 +28,9 @@ length scale serves both directions.
 """
 from __future__ import annotations
 
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from scipy.linalg import cho_factor, cho_solve
@@ -51,7 +53,7 @@ RASTER = 25
 JITTER = 1e-10
 
 
-def mm_per_parameter(model, raster=9):
+def mm_per_parameter(model: Any, raster: int = 9) -> np.ndarray:
     """(2,) mm per unit of u and of v: the face's mean speed along each direction."""
     uv = model.raster((raster, raster)).reshape(-1, 2)
     d = model.derivatives(uv, 1)
@@ -62,22 +64,22 @@ class PlaneCoordinates:
     """Plane coordinates (M, 2) mm of a face's parameters uv (M, 2): uv from the range's lower
     corner scaled by :func:`mm_per_parameter`."""
 
-    def __init__(self, model):
+    def __init__(self, model: Any) -> None:
         self.lower = np.array([model.bounds[0], model.bounds[2]])
         self.scale = mm_per_parameter(model)
 
-    def __call__(self, uv):
+    def __call__(self, uv: np.ndarray) -> np.ndarray:
         return (np.asarray(uv, float).reshape(-1, 2) - self.lower) * self.scale
 
 
-def error_map(model, uv, deviations, query):
+def error_map(model: Any, uv: np.ndarray, deviations: np.ndarray, query: np.ndarray) -> np.ndarray:
     """One part's error map without a series: the kriging of deviations (N,) mm measured at uv
     (N, 2) (:func:`fit_field`), at query (Q, 2): (Q,) mm. model: the face's SurfaceModel."""
     plane = PlaneCoordinates(model)
     return fit_field(plane(uv), deviations)(plane(query))
 
 
-def matern(a, b, length, variance):
+def matern(a: np.ndarray, b: np.ndarray, length: float, variance: float) -> np.ndarray:
     """Matern 5/2 covariance between plane points a (A, 2) and b (B, 2) mm: (A, B) mm^2."""
     r = np.hypot(a[:, None, 0] - b[None, :, 0], a[:, None, 1] - b[None, :, 1]) * (np.sqrt(5.0) / length)
     return variance * (1.0 + r + r * r / 3.0) * np.exp(-r)
@@ -96,12 +98,12 @@ class FieldFit:
     variance: float
     noise: float
 
-    def __call__(self, x):
+    def __call__(self, x: np.ndarray) -> np.ndarray:
         """The field's posterior mean at plane points x (Q, 2) mm: (Q,) mm."""
         return self.mean + matern(np.asarray(x, float), self.x, self.length, self.variance) @ self.weights
 
 
-def fit_field(x, deviations):
+def fit_field(x: np.ndarray, deviations: np.ndarray) -> FieldFit:
     """The FieldFit of deviations (M,) mm measured at plane points x (M, 2) mm, hyper-parameters
     by maximum likelihood (constant mean by generalised least squares, variance in closed form)."""
     x, d = np.asarray(x, float), np.asarray(deviations, float)
@@ -111,7 +113,7 @@ def fit_field(x, deviations):
     np.fill_diagonal(distance, np.inf)
     spacing = float(np.median(distance.min(1)))
     extent = float(np.ptp(x, axis=0).max())
-    best = None
+    best: Any = None   # (log likelihood, mean, variance, length, ratio) of the best fit so far
     for length in np.geomspace(max(0.5 * spacing, 1e-3 * extent), 2.0 * max(extent, 1e-9), LENGTH_STEPS):
         base = matern(x, x, length, 1.0)
         for ratio in NOISE_RATIOS:
@@ -123,7 +125,7 @@ def fit_field(x, deviations):
     return FieldFit(x, cho_solve(factor, d - mean), mean, float(length), float(variance), float(ratio * variance))
 
 
-def _likelihood(base, ratio, d):
+def _likelihood(base: np.ndarray, ratio: float, d: np.ndarray) -> tuple[float, float, float] | None:
     """(log likelihood, mean mm, variance mm^2) of d under correlation ``base`` (M, M) plus
     ``ratio`` noise, both scaled by the variance; None where the matrix is not positive definite."""
     try:
@@ -146,7 +148,7 @@ class SeriesModel:
     face's parameter range, signed deviations (M,) mm) of the points measured on it.
     """
 
-    def __init__(self, model, parts):
+    def __init__(self, model: Any, parts: Sequence[tuple[np.ndarray, np.ndarray]]) -> None:
         if not parts:
             raise InputError("a series model needs at least one earlier part's inspection: give prior=[...]")
         self.model, self.plane = model, PlaneCoordinates(model)
@@ -164,23 +166,23 @@ class SeriesModel:
         self.noise = float(np.mean([field.noise for field in self.fields])) + 1e-30
 
     @property
-    def parts(self):
+    def parts(self) -> int:
         """How many earlier parts the model holds."""
         return len(self.fields)
 
-    def _values(self, x):
+    def _values(self, x: np.ndarray) -> np.ndarray:
         """(M, K) mm: every earlier part's field at plane points x (M, 2)."""
         return np.column_stack([field(x) for field in self.fields])
 
-    def _plane_rows(self, x):
+    def _plane_rows(self, x: np.ndarray) -> np.ndarray:
         """(M, 3) the plane's basis at x: 1 and the two coordinates scaled to [-1, 1]."""
         return np.column_stack([np.ones(len(x)), (x - self.centre) / self.half])
 
-    def systematic(self, uv):
+    def systematic(self, uv: np.ndarray) -> np.ndarray:
         """The systematic error at uv (M, 2): (M,) mm, the mean of the earlier parts' fields."""
         return self._values(self.plane(uv)).mean(1)
 
-    def _features(self, x):
+    def _features(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(M, F) rows whose products give the covariance's low-rank part at plane points x."""
         values = self._values(x)
         mean = values.mean(1, keepdims=True)
@@ -188,24 +190,25 @@ class SeriesModel:
         plane = self._plane_rows(x) * np.sqrt(self.plane_variances)
         return np.column_stack([scatter, SIZE_SCATTER * mean, plane]), mean[:, 0]
 
-    def covariance(self, uv_a, uv_b):
+    def covariance(self, uv_a: np.ndarray, uv_b: np.ndarray) -> np.ndarray:
         """The next part's error covariance between uv_a (A, 2) and uv_b (B, 2): (A, B) mm^2."""
         a, b = self.plane(uv_a), self.plane(uv_b)
         return self._covariance(a, self._features(a)[0], b, self._features(b)[0])
 
-    def _covariance(self, a, features_a, b, features_b):
+    def _covariance(self, a: np.ndarray, features_a: np.ndarray, b: np.ndarray, features_b: np.ndarray) -> np.ndarray:
         """(A, B) mm^2 between plane points a (A, 2) and b (B, 2) whose :meth:`_features` are given."""
         return features_a @ features_b.T + matern(a, b, self.length, self.residual_variance)
 
-    def _variance(self, features):
+    def _variance(self, features: np.ndarray) -> np.ndarray:
         """(Q,) mm^2: the prior variance at the plane points whose :meth:`_features` are given."""
         return (features ** 2).sum(1) + self.residual_variance
 
-    def variance(self, uv):
+    def variance(self, uv: np.ndarray) -> np.ndarray:
         """The next part's error variance at uv (Q, 2) before any point is measured on it: (Q,) mm^2."""
         return self._variance(self._features(self.plane(uv))[0])
 
-    def predict(self, uv, deviations, uv_query):
+    def predict(self, uv: np.ndarray, deviations: np.ndarray,
+                uv_query: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The error map of a part measured at uv (N, 2) with signed deviations (N,) mm, at
         uv_query (Q, 2): (mean (Q,) mm, standard deviation (Q,) mm of the error there)."""
         d = np.asarray(deviations, float)
@@ -221,7 +224,9 @@ class SeriesModel:
         return mean, np.sqrt(np.maximum(own - (cross * cho_solve(factor, cross.T).T).sum(1), 0.0))
 
 
-def greedy_design(series, candidates, n, spaced_out=None, judged=None):
+def greedy_design(series: SeriesModel, candidates: np.ndarray, n: int,
+                  spaced_out: Callable[[int], Any] | None = None,
+                  judged: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """The n candidates that leave the next part's error least known on average, chosen one at
     a time: each the candidate whose measurement lowers the sum of the posterior variances over
     the judged places most (integrated mean squared error, the RMS the error map is judged by).
@@ -239,7 +244,7 @@ def greedy_design(series, candidates, n, spaced_out=None, judged=None):
     count = len(judged)
     variances = series.variance(judged)
     free = np.ones(len(candidates), dtype=bool)
-    chosen = []
+    chosen: list[int] = []
     for _ in range(n):
         if not free.any():
             raise InputError(f"only {len(chosen)} of {n} points fit on the face's feasible domain at the "
