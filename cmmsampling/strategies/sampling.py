@@ -95,7 +95,7 @@ def problem_for(face: Part.Face, settings: SampleSettings, *, strategy: str | No
     domain = setup.domain(settings.edge_offset, reachability)
     by_default = settings.min_spacing is None
     min_spacing = (default_min_spacing(model.area, settings.n, domain.feasible_area) if by_default
-                   else settings.min_spacing)
+                   else cast(float, settings.min_spacing))
     problem = SamplingProblem(model, settings, domain, min_spacing=min_spacing, spacing_by_default=by_default,
                               reachability=reachability)
     _check_room(problem)
