@@ -5,13 +5,23 @@ Every strategy has the signature ``strategy(problem, **options) -> StrategyOutco
 the outcome holds exactly N parameter pairs ``uv: (N, 2)`` inside the face's domain. Points and
 normals follow from ``problem.model``. :data:`RECORDS` describes them to the rest of the project.
 """
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
+
 import numpy as np
 from scipy.spatial import cKDTree
 
 from ..fitting.series import mm_per_parameter
 from ..geometry.bspline import radical_inverse
 from ..geometry.validation import InputError
-from .registry import Strategy, StrategyOutcome
+from .registry import Runner, Strategy, StrategyOutcome
+
+if TYPE_CHECKING:   # for the annotations only: problem's modules import this one
+    from ..geometry.domain import FaceDomain
+    from ..geometry.surface import SurfaceModel
+    from .problem import SamplingProblem
 
 CARTESIAN_RASTER = 121
 NEWTON_STEPS = 30
@@ -29,7 +39,7 @@ STALL_ROUNDS = 3
 STALL_GROWTH = 256
 
 
-def grid_shape(n, aspect=1.0):
+def grid_shape(n: int, aspect: float = 1.0) -> tuple[int, int]:
     """(rows, cols) with rows * cols >= n and cols / rows close to ``aspect`` (width / height).
 
     A perfect fit (e.g. 9 x 9 for 81 on a square) is used when there is one.
@@ -41,6 +51,7 @@ def grid_shape(n, aspect=1.0):
         score = (r * c - n, abs(np.log(c / r / aspect)))
         if best is None or score < best[0]:
             best = (score, (r, c))
+    assert best is not None   # the range above holds at least three rows
     return best[1]
 
 
@@ -48,7 +59,7 @@ def grid_shape(n, aspect=1.0):
 SPACING_BLOCK = 2048
 
 
-def thin_evenly(uv, n):
+def thin_evenly(uv: np.ndarray, n: int) -> np.ndarray:
     """Keep n of the M >= n points, spread evenly along their order: (M, 2) -> (n, 2)."""
     if len(uv) == n:
         return uv
@@ -56,14 +67,14 @@ def thin_evenly(uv, n):
     return uv[keep]
 
 
-def _unit_grid(rows, cols):
+def _unit_grid(rows: int, cols: int) -> np.ndarray:
     """Regular rows x cols grid of the unit square, corners included: (rows * cols, 2)."""
     u = np.linspace(0.0, 1.0, rows) if rows > 1 else np.array([0.5])
     v = np.linspace(0.0, 1.0, cols) if cols > 1 else np.array([0.5])
     return np.stack(np.meshgrid(u, v, indexing="ij"), axis=-1).reshape(-1, 2)
 
 
-def spaced(points, min_spacing, block=SPACING_BLOCK):
+def spaced(points: np.ndarray, min_spacing: float, block: int = SPACING_BLOCK) -> np.ndarray:
     """Indices of a greedy subset of points (M, 3) mm, in their order, at least min_spacing apart.
 
     Point i is kept unless an earlier kept point lies within min_spacing. The points go in
@@ -83,7 +94,7 @@ def spaced(points, min_spacing, block=SPACING_BLOCK):
     return np.flatnonzero(kept)
 
 
-def _spaced_among(points, min_spacing):
+def _spaced_among(points: np.ndarray, min_spacing: float) -> np.ndarray:
     """Indices of the greedy subset of points (B, 3) mm, in their order, at least min_spacing apart."""
     if len(points) < 2:
         return np.arange(len(points))
@@ -98,7 +109,7 @@ def _spaced_among(points, min_spacing):
     return np.flatnonzero(kept)
 
 
-def onto_face(problem, uv):
+def onto_face(problem: SamplingProblem, uv: np.ndarray) -> tuple[np.ndarray, list[str]]:
     """uv (N, 2) with the points OCC finds off the face moved onto it, and notes (list of str)
     saying what was moved (none where nothing was).
 
@@ -118,7 +129,7 @@ def onto_face(problem, uv):
     return uv, notes
 
 
-def respace(problem, uv):
+def respace(problem: SamplingProblem, uv: np.ndarray) -> tuple[np.ndarray, int]:
     """Move the points of uv (N, 2) that crowd others (closer than problem.min_spacing) to free places.
 
     The points are kept greedily in their order; each crowded one goes to the feasible candidate
@@ -145,14 +156,15 @@ def respace(problem, uv):
     return uv, len(uv) - len(kept)
 
 
-def feasible_candidates(problem, count):
+def feasible_candidates(problem: SamplingProblem, count: int) -> np.ndarray:
     """About ``count`` feasible (u, v) of the domain from a Halton set: (M, 2)."""
     index = np.arange(1, 4 * count + 1)
     uv = problem.domain.from_unit(np.column_stack([radical_inverse(index, 2), radical_inverse(index, 3)]))
     return uv[problem.domain.contains(uv)][:count]
 
 
-def _dense_enough(make_candidates, problem, start, keep_first=False, with_layout=False):
+def _dense_enough(make_candidates: Callable[[int], np.ndarray], problem: SamplingProblem, start: int,
+                  keep_first: bool = False, with_layout: bool = False) -> Any:
     """Grow a candidate layout until N of its points are feasible and spaced, then thin it.
 
     make_candidates(m) -> (M, 2) uv for a layout of about m points; start: first m to try;
@@ -190,7 +202,7 @@ def _dense_enough(make_candidates, problem, start, keep_first=False, with_layout
     )
 
 
-def snap_near_misses(domain, uv, cell):
+def snap_near_misses(domain: FaceDomain, uv: np.ndarray, cell: np.ndarray) -> np.ndarray:
     """Move grid nodes that just miss the feasible domain onto it: (M, 2) -> (M, 2).
 
     A node is moved to its nearest feasible point when that is at most one grid cell ``cell``
@@ -202,7 +214,7 @@ def snap_near_misses(domain, uv, cell):
     return np.where(near[:, None], moved, uv)
 
 
-def uniform_parametric(problem):
+def uniform_parametric(problem: SamplingProblem) -> StrategyOutcome:
     """Regular grid in (u, v) (paper eq. 5-6), corners included.
 
     The grid has rows x cols >= N nodes with rows / cols following the face's aspect (its mean
@@ -213,7 +225,7 @@ def uniform_parametric(problem):
     """
     aspect = spatial_aspect(problem.model)
 
-    def candidates(m):
+    def candidates(m: int) -> np.ndarray:
         rows, cols = grid_shape(m, aspect)
         cell = (problem.domain.upper - problem.domain.lower) / [max(rows - 1, 1), max(cols - 1, 1)]
         return snap_near_misses(problem.domain, problem.domain.from_unit(_unit_grid(rows, cols)), cell)
@@ -221,13 +233,13 @@ def uniform_parametric(problem):
     return StrategyOutcome(_dense_enough(candidates, problem, problem.n))
 
 
-def spatial_aspect(model, raster=9):
+def spatial_aspect(model: SurfaceModel, raster: int = 9) -> float:
     """Mean length of the face along v over its mean length along u (both in mm)."""
     along_u, along_v = mm_per_parameter(model, raster) * model.span
     return along_v / along_u if along_u > 0 and along_v > 0 else 1.0
 
 
-def projection_frame(model, raster=CARTESIAN_RASTER):
+def projection_frame(model: SurfaceModel, raster: int = CARTESIAN_RASTER) -> np.ndarray:
     """Axes of the Cartesian footprint: (e1, e2, e3) rows of a (3, 3) array.
 
     e3 is the machine axis (X, Y or Z) closest to the face's mean normal, and e1, e2 are the
@@ -241,7 +253,8 @@ def projection_frame(model, raster=CARTESIAN_RASTER):
     return np.eye(3)[[(axis + 1) % 3, (axis + 2) % 3, axis]]
 
 
-def _solve_footprint(model, frame, targets, seeds):
+def _solve_footprint(model: SurfaceModel, frame: np.ndarray, targets: np.ndarray,
+                     seeds: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Newton solve of (P(u, v) . e1, P(u, v) . e2) = targets.
 
     targets: (M, 2) footprint coordinates in mm; seeds: (M, 2) starting uv.
@@ -264,7 +277,7 @@ def _solve_footprint(model, frame, targets, seeds):
     return uv, residual
 
 
-def uniform_cartesian(problem):
+def uniform_cartesian(problem: SamplingProblem) -> StrategyOutcome:
     """Regular grid in machine coordinates over the face's footprint (paper eq. 3-4).
 
     The footprint is the face seen along the machine axis closest to its mean normal
@@ -283,7 +296,7 @@ def uniform_cartesian(problem):
     tree = cKDTree(foot)
     tolerance = NEWTON_TOLERANCE * max(1.0, float(extent.max()))
 
-    def candidates(m):
+    def candidates(m: int) -> np.ndarray:
         rows, cols = grid_shape(m, extent[1] / extent[0])
         targets = low + _unit_grid(rows, cols) * extent
         seeds = raster_uv[tree.query(targets)[1]]
@@ -298,7 +311,8 @@ def uniform_cartesian(problem):
     return StrategyOutcome(uv)
 
 
-def _check_coverage(problem, face_points, points, axis, count):
+def _check_coverage(problem: SamplingProblem, face_points: np.ndarray, points: np.ndarray, axis: str,
+                    count: int) -> None:
     """ValueError when some of the face lies farther than COVERAGE times the even spacing from
     every node of the footprint grid: the grid missed a steep part, where a fit would extrapolate.
 
@@ -315,35 +329,36 @@ def _check_coverage(problem, face_points, points, axis, count):
             "a fit there would extrapolate); use uniform_parametric, halton or an optimiser for this face")
 
 
-def random_uniform(problem):
+def random_uniform(problem: SamplingProblem) -> StrategyOutcome:
     """Independent uniform random (u, v), seeded by ``problem.seed``; off-face draws are redrawn."""
     rng = np.random.default_rng(problem.seed)
     return StrategyOutcome(_dense_enough(lambda m: problem.domain.from_unit(rng.random((m, 2))),
                                          problem, problem.n))
 
 
-def hammersley(problem):
+def hammersley(problem: SamplingProblem) -> StrategyOutcome:
     """Hammersley set in (u, v): (i / M, radical inverse base 2 of i), i = 0..M-1 (Woo et al. 1995).
 
     M = N on an untrimmed face; on a trimmed face M grows until N points fall inside.
     """
-    def candidates(m):
+    def candidates(m: int) -> np.ndarray:
         i = np.arange(m)
         return problem.domain.from_unit(np.column_stack([(i + 0.5) / m, radical_inverse(i, 2)]))
 
     return StrategyOutcome(_dense_enough(candidates, problem, problem.n))
 
 
-def halton(problem):
+def halton(problem: SamplingProblem) -> StrategyOutcome:
     """Halton sequence in (u, v), bases 2 and 3, starting at index 1: its first N feasible, spaced points."""
-    def candidates(m):
+    def candidates(m: int) -> np.ndarray:
         i = np.arange(1, m + 1)
         return problem.domain.from_unit(np.column_stack([radical_inverse(i, 2), radical_inverse(i, 3)]))
 
     return StrategyOutcome(_dense_enough(candidates, problem, 4 * problem.n + 16, keep_first=True))
 
 
-def _patch_scores(model, domain, patches, curvature, raster_per_patch=8):
+def _patch_scores(model: SurfaceModel, domain: FaceDomain, patches: tuple[int, int], curvature: str,
+                  raster_per_patch: int = 8) -> np.ndarray:
     """Integral of |curvature| over each patch plus a share of its area: (rows, cols).
 
     curvature: "mean" uses |H| (1/mm), "gaussian" uses sqrt|K| (1/mm), so both weigh alike.
@@ -369,7 +384,7 @@ def _patch_scores(model, domain, patches, curvature, raster_per_patch=8):
     return weight.reshape(rows, raster_per_patch, cols, raster_per_patch).sum(axis=(1, 3))
 
 
-def allocate(scores, n):
+def allocate(scores: np.ndarray, n: int) -> np.ndarray:
     """Split n points over patches in proportion to scores (largest remainder): (P,) -> (P,) ints."""
     share = scores / scores.sum() * n
     counts = np.floor(share).astype(int)
@@ -378,7 +393,7 @@ def allocate(scores, n):
     return counts
 
 
-def _points_in_patches(counts, patches):
+def _points_in_patches(counts: np.ndarray, patches: tuple[int, int]) -> np.ndarray:
     """Unit-square points: counts[p] Hammersley points in each patch of a rows x cols split."""
     rows, cols = patches
     flat_counts = counts.ravel()
@@ -391,7 +406,7 @@ def _points_in_patches(counts, patches):
     return (corner + local) / np.array([rows, cols])
 
 
-def curvature_adaptive(problem, curvature="mean"):
+def curvature_adaptive(problem: SamplingProblem, curvature: str = "mean") -> StrategyOutcome:
     """More points where the face bends (Elkott et al. 2002; Obeidat & Raman 2009).
 
     The domain is split into patches (about N / 4 of them); each gets points in proportion to the
@@ -406,19 +421,19 @@ def curvature_adaptive(problem, curvature="mean"):
     patches = grid_shape(max(1, n // 4), dv / du if du > 0 else 1.0)
     scores = _patch_scores(model, problem.domain, patches, curvature).ravel()
 
-    def candidates(m):
+    def candidates(m: int) -> np.ndarray:
         counts = allocate(scores, m).reshape(patches)
         return problem.domain.from_unit(_points_in_patches(counts, patches))
 
     return StrategyOutcome(_dense_enough(candidates, problem, n))
 
 
-def curvature_gaussian(problem):
+def curvature_gaussian(problem: SamplingProblem) -> StrategyOutcome:
     """:func:`curvature_adaptive` weighted by Gaussian curvature."""
     return curvature_adaptive(problem, curvature="gaussian")
 
 
-def _blind(function):
+def _blind(function: Callable[[SamplingProblem], StrategyOutcome]) -> Runner:
     """Adapter: a blind strategy ignores progress and takes no options."""
     return lambda problem, progress: function(problem)
 

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import os
 import time
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -19,6 +19,8 @@ from .settings import Pair, SampleSettings
 
 if TYPE_CHECKING:   # FreeCAD ships no type stubs: to the type checker Part's classes are Any
     import Part
+
+    from .problem import SamplingProblem
 else:
     Part = import_part()
 
@@ -31,7 +33,7 @@ JUDGINGS = 3
 
 def memory_needed(n: int, strategy: str | None = DEFAULT_STRATEGY, *, fit_degree: Pair = DEFAULT_DEGREE,
                   fit_poles: Pair | None = None, grid: Pair = DEFAULT_GRID, workers: int | None = None,
-                  **options) -> int:
+                  **options: Any) -> int:
     """Estimated peak memory (bytes) of :func:`sample` with these arguments, before any run.
 
     The arguments as in :func:`sample` (strategy None: what every run needs). sample() refuses
@@ -45,7 +47,7 @@ def memory_needed(n: int, strategy: str | None = DEFAULT_STRATEGY, *, fit_degree
 def time_needed(face: Part.Face, n: int = 81, strategy: str = DEFAULT_STRATEGY, *, fit_degree: Pair = DEFAULT_DEGREE,
                 fit_poles: Pair | None = None, grid: Pair = DEFAULT_GRID, edge_offset: float = 0.0,
                 min_spacing: float | None = None, workers: int | None = None, part: Part.Shape | None = None,
-                probe: Probe | None = None, **options) -> float | None:
+                probe: Probe | None = None, **options: Any) -> float | None:
     """Estimated seconds of :func:`sample` with these arguments on this face, before the run.
 
     The problem is built (as sample() builds it, the probe's reach on ``part`` included: that
@@ -86,7 +88,7 @@ def time_needed(face: Part.Face, n: int = 81, strategy: str = DEFAULT_STRATEGY, 
     return built_s + steps * per_step
 
 
-def sharing_processes(workers, load=None, cores=None):
+def sharing_processes(workers: int, load: float | None = None, cores: int | None = None) -> int:
     """How many of a run's ``workers`` processes will share its steps: all of them where the
     machine has a core free for each beside what already runs (load: the 1-minute load average,
     default the machine's; cores: default the machine's), else 1, since the default measured
@@ -96,7 +98,7 @@ def sharing_processes(workers, load=None, cores=None):
     return workers if load + workers <= cores + 0.5 else 1
 
 
-def _judging_seconds(problem):
+def _judging_seconds(problem: SamplingProblem) -> float:
     """Seconds of one exact deviation (the judging of a result) on this problem, timed on the
     substitute of the baseline strategy's layout."""
     name = baseline()
@@ -107,7 +109,7 @@ def _judging_seconds(problem):
     return time.perf_counter() - start
 
 
-def _one_step(problem, positions):
+def _one_step(problem: SamplingProblem, positions: np.ndarray) -> None:
     """What an optimiser's step costs: the objective of point sets positions (P, N, 2) and,
     with a spacing, their spacing check."""
     problem.objective(positions)
@@ -115,7 +117,7 @@ def _one_step(problem, positions):
         problem.spaced(positions)
 
 
-def duration_text(seconds):
+def duration_text(seconds: float) -> str:
     """A duration in seconds in words: "under a second", "40 s" (below 2 min), "3 min" (below an
     hour), "1 h 5 min"."""
     if seconds < 1:
@@ -126,11 +128,11 @@ def duration_text(seconds):
     return f"{minutes} min" if minutes < 60 else f"{minutes // 60} h {minutes % 60} min"
 
 
-def about_text(seconds):
+def about_text(seconds: float) -> str:
     """An estimated duration in seconds in words: "about 40 s", or "under a second"."""
     return f"{'' if seconds < 1 else 'about '}{duration_text(seconds)}"
 
 
-def time_left_text(seconds):
+def time_left_text(seconds: float) -> str:
     """"about 40 s left", or "under a second left", for the time a run still needs (seconds)."""
     return f"{about_text(seconds)} left"

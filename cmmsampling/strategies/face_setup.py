@@ -7,13 +7,24 @@ patch) come out the same every time. Inside ``with reused():`` :func:`setup_of` 
 FaceSetup per face object for the whole block; outside one, every call builds its own, so a face
 changed between two calls is never served from an older build.
 """
+from __future__ import annotations
+
 import contextlib
 import contextvars
+from collections.abc import Iterator
+from typing import TYPE_CHECKING
 
 from ..geometry.domain import face_domain
 from ..geometry.surface import SurfaceModel, as_face
 
-_SETUPS = contextvars.ContextVar("cmmsampling_face_setups", default=None)
+if TYPE_CHECKING:   # FreeCAD ships no type stubs: to the type checker Part's classes are Any
+    import Part
+
+    from ..access.reach import Reachability
+    from ..geometry.domain import FaceDomain
+
+_SETUPS: contextvars.ContextVar[dict[int, tuple[Part.Face, FaceSetup]] | None] = contextvars.ContextVar(
+    "cmmsampling_face_setups", default=None)
 
 
 class FaceSetup:
@@ -22,12 +33,12 @@ class FaceSetup:
     face: a Part.Face (or a Shape holding one face), which must not change while this is used.
     """
 
-    def __init__(self, face):
+    def __init__(self, face: Part.Face) -> None:
         self.face = as_face(face)
         self.model = SurfaceModel.from_face(self.face)
-        self._domains = {}
+        self._domains: dict[tuple[float, int], tuple[Reachability | None, FaceDomain]] = {}
 
-    def domain(self, edge_offset=0.0, reachable=None):
+    def domain(self, edge_offset: float = 0.0, reachable: Reachability | None = None) -> FaceDomain:
         """The FaceDomain keeping ``edge_offset`` mm from the edges, and (reachable: None or a
         Reachability) out of what the probe cannot reach; see
         :func:`cmmsampling.geometry.domain.face_domain`."""
@@ -38,7 +49,7 @@ class FaceSetup:
 
 
 @contextlib.contextmanager
-def reused():
+def reused() -> Iterator[None]:
     """Within the block, :func:`setup_of` builds one FaceSetup per face object and hands it out
     again (a block inside another shares the outer one's)."""
     if _SETUPS.get() is not None:
@@ -51,7 +62,7 @@ def reused():
         _SETUPS.reset(token)
 
 
-def setup_of(face):
+def setup_of(face: Part.Face) -> FaceSetup:
     """The FaceSetup of a face: the one built earlier in the current :func:`reused` block for
     this very face object, else a new one (kept for the rest of the block)."""
     setups = _SETUPS.get()

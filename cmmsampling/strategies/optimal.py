@@ -19,7 +19,9 @@ the descent.
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 from scipy.optimize import minimize
@@ -31,6 +33,12 @@ from ..geometry.bspline import kron_rows
 from ..geometry.validation import check_choice, check_int, check_real, check_uv
 from . import blind
 from .registry import STRATEGIES, Setting, Strategy, StrategyOutcome, layouts
+
+if TYPE_CHECKING:   # for the annotations only: sampling imports this module
+    from ..fitting.deviation import DeviationObjective
+    from ..fitting.exact import ExactDeviation
+    from .problem import SamplingProblem
+    from .sampling import Progress
 
 KAPPAS = (10.0, 30.0, 100.0, 300.0, 1000.0, 3000.0, 10000.0)
 STAGE_ITERATIONS = 800
@@ -53,7 +61,7 @@ class Stop(Exception):
     """Raised inside the objective to end the descent (budget spent or cancelled)."""
 
 
-def default_min_spacing(area, n, feasible_area=None):
+def default_min_spacing(area: float, n: int, feasible_area: float | None = None) -> float:
     """The default distance every strategy keeps between points, mm.
 
     A tenth of the spacing of N points spread evenly over a face of ``area`` mm^2, at least
@@ -77,7 +85,8 @@ class Surrogate:
     closest: float
 
 
-def surrogate(objective, uv, tau, min_spacing=0.0, penalty=0.0):
+def surrogate(objective: Linearisation, uv: np.ndarray, tau: float, min_spacing: float = 0.0,
+              penalty: float = 0.0) -> Surrogate:
     """Log-sum-exp surrogate of the maximum deviation and its exact gradient.
 
     objective: a Linearisation (model, space, grid_error, grid_transpose);
@@ -109,7 +118,7 @@ def surrogate(objective, uv, tau, min_spacing=0.0, penalty=0.0):
     return Surrogate(value + spacing_value, gradient, float(distance[inside].max()), closest)
 
 
-def _spacing_penalty(points, min_spacing, weight):
+def _spacing_penalty(points: np.ndarray, min_spacing: float, weight: float) -> tuple[float, np.ndarray, float]:
     """Penalty on pairs closer than min_spacing: (value, d value / d points (N, 3), closest mm).
 
     value = weight * sum over pairs i < j of max(min_spacing - |p_i - p_j|, 0)^2. The close pairs
@@ -151,8 +160,11 @@ class DescentResult:
     hopeless: bool = False
 
 
-def descend(objective, start, lower, upper, judge, min_spacing=0.0, time_limit=None,
-            max_evaluations=None, progress=None, project=None, began=None, stop_at=None):
+def descend(objective: DeviationObjective, start: np.ndarray, lower: np.ndarray, upper: np.ndarray,
+            judge: Callable[[np.ndarray], ExactDeviation], min_spacing: float = 0.0, time_limit: float | None = None,
+            max_evaluations: int | None = None, progress: Progress | None = None,
+            project: Callable[[np.ndarray], np.ndarray] | None = None, began: float | None = None,
+            stop_at: float | None = None) -> DescentResult:
     """Minimise the maximum deviation from the point set ``start`` (N, 2) inside the box.
 
     objective: DeviationObjective (its face model and substitute space);
@@ -180,7 +192,7 @@ def descend(objective, start, lower, upper, judge, min_spacing=0.0, time_limit=N
     tally = _Tally()
     penalty = 100.0 * best.maximum / max(min_spacing, 1e-12) ** 2
 
-    def fun(x, tau, chunk):
+    def fun(x: np.ndarray, tau: float, chunk: _Chunk) -> tuple[float, np.ndarray]:
         uv = lower + x.reshape(-1, 2) * scale
         if project is not None:
             uv = project(uv)
@@ -190,7 +202,7 @@ def descend(objective, start, lower, upper, judge, min_spacing=0.0, time_limit=N
             chunk.uv, chunk.maximum, chunk.closest = uv.copy(), s.maximum, s.closest
         tally.history.append(best.maximum)
         stopped = progress is not None and progress(tally.count, best.maximum)
-        elapsed = time.perf_counter() - began
+        elapsed = time.perf_counter() - cast(float, began)   # set above: the closure sees it as passed
         tally.hopeless = _hopeless(best.maximum, stop_at, elapsed, time_limit)
         out_of_budget = (max_evaluations is not None and tally.count >= max_evaluations) or (
             time_limit is not None and elapsed >= time_limit)
@@ -199,7 +211,7 @@ def descend(objective, start, lower, upper, judge, min_spacing=0.0, time_limit=N
             raise Stop
         return s.value, (s.gradient * scale).ravel()
 
-    def run_chunk(tau, length):
+    def run_chunk(tau: float, length: int) -> bool:
         """One chunk of ``length`` iterations from the best point set; True when it improved on it."""
         chunk = _Chunk()
         try:
@@ -233,7 +245,7 @@ class _Best:
     closest: float
 
     @classmethod
-    def judged(cls, uv, exact, objective, closest) -> _Best:
+    def judged(cls, uv: np.ndarray, exact: ExactDeviation, objective: DeviationObjective, closest: float) -> _Best:
         """uv (N, 2) as the best point set, exact: the ExactDeviation of its substitute."""
         return cls(uv, exact.maximum, Linearisation(objective.model, objective.space, exact), closest)
 
@@ -263,19 +275,19 @@ class _Tally:
     hopeless: bool = False
 
 
-def _hopeless(maximum, stop_at, elapsed, time_limit):
+def _hopeless(maximum: float, stop_at: float | None, elapsed: float, time_limit: float | None) -> bool:
     """True when a run with both a stop_at and a time_limit (s) is HOPELESS_AFTER of its time in
     (elapsed s) and its best maximum (mm) is still over HOPELESS_FACTOR times stop_at (mm)."""
     return (stop_at is not None and time_limit is not None and elapsed >= HOPELESS_AFTER * time_limit
             and maximum > HOPELESS_FACTOR * stop_at)
 
 
-def _enough(best, stop_at):
+def _enough(best: _Best, stop_at: float | None) -> bool:
     """True when the best point set's exact maximum (mm) is at most stop_at (mm, None: never)."""
     return stop_at is not None and best.maximum <= stop_at
 
 
-def _stage(run_chunk):
+def _stage(run_chunk: Callable[[int], bool]) -> None:
     """One stage: chunks of up to CHUNK_ITERATIONS iterations, halved after a chunk that does not
     improve (the linearisation was trusted too far) and doubled after one that does, until
     STAGE_ITERATIONS are spent or a chunk of MIN_CHUNK_ITERATIONS fails."""
@@ -288,7 +300,8 @@ def _stage(run_chunk):
         length = min(2 * length, CHUNK_ITERATIONS) if improved else max(length // 2, MIN_CHUNK_ITERATIONS)
 
 
-def _accept(chunk, best, judge, objective):
+def _accept(chunk: _Chunk, best: _Best, judge: Callable[[np.ndarray], ExactDeviation],
+            objective: DeviationObjective) -> None:
     """Judge the chunk's best iterate exactly; make it the best point set, linearised about its
     substitute, when it is better."""
     if chunk.uv is None:
@@ -305,7 +318,8 @@ OPTIMAL_SETTINGS = (Setting("time_limit", float, "seconds the optimal strategy m
                                                  "converges; in a plan 10 s per run)"),)
 
 
-def run_optimal(problem, progress, start, time_limit, max_evaluations, stop_at):
+def run_optimal(problem: SamplingProblem, progress: Progress | None, start: str | np.ndarray, time_limit: float | None,
+                max_evaluations: int | None, stop_at: float | None) -> StrategyOutcome:
     """Near-optimal points by gradient descent on a smoothed maximum (see cmmsampling.strategies.optimal).
 
     start: "best" (the best of BEST_STARTS by the exact deviation), a strategy name or an (N, 2)
@@ -343,7 +357,7 @@ def run_optimal(problem, progress, start, time_limit, max_evaluations, stop_at):
                            details={"closest": result.closest}, notes=notes)
 
 
-def _start_layout(problem, start, bounded):
+def _start_layout(problem: SamplingProblem, start: str, bounded: bool) -> tuple[np.ndarray, str]:
     """(uv (N, 2), name) of the start named ``start``; for "best", the BEST_STARTS layout of
     smallest maximum deviation (layouts a strategy refuses for this face are skipped): judged
     exactly, or, for a run bounded in time (``bounded``), by the swarm's expansion
@@ -361,13 +375,13 @@ def _start_layout(problem, start, bounded):
     return found[name], name
 
 
-def _optimal_memory(n, poles, nodes, options, workers):
+def _optimal_memory(n: int, poles: tuple[int, int], nodes: int, options: dict[str, Any], workers: int) -> int:
     """The descent's linearisation: (N, K) rows with their two derivatives and (G, K) grid rows."""
     count = poles[0] * poles[1]
     return 8 * count * (3 * n + nodes)
 
 
-def _check_optimal_options(options):
+def _check_optimal_options(options: dict[str, Any]) -> dict[str, Any]:
     """Validate the options of the 'optimal' strategy (merged with defaults)."""
     clean = dict(options)
     if options["time_limit"] is not None:

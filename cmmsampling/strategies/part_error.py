@@ -10,6 +10,10 @@ Halton, Hammersley) the model expects to do better as a whole is returned instea
 map's expected RMS and largest standard deviation over the face (``expected_rms_mm``,
 ``expected_max_sd_mm``), the model's prediction of how well the next part will be known.
 """
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
 import numpy as np
 from scipy.spatial import cKDTree
 
@@ -20,6 +24,10 @@ from .blind import feasible_candidates
 from .optimal import BEST_STARTS
 from .registry import STRATEGIES, Strategy, StrategyOutcome, layouts
 
+if TYPE_CHECKING:   # for the annotations only: sampling imports this module
+    from .problem import SamplingProblem
+    from .sampling import Progress
+
 CANDIDATES = 1200
 JUDGED = 30
 NO_PRIOR = ("part_error places points where the series' earlier parts leave the next part's error least known: "
@@ -27,7 +35,7 @@ NO_PRIOR = ("part_error places points where the series' earlier parts leave the 
             "(cmmsampling.series_model)")
 
 
-def series_of(problem, prior):
+def series_of(problem: SamplingProblem, prior: SeriesModel | list[Any]) -> SeriesModel:
     """The SeriesModel of ``prior`` on the problem's face: prior itself when it is one, else one
     built from its inspections' points (each with ``points`` (M, 3) mm and ``deviations`` (M,) mm)."""
     if isinstance(prior, SeriesModel):
@@ -36,7 +44,8 @@ def series_of(problem, prior):
     return SeriesModel(problem.model, [(nearest(part.points), part.deviations) for part in prior])
 
 
-def run_part_error(problem, progress, prior):
+def run_part_error(problem: SamplingProblem, progress: Progress | None,
+                   prior: SeriesModel | list[Any]) -> StrategyOutcome:
     """Near the fewest-unknowns design for the next part (see the module docstring)."""
     series = series_of(problem, prior)
     candidates = feasible_candidates(problem, candidate_count(problem.n))
@@ -47,7 +56,7 @@ def run_part_error(problem, progress, prior):
     tree = cKDTree(places)
     spacing = problem.min_spacing
 
-    def spaced_out(index):
+    def spaced_out(index: int) -> list[int]:
         return tree.query_ball_point(places[index], spacing) if spacing > 0 else [index]
 
     judged = judged_places(problem, candidates)
@@ -64,7 +73,7 @@ def run_part_error(problem, progress, prior):
     return StrategyOutcome(uv, details=details, notes=notes)
 
 
-def judged_places(problem, candidates):
+def judged_places(problem: SamplingProblem, candidates: np.ndarray) -> np.ndarray:
     """(Q, 2) uv where the error map is judged: a JUDGED x JUDGED raster of the face's parameter
     range, those on the face (inside its trim); the candidates (C, 2) where none is."""
     raster = problem.model.raster((JUDGED, JUDGED)).reshape(-1, 2)
@@ -72,12 +81,13 @@ def judged_places(problem, candidates):
     return on_face if len(on_face) else candidates
 
 
-def _best_design(problem, series, judged, greedy, variances):
+def _best_design(problem: SamplingProblem, series: SeriesModel, judged: np.ndarray, greedy: np.ndarray,
+                 variances: np.ndarray) -> tuple[np.ndarray, np.ndarray, str | None]:
     """(uv (N, 2), posterior variances (Q,) mm^2 at the judged places (Q, 2), the blind layout's name or
     None): the greedy design, or a blind layout of BEST_STARTS (those the face takes) where the
     model expects a smaller sum of variances after it; choosing one point at a time is not
     always the best set of N."""
-    best = (greedy, variances, None)
+    best: tuple[np.ndarray, np.ndarray, str | None] = (greedy, variances, None)
     for name, uv in layouts(problem, optional=BEST_STARTS).items():
         spread = series.predict(uv, np.zeros(len(uv)), judged)[1] ** 2
         if spread.sum() < best[1].sum():
@@ -85,19 +95,19 @@ def _best_design(problem, series, judged, greedy, variances):
     return best
 
 
-def candidate_count(n):
+def candidate_count(n: int) -> int:
     """How many feasible places the N points are chosen among: CANDIDATES, or 4 N for more points."""
     return max(CANDIDATES, 4 * n)
 
 
-def _part_error_memory(n, poles, nodes, options, workers):
+def _part_error_memory(n: int, poles: tuple[int, int], nodes: int, options: dict[str, Any], workers: int) -> int:
     """The posterior covariance of the judged places and candidates with the candidates, and the
     temporaries of its updates: 4 (Q + C, C) arrays."""
     count = candidate_count(n)
     return 4 * 8 * (JUDGED ** 2 + count) * count
 
 
-def _check_part_error_options(options):
+def _check_part_error_options(options: dict[str, Any]) -> dict[str, Any]:
     """The prior must be given: a SeriesModel or a non-empty list of inspections."""
     prior = options["prior"]
     if prior is None or (not isinstance(prior, SeriesModel) and len(list(prior)) == 0):

@@ -1,6 +1,9 @@
 """SamplingProblem: everything a strategy needs to place N points on one face."""
 from __future__ import annotations
 
+from collections.abc import Callable
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from ..fitting.bound import minimax_bound, minimax_bracket
@@ -11,6 +14,12 @@ from ..geometry.domain import FaceDomain
 from ..geometry.surface import SurfaceModel
 from ..runtime.parallel import TwoProcessObjective
 from .settings import SampleSettings
+
+if TYPE_CHECKING:   # for the annotations only
+    from ..access.reach import Reachability
+    from ..fitting.bound import MinimaxBound
+    from ..fitting.deviation import DeviationObjective
+    from ..fitting.exact import ExactDeviation
 
 
 CHECK_DENSITY = 3
@@ -33,7 +42,8 @@ class SamplingProblem:
     """
 
     def __init__(self, model: SurfaceModel, settings: SampleSettings, domain: FaceDomain, *,
-                 min_spacing: float, spacing_by_default: bool = False, reachability=None) -> None:
+                 min_spacing: float, spacing_by_default: bool = False,
+                 reachability: Reachability | None = None) -> None:
         self.model = model
         self.settings = settings
         self.reachability = reachability
@@ -46,18 +56,18 @@ class SamplingProblem:
         self.domain = domain
         self.space = SubstituteSpace(settings.fit_degree, settings.fit_poles, model.bounds, settings.smoothing)
         self.grid = EvaluationGrid(model, settings.grid)
-        self._objective = None
-        self._check = None
-        self._bounds = None
+        self._objective: DeviationObjective | None = None
+        self._check: DeviationObjective | None = None
+        self._bounds: LocalBounds | None = None
         self._judged: dict[bool, list] = {}
 
     @property
-    def reached(self):
+    def reached(self) -> Callable[[np.ndarray], np.ndarray] | None:
         """uv (..., 2) -> (...) bool, where the probe reaches the face, the only part of it a
         substitute is judged over; None when no probe was asked (the whole face is judged)."""
         return None if self.domain.unreached is None else self.domain.reached
 
-    def spacing_advice(self):
+    def spacing_advice(self) -> str:
         """How to let more points in, in words that say whether the caller chose the spacing."""
         if self.spacing_by_default:
             return (f"the default spacing of {self.min_spacing:.3g} mm applies; lower n or pass a "
@@ -65,14 +75,14 @@ class SamplingProblem:
         return "lower n or min_spacing"
 
     @property
-    def objective(self):
+    def objective(self) -> DeviationObjective:
         """The batched maximum-deviation objective on the grid's nodes (built on first use)."""
         if self._objective is None:
             self._objective = self._reference_objective(self.grid)
         return self._objective
 
     @property
-    def check_objective(self):
+    def check_objective(self) -> DeviationObjective:
         """The objective on the check grid, CHECK_DENSITY times denser per direction (built on first use).
 
         Optimising on a grid partly fits its nodes; every result is also judged here.
@@ -82,11 +92,11 @@ class SamplingProblem:
             self._check = self._reference_objective(EvaluationGrid(self.model, size))
         return self._check
 
-    def _reference_objective(self, grid):
+    def _reference_objective(self, grid: EvaluationGrid) -> DeviationObjective:
         """A DeviationObjective on ``grid``'s nodes of the face."""
         return deviation_objective(self.model, self.space, grid, self.domain.on_face, self.reached)
 
-    def judge(self, poles, check=False):
+    def judge(self, poles: np.ndarray, check: bool = False) -> ExactDeviation:
         """The exact two-sided deviation (cmmsampling.fitting.exact.ExactDeviation) of the substitute
         with ``poles`` (n_u, n_v, 3) mm at the nodes of the grid or the check grid (the last
         JUDGED_KEPT judged on each are kept and not judged again)."""
@@ -102,25 +112,25 @@ class SamplingProblem:
         del kept[:-JUDGED_KEPT]
         return exact
 
-    def bound_bracket(self, poles, level=None):
+    def bound_bracket(self, poles: np.ndarray, level: float | None = None) -> tuple[float, float]:
         """(lower, upper) mm around the local bound on the grid about the substitute with ``poles``
         (n_u, n_v, 3) mm, in milliseconds; level: mm, stop once it lies outside
         (cmmsampling.fitting.bound.minimax_bracket)."""
         return minimax_bracket(self.space, self.judge(poles), level)
 
-    def exact(self, uv):
+    def exact(self, uv: np.ndarray) -> ExactDeviation:
         """The ExactDeviation, on the grid, of the substitute fitted at uv (N, 2)."""
         return self.judge(self.objective.fit(np.asarray(uv, dtype=float)[None])[0])
 
-    def exact_maximum(self, uv):
+    def exact_maximum(self, uv: np.ndarray) -> float:
         """Exact maximum deviation (mm) of the substitute fitted at uv (N, 2), on the grid."""
         return self.exact(uv).maximum
 
-    def deviation(self, poles, check=False):
+    def deviation(self, poles: np.ndarray, check: bool = False) -> DeviationStats:
         """Exact deviation statistics (DeviationStats, mm) of a substitute on the grid or check grid."""
         return DeviationStats.from_exact(self.judge(poles, check))
 
-    def bounds(self, poles=None):
+    def bounds(self, poles: np.ndarray | None = None) -> LocalBounds:
         """Local bounds (MinimaxBound, mm) about a substitute on the grid and on the check grid: the
         least first-order maximum deviation that moving its poles along its normals could reach
         (see cmmsampling.fitting.bound: a local figure, not a bound over every point set). poles:
@@ -132,7 +142,7 @@ class SamplingProblem:
             return self._bounds
         about = self.objective.reference_poles() if poles is None else poles
 
-        def compute(check):
+        def compute(check: bool) -> MinimaxBound:
             grid = (self.check_objective if check else self.objective).grid.size
             return minimax_bound(self.space, self.judge(about, check), grid)
 
@@ -141,19 +151,19 @@ class SamplingProblem:
             self._bounds = found
         return found
 
-    def swarm_objective(self):
+    def swarm_objective(self) -> DeviationObjective | TwoProcessObjective:
         """The objective for whole swarms: split over two processes when workers == 2 (where
         that is faster, measured as it runs, when the caller left workers to the default)."""
         if self.workers == 2:
             return TwoProcessObjective(self.objective, measured=self.measured_split)
         return self.objective
 
-    def spaced(self, uv, rows=None):
+    def spaced(self, uv: np.ndarray, rows: np.ndarray | None = None) -> np.ndarray:
         """True for the point sets uv[rows] (uv: (P, N, 2)) that keep min_spacing: (len(rows),) bool,
         all P when rows is None."""
         return self.objective.spaced(uv, self.min_spacing, rows)
 
-    def project(self, uv):
+    def project(self, uv: np.ndarray) -> np.ndarray:
         """Map uv: (..., 2) onto the face's domain."""
         return self.domain.project(np.asarray(uv, dtype=float))
 
@@ -162,11 +172,11 @@ class LocalBounds(dict):
     """{"grid": MinimaxBound, "check": MinimaxBound}, each computed on first access by
     compute(check: bool)."""
 
-    def __init__(self, compute):
+    def __init__(self, compute: Callable[[bool], MinimaxBound]) -> None:
         super().__init__()
         self._compute = compute
 
-    def __missing__(self, key):
+    def __missing__(self, key: str) -> MinimaxBound:
         if key not in ("grid", "check"):
             raise KeyError(key)
         self[key] = self._compute(key == "check")

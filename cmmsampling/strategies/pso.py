@@ -13,8 +13,12 @@ size; a coordinate pushed out of the feasible set is projected back and its velo
 Below the algorithm, the strategy: :func:`run_pso` runs it on a sampling problem and :data:`RECORD`
 describes it to the rest of the project.
 """
+from __future__ import annotations
+
 import time
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -23,6 +27,12 @@ from ..geometry.validation import InputError, check_int, check_real
 from ..runtime import memory
 from . import blind
 from .registry import STRATEGIES, Setting, Strategy, StrategyOutcome, layouts
+
+if TYPE_CHECKING:   # for the annotations only: sampling imports this module
+    from ..fitting.deviation import DeviationObjective
+    from ..runtime.parallel import TwoProcessObjective
+    from .problem import SamplingProblem
+    from .sampling import Progress
 
 
 @dataclass
@@ -52,7 +62,7 @@ class SwarmResult:
     cancelled: bool
 
 
-def inertia(iteration, settings):
+def inertia(iteration: int, settings: SwarmSettings) -> float:
     """Inertia weight at iteration 1..iterations, linear from w1 to w2."""
     if settings.iterations == 1:
         return settings.w1
@@ -60,7 +70,8 @@ def inertia(iteration, settings):
     return settings.w1 - fraction * (settings.w1 - settings.w2)
 
 
-def _initial_swarm(rng, lower, upper, n_points, settings, seeds):
+def _initial_swarm(rng: np.random.Generator, lower: np.ndarray, upper: np.ndarray, n_points: int,
+                   settings: SwarmSettings, seeds: Sequence[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Random positions in the box, the first particles replaced by the given seed layouts."""
     shape = (settings.population, n_points, 2)
     positions = lower + rng.random(shape) * (upper - lower)
@@ -71,7 +82,8 @@ def _initial_swarm(rng, lower, upper, n_points, settings, seeds):
     return positions, velocities, limit
 
 
-def _attraction(positions, personal, best, r1, r2, settings):
+def _attraction(positions: np.ndarray, personal: np.ndarray, best: np.ndarray, r1: np.ndarray, r2: np.ndarray,
+                settings: SwarmSettings) -> np.ndarray:
     """c1 r1 (pbest - x) + c2 r2 (gbest - x) for the whole swarm, computed in r1 and r2 in place.
 
     positions, personal, r1, r2: (P, N, 2); best: (N, 2). Returns r1.
@@ -84,7 +96,8 @@ def _attraction(positions, personal, best, r1, r2, settings):
     return r1
 
 
-def _screened(values, positions, personal_values, admissible):
+def _screened(values: np.ndarray, positions: np.ndarray, personal_values: np.ndarray,
+              admissible: Callable[[np.ndarray, np.ndarray], np.ndarray] | None) -> np.ndarray:
     """values (P,) with inf where a position that would improve its personal best is inadmissible."""
     if admissible is None:
         return values
@@ -94,7 +107,7 @@ def _screened(values, positions, personal_values, admissible):
     return values
 
 
-def _scores(objective, positions, personal_values):
+def _scores(objective: Callable[..., np.ndarray], positions: np.ndarray, personal_values: np.ndarray) -> np.ndarray:
     """objective(positions), told the personal bests to beat where it takes them (its ``beats``
     attribute is True: values that do not beat them may come back as any lower value that still
     does not)."""
@@ -103,8 +116,11 @@ def _scores(objective, positions, personal_values):
     return objective(positions)
 
 
-def particle_swarm(objective, lower, upper, n_points, settings, seeds=(), project=None, progress=None,
-                   admissible=None):
+def particle_swarm(objective: Callable[..., np.ndarray], lower: np.ndarray, upper: np.ndarray, n_points: int,
+                   settings: SwarmSettings, seeds: Sequence[np.ndarray] = (),
+                   project: Callable[[np.ndarray], np.ndarray] | None = None,
+                   progress: Callable[[int, float, np.ndarray], bool | None] | None = None,
+                   admissible: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None) -> SwarmResult:
     """Minimise objective over sets of n_points points in the box [lower, upper].
 
     objective: callable (P, N, 2) -> (P,), or with a true ``beats`` attribute (uv, above (P,)) ->
@@ -166,8 +182,8 @@ PSO_SETTINGS = (Setting("iterations", int, "PSO iterations (default 3000, the pa
                 Setting("population", int, "PSO particles (default 25, the paper's)"))
 
 
-def run_pso(problem, progress, population, iterations, w1, w2, c1, c2, velocity_limit,
-            start_from_uniform):
+def run_pso(problem: SamplingProblem, progress: Progress | None, population: int, iterations: int, w1: float,
+            w2: float, c1: float, c2: float, velocity_limit: float, start_from_uniform: bool) -> StrategyOutcome:
     """The paper's PSO (eq. 7-9) on the problem's maximum-deviation objective.
 
     The swarm scores point sets by the expanded deviation (cmmsampling.fitting.deviation). With
@@ -213,14 +229,15 @@ class ExactProgress:
     JUDGING_SHARE = 0.05
     MIN_INTERVAL_S = 0.5
 
-    def __init__(self, problem, progress, seeds, iterations):
+    def __init__(self, problem: SamplingProblem, progress: Progress, seeds: Sequence[np.ndarray],
+                 iterations: int) -> None:
         self.problem, self.progress, self.iterations = problem, progress, iterations
         self.floor = min((problem.exact_maximum(uv) for uv in seeds), default=np.inf)
-        self.maximum = None
-        self.judged_value = None
+        self.maximum: float | None = None
+        self.judged_value: float | None = None
         self.next_time = 0.0
 
-    def __call__(self, iteration, best_value, best):
+    def __call__(self, iteration: int, best_value: float, best: np.ndarray) -> bool | None:
         """Judge the swarm's best where due; returns what progress returns."""
         now = time.perf_counter()
         due = now >= self.next_time or iteration == self.iterations
@@ -232,7 +249,8 @@ class ExactProgress:
         return self.progress(iteration, self.maximum if self.maximum is not None else self.floor)
 
 
-def _process_notes(problem, objective):
+def _process_notes(problem: SamplingProblem,
+                   objective: DeviationObjective | TwoProcessObjective) -> tuple[list[str], dict[str, Any]]:
     """(notes, details) on the processes that scored the swarm: details {"processes": 1 or 2},
     2 when the second process took part; a note when it was asked for (workers=2) but could not
     help, with the reason."""
@@ -245,7 +263,7 @@ def _process_notes(problem, objective):
     return notes, {"processes": used}
 
 
-def _uniform_seeds(problem):
+def _uniform_seeds(problem: SamplingProblem) -> dict[str, tuple[np.ndarray, list[str]]]:
     """{label: (uv (N, 2), notes)} of the uniform layouts that fit the face (uniform Cartesian
     may refuse), as their strategies deliver them: with the points OCC finds off the face moved
     onto it and notes saying so (blind.onto_face)."""
@@ -253,7 +271,8 @@ def _uniform_seeds(problem):
     return {STRATEGIES[name].label: blind.onto_face(problem, uv) for name, uv in found.items()}
 
 
-def _best_exact(problem, found, seeds):
+def _best_exact(problem: SamplingProblem, found: np.ndarray,
+                seeds: dict[str, tuple[np.ndarray, list[str]]]) -> tuple[np.ndarray, list[str]]:
     """The swarm's best point set, or a seed layout where that is better by the exact deviation,
     each as it is delivered (the swarm's best with the points OCC finds off the face moved onto
     it, blind.onto_face), so that the figures a note quotes are the result's.
@@ -272,7 +291,7 @@ def _best_exact(problem, found, seeds):
                 f"against {maxima[0]:.4g} mm); that layout is returned", *notes]
 
 
-def _pso_memory(n, poles, nodes, options, workers):
+def _pso_memory(n: int, poles: tuple[int, int], nodes: int, options: dict[str, Any], workers: int) -> int:
     """PSO fits its whole swarm at once: about 1.25 (P/W, K, K) float64 arrays and the fits'
     lattice tables (at most LATTICE_LIMIT_BYTES) in each of its W processes, and each process
     beyond the first holds a copy of the problem (bytes)."""
@@ -282,7 +301,7 @@ def _pso_memory(n, poles, nodes, options, workers):
             + (workers - 1) * (memory.FIXED_BYTES + 16 * count ** 2))
 
 
-def _check_pso_options(options):
+def _check_pso_options(options: dict[str, Any]) -> dict[str, Any]:
     """Validate PSO options (already merged with defaults); returns the cleaned dict."""
     clean = dict(options)
     clean["population"] = check_int("population", options["population"], 2)

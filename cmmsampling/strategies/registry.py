@@ -6,13 +6,16 @@ the built-in ones, a user's module calls :func:`register_strategy`.
 """
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 
 from ..geometry.validation import InputError, InputTypeError
+
+if TYPE_CHECKING:   # for the annotations only
+    from .problem import SamplingProblem
 
 
 class OptionsCheck(Protocol):
@@ -103,7 +106,7 @@ class Strategy:
     memory: MemoryNeed | None = None
     requires: tuple[str, ...] = ()
 
-    def checked_options(self, options):
+    def checked_options(self, options: dict[str, Any]) -> dict[str, Any]:
         """The defaults updated by ``options``, validated: TypeError for an option it does not take."""
         unknown = sorted(set(options) - set(self.options))
         if unknown:
@@ -112,7 +115,7 @@ class Strategy:
         merged = {**self.options, **options}
         return self.check(merged) if self.check else merged
 
-    def progress_steps(self, options):
+    def progress_steps(self, options: dict[str, Any]) -> int | None:
         """How many progress steps a run with ``options`` (given ones; the rest default) will
         report, or None when that is not known in advance."""
         if self.progress_total is None:
@@ -143,12 +146,12 @@ def strategy_label(name: str) -> str:
     return STRATEGIES[name].label if name in STRATEGIES else name
 
 
-def baseline():
+def baseline() -> str:
     """The name of the layout the studies' and tables' ratios divide by (its record says baseline)."""
     return next(name for name, entry in STRATEGIES.items() if entry.baseline)
 
 
-def strategy_options(strategy, options):
+def strategy_options(strategy: str, options: dict[str, Any]) -> dict[str, Any]:
     """The strategy's options: defaults updated by ``options``, validated.
 
     Raises TypeError for an option the strategy does not take (listing those it does).
@@ -156,13 +159,14 @@ def strategy_options(strategy, options):
     return STRATEGIES[strategy].checked_options(options)
 
 
-def self_contained():
+def self_contained() -> list[str]:
     """Names of the strategies that need nothing beyond the face (no ``requires``), in order:
     those a study, a plan or a panel runs without being told more."""
     return [name for name, entry in STRATEGIES.items() if not entry.requires]
 
 
-def layouts(problem, required=(), optional=()):
+def layouts(problem: SamplingProblem, required: Sequence[str] = (),
+            optional: Sequence[str] = ()) -> dict[str, np.ndarray]:
     """{name: uv (N, 2)} of the named strategies' layouts with their default options, in the order
     given; a refusal (InputError) of a required one is raised, an optional one is left out."""
     found = {}

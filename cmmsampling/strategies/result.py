@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
@@ -12,7 +12,12 @@ from ..geometry.validation import InputError
 from .blind import projection_frame
 
 if TYPE_CHECKING:   # for the annotations only: the modules import this one
-    from ..access.reach import Access
+    import Part   # FreeCAD ships no type stubs: to the type checker Part's classes are Any
+
+    from ..access.probe import Motion
+    from ..access.probe_moves import ProbeMoves
+    from ..access.reach import Access, Reachability
+    from ..fitting.bound import MinimaxBound
     from ..fitting.deviation import DeviationStats
     from ..fitting.substitute import SubstituteSpace
     from ..geometry.surface import SurfaceModel
@@ -60,40 +65,40 @@ class SamplingResult:
     _check: DeviationStats | None = field(default=None, repr=False)
 
     @property
-    def check(self):
+    def check(self) -> DeviationStats:
         """DeviationStats at the nodes of the check grid, 3x denser than the grid optimised on."""
         if self._check is None:
-            self._check = self.problem.deviation(self.poles, check=True)
+            self._check = cast("SamplingProblem", self.problem).deviation(self.poles, check=True)
         return self._check
 
     @property
-    def exact(self):
+    def exact(self) -> bool:
         """True when the substitute reproduces the face to rounding (e.g. a plane): every point set
         is then as good as any other."""
         return self.deviation.maximum <= EXACT_FIT * self.model.diagonal
 
     @property
-    def n(self):
+    def n(self) -> int:
         """Number of probe points."""
         return len(self.uv)
 
     @property
-    def face(self):
+    def face(self) -> Part.Face:
         """The face as it was given."""
         return self.model.source_face
 
     @property
-    def substitute(self):
+    def substitute(self) -> Part.BSplineSurface:
         """The fitted substitute surface as a Part.BSplineSurface over the face's parameter range
         (the surface the deviation is measured on; never extended beyond it)."""
         return substitute_surface(self.space, self.poles)
 
-    def substitute_shape(self):
+    def substitute_shape(self) -> Part.Face:
         """The delivered substitute as a Part.Face: :attr:`substitute` trimmed like the face in the
         parameter plane (the document's Substitute surface)."""
         return trimmed_like(self.face, self.substitute)
 
-    def bounds(self):
+    def bounds(self) -> dict[str, MinimaxBound]:
         """Local bounds about this result's substitute, mm: the least maximum deviation that
         moving its poles along its normals could reach (cmmsampling.fitting.bound).
 
@@ -101,22 +106,22 @@ class SamplingResult:
         call (about a second), then kept.
         """
         if self._bounds is None:
-            self._bounds = self.problem.bounds(self.poles)
+            self._bounds = cast("SamplingProblem", self.problem).bounds(self.poles)
         return self._bounds
 
-    def bound_exceeds(self, level):
+    def bound_exceeds(self, level: float) -> tuple[bool, float]:
         """(exceeds, bound): whether the local bound on the grid (:meth:`bounds`) exceeds ``level``
         mm, and that bound (mm) where telling took computing it, else NaN. A bracket around it
         (reweighted least squares, milliseconds) tells where it lies wholly above or below
         ``level``; the linear programme (a quarter of a second on a 30 x 30 grid) only where not."""
         if self._bounds is None or "grid" not in self._bounds:
-            lower, upper = self.problem.bound_bracket(self.poles, level)
+            lower, upper = cast("SamplingProblem", self.problem).bound_bracket(self.poles, level)
             if lower > level or upper <= level:
                 return lower > level, float("nan")
         bound = self.bounds()["grid"].lower
         return bound > level, bound
 
-    def multiple_of_bound(self, check=False):
+    def multiple_of_bound(self, check: bool = False) -> float:
         """Maximum deviation as a multiple of the local bound about this substitute (about 1 when
         no reshaping of it along its normals lowers its maximum; see :meth:`bounds`), on the grid
         or the check grid; 1 when the fit is exact (see :attr:`exact`)."""
@@ -127,11 +132,11 @@ class SamplingResult:
         return maximum / bound if bound > 0 else float("inf")
 
     @property
-    def labels(self):
+    def labels(self) -> list[str]:
         """Point labels P1..PN."""
         return [f"P{i + 1}" for i in range(self.n)]
 
-    def summary(self):
+    def summary(self) -> dict[str, Any]:
         """The headline figures as a dict (deviations in mm, times in s)."""
         return {
             "strategy": self.strategy,
@@ -143,7 +148,7 @@ class SamplingResult:
             "cancelled": self.cancelled,
         }
 
-    def __repr__(self):
+    def __repr__(self) -> str:
         d = self.deviation
         return (
             f"<SamplingResult {self.strategy} N={self.n} max={d.maximum:.4f} mm "
@@ -151,11 +156,11 @@ class SamplingResult:
             f"{' (cancelled)' if self.cancelled else ''}>"
         )
 
-    def substitute_grid(self):
+    def substitute_grid(self) -> np.ndarray:
         """The substitute surface on the evaluation raster: (g_u, g_v, 3) mm."""
         return self.space.evaluate(self.poles, self.deviation.grid_uv)
 
-    def map_coordinates(self):
+    def map_coordinates(self) -> tuple[np.ndarray, np.ndarray, tuple[str, ...]]:
         """Plot coordinates of the deviation grid and of the probe points, with axis labels.
 
         Returns (grid (g_u, g_v, 2), points (N, 2), (x label, y label)): the machine footprint in
@@ -168,7 +173,7 @@ class SamplingResult:
         xy, names, frame = view
         return xy, self.points @ frame[:2].T, tuple(f"{name} (mm)" for name in names)
 
-    def probe_moves(self, motion=None):
+    def probe_moves(self, motion: Motion | None = None) -> ProbeMoves:
         """The collision-free probe path through the points (cmmsampling.access.probe_moves.ProbeMoves;
         motion: the CMM's speeds for the time estimate, a Motion). ValueError for a run made without
         the part (``sample(..., part=)``) or with points the probe cannot reach."""
@@ -180,10 +185,10 @@ class SamplingResult:
             raise InputError(f"the probe cannot reach {np.count_nonzero(~access.reachable)} of the points ({blocked}); "
                              "sample again with part= (the run keeps to what the probe reaches) or export with "
                              "order='short_path'")
-        reachability = self.problem.reachability
+        reachability = cast("Reachability", cast("SamplingProblem", self.problem).reachability)
         return moves_through(reachability.probe, reachability.obstacles, self.points, self.normals, access.axes, motion)
 
-    def point_table(self):
+    def point_table(self) -> list[tuple[str | float, ...]]:
         """Per-point rows (label, x, y, z, i, j, k, u, v) as a list of tuples."""
         return [
             (label, *map(float, p), *map(float, nrm), *map(float, uv))
@@ -191,7 +196,7 @@ class SamplingResult:
         ]
 
 
-def footprint(model, uv):
+def footprint(model: SurfaceModel, uv: np.ndarray) -> tuple[np.ndarray, tuple[str, ...], np.ndarray] | None:
     """The face seen along the machine axis closest to its mean normal.
 
     model: the face's SurfaceModel; uv: (g_u, g_v, 2) grid of parameters. Returns (xy (g_u, g_v,

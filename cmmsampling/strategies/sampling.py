@@ -7,7 +7,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 from dataclasses import asdict
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
@@ -34,6 +34,9 @@ from .settings import KEYWORDS, MIN_POINTS, Pair, SampleSettings, resolve_fit_po
 
 if TYPE_CHECKING:   # FreeCAD ships no type stubs: to the type checker Part's classes are Any
     import Part
+
+    from ..fitting.bound import MinimaxBound
+    from ..geometry.surface import SurfaceModel
 else:
     Part = import_part()
 
@@ -92,7 +95,7 @@ def problem_for(face: Part.Face, settings: SampleSettings, *, strategy: str | No
     domain = setup.domain(settings.edge_offset, reachability)
     by_default = settings.min_spacing is None
     min_spacing = (default_min_spacing(model.area, settings.n, domain.feasible_area) if by_default
-                   else settings.min_spacing)
+                   else cast(float, settings.min_spacing))
     problem = SamplingProblem(model, settings, domain, min_spacing=min_spacing, spacing_by_default=by_default,
                               reachability=reachability)
     _check_room(problem)
@@ -110,7 +113,8 @@ def check_arguments(strategy: str, arguments: dict, n: int = MIN_POINTS) -> None
     check_probe(arguments.get("probe"))
 
 
-def _reachability(part, probe, face):
+def _reachability(part: Part.Shape | Reachability | None, probe: Probe | None,
+                  face: Part.Face) -> Reachability | None:
     """The Reachability of a probe on a part (part itself when it is one), None without a part;
     TypeError for a part that is no shape or a probe that is no Probe, InputError for a part
     that face (a Part.Face) is not on."""
@@ -131,7 +135,7 @@ def _reachability(part, probe, face):
     return Reachability(part, probe)
 
 
-def _refuse_off_part(part, on):
+def _refuse_off_part(part: Part.Shape, on: bool) -> None:
     """InputError unless the face lies on part (a Part.Shape), as ``on`` says: the probe's reach would
     be judged on another part."""
     if not on:
@@ -157,7 +161,7 @@ def _check_memory(settings: SampleSettings, strategy: str | None, options: dict)
     poles = settings.fit_poles
     what = f"{strategy or 'the fit'}, a substitute of {poles[0]} x {poles[1]} poles"
 
-    def largest_n(free):
+    def largest_n(free: float) -> int | None:
         low, high = MIN_POINTS, settings.n
         if memory_bytes(settings.with_n(low), strategy, options) > free:
             return None
@@ -171,7 +175,7 @@ def _check_memory(settings: SampleSettings, strategy: str | None, options: dict)
     memory.check_fits(needed, settings.n, largest_n, what)
 
 
-def _check_room(problem):
+def _check_room(problem: SamplingProblem) -> None:
     """ValueError when the face cannot hold N points with the edge offset and spacing asked for,
     or the probe reaches none of them."""
     domain = problem.domain
@@ -193,7 +197,7 @@ def _check_room(problem):
                 f"{domain.edge_offset:g} mm (at most about {room}); {problem.spacing_advice()}")
 
 
-def _round_down(value):
+def _round_down(value: float) -> float:
     """value (mm, >= 0) rounded down to two significant digits, 0 for none left."""
     if value <= 0:
         return 0.0
@@ -201,7 +205,7 @@ def _round_down(value):
     return float(f"{np.floor(value / scale) * scale:.2g}")
 
 
-def _check_area(model):
+def _check_area(model: SurfaceModel) -> None:
     """ValueError for a face (its SurfaceModel) without usable area."""
     diagonal = model.diagonal
     if not np.isfinite(model.area) or model.area <= MIN_AREA_RATIO * max(diagonal, 1e-300) ** 2:
@@ -215,7 +219,7 @@ def sample(face: Part.Face, n: int = 81, strategy: str = DEFAULT_STRATEGY, *, fi
            fit_poles: Pair | None = None, smoothing: float = DEFAULT_SMOOTHING, grid: Pair = DEFAULT_GRID,
            seed: int = 0, progress: Progress | None = None, occ_check: bool = True, workers: int | None = None,
            edge_offset: float = 0.0, min_spacing: float | None = None, part: Part.Shape | None = None,
-           probe: Probe | None = None, **options) -> SamplingResult:
+           probe: Probe | None = None, **options: Any) -> SamplingResult:
     """Place n probe points on a face with a strategy and judge them.
 
     face: a Part.Face (or a Shape holding one face), e.g. ``cmmsampling.reference_face()``;
@@ -254,7 +258,7 @@ def sample(face: Part.Face, n: int = 81, strategy: str = DEFAULT_STRATEGY, *, fi
     return _judge(problem, outcome, strategy, recorded, strategy_s, occ_check)
 
 
-def _exact_outcome(problem, strategy):
+def _exact_outcome(problem: SamplingProblem, strategy: str) -> StrategyOutcome | None:
     """For an optimiser on a face the substitute reproduces exactly (a plane, a face of the fit's
     own space): the uniform parametric layout with a note, since no point set can do better;
     otherwise (or for a blind strategy) None, and the strategy runs."""
@@ -284,26 +288,26 @@ def probe_edge_offset(face: Part.Face, cap: float | None = None) -> float:
     return cap if reach >= 2 * cap else _round_down(0.5 * reach)
 
 
-def _move_onto_face(problem, outcome):
+def _move_onto_face(problem: SamplingProblem, outcome: StrategyOutcome) -> None:
     """Move the outcome's points that lie off the face (OCC) onto it (blind.onto_face), with
     notes saying so."""
     outcome.uv, notes = blind.onto_face(problem, outcome.uv)
     outcome.notes += notes
 
 
-def _fit_notes(problem):
+def _fit_notes(problem: SamplingProblem) -> list[str]:
     """Sentences on a substitute with more poles than points: between the points its shape then
     comes from the smoothing, not from the measurement."""
     poles = problem.space.poles
     if poles[0] * poles[1] <= problem.n:
         return []
-    usual = resolve_fit_poles(None, problem.n, tuple(problem.space.degrees))
+    usual = resolve_fit_poles(None, problem.n, cast("tuple[int, int]", tuple(problem.space.degrees)))
     return [f"the substitute has {poles[0]} x {poles[1]} poles for {problem.n} points: between the "
             f"points its shape comes from the smoothing, not from the measurement (the default for "
             f"{problem.n} points is {usual[0]} x {usual[1]})"]
 
 
-def _spacing_notes(problem):
+def _spacing_notes(problem: SamplingProblem) -> list[str]:
     """A sentence where the default spacing had to go below BALL_SEPARATION_MM: the face has no
     room for N points that far apart, and a ball may then touch one spot twice."""
     if not problem.spacing_by_default or problem.min_spacing >= BALL_SEPARATION_MM:
@@ -312,13 +316,13 @@ def _spacing_notes(problem):
             f"{problem.min_spacing:.3g} mm, and a probe ball may touch nearly one spot twice; lower n to keep them apart"]
 
 
-def _json_friendly(options):
+def _json_friendly(options: dict[str, Any]) -> dict[str, Any]:
     """Options with arrays (e.g. a start layout) replaced by lists, for settings and documents."""
     return {k: (np.asarray(v).tolist() if isinstance(v, np.ndarray) else v) for k, v in options.items()}
 
 
 def lower_bound(face: Part.Face, n: int = 81, *, fit_degree: Pair = DEFAULT_DEGREE, fit_poles: Pair | None = None,
-                smoothing: float = DEFAULT_SMOOTHING, grid: Pair = DEFAULT_GRID, check: bool = False) -> float:
+                smoothing: float = DEFAULT_SMOOTHING, grid: Pair = DEFAULT_GRID, check: bool = False) -> MinimaxBound:
     """The local bound about the reference fit on this face (cmmsampling.fitting.bound): the least
     first-order maximum deviation that reshaping the fit to very many points along its normals
     reaches. A yardstick, not a lower bound of what n points can reach: point sets reach other
@@ -349,7 +353,7 @@ def evaluate(face: Part.Face, uv: np.ndarray, *, strategy: str = "given", fit_de
     return _judge(problem, StrategyOutcome(uv), strategy, settings, 0.0, occ_check, given=True)
 
 
-def measure_reach(result, given=False):
+def measure_reach(result: SamplingResult, given: bool = False) -> None:
     """The probe's pose at each of a result's points, measured with OCC (result.access), its
     settings, and notes on the area out of reach and the points tilted, refused or left to the
     fast test; for a result of a run with part= (sample does it, unless its Reachability was
@@ -357,7 +361,9 @@ def measure_reach(result, given=False):
     that kept out of the unreached area."""
     started = time.perf_counter()
     problem = result.problem
+    assert problem is not None and problem.reachability is not None   # a run with part=, as its callers' are
     result.access, refused, unmeasured = problem.reachability.final(result.points, result.normals)
+    assert result.access is not None   # final() returns an Access
     result.access.unreached = problem.domain.unreached_rectangles()
     result.access.unreached_area = problem.domain.unreached_area
     result.settings["probe"] = asdict(problem.reachability.probe)
@@ -384,7 +390,7 @@ def measure_reach(result, given=False):
     result.timings["reach_s"] = time.perf_counter() - started
 
 
-def _common_settings(problem):
+def _common_settings(problem: SamplingProblem) -> dict[str, Any]:
     """The fit and grid settings of a problem, JSON-friendly."""
     return {
         "fit_degree": list(problem.space.degrees),
@@ -398,11 +404,13 @@ def _common_settings(problem):
     }
 
 
-def _unreached_note(result, given):
+def _unreached_note(result: SamplingResult, given: bool) -> str:
     """The note on the area of the face the probe cannot reach: that no point was placed there,
     or for given points how many lie there (result.access.unreached: (K, 4) rectangles u0, u1, v0,
     v1 of the face's parameters)."""
     problem = result.problem
+    # measure_reach, the caller, has set them (unreached: unreached_rectangles() is an array)
+    assert problem is not None and result.access is not None and result.access.unreached is not None
     area = problem.domain.unreached_area
     text = (f"the probe cannot reach {area:.4g} mm^2 of the face ({100 * area / problem.model.area:.3g} %) "
             "without touching the part elsewhere")
@@ -415,7 +423,8 @@ def _unreached_note(result, given):
     return text + f": {inside} of the {result.n} given points {'lies' if inside == 1 else 'lie'} there"
 
 
-def _judge(problem, outcome, strategy, settings, strategy_s, occ_check, given=False):
+def _judge(problem: SamplingProblem, outcome: StrategyOutcome, strategy: str, settings: dict[str, Any],
+           strategy_s: float, occ_check: bool, given: bool = False) -> SamplingResult:
     """Points, normals, fit and deviation statistics for a strategy's outcome; given: the points
     were given, not placed by the strategy (:func:`evaluate`)."""
     start = time.perf_counter()
