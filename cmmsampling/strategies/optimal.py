@@ -367,6 +367,7 @@ def _start_layout(problem: SamplingProblem, start: str, bounded: bool) -> tuple[
     names = list(found)
     if len(names) == 1:
         return found[names[0]], names[0]
+    maxima: np.ndarray | list[float]
     if bounded:
         maxima = problem.objective(np.stack([problem.project(found[name]) for name in names]))
     else:
