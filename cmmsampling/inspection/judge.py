@@ -396,6 +396,7 @@ def inspect(source: object, measured: str | os.PathLike | PointSet, alignment: s
         told("aligning each face alone")
         inspection.face_forms = _face_forms(points, owner, closers, planned.names, found, locked, zone_offset, notes)
     if uncertainty is not None:
+        assert frame is not None   # _aligned gives the Frame where an uncertainty is asked for (linear)
         inspection.uncertainty = profile_uncertainty(
             frame, owner, planned.names, uncertainty, seed, lambda trials: told(f"propagating the probing uncertainty (Monte Carlo): {trials} trials"))
     if isinstance(source, SamplingResult):
@@ -575,7 +576,7 @@ def _face_of(part: Part.Shape, name: str) -> Part.Face:
         raise InputError(f"the part given has no {name}: give part= the shape the plan was made of") from None
 
 
-def _measured_point_set(measured: str | bytes | os.PathLike | PointSet) -> PointSet:
+def _measured_point_set(measured: str | os.PathLike | PointSet) -> PointSet:
     """The PointSet of ``measured``: a file's path (str, pathlib.Path) read by read_measured, or
     points already in hand (a PointSet); InputTypeError naming what was given otherwise."""
     if isinstance(measured, (str, bytes, os.PathLike)):
