@@ -28,7 +28,6 @@ from ..measurement import check_extent, stated_radius
 from ..strategies.face_setup import reused
 from ..planning.part_plan import PartPlan
 from ..strategies.result import SamplingResult
-from ..fitting.series import SeriesModel
 from .align import ALIGNMENTS, PROFILE_KINDS, Alignment, AlignmentCancelled, Closest, align, check_locked, kabsch
 from .datums import Datum, Frame, Stage, align_on_datums, as_datums, floating_frame
 from .uncertainty import NO_UNCERTAINTY, ProfileUncertainty, decide, profile_uncertainty
@@ -38,6 +37,8 @@ from .series import deviation_map, face_rows
 
 if TYPE_CHECKING:   # FreeCAD ships no type stubs: to the type checker Part's classes are Any
     import Part
+
+    from ..fitting.series import SeriesModel
 else:
     Part = import_part()
 import FreeCAD  # noqa: E402  (importable once import_part() has set the path)
