@@ -3,6 +3,7 @@ an export: points a CMM measured, read from its file, judged against the face th
 from __future__ import annotations
 
 import os
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -39,21 +40,21 @@ class MeasuredDeviation:
     probe_radius: float
 
     @property
-    def maximum(self):
+    def maximum(self) -> float:
         """Largest |distance|, mm."""
         return float(np.abs(self.distances).max())
 
     @property
-    def mean(self):
+    def mean(self) -> float:
         """Mean |distance|, mm."""
         return float(np.abs(self.distances).mean())
 
     @property
-    def rms(self):
+    def rms(self) -> float:
         """Root mean square distance, mm."""
         return float(np.sqrt(np.mean(self.distances ** 2)))
 
-    def summary(self):
+    def summary(self) -> dict[str, float]:
         """The figures as a dict: n, max_mm, mean_mm, rms_mm, lowest_mm and highest_mm (signed)."""
         return {"n": len(self.labels), "max_mm": self.maximum, "mean_mm": self.mean, "rms_mm": self.rms,
                 "lowest_mm": float(self.distances.min()), "highest_mm": float(self.distances.max())}
@@ -90,7 +91,7 @@ def measured_deviation(face: Part.Face, points: PointSet | str | os.PathLike, *,
 MAX_COORDINATE_MM = 1e6
 
 
-def stated_radius(point_set):
+def stated_radius(point_set: PointSet) -> float:
     """The probe radius (mm) the point file states (0 when none); InputError for a stated value
     that is no finite number of at least 0."""
     stated = point_set.metadata.get("probe_radius_mm", 0.0)
@@ -103,7 +104,7 @@ def stated_radius(point_set):
     return check_real(f"{where}: the stated probe_radius_mm", value, minimum=0.0)
 
 
-def check_extent(positions, labels):
+def check_extent(positions: np.ndarray, labels: Sequence[str]) -> None:
     """InputError naming the first point farther than MAX_COORDINATE_MM from the origin.
     positions: (N, 3) mm in the part's frame; labels: N names."""
     far = np.flatnonzero(np.abs(positions).max(axis=1) > MAX_COORDINATE_MM)
@@ -112,7 +113,7 @@ def check_extent(positions, labels):
                          "check the file's numbers and units (mm)")
 
 
-def closest_points(face, points):
+def closest_points(face: Part.Face, points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """For points (N, 3) mm: the closest points on face (N, 3) mm, the face's outward unit normals
     there (N, 3) and the distances (N,) mm, by OCC
     (:func:`cmmsampling.geometry.occ_distance.distances_to_face`)."""

@@ -30,6 +30,7 @@ numpy/scipy: the closest points come from a callable.
 from __future__ import annotations
 
 import itertools
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -37,6 +38,8 @@ from scipy.optimize import linprog
 
 from ..geometry.validation import InputError
 
+# closest(points (M, 3) mm) -> (feet (M, 3) mm, outward unit normals (M, 3)) on a CAD face.
+Closest = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
 DEGREES_OF_FREEDOM = ("rx", "ry", "rz", "x", "y", "z")
 ALIGNMENTS = ("none", "best_fit", "min_max")
 # What each alignment's profile is, in the summary's words.
@@ -97,18 +100,18 @@ class Alignment:
     free_motions: tuple = ()
     capped: bool = False
 
-    def apply(self, points):
+    def apply(self, points: np.ndarray) -> np.ndarray:
         """points (N, 3) mm moved by the alignment: (N, 3) mm."""
         return transform(self.matrix, points)
 
 
-def transform(matrix, points):
+def transform(matrix: np.ndarray, points: np.ndarray) -> np.ndarray:
     """points (N, 3) mm moved by a (4, 4) homogeneous transform: (N, 3) mm."""
     points = np.asarray(points, dtype=float)
     return points @ matrix[:3, :3].T + matrix[:3, 3]
 
 
-def rotation_matrix(vector):
+def rotation_matrix(vector: np.ndarray | Sequence[float]) -> np.ndarray:
     """The rotation by the rotation vector ``vector`` (3,) rad (axis times angle): (3, 3)."""
     angle = float(np.linalg.norm(vector))
     if angle == 0.0:
@@ -118,7 +121,7 @@ def rotation_matrix(vector):
     return np.eye(3) + np.sin(angle) * cross + (1.0 - np.cos(angle)) * cross @ cross
 
 
-def check_locked(locked):
+def check_locked(locked: Sequence[str] | None) -> tuple[str, ...]:
     """The locked degrees of freedom as a tuple; InputError naming an unknown one (all six
     locked leaves the points as they are, as alignment 'none' does)."""
     locked = tuple(locked or ())
@@ -133,7 +136,9 @@ class AlignmentCancelled(Exception):
     """The progress callback asked the alignment to stop."""
 
 
-def align(points, closest, method="min_max", locked=(), start=None, offset=0.0, progress=None):
+def align(points: np.ndarray, closest: Closest, method: str = "min_max", locked: Sequence[str] = (),
+          start: np.ndarray | None = None, offset: float = 0.0,
+          progress: Callable[[int], bool | None] | None = None) -> Alignment:
     """The Alignment of measured points to the face that ``closest`` measures.
 
     points: (N, 3) mm, measured contact points; closest: callable (M, 3) mm -> (feet (M, 3) mm,
@@ -157,6 +162,7 @@ def align(points, closest, method="min_max", locked=(), start=None, offset=0.0, 
         raise InputError(f"{len(points)} measured points cannot fix {len(free)} degrees of freedom; measure at "
                          f"least {max(needed, len(free))} points or lock some (locked=...)")
     matrix = np.eye(4) if start is None or method == "none" else np.asarray(start, dtype=float)
+    free_motions: tuple[str, ...]
     iterations, free_motions, capped = 0, (), False
     if method != "none" and free:
         basis, free_motions = held_motions(transform(matrix, points), closest, free)
@@ -173,14 +179,15 @@ def align(points, closest, method="min_max", locked=(), start=None, offset=0.0, 
                      signed_distances(moved, feet, normals), free_motions, capped)
 
 
-def _asking(closest, progress):
+def _asking(closest: Closest, progress: Callable[[int], bool | None] | None) -> Closest:
     """``closest`` that calls progress(step) before each of its passes (one a step of the fit)
     and raises AlignmentCancelled where it returns True."""
     if progress is None:
         return closest
     passes = itertools.count(1)
 
-    def asked(points):
+    def asked(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        assert progress is not None   # the closure is made only for a progress callback
         if progress(next(passes)):
             raise AlignmentCancelled
         return closest(points)
@@ -188,20 +195,20 @@ def _asking(closest, progress):
     return asked
 
 
-def _offset_by(closest, offset):
+def _offset_by(closest: Closest, offset: float) -> Closest:
     """``closest`` with the feet moved by ``offset`` mm along the normals: the signed distances
     become d - offset, measured from the zone's centre."""
     if offset == 0:
         return closest
 
-    def shifted(points):
+    def shifted(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         feet, normals = closest(points)
         return feet + offset * normals, normals
 
     return shifted
 
 
-def kabsch(points, targets):
+def kabsch(points: np.ndarray, targets: np.ndarray) -> np.ndarray | None:
     """(4, 4) the rigid motion that takes points (N, 3) mm nearest to targets (N, 3) mm in least
     squares (Kabsch's solution; for targets on a line, the least turn that lays the points' line
     on theirs), or None where the targets fix none (fewer than two, or all at one place)."""
@@ -222,7 +229,7 @@ def kabsch(points, targets):
     return matrix
 
 
-def _line_turn(points, targets):
+def _line_turn(points: np.ndarray, targets: np.ndarray) -> np.ndarray:
     """(3, 3) the least rotation taking the main direction of points (N, 3) (centred) to that of
     targets (N, 3) (centred), the two directions signed alike along the points' order."""
     first = np.linalg.svd(points, full_matrices=False)[2][0]
@@ -236,7 +243,7 @@ def _line_turn(points, targets):
     return rotation_matrix(axis / np.linalg.norm(axis) * np.arccos(cosine))
 
 
-def held_motions(points, closest, free):
+def held_motions(points: np.ndarray, closest: Closest, free: list[int]) -> tuple[np.ndarray, tuple[str, ...]]:
     """(basis (6, H), free_motions): the motions the points (N, 3) mm hold, as columns over the
     six degrees of freedom (a unit of each moves the points about 1 mm RMS), and the names of
     those they do not (fewer than WEAK_SENSITIVITY mm of RMS deviation per mm of motion, from the
@@ -256,7 +263,7 @@ def held_motions(points, closest, free):
     return basis, _motion_names(weak_vectors)
 
 
-def _motion_names(weak):
+def _motion_names(weak: np.ndarray) -> tuple[str, ...]:
     """The names of the weakly held motions, weak (6, K) orthonormal columns (rotations scaled
     to mm): the degrees of freedom that lie in them, then the rest described by direction."""
     names, named = [], []
@@ -278,7 +285,7 @@ def _motion_names(weak):
     return tuple(names)
 
 
-def _check_redundancy(count, held, free_motions, method):
+def _check_redundancy(count: int, held: int, free_motions: tuple[str, ...], method: str) -> None:
     """InputError where ``count`` points leave nothing to judge once they have fixed the ``held``
     motions (min-max needs one more point: its zone is set by held + 1 of them)."""
     needed = held + (2 if method == "min_max" else 1)
@@ -288,12 +295,13 @@ def _check_redundancy(count, held, free_motions, method):
                          f"any part would pass; measure at least {needed} points, or lock motions (locked=...)")
 
 
-def signed_distances(points, feet, normals):
+def signed_distances(points: np.ndarray, feet: np.ndarray, normals: np.ndarray) -> np.ndarray:
     """d = n . (p - f): (N,) mm for points, their feet and the outward normals there, (N, 3)."""
     return np.einsum("ij,ij->i", points - feet, normals)
 
 
-def _model(points, closest, basis, pivot=None):
+def _model(points: np.ndarray, closest: Closest, basis: np.ndarray,
+           pivot: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The point-to-plane model at points (N, 3) mm: (deviations (N,) mm, Jacobian (N, H) of
     the deviations by the held motions, basis (6, H), the centre (3,) mm the rotations turn
     about: pivot (3,) mm where given, else the points' centroid)."""
@@ -302,13 +310,13 @@ def _model(points, closest, basis, pivot=None):
     return signed_distances(points, feet, normals), twist_jacobian(points, normals, centre) @ basis, centre
 
 
-def twist_jacobian(points, normals, pivot):
+def twist_jacobian(points: np.ndarray, normals: np.ndarray, pivot: np.ndarray) -> np.ndarray:
     """(M, 6): how the signed distances of points (M, 3) mm (outward normals (M, 3)) change by a
     twist (rotation vector w rad about pivot (3,) mm, shift s mm): ((p - pivot) x n, n)."""
     return np.hstack([np.cross(points - pivot, normals), normals])
 
 
-def _step_matrix(step, basis, centre):
+def _step_matrix(step: np.ndarray, basis: np.ndarray, centre: np.ndarray) -> np.ndarray:
     """(4, 4): the motion by ``step`` (H,) along the held motions basis (6, H), rotation about centre."""
     full = basis @ step
     rotation = rotation_matrix(full[:3])
@@ -318,7 +326,8 @@ def _step_matrix(step, basis, centre):
     return matrix
 
 
-def _least_squares(points, closest, basis, start, pivot=None):
+def _least_squares(points: np.ndarray, closest: Closest, basis: np.ndarray, start: np.ndarray,
+                   pivot: np.ndarray | None = None) -> tuple[np.ndarray, int, bool]:
     """Levenberg-Marquardt on sum d^2 from the motion ``start`` (4, 4) along the held motions
     basis (6, H) (Gauss-Newton steps, damped where a step would not lower the sum), ended where
     the Gauss-Newton step could gain nothing or would move no point by STEP_TOLERANCE_MM (where
@@ -355,18 +364,20 @@ def _least_squares(points, closest, basis, start, pivot=None):
     return matrix, MAX_ITERATIONS, True
 
 
-def _largest_move(motion, points):
+def _largest_move(motion: np.ndarray, points: np.ndarray) -> float:
     """mm, the farthest a motion (4, 4) moves any of the points (N, 3) mm."""
     return float(np.linalg.norm(transform(motion, points) - points, axis=1).max())
 
 
-def _min_max(points, closest, basis, matrix, pivot=None):
+def _min_max(points: np.ndarray, closest: Closest, basis: np.ndarray, matrix: np.ndarray,
+             pivot: np.ndarray | None = None) -> tuple[np.ndarray, int, bool]:
     """Sequential linear programmes on max |d| from ``matrix`` along the held motions basis (6,
     H), whose units move the points about 1 mm: (matrix (4, 4), iterations, capped)."""
     return _linear_programmes(points, closest, basis, matrix, pivot, _chebyshev_step, lambda d: np.abs(d).max())
 
 
-def tangent(points, closest, basis, matrix, pivot=None):
+def tangent(points: np.ndarray, closest: Closest, basis: np.ndarray, matrix: np.ndarray,
+            pivot: np.ndarray | None = None) -> tuple[np.ndarray, int, bool]:
     """ISO 5459's association of a datum: the motion along basis (6, H) (rotations about pivot
     (3,) mm) that lays the face on the outside of the points (every d <= 0: the points in the
     material) as near to them as it can (min max -d), from ``matrix`` (4, 4): (matrix,
@@ -374,13 +385,15 @@ def tangent(points, closest, basis, matrix, pivot=None):
     return _linear_programmes(points, closest, basis, matrix, pivot, _tangent_step, tangent_merit)
 
 
-def tangent_merit(deviations):
+def tangent_merit(deviations: np.ndarray) -> float:
     """mm, how far deviations (N,) mm are from a tangent datum's: max -d, plus TANGENT_PENALTY
     times the farthest point out of the material (d > 0)."""
     return max(-float(deviations.min()), 0.0) + TANGENT_PENALTY * max(float(deviations.max()), 0.0)
 
 
-def _linear_programmes(points, closest, basis, matrix, pivot, step_of, merit):
+def _linear_programmes(points: np.ndarray, closest: Closest, basis: np.ndarray, matrix: np.ndarray,
+                       pivot: np.ndarray | None, step_of: Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray],
+                       merit: Callable[[np.ndarray], float]) -> tuple[np.ndarray, int, bool]:
     """Sequential linear programmes: each step step_of(deviations, jacobian, radius) inside a
     trust region, kept where it lowers merit(deviations) (mm), the trust region shrunk by
     TRUST_SHRINK where it does not: (matrix (4, 4), iterations, capped)."""
@@ -403,14 +416,15 @@ def _linear_programmes(points, closest, basis, matrix, pivot, step_of, merit):
     return matrix, MAX_ITERATIONS, True
 
 
-def _chebyshev_step(deviations, jacobian, radius):
+def _chebyshev_step(deviations: np.ndarray, jacobian: np.ndarray, radius: np.ndarray) -> np.ndarray:
     """The step x (F,) within |x| <= radius minimising max |d + J x|; no step where the
     programme has no solution."""
     found = chebyshev_programme(deviations, jacobian, [(-r, r) for r in radius])
     return np.zeros(jacobian.shape[1]) if found is None else found
 
 
-def chebyshev_programme(deviations, jacobian, limits):
+def chebyshev_programme(deviations: np.ndarray, jacobian: np.ndarray,
+                        limits: Sequence[tuple[float | None, float | None]]) -> np.ndarray | None:
     """The x (F,) within limits (F pairs (low, high), None: unbounded) minimising max |d + J x|
     for deviations d (M,) mm and jacobian J (M, F): a linear programme in (x, s), minimise s
     with -s <= d + J x <= s; None where it has no solution."""
@@ -424,7 +438,7 @@ def chebyshev_programme(deviations, jacobian, limits):
     return solved.x[:size] if solved.success else None
 
 
-def _tangent_step(deviations, jacobian, radius):
+def _tangent_step(deviations: np.ndarray, jacobian: np.ndarray, radius: np.ndarray) -> np.ndarray:
     """The step x (F,) within |x| <= radius minimising the linearised tangent_merit of d + J x:
     a linear programme in (x, s, v): minimise s + TANGENT_PENALTY v with -s <= d + J x <= v,
     s, v >= 0 (always feasible: v takes what the trust region cannot bring in)."""

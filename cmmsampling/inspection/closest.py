@@ -8,12 +8,20 @@ of the face, the nearest result kept; a foot outside the face's trim goes to the
 its edges, as the deviation's reverse side does. The deviations that decide the verdict, the
 points nearest the zone's limits, are measured again with OCC (:func:`confirm_with_occ`).
 """
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from ..fitting.exact import NearestParameters, _nearest_on_edge_curves, node_normals
 from ..fitting.sides import normals_or
 from ..measurement import closest_points
 from ..strategies.face_setup import setup_of
+
+if TYPE_CHECKING:   # FreeCAD ships no type stubs: to the type checker Part's classes are Any
+    import Part
 
 # The raster whose nodes start the searches, per direction, and how many of the nearest start each.
 CLOSEST_GRID = 60
@@ -28,7 +36,7 @@ class FaceCloser:
     """The closest points on one face (a Part.Face) for many points: call with points (M, 3) mm
     -> (feet (M, 3) mm, the face's outward unit normals there (M, 3))."""
 
-    def __init__(self, face):
+    def __init__(self, face: Part.Face) -> None:
         setup = setup_of(face)
         self.model = setup.model
         self.on_face = setup.domain().on_face if self.model.trimmed else None
@@ -36,7 +44,7 @@ class FaceCloser:
         self.nodes = self.parameters.nodes
         self.fallback = node_normals(self.nodes)
 
-    def __call__(self, points):
+    def __call__(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         points = np.asarray(points, dtype=float).reshape(-1, 3)
         feet, near = self.parameters.locate(points)
         nearest, normals = self.model.points(feet), self.model.normals(feet)
@@ -48,7 +56,8 @@ class FaceCloser:
         return nearest, normals_or(normals, self.fallback[near[:, 0]])
 
 
-def confirm_with_occ(faces, owner, points, deviations, offset=0.0):
+def confirm_with_occ(faces: Sequence[Part.Face], owner: np.ndarray, points: np.ndarray, deviations: np.ndarray,
+                     offset: float = 0.0) -> tuple[np.ndarray, float]:
     """(deviations (N,) mm, largest disagreement mm): the signed deviations of points (N, 3) mm
     on their faces (owner (N,) indices into faces, Part.Face), those of the OCC_CONFIRMED points
     farthest from the zone's centre ``offset`` mm replaced by OCC's (its closest point and the

@@ -6,7 +6,10 @@ after an underscore (``X [mm]``, ``x_mm``) is ignored. Reports that give each co
 nominal and measured (``X nom``, ``X act``, ``Meas X``, ``XACT``), are read from the measured
 columns; a table with nominal columns only is refused, since it holds no measurement.
 """
+from __future__ import annotations
+
 import re
+from typing import Any
 
 from ..geometry.validation import InputError
 
@@ -19,11 +22,11 @@ NOMINAL_WORDS = ("nominal", "theoretical", "theo", "target", "nom")
 UNIT_WORDS = {"mm", "inch", "in", "um", "m"}
 
 
-def header_columns(fields, path, line_number):
+def header_columns(fields: list[str], path: str, line_number: int) -> dict[str, Any] | None:
     """{"label": column or None, "x", "y", "z": column, "i", "j", "k": column or None} from a
     header's fields, or None where the fields do not name x, y and z (not a header).
     InputError where they name only nominal coordinates."""
-    found = {}
+    found: dict[str, dict[str, int]] = {}
     for column, field in enumerate(fields):
         name, kind = _column_name(field)
         if name is not None:
@@ -39,7 +42,7 @@ def header_columns(fields, path, line_number):
     return chosen
 
 
-def _measured_column(kinds, name, path, line_number):
+def _measured_column(kinds: dict[str, int] | None, name: str, path: str, line_number: int) -> int | None:
     """The column of one coordinate: its measured one, else its plain one; InputError where the
     header gives it as nominal only."""
     if not kinds:
@@ -52,7 +55,7 @@ def _measured_column(kinds, name, path, line_number):
     return None
 
 
-def _column_name(field):
+def _column_name(field: str) -> tuple[str | None, str]:
     """(what the column holds: 'label' or one of COORDINATES or None, its kind: 'measured',
     'nominal' or 'plain') of a header field."""
     text = re.sub(r"[\[(].*?[\])]", " ", field.lower())
@@ -70,7 +73,7 @@ def _column_name(field):
     return _coordinate(joined), "plain"
 
 
-def _coordinate(name):
+def _coordinate(name: str) -> str | None:
     """x, y, z, i, j or k for a column's bare name, else None."""
     name = VECTOR_NAMES.get(name, name)
     return name if name in COORDINATES else None

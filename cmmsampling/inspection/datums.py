@@ -20,15 +20,17 @@ where the start put them and named. Pure numpy/scipy: the closest points come fr
 from __future__ import annotations
 
 import os
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
+from typing import Any, cast
 
 import numpy as np
 from scipy.linalg import eigh
 
 from ..formats.pointset import PointSet
 from ..geometry.validation import InputError
-from .align import (DEGREES_OF_FREEDOM, WEAK_SENSITIVITY, Alignment, _least_squares, _min_max, _motion_names,
-                    _offset_by, signed_distances, tangent, transform, twist_jacobian)
+from .align import (DEGREES_OF_FREEDOM, WEAK_SENSITIVITY, Alignment, Closest, _least_squares, _min_max,
+                    _motion_names, _offset_by, signed_distances, tangent, transform, twist_jacobian)
 
 DATUM_CRITERIA = ("tangent", "least_squares")
 # The regularisation of a datum's motion metric, as a share of its trace: a motion that moves
@@ -66,21 +68,21 @@ class DatumFit:
     deviations: np.ndarray
 
     @property
-    def form(self):
+    def form(self) -> float:
         """mm, the spread of the datum's points about its associated face."""
         return float(self.deviations.max() - self.deviations.min())
 
-    def as_record(self):
+    def as_record(self) -> dict[str, Any]:
         """The fit as a JSON-friendly dict."""
         return {"label": self.label, "face": self.face, "criterion": self.criterion, "count": self.count,
                 "held": self.held, "deviations": [float(value) for value in self.deviations]}
 
     @classmethod
-    def from_record(cls, record):
+    def from_record(cls, record: dict[str, Any]) -> DatumFit:
         """The DatumFit of :meth:`as_record`'s dict."""
-        return cls(**{**record, "deviations": np.array(record["deviations"], dtype=float)})
+        return cls(**cast("dict[str, Any]", {**record, "deviations": np.array(record["deviations"], dtype=float)}))
 
-    def text(self):
+    def text(self) -> str:
         """'A (Face1, tangent, 3 motions, 12 points, form 0.0012 mm)'."""
         return (f"{self.label} ({self.face}, {self.criterion.replace('_', ' ')}, {self.held} motion"
                 f"{'' if self.held == 1 else 's'}, {self.count} points, form {self.form:.4f} mm)")
@@ -96,7 +98,7 @@ class Stage:
     face: str
     criterion: str
     points: np.ndarray
-    closest: object
+    closest: Closest
 
 
 @dataclass
@@ -125,12 +127,13 @@ class Frame:
     links: list
 
 
-def free_twists(locked):
+def free_twists(locked: Sequence[str]) -> np.ndarray:
     """(6, K): the unit twists of the degrees of freedom not locked (DEGREES_OF_FREEDOM order)."""
     return np.eye(6)[:, [index for index, name in enumerate(DEGREES_OF_FREEDOM) if name not in locked]]
 
 
-def split_motions(points, normals, allowed, pivot):
+def split_motions(points: np.ndarray, normals: np.ndarray, allowed: np.ndarray,
+                  pivot: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(held (6, H), weak (6, K - H)): the twists of allowed (6, K) that move points (M, 3) mm
     off their face (outward normals (M, 3)) by at least WEAK_SENSITIVITY mm RMS per mm RMS of
     the points' own motion, and those that do not; a held column moves the points 1 mm RMS."""
@@ -146,7 +149,7 @@ def split_motions(points, normals, allowed, pivot):
     return allowed @ vectors[:, ~weak], allowed @ vectors[:, weak]
 
 
-def motion_names(twists, length):
+def motion_names(twists: np.ndarray, length: float) -> tuple[str, ...]:
     """The names of the motions twists (6, K) span (align._motion_names: 'x', 'rz', 'slide
     along (...)'), rotations weighed by length mm, the points' RMS distance from the pivot."""
     if not twists.shape[1]:
@@ -155,7 +158,8 @@ def motion_names(twists, length):
     return _motion_names(np.linalg.svd(scaled, full_matrices=False)[0][:, :twists.shape[1]])
 
 
-def align_on_datums(datums, toleranced, start, locked=(), offset=0.0):
+def align_on_datums(datums: Sequence[Stage], toleranced: Stage, start: np.ndarray, locked: Sequence[str] = (),
+                    offset: float = 0.0) -> Frame:
     """The Frame of the Stages ``datums`` (precedence order) and of ``toleranced`` (the
     toleranced surface's Stage, its criterion the inspection's alignment method), from the
     motion start (4, 4) measured -> CAD; locked: degrees of freedom no step moves; offset: mm,
@@ -196,7 +200,7 @@ def align_on_datums(datums, toleranced, start, locked=(), offset=0.0):
     return Frame(alignment, fits, links + [last])
 
 
-def _check_datum(stage, held):
+def _check_datum(stage: Stage, held: int) -> None:
     """InputError where a datum fixes no motion or has too few points for those it fixes."""
     if held == 0:
         raise InputError(f"datum {stage.label} ({stage.face}) fixes none of the motions the datums before it leave "
@@ -206,7 +210,7 @@ def _check_datum(stage, held):
                          f"motions it fixes; measure at least {held} points on it")
 
 
-def _link(stage, matrix, held, pivot, first):
+def _link(stage: Stage, matrix: np.ndarray, held: np.ndarray, pivot: np.ndarray, first: int) -> Link:
     """The Link of a stage solved to ``matrix`` (its rows from ``first`` in all the points)."""
     moved = transform(matrix, stage.points)
     feet, normals = stage.closest(moved)
@@ -214,7 +218,7 @@ def _link(stage, matrix, held, pivot, first):
                 signed_distances(moved, feet, normals))
 
 
-def as_datums(datums):
+def as_datums(datums: Datum | str | Sequence[Datum | str] | None) -> tuple[Datum, ...]:
     """The Datums of inspect()'s datums=: None or () for none, a Datum or a face name ('Face3')
     or a sequence of them in precedence order (names become tangent datums A, B, C ...).
     InputError for an unknown criterion or a label given twice."""
@@ -235,7 +239,8 @@ def as_datums(datums):
     return found
 
 
-def floating_frame(toleranced, alignment, locked=(), offset=0.0):
+def floating_frame(toleranced: Stage, alignment: Alignment, locked: Sequence[str] = (),
+                   offset: float = 0.0) -> Frame:
     """The Frame of a fit with no datums: the toleranced Stage aligned alone (an Alignment from
     align.align), its one Link the linear model at that solution."""
     zone = _offset_by(toleranced.closest, offset)

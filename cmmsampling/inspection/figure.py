@@ -8,19 +8,27 @@ points outside the zone are ringed.
 """
 from __future__ import annotations
 
+import os
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
+
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.collections import PolyCollection
 from matplotlib.figure import Figure
 
 from ..geometry.surface import as_face
-from .judge import verdict_words
+from .judge import Inspection, verdict_words
+
+if TYPE_CHECKING:   # FreeCAD ships no type stubs: to the type checker Part's classes are Any
+    import Part
 
 # The tessellation's tolerance as a fraction of the face's diagonal.
 MESH_FRACTION = 5e-3
 
 
-def write_inspection_figure(inspection, face, path, title="Measured deviation"):
+def write_inspection_figure(inspection: Inspection, face: Part.Face | Sequence[Part.Face], path: str | os.PathLike,
+                            title: str = "Measured deviation") -> str | os.PathLike:
     """Write the colour map of an Inspection's points on ``face`` (Part.Face, or a list of faces
     for a plan) to the PNG ``path``; returns path."""
     faces = face if isinstance(face, (list, tuple)) else [face]
@@ -57,7 +65,7 @@ def write_inspection_figure(inspection, face, path, title="Measured deviation"):
     return path
 
 
-def _triangles(face):
+def _triangles(face: Part.Face) -> np.ndarray:
     """The face's tessellation as (T, 3, 3) triangle corners, mm."""
     points, triangles = face.tessellate(MESH_FRACTION * face.BoundBox.DiagonalLength)
     corners = np.array([tuple(p) for p in points], dtype=float)

@@ -11,7 +11,9 @@ at most t.
 from __future__ import annotations
 
 import os
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, cast
 
 import numpy as np
 
@@ -26,14 +28,19 @@ from ..measurement import check_extent, stated_radius
 from ..strategies.face_setup import reused
 from ..planning.part_plan import PartPlan
 from ..strategies.result import SamplingResult
-from .align import ALIGNMENTS, PROFILE_KINDS, Alignment, AlignmentCancelled, align, check_locked, kabsch
-from .datums import Datum, Stage, align_on_datums, as_datums, floating_frame
-from .uncertainty import NO_UNCERTAINTY, decide, profile_uncertainty
+from .align import ALIGNMENTS, PROFILE_KINDS, Alignment, AlignmentCancelled, Closest, align, check_locked, kabsch
+from .datums import Datum, Frame, Stage, align_on_datums, as_datums, floating_frame
+from .uncertainty import NO_UNCERTAINTY, ProfileUncertainty, decide, profile_uncertainty
 from .closest import OCC_AGREEMENT_MM, OCC_CONFIRMED, FaceCloser, confirm_with_occ
 from .measured import read_measured
 from .series import deviation_map, face_rows
 
-Part = import_part()
+if TYPE_CHECKING:   # FreeCAD ships no type stubs: to the type checker Part's classes are Any
+    import Part
+
+    from ..fitting.series import SeriesModel
+else:
+    Part = import_part()
 import FreeCAD  # noqa: E402  (importable once import_part() has set the path)
 
 # A point inside the zone is "near" its limit beyond this fraction of the half zone t / 2.
@@ -42,6 +49,8 @@ NEAR_FRACTION = 0.8
 # than the rounding of the closest points (a point placed on the limit lands 1e-14 mm either side).
 LIMIT_SLACK_MM = NUMERICAL_ZERO_MM
 BANDS = ("out below", "near below", "in", "near above", "out above")
+# progress(message, None after a step of the alignment) -> True to cancel the inspection.
+Progress = Callable[[str | None], bool | None]
 
 
 @dataclass
@@ -84,10 +93,11 @@ class Inspection:
     face_forms: dict = field(default_factory=dict)
     normals: np.ndarray | None = None
     datums: list = field(default_factory=list)
-    uncertainty: object = None
+    uncertainty: ProfileUncertainty | None = None
     planned_faces: dict = field(default_factory=dict)
 
-    def deviation_map(self, uv, prior=None, face=None):
+    def deviation_map(self, uv: np.ndarray, prior: Sequence[Inspection] | SeriesModel | None = None,
+                      face: str | None = None) -> np.ndarray:
         """The measured part's signed deviation from the CAD face at uv (M, 2) in the face's
         parameter range: (M,) mm, + out of the material, in this inspection's alignment.
 
@@ -106,58 +116,58 @@ class Inspection:
         return deviation_map(self, self.planned_faces[name], uv, prior, name if face is not None else None)
 
     @property
-    def feet(self):
+    def feet(self) -> np.ndarray:
         """(N, 3) mm: the closest point of each aligned point on its face."""
         return self.points - self.deviations[:, None] * self.normals
 
     @property
-    def substitute(self):
+    def substitute(self) -> Part.BSplineSurface | None:
         """The substitute rebuilt from the measured points as a Part.BSplineSurface, or None."""
         return None if self.substitute_poles is None else substitute_surface(self.space, self.substitute_poles)
 
     @property
-    def placement(self):
+    def placement(self) -> FreeCAD.Placement:
         """The alignment as a FreeCAD.Placement (measured -> CAD)."""
         return FreeCAD.Placement(FreeCAD.Matrix(*self.transform.ravel().tolist()))
 
-    def _form_text(self, name):
+    def _form_text(self, name: str) -> str:
         """'; form 0.0101 mm aligned alone' for a face of several with its own form profile."""
         form = self.face_forms.get(name)
         return "" if form is None else f" with the part's alignment; form {form:.4f} mm aligned alone"
 
     @property
-    def free_motions(self):
+    def free_motions(self) -> tuple[str, ...]:
         """The motions the points do not hold (cmmsampling.inspection.align.held_motions), kept
         where the labelled nominals put them: e.g. ('rz', 'x', 'y') for a plane z = const."""
         return self.alignment.free_motions
 
     @property
-    def profile(self):
+    def profile(self) -> float:
         """The form profile, mm: the width of the zone centred on the nominal (offset by
         zone_offset) that holds every point, 2 max |d - o|."""
         return 2.0 * float(np.abs(self.deviations - self.zone_offset).max())
 
     @property
-    def face_profiles(self):
+    def face_profiles(self) -> dict[str, float]:
         """{face name: its profile, mm}, the faces in the order of their first point."""
-        names = list(dict.fromkeys(self.faces))
-        owner = np.array([names.index(name) for name in self.faces])
+        names = list(dict.fromkeys(cast(list, self.faces)))
+        owner = np.array([names.index(name) for name in cast(list, self.faces)])
         off = np.abs(self.deviations - self.zone_offset)
         return {name: 2.0 * float(off[owner == index].max()) for index, name in enumerate(names)}
 
-    def face_passed(self, profile):
+    def face_passed(self, profile: float) -> bool | None:
         """Whether a profile (mm) is within the tolerance (None without one)."""
         return None if self.tolerance is None else profile <= self.tolerance + 2 * LIMIT_SLACK_MM
 
     @property
-    def within(self):
+    def within(self) -> np.ndarray:
         """(N,) bool: the point lies inside the tolerance zone (all True without a tolerance)."""
         if self.tolerance is None:
             return np.ones(len(self.labels), dtype=bool)
         return np.abs(self.deviations - self.zone_offset) <= self.tolerance / 2.0 + LIMIT_SLACK_MM
 
     @property
-    def bands(self):
+    def bands(self) -> np.ndarray:
         """(N,) int in -2 .. 2, the point's band in the tolerance zone (BANDS[band + 2]): 0 in,
         +-1 near the limit (|d| beyond NEAR_FRACTION of t / 2), +-2 out of the zone, + above the
         nominal (out of the material); all 0 without a tolerance."""
@@ -166,23 +176,23 @@ class Inspection:
         return tolerance_bands(self.deviations, self.tolerance, self.zone_offset)
 
     @property
-    def passed(self):
+    def passed(self) -> bool | None:
         """The profile is within the tolerance (None without one)."""
         return self.face_passed(self.profile)
 
     @property
-    def profile_uncertainty(self):
+    def profile_uncertainty(self) -> float | None:
         """U, mm, the profile's expanded uncertainty (k = 2), or None where none was given."""
         return None if self.uncertainty is None else self.uncertainty.expanded
 
     @property
-    def decision(self):
+    def decision(self) -> str | None:
         """ISO 14253-1's decision on the whole profile: 'conforms', 'does not conform' or
         'undecided' (cmmsampling.inspection.uncertainty.DECISIONS); None without a tolerance
         or an uncertainty."""
         return self.face_decision(None)
 
-    def face_decision(self, name):
+    def face_decision(self, name: str | None) -> str | None:
         """The decision on face ``name``'s profile (None: the whole profile), as :attr:`decision`."""
         if self.tolerance is None or self.uncertainty is None:
             return None
@@ -191,14 +201,14 @@ class Inspection:
         return decide(profile, expanded, self.tolerance + 2 * LIMIT_SLACK_MM)
 
     @property
-    def profile_kind(self):
+    def profile_kind(self) -> str:
         """What the profile is, in the summary's words: floated form, or relative to datums."""
         if not self.datums:
             return PROFILE_KINDS[self.alignment.method]
         frame = "|".join(datum.label for datum in self.datums)
         return f"relative to datums {frame}: location and form, ISO 1101"
 
-    def decision_text(self):
+    def decision_text(self) -> str:
         """The verdict's uncertainty in a line: 'ISO 14253-1: undecided: profile 0.0480 mm, U =
         0.0040 mm (k = 2 ...)', or that none was given."""
         if self.uncertainty is None:
@@ -208,7 +218,7 @@ class Inspection:
         return (f"ISO 14253-1: {self.decision} (profile {self.profile:.4f} mm, tolerance {self.tolerance:g} mm, "
                 f"guard band U): {self.uncertainty.text()}")
 
-    def summary(self):
+    def summary(self) -> str:
         """The inspection in a few lines: points, alignment, profile, verdict."""
         zone = f" (zone offset {self.zone_offset:+g} mm)" if self.zone_offset else ""
         lines = [f"{len(self.labels)} points, {self._alignment_words()}, "
@@ -232,7 +242,7 @@ class Inspection:
         notes = self.notes + ([] if self.uncertainty is None else self.uncertainty.notes)
         return "\n".join(lines + [f"note: {note}" for note in notes])
 
-    def _alignment_words(self):
+    def _alignment_words(self) -> str:
         """'alignment min_max (7 steps' or 'aligned on datums A|B|C (then min_max, 3 steps in the
         motions they leave free' (the summary's first line closes the bracket)."""
         steps = f"{self.alignment.iterations} steps{' (capped: not settled)' if self.alignment.capped else ''}"
@@ -241,7 +251,7 @@ class Inspection:
         frame = "|".join(datum.label for datum in self.datums)
         return f"aligned on datums {frame} (then {self.alignment.method}, {steps} in the motions they leave free"
 
-    def _face_verdict(self, name, profile):
+    def _face_verdict(self, name: str, profile: float) -> str:
         """', PASS' (and ', U 0.0041 mm: conforms' with an uncertainty) for a face's profile."""
         if self.tolerance is None:
             return "" if self.uncertainty is None else f", U {self.uncertainty.faces[name]:.4f} mm"
@@ -256,19 +266,19 @@ class Planned:
     """What was planned: labels N (None for a bare face), nominal points (N, 3) mm (or None), the
     faces (Part.Face), their names and owner (N,) int, the index of each point's face (or None)."""
 
-    labels: list
-    points: np.ndarray
+    labels: list | None
+    points: np.ndarray | None
     faces: list
     names: list
-    owner: np.ndarray
+    owner: np.ndarray | None
 
 
-def verdict_text(passed):
+def verdict_text(passed: bool | None) -> str:
     """'PASS' or 'FAIL' for a verdict (True or False)."""
     return "PASS" if passed else "FAIL"
 
 
-def verdict_words(inspection):
+def verdict_words(inspection: Inspection) -> str:
     """', U 0.0061 mm, tolerance 0.05 mm: FAIL, ISO 14253-1: undecided' (the parts it has)."""
     spread = "" if inspection.uncertainty is None else f", U {inspection.profile_uncertainty:.4f} mm (k = 2)"
     if inspection.passed is None:
@@ -277,7 +287,7 @@ def verdict_words(inspection):
     return f"{spread}, tolerance {inspection.tolerance:g} mm: {verdict_text(inspection.passed)}{decided}"
 
 
-def tolerance_bands(deviations, tolerance, offset=0.0):
+def tolerance_bands(deviations: np.ndarray, tolerance: float, offset: float = 0.0) -> np.ndarray:
     """(N,) int in -2 .. 2 for deviations (N,) mm against a profile tolerance t mm whose zone is
     centred at offset o mm: 0 where |d - o| <= NEAR_FRACTION t / 2, +-1 up to t / 2, +-2 beyond,
     signed as d - o (a point within LIMIT_SLACK_MM of the limit is on it)."""
@@ -286,7 +296,7 @@ def tolerance_bands(deviations, tolerance, offset=0.0):
     return (np.sign(away) * size).astype(int)
 
 
-def band_limits(tolerance, offset=0.0):
+def band_limits(tolerance: float, offset: float = 0.0) -> tuple[float, float, float, float]:
     """The deviations (mm) where the bands meet for a tolerance t mm centred at offset o mm:
     (o - t/2, o - 0.8 t/2, o + 0.8 t/2, o + t/2)."""
     half = tolerance / 2.0
@@ -297,8 +307,12 @@ class InspectionCancelled(Exception):
     """The inspection was cancelled (its progress callback returned True); nothing was judged."""
 
 
-def inspect(source, measured, alignment="min_max", tolerance=None, locked=(), part=None, probe_radius=None,
-            zone_offset=0.0, progress=None, datums=(), uncertainty=None, seed=0):
+def inspect(source: object, measured: str | os.PathLike | PointSet, alignment: str = "min_max",
+            tolerance: float | None = None, locked: Sequence[str] = (), part: Part.Shape | None = None,
+            probe_radius: float | None = None, zone_offset: float = 0.0,
+            progress: Progress | None = None,
+            datums: Datum | str | Sequence[Datum | str] | None = (), uncertainty: float | None = None,
+            seed: int = 0) -> Inspection:
     """Judge measured points against the CAD model they were planned on.
 
     source: a Part.Face (the measured points are taken as they come), a SamplingResult, a
@@ -329,7 +343,7 @@ def inspect(source, measured, alignment="min_max", tolerance=None, locked=(), pa
     (InspectionCancelled). Returns an Inspection.
     """
 
-    def told(message):
+    def told(message: str) -> None:
         if progress is not None and progress(message):
             raise InspectionCancelled
 
@@ -360,7 +374,7 @@ def inspect(source, measured, alignment="min_max", tolerance=None, locked=(), pa
         stages = [Stage(source.datum.label, source.name, source.datum.criterion, source.points,
                         FaceCloser(source.face)) for source in sources]
 
-    def closest(where):
+    def closest(where: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         return _closest(closers, owner, where)
 
     told(f"aligning {len(points)} points" + (f" on datums {'|'.join(d.label for d in wanted)}" if wanted else ""))
@@ -383,6 +397,7 @@ def inspect(source, measured, alignment="min_max", tolerance=None, locked=(), pa
         told("aligning each face alone")
         inspection.face_forms = _face_forms(points, owner, closers, planned.names, found, locked, zone_offset, notes)
     if uncertainty is not None:
+        assert frame is not None   # _aligned gives the Frame where an uncertainty is asked for (linear)
         inspection.uncertainty = profile_uncertainty(
             frame, owner, planned.names, uncertainty, seed, lambda trials: told(f"propagating the probing uncertainty (Monte Carlo): {trials} trials"))
     if isinstance(source, SamplingResult):
@@ -390,7 +405,7 @@ def inspect(source, measured, alignment="min_max", tolerance=None, locked=(), pa
     return inspection
 
 
-def _start(points, nominals):
+def _start(points: list[np.ndarray], nominals: list[np.ndarray]) -> np.ndarray | None:
     """The (4, 4) motion the fit starts from: the rigid match of the points (a list of (M, 3)
     mm, datum points included) to their nominals (a list of (M, 3) mm, NaN where unknown), or
     None where no point has a nominal."""
@@ -412,7 +427,9 @@ class DatumSource:
     nominal: np.ndarray
 
 
-def datum_points(datums, planned, order, owner, contact, part, probe_radius):
+def datum_points(datums: Sequence[Datum], planned: Planned, order: tuple[np.ndarray, np.ndarray], owner: np.ndarray,
+                 contact: np.ndarray, part: Part.Shape | None,
+                 probe_radius: float | None) -> tuple[list[DatumSource], np.ndarray]:
     """(DatumSources, kept (N,) bool): each datum's points, and which of the paired points
     (order: (measured rows (N,) into contact (P, 3) mm, planned rows (N,)), owner (N,) their
     planned faces) stay toleranced (those of a datum's face that brings no points of its own
@@ -441,7 +458,9 @@ def datum_points(datums, planned, order, owner, contact, part, probe_radius):
     return sources, kept
 
 
-def _aligned(points, closest, alignment, locked, start, offset, stages, progress, linear):
+def _aligned(points: np.ndarray, closest: Closest, alignment: str, locked: tuple[str, ...], start: np.ndarray | None,
+             offset: float, stages: list[Stage], progress: Progress | None,
+             linear: bool) -> tuple[Alignment, Frame | None]:
     """(Alignment, Frame) of the toleranced points: on the datum stages where there are any,
     else the floating fit of :func:`align` (its Frame, the one link of its solution, only where
     ``linear``: the Monte Carlo needs it; else None)."""
@@ -451,22 +470,23 @@ def _aligned(points, closest, alignment, locked, start, offset, stages, progress
         return frame.alignment, frame
     try:
         found = align(points, closest, alignment, locked, start, offset,
-                      None if progress is None else lambda step: progress(None))
+                      None if progress is None else lambda step: cast(Progress, progress)(None))
     except AlignmentCancelled:
         raise InspectionCancelled from None
     return found, floating_frame(toleranced, found, locked, offset) if linear else None
 
 
-def _face_forms(points, owner, closers, names, found, locked, offset, notes):
+def _face_forms(points: np.ndarray, owner: np.ndarray, closers: Sequence[FaceCloser | None], names: list[str],
+                found: Alignment, locked: tuple[str, ...], offset: float, notes: list[str]) -> dict[str, float | None]:
     """{face name: its form profile, mm}: each face's points aligned alone (the same method and
     locked motions, from the part's alignment), the profile 2 max |d - offset| of that fit; None
     where a face's points cannot be aligned alone (too few for the motions they hold), the reason
     in notes."""
-    forms = {}
+    forms: dict[str, float | None] = {}
     for index in sorted(set(owner.tolist())):
         rows = np.flatnonzero(owner == index)
 
-        def closest(where, rows=rows):
+        def closest(where: np.ndarray, rows: np.ndarray = rows) -> tuple[np.ndarray, np.ndarray]:
             return _closest(closers, owner[rows], where)
 
         try:
@@ -479,7 +499,7 @@ def _face_forms(points, owner, closers, names, found, locked, offset, notes):
     return forms
 
 
-def rebuild(inspection, result, planned_rows):
+def rebuild(inspection: Inspection, result: SamplingResult, planned_rows: np.ndarray) -> None:
     """The paper's step: the substitute fitted to the aligned measured points at their planned
     (u, v) in the result's space, and its exact deviation from the CAD face, into inspection."""
     poles = result.space.fit(result.uv[planned_rows], inspection.points)
@@ -488,7 +508,7 @@ def rebuild(inspection, result, planned_rows):
         inspection.substitute_deviation = result.problem.deviation(poles)
 
 
-def _planned(source, part):
+def _planned(source: object, part: Part.Shape | None) -> Planned:
     """The Planned of a face, a SamplingResult, a PartPlan (with its part), a Planned or a document
     object whose Proxy has planned(obj)."""
     if isinstance(source, Planned):
@@ -513,7 +533,7 @@ def _planned(source, part):
                          "a PartPlan or the workbench's probe points in a document")
 
 
-def planned_face(planned, name):
+def planned_face(planned: Planned, name: str) -> int | None:
     """The index of face ``name`` among the planned faces: its own name, or the one name of the
     form '<object>:<name>' (a plan in a document names its faces 'Block:Face1'); None if none."""
     if name in planned.names:
@@ -522,7 +542,7 @@ def planned_face(planned, name):
     return ends[0] if len(ends) == 1 else None
 
 
-def _datum_face(datum, planned, part):
+def _datum_face(datum: Datum, planned: Planned, part: Part.Shape | None) -> Part.Face:
     """The Part.Face of a datum that brings its own points: its face given, a face of the plan
     by name, or of part=; InputError where none is found."""
     if not isinstance(datum.face, str):
@@ -536,7 +556,7 @@ def _datum_face(datum, planned, part):
     return _face_of(part, datum.face)
 
 
-def _datum_point_set(datum):
+def _datum_point_set(datum: Datum) -> PointSet:
     """A datum's own points as a PointSet: a path or PointSet as measured, an (M, 3) array of
     contact points (mm) labelled by order."""
     if isinstance(datum.points, (str, bytes, os.PathLike, PointSet)):
@@ -549,7 +569,7 @@ def _datum_point_set(datum):
                     np.full_like(points, np.nan))
 
 
-def _face_of(part, name):
+def _face_of(part: Part.Shape, name: str) -> Part.Face:
     """The face ``name`` ('Face3') of the plan's part; InputError where the part has none."""
     try:
         return part.getElement(name)
@@ -557,7 +577,7 @@ def _face_of(part, name):
         raise InputError(f"the part given has no {name}: give part= the shape the plan was made of") from None
 
 
-def _measured_point_set(measured):
+def _measured_point_set(measured: str | os.PathLike | PointSet) -> PointSet:
     """The PointSet of ``measured``: a file's path (str, pathlib.Path) read by read_measured, or
     points already in hand (a PointSet); InputTypeError naming what was given otherwise."""
     if isinstance(measured, (str, bytes, os.PathLike)):
@@ -569,7 +589,7 @@ def _measured_point_set(measured):
                              f"PointSet, got {type(measured).__name__}") from None
 
 
-def _contact_points(point_set, probe_radius):
+def _contact_points(point_set: PointSet, probe_radius: float | None) -> np.ndarray:
     """The measured contact points (N, 3) mm: ball centres moved back by the probe radius along
     their vectors (probe_radius mm, else the radius the file states, except for DMIS actuals,
     which a CMM reports as contact points already; 0 for contact points)."""
@@ -591,7 +611,7 @@ def _contact_points(point_set, probe_radius):
     return points - radius * np.nan_to_num(normals)
 
 
-def pair(planned, measured):
+def pair(planned: Planned, measured: PointSet) -> tuple[tuple[np.ndarray, np.ndarray], list[str]]:
     """((measured rows, planned rows), notes): the measured points paired with the planned ones
     by label (as DMIS, regardless of case) where the measured labels are planned ones, else by
     order when the counts agree; labels a file did not give (P1..PN by order, metadata
@@ -629,12 +649,14 @@ def pair(planned, measured):
     return (rows, rows), [f"paired by order: {why}"]
 
 
-def _closest(closers, owner, points):
+def _closest(closers: Sequence[FaceCloser | None], owner: np.ndarray,
+             points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Feet (N, 3) mm and outward normals (N, 3) of points (N, 3) on their own faces (closers:
     a FaceCloser per face, None for a face without points; owner (N,) the face of each point)."""
     feet, normals = np.empty_like(points), np.empty_like(points)
     for index, closer in enumerate(closers):
         rows = np.flatnonzero(owner == index)
         if rows.size:
+            assert closer is not None   # a face with points has its FaceCloser
             feet[rows], normals[rows] = closer(points[rows])
     return feet, normals

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import os
 import re
+from typing import Any
 
 import numpy as np
 
@@ -32,7 +33,7 @@ FIELD_COUNTS = {3: "x y z", 4: "label x y z", 6: "x y z i j k", 7: "label x y z 
 MAX_FILE_BYTES = 100 * 2 ** 20
 
 
-def read_measured(path):
+def read_measured(path: str | os.PathLike) -> PointSet:
     """The measured points of a file: a PointSet of contact points or ball centres (normals NaN
     where the file gives no vectors). DMIS, XYZIJK and QIF files and CSV files with the project's
     header go through :func:`cmmsampling.read_points` (a DMIS program or a QIF plan without
@@ -64,7 +65,7 @@ def read_measured(path):
     return point_set
 
 
-def _project_file(path):
+def _project_file(path: str | os.PathLike) -> bool:
     """True for a file one of the registered formats reads as its own: by its extension, and where
     the format tells its files by their header (``FileFormat.recognises``: CSV's label,x,y,z,i,j,k,
     XYZIJK's), by the file's first line that is no comment."""
@@ -79,13 +80,15 @@ def _project_file(path):
     return bool(record.recognises(head[0].lower().replace(" ", "") if head else ""))
 
 
-def read_labelled_text(text, path="<text>"):
+def read_labelled_text(text: str, path: str = "<text>") -> PointSet:
     """PointSet from a table of measured points: a header naming the columns (label, x, y, z and
     optionally i, j, k in any order and case, see cmmsampling.inspection.columns), or none and
     lines of ``[label] x y z [i j k]``; comma, semicolon or whitespace between fields, comment
     lines skipped. Without a label column the points are labelled P1..PN by order, which the
     metadata says (``labels: by order``). InputError naming the line for a decimal comma, a line
     of another length, a label given twice, a header of nominal coordinates only, or no point."""
+    rows: list[list[float]]
+    layout: dict[str, Any] | None
     rows, labels, seen, layout = [], [], set(), None
     for line_number, line in enumerate(text.splitlines(), start=1):
         if not line.strip() or COMMENT.match(line):
@@ -111,11 +114,12 @@ def read_labelled_text(text, path="<text>"):
     if not rows:
         raise InputError(f"{path}: no measured point found; write one point a line as label, x, y, z")
     data = np.array(rows)
+    assert layout is not None   # set by the first point's line, and there is one
     metadata = {} if layout["label"] is not None else {"labels": "by order"}
     return PointSet(labels, data[:, :3], data[:, 3:], metadata=metadata)
 
 
-def _plain_layout(fields, path, line_number):
+def _plain_layout(fields: list[str], path: str, line_number: int) -> dict[str, Any]:
     """The columns of a table without a header, from its first point's fields: label (or None),
     x, y, z, i, j, k (or None) by position."""
     width = len(fields)
@@ -135,7 +139,7 @@ def _plain_layout(fields, path, line_number):
     return layout
 
 
-def _is_number(field):
+def _is_number(field: str) -> bool:
     """True where a field reads as a float."""
     try:
         float(field)
@@ -144,7 +148,7 @@ def _is_number(field):
     return True
 
 
-def _fields(line, path, line_number):
+def _fields(line: str, path: str, line_number: int) -> list[str]:
     """The fields of a line: split at semicolons where it has any, else at tabs, else at commas,
     else at blanks; a number with a comma inside (12,5 between semicolons or blanks) is a decimal
     comma, refused."""

@@ -5,6 +5,9 @@ and scatter); this module finds each inspection's points on the face and their p
 """
 from __future__ import annotations
 
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from ..fitting.exact import NearestParameters
@@ -12,8 +15,13 @@ from ..fitting.series import SeriesModel, error_map
 from ..geometry.validation import InputError, InputTypeError
 from ..strategies.face_setup import setup_of
 
+if TYPE_CHECKING:   # for the annotations only: judge imports this module; FreeCAD ships no type stubs
+    import Part
 
-def face_rows(inspection, name=None):
+    from .judge import Inspection
+
+
+def face_rows(inspection: Inspection, name: str | None = None) -> tuple[np.ndarray, str]:
     """(rows (M,) int, the face's name) of an inspection's points on the face called ``name``
     (None: the inspection's only face; InputError when it has several)."""
     names = list(dict.fromkeys(inspection.faces or [""]))
@@ -27,14 +35,15 @@ def face_rows(inspection, name=None):
     return rows, name
 
 
-def nearest_parameters(face):
+def nearest_parameters(face: Part.Face) -> NearestParameters:
     """The NearestParameters (cmmsampling.fitting.exact) of ``face`` (a Part.Face): points (M, 3)
     mm -> the parameters (M, 2) of their closest points on it, inside its trim."""
     setup = setup_of(face)
     return NearestParameters(setup.model, setup.domain().on_face if setup.model.trimmed else None)
 
 
-def measured_parameters(face, inspection, name=None, nearest=None):
+def measured_parameters(face: Part.Face, inspection: Inspection, name: str | None = None,
+                        nearest: NearestParameters | None = None) -> tuple[np.ndarray, np.ndarray]:
     """(uv (M, 2) on face, signed deviations (M,) mm) of the inspection's points on ``face`` (a
     Part.Face; name: the face's name in the inspection, None for its only face; nearest: the
     face's :func:`nearest_parameters` where already built)."""
@@ -44,7 +53,7 @@ def measured_parameters(face, inspection, name=None, nearest=None):
     return nearest(inspection.points[rows]), inspection.deviations[rows]
 
 
-def series_model(face, prior, name=None) -> SeriesModel:
+def series_model(face: Part.Face, prior: Sequence[Inspection] | SeriesModel, name: str | None = None) -> SeriesModel:
     """The series model of ``face`` (a Part.Face) from the inspections of earlier parts.
 
     prior: a list of Inspections (cmmsampling.inspect), at least one, each with points on the
@@ -55,7 +64,8 @@ def series_model(face, prior, name=None) -> SeriesModel:
     return _series_model(face, prior, name)
 
 
-def _series_model(face, prior, name, nearest=None):
+def _series_model(face: Part.Face, prior: Sequence[Inspection] | SeriesModel, name: str | None,
+                  nearest: NearestParameters | None = None) -> SeriesModel:
     """:func:`series_model`, with the face's :func:`nearest_parameters` where already built."""
     if isinstance(prior, SeriesModel):
         return prior
@@ -67,7 +77,8 @@ def _series_model(face, prior, name, nearest=None):
     return SeriesModel(nearest.model, [measured_parameters(face, inspection, name, nearest) for inspection in parts])
 
 
-def deviation_map(inspection, face, uv, prior=None, name=None):
+def deviation_map(inspection: Inspection, face: Part.Face, uv: np.ndarray,
+                  prior: Sequence[Inspection] | SeriesModel | None = None, name: str | None = None) -> np.ndarray:
     """The measured part's signed deviation from the CAD face at uv (M, 2) of its parameter
     range: (M,) mm, from the inspection's points on ``face`` alone (prior None: kriging,
     cmmsampling.fitting.series.fit_field) or with the series model of ``prior`` (a list of

@@ -11,17 +11,22 @@ the CMM sees it: DMIS output (``F(label)`` nominals and ``FA(label)`` actuals) o
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
 from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..formats.exporting import as_point_set, export
 from ..formats.files import write_atomically
 from ..formats.pointset import PointSet
-from ..formats.registry import measured_records
+from ..formats.registry import FileFormat, measured_records
 from ..geometry.validation import InputError, check_real
 from ..strategies.face_setup import setup_of
 from .align import rotation_matrix, transform
+
+if TYPE_CHECKING:   # FreeCAD ships no type stubs: to the type checker Part's classes are Any
+    import Part
 
 # The form error's waves: their number and wavelengths as fractions of the points' extent.
 WAVES = 3
@@ -40,7 +45,7 @@ class Misplacement:
     y: float = 0.0
     z: float = 0.0
 
-    def matrix(self, centre):
+    def matrix(self, centre: np.ndarray) -> np.ndarray:
         """(4, 4) the motion nominal -> table about centre (3,) mm."""
         angles = np.radians([self.rx, self.ry, self.rz])
         rotation = rotation_matrix([0.0, 0.0, angles[2]]) @ rotation_matrix([0.0, angles[1], 0.0]) \
@@ -65,13 +70,13 @@ class SimulatedMeasurement:
     misplacement: np.ndarray
 
 
-def form_field(points, amplitude, seed=0):
+def form_field(points: np.ndarray, amplitude: float, seed: int = 0) -> np.ndarray:
     """A smooth form error at points (N, 3) mm: (N,) mm within +-amplitude, a sum of WAVES plane
     waves across the points' extent with random directions, lengths and phases (seeded)."""
     return form_waves(points, amplitude, seed)(points)
 
 
-def form_waves(points, amplitude, seed=0):
+def form_waves(points: np.ndarray, amplitude: float, seed: int = 0) -> Callable[[np.ndarray], np.ndarray]:
     """The form error of :func:`form_field` as a function of any points (M, 3) mm -> (M,) mm, its
     waves sized by the extent of points (N, 3) mm."""
     points = np.asarray(points, dtype=float)
@@ -82,7 +87,7 @@ def form_waves(points, amplitude, seed=0):
     lengths = extent * rng.uniform(*WAVELENGTHS, WAVES)
     phases = rng.uniform(0, 2 * np.pi, WAVES)
 
-    def waves(where):
+    def waves(where: np.ndarray) -> np.ndarray:
         where = np.asarray(where, dtype=float).reshape(-1, 3)
         if amplitude == 0:
             return np.zeros(len(where))
@@ -91,7 +96,7 @@ def form_waves(points, amplitude, seed=0):
     return waves
 
 
-def _measured_format(path):
+def _measured_format(path: str | os.PathLike) -> FileFormat:
     """The FileFormat (registered, ``measured``) a measurement is written in, by path's extension;
     InputError naming those there are."""
     extension = os.path.splitext(os.fspath(path))[1].lower()
@@ -103,7 +108,9 @@ def _measured_format(path):
     return found[0]
 
 
-def simulate_measurement(source, path, *, form_error=0.0, noise=0.0, misplacement=None, seed=0):
+def simulate_measurement(source: object, path: str | os.PathLike, *, form_error: float = 0.0, noise: float = 0.0,
+                         misplacement: Misplacement | dict[str, float] | None = None,
+                         seed: int = 0) -> SimulatedMeasurement:
     """Measure the planned points of ``source`` on a virtual part and write what the CMM reports.
 
     source: a SamplingResult, PartPlan, PointSet or probe-points object (the nominal points and
@@ -151,7 +158,7 @@ class SeriesPart:
     lower: np.ndarray
     span: np.ndarray
 
-    def error(self, uv):
+    def error(self, uv: np.ndarray) -> np.ndarray:
         """(M,) mm at uv (M, 2)."""
         s, t = ((np.asarray(uv, float).reshape(-1, 2) - self.lower) / self.span).T
         shapes = {"wave": np.sin(2 * np.pi * (0.9 * s + 0.4 * t) + 0.5) * np.cos(np.pi * (t - 0.3)),
@@ -162,7 +169,8 @@ class SeriesPart:
         return field + self.setup[0] + self.setup[1] * (s - 0.5) + self.setup[2] * (t - 0.5)
 
 
-def simulated_series(face, count, kind="all", size=0.02, seed=0):
+def simulated_series(face: Part.Face, count: int, kind: str = "all", size: float = 0.02,
+                     seed: int = 0) -> list[SeriesPart]:
     """``count`` SeriesParts of a series on face (a Part.Face): error kind one of SERIES_KINDS
     or 'all' (their sum), of ``size`` mm (each part's sizes scattered by SIZE_SPREAD), each part
     offset and tilted (SETUP_SPREAD x size, standard deviation); seeded."""
@@ -176,7 +184,8 @@ def simulated_series(face, count, kind="all", size=0.02, seed=0):
             for _ in range(count)]
 
 
-def measured_part(face, uv, part, noise=0.0, seed=0):
+def measured_part(face: Part.Face, uv: np.ndarray, part: SeriesPart, noise: float = 0.0,
+                  seed: int = 0) -> PointSet:
     """What a CMM reads on ``part`` (a SeriesPart) at the face's parameters uv (M, 2): a PointSet
     of contact points, the face's points moved by the part's error along its normals plus a
     probing error (``noise`` mm, standard deviation), with the face's normals."""

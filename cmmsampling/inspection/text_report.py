@@ -10,7 +10,10 @@ the point's label after ``OF POINT``, its measured x, y, z in the column headed 
 the block's UNITS (MM or IN); other dimensions in the report (a circle's diameter, a plane's
 flatness) are passed over.
 """
+from __future__ import annotations
+
 import re
+from typing import Any
 
 import numpy as np
 
@@ -24,14 +27,17 @@ MEASURED_HEADINGS = ("MEAS", "ACTUAL", "MEASURED")
 UNITS_MM = {"MM": 1.0, "IN": 25.4}
 
 
-def is_text_report(text):
+def is_text_report(text: str) -> bool:
     """True where text holds a point location block of a CMM text report."""
     return any(LOCATION.match(line) for line in text.splitlines()[:200])
 
 
-def read_text_report(text, path="<text>"):
+def read_text_report(text: str, path: str = "<text>") -> PointSet:
     """PointSet of the measured point locations of a text report (module docstring); InputError
     naming the line where a block's x, y or z or its MEAS column is missing."""
+    labels: list[str]
+    rows: list[list[float]]
+    block: dict[str, Any] | None
     labels, rows, block = [], [], None
     for line_number, line in enumerate(text.splitlines(), start=1):
         found = LOCATION.match(line)
@@ -56,7 +62,8 @@ def read_text_report(text, path="<text>"):
     return PointSet(labels, np.array(rows), np.full((len(rows), 3), np.nan), metadata={"format": "text report"})
 
 
-def _close(block, labels, rows, path):
+def _close(block: dict[str, Any] | None, labels: list[str], rows: list[list[float]],
+           path: str) -> dict[str, Any] | None:
     """Take a finished block's point into labels and rows; InputError where it lacks x, y or z."""
     if block is not None:
         missing = [axis for axis in "XYZ" if axis not in block["values"]]

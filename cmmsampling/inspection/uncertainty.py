@@ -19,12 +19,17 @@ ISO 14253-1's decision for a profile tolerance t (an upper limit): 'conforms' wh
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from scipy.optimize import linprog
 
 from .align import chebyshev_programme
+
+if TYPE_CHECKING:   # for the annotations only
+    from .datums import Frame, Link
 
 COVERAGE_FACTOR = 2.0
 SAMPLING_ERROR = 0.05
@@ -56,22 +61,22 @@ class ProfileUncertainty:
     notes: list = field(default_factory=list)
     profiles: np.ndarray | None = None
 
-    def as_record(self):
+    def as_record(self) -> dict[str, Any]:
         """The figures as a JSON-friendly dict (the trials' profiles left out)."""
         return {key: value for key, value in vars(self).items() if key != "profiles"}
 
     @classmethod
-    def from_record(cls, record):
+    def from_record(cls, record: dict[str, Any]) -> ProfileUncertainty:
         """The ProfileUncertainty of :meth:`as_record`'s dict."""
         return cls(**record)
 
-    def text(self):
+    def text(self) -> str:
         """'U = 0.0042 mm (k = 2; u = 0.001 mm per point, 750 Monte Carlo trials, its own error 3.1 %)'."""
         return (f"U = {self.expanded:.4f} mm (k = {self.coverage:g}; probing u = {self.probing:g} mm per point, "
                 f"{self.trials} Monte Carlo trials, their own error {100 * self.relative_error:.1f} %)")
 
 
-def decide(profile, expanded, tolerance):
+def decide(profile: float, expanded: float, tolerance: float) -> str:
     """ISO 14253-1's decision for a profile (mm) with expanded uncertainty U (mm) against an
     upper limit t (mm): CONFORMS (profile + U <= t), DOES_NOT_CONFORM (profile - U > t) or
     UNDECIDED."""
@@ -82,7 +87,8 @@ def decide(profile, expanded, tolerance):
     return UNDECIDED
 
 
-def profile_uncertainty(frame, owner, names, probing, seed=0, check=None):
+def profile_uncertainty(frame: Frame, owner: np.ndarray, names: list[str], probing: float, seed: int = 0,
+                        check: Callable[[int], None] | None = None) -> ProfileUncertainty:
     """The ProfileUncertainty of a Frame (cmmsampling.inspection.datums: its Links, the datums'
     then the toleranced surface's, the last one's deviations from the zone's centre) under
     probing error u = probing mm per point and axis, taken along the outward normals each
@@ -117,7 +123,7 @@ def profile_uncertainty(frame, owner, names, probing, seed=0, check=None):
                               profiles=whole)
 
 
-def relative_error(values):
+def relative_error(values: np.ndarray) -> float:
     """The relative standard error of the standard deviation of values (T,): 1/2 sqrt((b - 1)
     / T) with b their kurtosis (3 for a normal distribution); 0 where they do not vary."""
     spread = values.std()
@@ -127,7 +133,8 @@ def relative_error(values):
     return 0.5 * np.sqrt(max(kurtosis - 1.0, 0.0) / len(values))
 
 
-def trial_profiles(links, errors, faces, check=None):
+def trial_profiles(links: list[Link], errors: np.ndarray, faces: list[np.ndarray],
+                   check: Callable[[int], None] | None = None) -> np.ndarray:
     """(T, F) mm: each trial's profile per face (2 max |d - o| over its rows of the last link;
     faces: F arrays of row numbers), the links solved in order on their linear models with the
     errors (T, P) mm along the normals of all P points added to their deviations; check:
@@ -144,7 +151,8 @@ def trial_profiles(links, errors, faces, check=None):
                             for rows in faces])
 
 
-def _solve(criterion, deviations, jacobian, check=None):
+def _solve(criterion: str, deviations: np.ndarray, jacobian: np.ndarray,
+           check: Callable[[int], None] | None = None) -> np.ndarray:
     """(T, H): each trial's step x minimising the criterion of deviations (T, M) + jacobian (M,
     H) x: least squares for all trials at once, a linear programme per trial otherwise (check
     called with the trials done every CHECK_EVERY of them)."""
@@ -159,12 +167,12 @@ def _solve(criterion, deviations, jacobian, check=None):
     return np.array(steps)
 
 
-def _chebyshev_programme(deviations, jacobian):
+def _chebyshev_programme(deviations: np.ndarray, jacobian: np.ndarray) -> np.ndarray:
     """x (H,) minimising max |d + J x| (d (M,), J (M, H)), unbounded (align's programme)."""
     return _solved(chebyshev_programme(deviations, jacobian, [(None, None)] * jacobian.shape[1]))
 
 
-def _tangent_programme(deviations, jacobian):
+def _tangent_programme(deviations: np.ndarray, jacobian: np.ndarray) -> np.ndarray:
     """x (H,) minimising max -(d + J x) with every d + J x <= 0: minimise s, -s <= d + J x <= 0."""
     count, size = jacobian.shape
     upper = np.vstack([np.hstack([jacobian, np.zeros((count, 1))]), np.hstack([-jacobian, -np.ones((count, 1))])])
@@ -173,7 +181,7 @@ def _tangent_programme(deviations, jacobian):
     return _solved(solved.x[:size] if solved.success else None)
 
 
-def _solved(step):
+def _solved(step: np.ndarray | None) -> np.ndarray:
     """A trial's step, or ArithmeticError where its programme had no solution."""
     if step is None:
         raise ArithmeticError("a Monte Carlo trial's fit has no solution")

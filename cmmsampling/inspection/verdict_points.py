@@ -62,11 +62,11 @@ class VerdictPoints:
     strategy: str
 
     @property
-    def uncertainties(self):
+    def uncertainties(self) -> np.ndarray:
         """(len(counts),) mm: each N's uncertainty from sampling, the COVERAGE quantile of its gaps."""
         return np.quantile(self.gaps, COVERAGE, axis=1)
 
-    def text(self):
+    def text(self) -> str:
         """The finding in a line, with the uncertainty from sampling of each N tried."""
         limit = self.share * self.tolerance
         table = ", ".join(f"{count}: {gap:.4f}" for count, gap in zip(self.counts, self.uncertainties))
@@ -106,7 +106,7 @@ def points_for_verdict(face: Part.Face, tolerance: float, form_error: float, *, 
                          form_error, strategy)
 
 
-def dense_nodes(closer):
+def dense_nodes(closer: FaceCloser) -> tuple[np.ndarray, np.ndarray]:
     """(points (M, 3) mm, outward normals (M, 3)): every DENSE_STEP-th raster node on the face
     and every edge node, the face as a whole."""
     nodes = closer.nodes
@@ -117,7 +117,7 @@ def dense_nodes(closer):
             np.vstack([nodes.normals[kept], nodes.edge_normals]))
 
 
-def zone_width(points, closer, alignment):
+def zone_width(points: np.ndarray, closer: FaceCloser, alignment: str) -> float:
     """mm: the profile 2 max |d| of points (M, 3) mm on the face closer measures, aligned by
     ``alignment`` from where they are."""
     return 2.0 * float(np.abs(align(points, closer, alignment).deviations).max())
