@@ -5,8 +5,16 @@ KD-tree. A ball swept along a segment (a capsule) or a flat-ended cylinder is bl
 part point lies within it grown by ``margin`` (the spacing and the tessellation's deflection:
 how far the surface may lie from its nearest point), so the tests err on the side of blocking.
 """
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
+
 import numpy as np
 from scipy.spatial import cKDTree
+
+if TYPE_CHECKING:   # FreeCAD ships no type stubs: to the type checker Part's classes are Any
+    import Part
 
 # Ball centres along a swept ball are this fraction of its radius apart.
 SPHERE_STEP = 0.5
@@ -27,11 +35,13 @@ class Obstacles:
     mm; margin: mm added to every capsule's radius.
     """
 
-    def __init__(self, part, spacing=None, deflection=None, max_points=MAX_POINTS):
+    def __init__(self, part: Part.Shape, spacing: float | None = None, deflection: float | None = None,
+                 max_points: int = MAX_POINTS) -> None:
         box = part.BoundBox
         self.box = np.array([[box.XMin, box.YMin, box.ZMin], [box.XMax, box.YMax, box.ZMax]])
         wanted = float(spacing or min(FINEST_SPACING_MM, box.DiagonalLength / 40.0))
         spacing = max(wanted, np.sqrt(part.Area / max_points))   # a fill holds at least area / spacing^2 points
+        assert spacing is not None   # max() of two numbers
         self.deflection = float(deflection or spacing / 5.0)
         meshes = [_mesh(face, self.deflection) for face in part.Faces]
         self.spacing = _spacing_within(meshes, spacing, max_points)
@@ -40,7 +50,8 @@ class Obstacles:
         self.tree = cKDTree(self.points)
         self.margin = self.spacing + self.deflection
 
-    def swept_blocked(self, starts, ends, radii, margin=True, overreach=None):
+    def swept_blocked(self, starts: np.ndarray, ends: np.ndarray, radii: np.ndarray | float, margin: bool = True,
+                      overreach: float | None = None) -> np.ndarray:
         """Balls swept along segments (capsules from starts (M, 3) to ends (M, 3), radius radii
         (M,), mm) that a part point lies within (plus the margin unless margin=False): (M,) bool.
         The capsule is covered by balls along its segment, a little larger than it between them:
@@ -58,7 +69,7 @@ class Obstacles:
             hit[chosen] = np.isfinite(distances)
         return np.bincount(owner, weights=hit, minlength=len(starts)) > 0
 
-    def cylinders_blocked(self, starts, ends, radii):
+    def cylinders_blocked(self, starts: np.ndarray, ends: np.ndarray, radii: np.ndarray | float) -> np.ndarray:
         """Flat-ended cylinders (axis from starts (M, 3) to ends (M, 3), radius radii (M,), mm),
         each grown by the margin, that hold a part point: (M,) bool.
 
@@ -85,7 +96,8 @@ class Obstacles:
                                                    radii)
         return np.bincount(owner, weights=hit, minlength=len(starts)) > 0
 
-    def _pieces_hold_points(self, centres, bounding, owner, starts, ends, radii):
+    def _pieces_hold_points(self, centres: np.ndarray, bounding: np.ndarray, owner: np.ndarray, starts: np.ndarray,
+                            ends: np.ndarray, radii: np.ndarray) -> np.ndarray:
         """(P,) bool: pieces (ball centres (P, 3), radii bounding (P,)) of the cylinders ``owner``
         (P,) whose balls hold a point inside the cylinder (starts, ends (M, 3), radii (M,))."""
         found = self.tree.query_ball_point(centres, bounding, return_sorted=False)
@@ -102,7 +114,7 @@ class Obstacles:
         inside = (along >= -self.margin) & (along <= length[cylinder] + self.margin) & (across <= radii[cylinder])
         return np.bincount(piece, weights=inside, minlength=len(centres)) > 0
 
-    def exits(self, starts, axes, grow):
+    def exits(self, starts: np.ndarray, axes: np.ndarray, grow: float) -> tuple[np.ndarray, np.ndarray]:
         """(lengths (M,) mm, points (M, 3) mm): how far along axes (M, 3) unit the starts (M, 3)
         leave the part's box grown by ``grow`` mm (0 for a start already outside), and where."""
         low, high = self.box[0] - grow, self.box[1] + grow
@@ -111,7 +123,8 @@ class Obstacles:
         lengths = np.maximum(far.min(axis=1), 0.0)
         return lengths, starts + lengths[:, None] * axes
 
-def along_segments(starts, ends, steps):
+def along_segments(starts: np.ndarray, ends: np.ndarray,
+                   steps: np.ndarray | float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Points along segments from starts (M, 3) to ends (M, 3), at most steps (M,) apart, both
     ends included: (points (P, 3), owner (P,) the segment of each, steps (M,) as used)."""
     starts, ends = np.asarray(starts, float), np.asarray(ends, float)
@@ -124,7 +137,7 @@ def along_segments(starts, ends, steps):
     return starts[owner] + t[:, None] * (ends - starts)[owner], owner, lengths / np.maximum(counts - 1, 1)
 
 
-def _mesh(face, deflection):
+def _mesh(face: Part.Face, deflection: float) -> tuple[np.ndarray, np.ndarray]:
     """A face's tessellation: (vertices (V, 3) mm, triangles' corners (T, 3, 3) mm)."""
     vertices, triangles = face.tessellate(deflection)
     vertices = np.array([[v.x, v.y, v.z] for v in vertices], dtype=float).reshape(-1, 3)
@@ -132,7 +145,7 @@ def _mesh(face, deflection):
     return vertices, vertices[triangles]
 
 
-def _grids(corners, spacing):
+def _grids(corners: np.ndarray, spacing: float) -> tuple[np.ndarray, np.ndarray]:
     """How each triangle (corners (T, 3, 3) mm) is filled so that neighbouring points are at
     most spacing mm apart: (rows (T,), steps (T,)) ints. A triangle of rows 0 is filled on a
     barycentric grid of ``steps`` steps per side; one with rows > 0 (a long thin triangle, where
@@ -148,7 +161,7 @@ def _grids(corners, spacing):
     return np.where(thin, rows, 0), steps
 
 
-def _point_count(meshes, spacing):
+def _point_count(meshes: Sequence[tuple[np.ndarray, np.ndarray]], spacing: float) -> int:
     """How many points :func:`_fill` puts on the meshes at spacing mm."""
     total = 0
     for vertices, corners in meshes:
@@ -157,7 +170,7 @@ def _point_count(meshes, spacing):
     return total
 
 
-def _spacing_within(meshes, spacing, max_points):
+def _spacing_within(meshes: Sequence[tuple[np.ndarray, np.ndarray]], spacing: float, max_points: int) -> float:
     """The smallest spacing from ``spacing`` up (mm, growing by a quarter) whose fill of the
     meshes holds at most max_points points, counted before any is made."""
     while _point_count(meshes, spacing) > max_points:
@@ -165,7 +178,7 @@ def _spacing_within(meshes, spacing, max_points):
     return spacing
 
 
-def _fill(vertices, corners, spacing):
+def _fill(vertices: np.ndarray, corners: np.ndarray, spacing: float) -> np.ndarray:
     """Points on a face's mesh (vertices (V, 3), triangles' corners (T, 3, 3), mm): its vertices
     and its triangles filled as :func:`_grids` says: (P, 3)."""
     if not len(corners):
@@ -178,7 +191,7 @@ def _fill(vertices, corners, spacing):
     return np.concatenate(filled)
 
 
-def _barycentric(corners, k):
+def _barycentric(corners: np.ndarray, k: int) -> np.ndarray:
     """Points of triangles (corners (T, 3, 3)) on a barycentric grid of k steps: (T * W, 3)."""
     i, j = np.meshgrid(np.arange(k + 1), np.arange(k + 1), indexing="ij")
     keep = i + j <= k
@@ -186,7 +199,7 @@ def _barycentric(corners, k):
     return np.einsum("wc,tcd->twd", weights, corners).reshape(-1, 3)
 
 
-def _rows(corners, r, k):
+def _rows(corners: np.ndarray, r: int, k: int) -> np.ndarray:
     """Points of triangles (corners (T, 3, 3)) on r + 1 segments parallel to each one's longest
     side, from that side (t = 0) to the opposite corner (t = 1), k steps each: (T * (r + 1) * (k + 1), 3)."""
     sides = np.linalg.norm(corners - np.roll(corners, 1, axis=1), axis=2)

@@ -7,14 +7,21 @@ cylinder beyond it over ``body_length``. The ball approaches ``p`` along ``-n`` 
 ``approach`` mm away and retracts the same way; every move keeps ``clearance`` mm from the part.
 All lengths in mm, angles in degrees.
 """
+from __future__ import annotations
+
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from ..geometry.freecad_env import import_part
 from ..geometry.validation import InputError, InputTypeError, check_real
 
-Part = import_part()
+if TYPE_CHECKING:   # FreeCAD ships no type stubs: to the type checker Part's classes are Any
+    import Part
+else:
+    Part = import_part()
 import FreeCAD  # noqa: E402  (importable once import_part() has set the path)
 
 
@@ -49,7 +56,7 @@ class Probe:
     index_step: float = 7.5
     max_head_angle: float = 105.0
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         for name in ("ball_diameter", "stylus_length", "stylus_diameter", "body_diameter", "body_length"):
             check_real(name, getattr(self, name), above=0.0)
         for name in ("approach", "clearance"):
@@ -75,37 +82,37 @@ class Probe:
                              "stylus; give body_diameter of at least stylus_diameter")
 
     @property
-    def radius(self):
+    def radius(self) -> float:
         """The tip ball's radius, mm."""
         return 0.5 * self.ball_diameter
 
     @property
-    def reach(self):
+    def reach(self) -> float:
         """From the ball centre to the end of the body, mm."""
         return self.stylus_length + self.body_length
 
     @property
-    def stylus_start(self):
+    def stylus_start(self) -> float:
         """Where the stylus leaves the ball, mm along the axis from the ball centre."""
         return float(np.sqrt(max(self.radius ** 2 - (0.5 * self.stylus_diameter) ** 2, 0.0)))
 
-    def stations(self, points, normals):
+    def stations(self, points: np.ndarray, normals: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(centres, ready) (N, 3) mm: the ball centres touching points (N, 3) with normals (N, 3)
         unit, c = p + r n, and the ready positions ``approach`` mm out along the normals."""
         centres = points + self.radius * normals
         return centres, centres + self.approach * normals
 
-    def with_values(self, **values):
+    def with_values(self, **values: Any) -> Probe:
         """A copy with some values changed (checked again)."""
         return replace(self, **values)
 
-    def cylinders(self):
+    def cylinders(self) -> list[tuple[float, float, float]]:
         """[(start, end, radius)] of the stylus and the body along the axis, mm from the ball
         centre."""
         return [(0.0, self.stylus_length, 0.5 * self.stylus_diameter),
                 (self.stylus_length, self.reach, 0.5 * self.body_diameter)]
 
-    def solid(self, centre, axis, with_ball=True):
+    def solid(self, centre: np.ndarray, axis: Any, with_ball: bool = True) -> Part.Shape:
         """The probe as an OCC solid with its ball centre at ``centre`` (3,) mm and its axis
         ``axis`` (3,) unit: ball, stylus and body fused (the ball left out with_ball=False)."""
         centre = Vector(centre)
@@ -118,14 +125,14 @@ class Probe:
         return parts[0].fuse(parts[1:]).removeSplitter()
 
 
-def check_probe(probe):
+def check_probe(probe: Any) -> None:
     """InputTypeError unless probe is a Probe (None is no probe, and passes)."""
     if probe is not None and not isinstance(probe, Probe):
         raise InputTypeError(f"probe must be a cmmsampling.Probe (e.g. cmmsampling.PROBES['2 mm ball, 20 mm "
                              f"stylus']), got {probe!r}")
 
 
-def Vector(values):
+def Vector(values: Sequence[float] | np.ndarray) -> FreeCAD.Vector:
     """A FreeCAD vector of three numbers."""
     return FreeCAD.Vector(*(float(v) for v in values))
 
@@ -139,12 +146,12 @@ class Motion:
     touch_speed: float = 4.0
     point_time: float = 0.3
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         check_real("move_speed", self.move_speed, above=0.0)
         check_real("touch_speed", self.touch_speed, above=0.0)
         check_real("point_time", self.point_time, 0.0)
 
-    def seconds(self, travel, points, approach):
+    def seconds(self, travel: float, points: int, approach: float) -> float:
         """Estimated measuring time, s: ``travel`` mm of moves at move_speed, and per point
         the approach (mm) at touch_speed, the retract at move_speed and point_time."""
         per_point = approach / self.touch_speed + approach / self.move_speed + self.point_time
@@ -160,7 +167,7 @@ PROBES = {
 }
 
 
-def head_angles(axes):
+def head_angles(axes: np.ndarray) -> np.ndarray:
     """(A, B) in degrees of probe axes (N, 3) unit: A from the vertical +Z (0: stylus pointing
     down), B the azimuth of the axis from +X about +Z (-180, 180]; (N, 2)."""
     axes = np.asarray(axes, dtype=float)
@@ -170,7 +177,7 @@ def head_angles(axes):
     return np.stack([a, np.where(b <= -180.0, 180.0, b)], axis=1)
 
 
-def axes_of(angles):
+def axes_of(angles: np.ndarray) -> np.ndarray:
     """Probe axes (N, 3) unit for head angles (N, 2) degrees (see :func:`head_angles`)."""
     a, b = np.radians(np.asarray(angles, dtype=float)).T
     return np.stack([np.sin(a) * np.cos(b), np.sin(a) * np.sin(b), np.cos(a)], axis=1)
@@ -180,7 +187,7 @@ def axes_of(angles):
 CONTINUOUS_STEP = 7.5
 
 
-def candidate_axes(normals, probe):
+def candidate_axes(normals: np.ndarray, probe: Probe) -> tuple[np.ndarray, np.ndarray]:
     """The axes the head may take at points of unit normals (N, 3), nearest each normal first:
     (axes (N, K, 3) unit, usable (N, K) bool; the unusable ones sort last).
 
@@ -200,7 +207,7 @@ def candidate_axes(normals, probe):
     return np.take_along_axis(axes, order[..., None], axis=1), np.take_along_axis(usable, order, axis=1)
 
 
-def _index_grid(probe):
+def _index_grid(probe: Probe) -> np.ndarray:
     """(A, B) degrees of an indexing head's orientations, about index_step apart on the sphere:
     A in steps up to max_head_angle, B in multiples of the step that keep neighbours about a step
     apart (near the vertical, neighbouring B differ by far less than a step in direction)."""
@@ -212,7 +219,7 @@ def _index_grid(probe):
     return np.array(grid)
 
 
-def _rings(normals, max_tilt):
+def _rings(normals: np.ndarray, max_tilt: float) -> np.ndarray:
     """(N, K, 3): each normal, then rings of tilt CONTINUOUS_STEP, 2 CONTINUOUS_STEP, ... up to
     max_tilt around it, about CONTINUOUS_STEP degrees apart along each ring."""
     helper = np.where(np.abs(normals[:, :1]) < 0.9, [[1.0, 0.0, 0.0]], [[0.0, 1.0, 0.0]])

@@ -20,8 +20,8 @@ from scipy.spatial.distance import cdist
 
 from ..geometry.probe_path import nearest_neighbour, two_opt
 from ..geometry.validation import InputError
-from .obstacles import along_segments
-from .probe import Motion
+from .obstacles import Obstacles, along_segments
+from .probe import Motion, Probe
 
 # Poses checked along a straight travel move are at most this many mm apart.
 POSE_STEP = 2.0
@@ -56,17 +56,18 @@ class ProbeMoves:
     ready: np.ndarray
     legs: list
 
-    def travel_pairs(self):
+    def travel_pairs(self) -> list[tuple[np.ndarray, ...]]:
         """The legs as N + 1 pairs (leaving, arriving) of (M, 3) positions, mm (PointSet.travel)."""
         return [tuple(np.array([p for p, _ in part]).reshape(-1, 3) for part in leg) for leg in self.legs]
 
-    def segments(self, kind):
+    def segments(self, kind: str) -> tuple[np.ndarray, np.ndarray]:
         """(starts (S, 3), ends (S, 3)) of the path's moves of one kind."""
         chosen = self.kinds == kind
         return self.waypoints[:-1][chosen], self.waypoints[1:][chosen]
 
 
-def moves_through(probe, obstacles, points, normals, axes, motion=None):
+def moves_through(probe: Probe, obstacles: Obstacles, points: np.ndarray, normals: np.ndarray, axes: np.ndarray,
+                  motion: Motion | None = None) -> ProbeMoves:
     """The path through reachable points (N, 3) mm with normals (N, 3) and probe axes (N, 3)
     unit (:func:`cmmsampling.access.reach.reach`); motion: speeds for the time estimate
     (default Motion()). Returns ProbeMoves."""
@@ -92,7 +93,7 @@ def moves_through(probe, obstacles, points, normals, axes, motion=None):
                       motion.seconds(travel, len(points), probe.approach), ready, legs)
 
 
-def _end_lengths(ready, exits, above):
+def _end_lengths(ready: np.ndarray, exits: np.ndarray, above: np.ndarray) -> np.ndarray:
     """(N,) mm: from the clearance plane down to each ready position (the program's first and
     last moves)."""
     return np.linalg.norm(exits - ready, axis=1) + np.linalg.norm(above - exits, axis=1)
@@ -113,7 +114,7 @@ def probe_moves(source: object, motion: Motion | None = None) -> ProbeMoves:
     raise InputError(NO_PART)
 
 
-def _direct_moves(probe, obstacles, ready, axes):
+def _direct_moves(probe: Probe, obstacles: Obstacles, ready: np.ndarray, axes: np.ndarray) -> np.ndarray:
     """(N, N) bool: the pairs of ready positions a straight move joins keeping the clearance
     (same axis; the ball's sweep and the stylus and body at poses along it clear by it)."""
     count = len(ready)
@@ -129,7 +130,8 @@ def _direct_moves(probe, obstacles, ready, axes):
     return direct
 
 
-def _poses_blocked_along(probe, obstacles, starts, ends, axes):
+def _poses_blocked_along(probe: Probe, obstacles: Obstacles, starts: np.ndarray, ends: np.ndarray,
+                         axes: np.ndarray) -> np.ndarray:
     """(M,) bool: moves from starts to ends (M, 3) of a probe on axes (M, 3) whose stylus or body,
     grown by the clearance, meets the part at a pose along the move (POSE_STEP mm apart)."""
     positions, owner, _ = along_segments(starts, ends, np.full(len(starts), POSE_STEP))
@@ -144,7 +146,7 @@ def _poses_blocked_along(probe, obstacles, starts, ends, axes):
     return np.bincount(owner, weights=hit, minlength=len(starts)) > 0
 
 
-def _travel_lengths(ready, exits, above, direct):
+def _travel_lengths(ready: np.ndarray, exits: np.ndarray, above: np.ndarray, direct: np.ndarray) -> np.ndarray:
     """(N, N) mm: straight where ``direct``, else out along the axis, up, across the clearance
     plane, down and in."""
     out = _end_lengths(ready, exits, above)
@@ -152,7 +154,7 @@ def _travel_lengths(ready, exits, above, direct):
     return np.where(direct, cdist(ready, ready), detour)
 
 
-def _short_order(lengths, straight):
+def _short_order(lengths: np.ndarray, straight: np.ndarray) -> np.ndarray:
     """A short open path on the travel lengths (N, N): 2-opt from the nearest-neighbour path on
     them and from the straight nearest-neighbour order, the shorter."""
     if len(lengths) < 3:
@@ -163,13 +165,15 @@ def _short_order(lengths, straight):
     return min(orders, key=lambda order: float(lengths[order[:-1], order[1:]].sum()))
 
 
-def _legs(order, ready, exits, above, direct):
+def _legs(order: np.ndarray, ready: np.ndarray, exits: np.ndarray, above: np.ndarray,
+          direct: np.ndarray) -> list[tuple[list[tuple[np.ndarray, str]], list[tuple[np.ndarray, str]]]]:
     """The travel of a visiting order as N + 1 pairs (leaving, arriving), each a list of
     (position (3,) mm, kind of the move that ends there): the moves out of the previous point
     (none before the first) and in to this one; last, out of the last point. A detour leaves
     along the axis and up to the clearance plane, and arrives across it, down and in along the
     next axis; a straight move only arrives."""
     first, last = order[0], order[-1]
+    legs: list[tuple[list[tuple[np.ndarray, str]], list[tuple[np.ndarray, str]]]]
     legs = [([], [(above[first], "travel"), (exits[first], "travel"), (ready[first], "axis")])]
     for a, b in zip(order[:-1], order[1:]):
         if direct[a, b]:
@@ -181,7 +185,9 @@ def _legs(order, ready, exits, above, direct):
     return legs
 
 
-def _waypoints(order, centres, legs):
+def _waypoints(order: np.ndarray, centres: np.ndarray,
+               legs: list[tuple[list[tuple[np.ndarray, str]], list[tuple[np.ndarray, str]]]]
+               ) -> tuple[np.ndarray, np.ndarray]:
     """The ball centre's whole path (W, 3) and the kind of each move (W - 1,): the legs, with a
     touch (to the contact's centre and back) at each point; the first position is the start."""
     steps = []

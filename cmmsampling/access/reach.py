@@ -19,9 +19,13 @@ A point ``p`` with normal ``n`` (out of the material) is reachable along an axis
 
 The head tries the axes nearest the normal first (:func:`cmmsampling.access.probe.candidate_axes`).
 """
+from __future__ import annotations
+
 import contextlib
 import time
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -31,7 +35,10 @@ from ..geometry.validation import InputError
 from .obstacles import MAX_POINTS, Obstacles
 from .probe import Probe, Vector, candidate_axes, head_angles
 
-Part = import_part()
+if TYPE_CHECKING:   # FreeCAD ships no type stubs: to the type checker Part's classes are Any
+    import Part
+else:
+    Part = import_part()
 
 
 @dataclass
@@ -53,13 +60,15 @@ class Access:
     unreached_area: float = 0.0
 
     @property
-    def tilted(self):
+    def tilted(self) -> np.ndarray:
         """(N,) bool: reached only with the stylus tilted away from the head's orientation nearest
         the normal (that one was blocked)."""
         return self.reachable & (self.ranks > 0)
 
 
-def pose_pieces(probe, centres, ready, axes, exits):
+def pose_pieces(probe: Probe, centres: np.ndarray, ready: np.ndarray, axes: np.ndarray, exits: np.ndarray
+                ) -> tuple[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+                           tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]:
     """What a probe touching at ball centres (M, 3) from ready positions (M, 3) along axes (M, 3)
     must keep clear, leaving ``exits`` (M,) mm along the axis (Probe.stations,
     Obstacles.exits): (sweeps, cylinders), each (starts, ends, radii, owner) with owner the pose
@@ -80,13 +89,14 @@ def pose_pieces(probe, centres, ready, axes, exits):
     return _stacked(sweeps, len(axes)), _stacked(cylinders, len(axes))
 
 
-def _stacked(pieces, count):
+def _stacked(pieces: Sequence[tuple[np.ndarray, np.ndarray, float]],
+             count: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """(starts, ends, radii, owner) of pieces [(starts (M, 3), ends (M, 3), radius)], M poses each."""
     return (np.concatenate([p[0] for p in pieces]), np.concatenate([p[1] for p in pieces]),
             np.concatenate([np.full(count, p[2]) for p in pieces]), np.tile(np.arange(count), len(pieces)))
 
 
-def touch_blocked(probe, obstacles, points, normals):
+def touch_blocked(probe: Probe, obstacles: Obstacles, points: np.ndarray, normals: np.ndarray) -> np.ndarray:
     """(M,) bool: points whose ball cannot touch them from ``approach`` mm out along the normal
     without cutting into the part elsewhere, whatever the axis (see :func:`pose_pieces`)."""
     centres, ready = probe.stations(points, normals)
@@ -94,7 +104,8 @@ def touch_blocked(probe, obstacles, points, normals):
                                    overreach=0.5 * obstacles.deflection)
 
 
-def poses_blocked(probe, obstacles, points, normals, axes):
+def poses_blocked(probe: Probe, obstacles: Obstacles, points: np.ndarray, normals: np.ndarray,
+                  axes: np.ndarray) -> np.ndarray:
     """(M,) bool: the probe poses (see :func:`pose_pieces`) that the part blocks on the way out,
     or whose way out leaves the part's box through its bottom (the clearance plane above could
     not be reached from there)."""
@@ -111,7 +122,7 @@ def poses_blocked(probe, obstacles, points, normals, axes):
     return blocked | (np.bincount(c_owner[open_], weights=cylinders, minlength=len(points)) > 0)
 
 
-def reach(probe, obstacles, points, normals):
+def reach(probe: Probe, obstacles: Obstacles, points: np.ndarray, normals: np.ndarray) -> Access:
     """How the probe reaches each point: the first axis, nearest the normal, whose pose is clear
     (:func:`candidate_axes`, tried for all points still blocked at once). points, normals: (N, 3)
     mm and unit. Returns an Access."""
@@ -151,13 +162,13 @@ class ExactPoses:
     160 ms). part: the Part.Shape; probe: a Probe.
     """
 
-    def __init__(self, part, probe):
+    def __init__(self, part: Part.Shape, probe: Probe) -> None:
         self.part, self.probe = part, probe
         self.faces = part.Faces
         self.boxes = np.array([[f.BoundBox.XMin, f.BoundBox.YMin, f.BoundBox.ZMin,
                                 f.BoundBox.XMax, f.BoundBox.YMax, f.BoundBox.ZMax] for f in self.faces]).reshape(-1, 6)
 
-    def near(self, lower, upper):
+    def near(self, lower: Sequence[float] | np.ndarray, upper: Sequence[float] | np.ndarray) -> Part.Compound | None:
         """A compound of the faces whose boxes meet the box [lower, upper] (3,) mm grown by
         TOUCH_TOLERANCE, or None where there is none."""
         grown_lower, grown_upper = np.asarray(lower) - TOUCH_TOLERANCE, np.asarray(upper) + TOUCH_TOLERANCE
@@ -165,7 +176,7 @@ class ExactPoses:
                                 & np.all(self.boxes[:, 3:] >= grown_lower, axis=1))
         return Part.Compound([self.faces[k] for k in chosen]) if chosen.size else None
 
-    def ball_gap(self, centre):
+    def ball_gap(self, centre: np.ndarray) -> float:
         """The ball centre's (3,) mm distance to the part less the ball's radius, mm (0 when it just
         touches, negative when the ball cuts into the part; the radius where no face is within
         it). Where the centre lies strictly inside the part is :meth:`inside`'s question."""
@@ -175,7 +186,7 @@ class ExactPoses:
             return radius
         return nearby.distToShape(Part.Vertex(Vector(centre)))[0] - radius
 
-    def body_clear(self, centre, axis):
+    def body_clear(self, centre: np.ndarray, axis: np.ndarray) -> bool:
         """True when the stylus and the body with the ball centre at ``centre`` (3,) mm along
         ``axis`` (3,) unit keep off the part (OCC's distance above 0). They start at the ball
         centre, outside the part, so they reach into it only through a face near them."""
@@ -184,7 +195,7 @@ class ExactPoses:
         nearby = self.near((box.XMin, box.YMin, box.ZMin), (box.XMax, box.YMax, box.ZMax))
         return nearby is None or nearby.distToShape(solid)[0] > 0.0
 
-    def inside(self, point):
+    def inside(self, point: np.ndarray) -> bool:
         """True when a closed part holds point (3,) mm strictly inside."""
         return bool(self.part.Solids) and any(solid.isInside(Vector(point), 1e-7, False)
                                               for solid in self.part.Solids)
@@ -208,7 +219,10 @@ class Reachability:
     Reachability serves many runs on the part's faces (``sample(face, part=reachability)``).
     """
 
-    def __init__(self, part, probe=None, spacing=None):
+    _answers: dict[int, np.ndarray]
+    _holds: dict[int, bool]
+
+    def __init__(self, part: Part.Shape, probe: Probe | None = None, spacing: float | None = None) -> None:
         self.part = part
         self.probe = probe if probe is not None else Probe()
         self.obstacles = Obstacles(part, spacing)
@@ -222,7 +236,7 @@ class Reachability:
         self.measures = True
         self._answers, self._holds = {}, {}
 
-    def __call__(self, points, normals):
+    def __call__(self, points: np.ndarray, normals: np.ndarray) -> np.ndarray:
         """(M,) bool; the same question (the same points and normals, as a face's raster asks it
         at every N of a search) is answered once."""
         points, normals = np.asarray(points, dtype=float), np.asarray(normals, dtype=float)
@@ -232,7 +246,7 @@ class Reachability:
         return self._answers[key].copy()
 
     @contextlib.contextmanager
-    def unmeasured(self):
+    def unmeasured(self) -> Iterator[Reachability]:
         """Within the block, runs leave their final points' poses unmeasured (their result's
         ``access`` stays None): a search measures only the result it keeps."""
         self.measures = False
@@ -241,7 +255,7 @@ class Reachability:
         finally:
             self.measures = True
 
-    def holds(self, face):
+    def holds(self, face: Part.Face) -> bool:
         """True when face (a Part.Face) lies on the part (:func:`cmmsampling.geometry.surface.lies_on`);
         asked once per face (a search asks it at every N)."""
         key = face.hashCode()
@@ -249,7 +263,7 @@ class Reachability:
             self._holds[key] = lies_on(face, self.part)
         return self._holds[key]
 
-    def final(self, points, normals):
+    def final(self, points: np.ndarray, normals: np.ndarray) -> tuple[Access, list[int], int]:
         """The Access of final points (M, 3) mm with normals (M, 3) unit, all on one face: each
         point's axis from the fast test, then its pose measured with OCC (:class:`ExactPoses`):
         the ball's touch at every point, the stylus and the body where the fast test is unsure
@@ -279,7 +293,7 @@ class Reachability:
             access.ranks[refused] = -1
         return access, refused, unmeasured
 
-    def unsure(self, centres, axes):
+    def unsure(self, centres: np.ndarray, axes: np.ndarray) -> np.ndarray:
         """(M,) bool: the poses, ball centres (M, 3) mm along axes (M, 3) unit, whose stylus or body
         the fast test finds blocked once widened by another margin (it found them clear with
         one): near enough to the part for OCC to judge them."""

@@ -5,12 +5,14 @@ Pure numpy. Knot vectors are full (every knot repeated by its multiplicity), as
 per-span polynomial tables; the recursions are those of Piegl and Tiller, *The NURBS Book*,
 A2.1-A2.3, run over whole arrays of parameters at once.
 """
+from __future__ import annotations
+
 import functools
 
 import numpy as np
 
 
-def full_knots(knots, mults):
+def full_knots(knots: np.ndarray, mults: np.ndarray) -> np.ndarray:
     """Expand distinct knots and multiplicities into a full knot vector.
 
     knots: (K,) distinct knot values; mults: (K,) positive integers.
@@ -19,7 +21,7 @@ def full_knots(knots, mults):
     return np.repeat(np.asarray(knots, dtype=float), np.asarray(mults, dtype=int))
 
 
-def clamped_uniform_knots(degree, n_poles, start=0.0, end=1.0):
+def clamped_uniform_knots(degree: int, n_poles: int, start: float = 0.0, end: float = 1.0) -> np.ndarray:
     """Full clamped knot vector with uniformly spaced interior knots.
 
     degree: polynomial degree k >= 1; n_poles: number of poles n >= k + 1;
@@ -29,7 +31,7 @@ def clamped_uniform_knots(degree, n_poles, start=0.0, end=1.0):
     return np.concatenate([np.full(degree, start), interior, np.full(degree, end)])
 
 
-def find_spans(t, degree, x):
+def find_spans(t: np.ndarray, degree: int, x: np.ndarray) -> np.ndarray:
     """Knot span index of every parameter: t[i] <= x < t[i+1], clamped to the valid range.
 
     t: (n + k + 1,) full knot vector; x: (N,) parameters. Returns (N,) int array in [k, n - 1],
@@ -39,7 +41,7 @@ def find_spans(t, degree, x):
     return degree + np.searchsorted(t[degree + 1:n], x, side="right")
 
 
-def _basis_table(t, degree, x, span):
+def _basis_table(t: np.ndarray, degree: int, x: np.ndarray, span: np.ndarray) -> np.ndarray:
     """The triangular table of The NURBS Book A2.3: basis values and knot differences.
 
     Returns ndu: (k + 1, k + 1, N); ndu[:, k] holds the k + 1 non-zero basis values,
@@ -64,7 +66,7 @@ def _basis_table(t, degree, x, span):
     return ndu
 
 
-def basis_values(t, degree, x):
+def basis_values(t: np.ndarray, degree: int, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Non-zero basis values at many parameters (Cox-de Boor, The NURBS Book A2.2).
 
     t: full knot vector; degree: k; x: (...) parameters.
@@ -104,7 +106,7 @@ class KnotBasis:
     degree POLYNOMIAL_MAX_DEGREE, where the power basis loses accuracy (1e-13 at degree 9).
     """
 
-    def __init__(self, t, degree):
+    def __init__(self, t: np.ndarray, degree: int) -> None:
         self.knots = np.asarray(t, dtype=float)
         self.degree = int(degree)
         self.count = len(self.knots) - self.degree - 1
@@ -119,7 +121,7 @@ class KnotBasis:
             self._inverse_width = np.divide(1.0, width, out=np.zeros_like(width), where=width > 0)
             self._table = _span_polynomials(self.knots, k, width)
 
-    def values(self, x):
+    def values(self, x: np.ndarray) -> np.ndarray:
         """Dense basis values, basis index before the points: x (..., N) -> (..., n, N).
 
         Entry [..., j, m] is N_j(x[..., m]); a single parameter (0-d x) gives (n, 1). Each leading index is one matrix product of the same
@@ -133,7 +135,7 @@ class KnotBasis:
             dense = dense_from_local(*basis_values(self.knots, self.degree, flat), self.degree, self.count)
         return dense.reshape(x.shape[:-1] + (self.count, flat.shape[-1]))
 
-    def _selected_powers(self, x):
+    def _selected_powers(self, x: np.ndarray) -> np.ndarray:
         """Powers s^0..s^k of the local parameter, placed in the rows of each point's span.
 
         x: (B, N) -> (B, spans * (k + 1), N), zero outside the point's span.
@@ -150,7 +152,7 @@ class KnotBasis:
         return _scatter_rows(powers, span * order, self._spans * order)
 
 
-def _scatter_rows(values, first_row, rows):
+def _scatter_rows(values: np.ndarray, first_row: np.ndarray, rows: int) -> np.ndarray:
     """Zero array (B, rows, N) with values: (B, r, N) in rows first_row (B, N) .. first_row + r - 1."""
     batch, count, n = values.shape
     out = np.zeros((batch, rows, n))
@@ -160,12 +162,12 @@ def _scatter_rows(values, first_row, rows):
 
 
 @functools.lru_cache(maxsize=16)
-def _scatter_offsets(batch, count, n, rows):
+def _scatter_offsets(batch: int, count: int, n: int, rows: int) -> np.ndarray:
     """Flat offsets (B, r, N) of rows 0..r-1 of every point in a (B, rows, N) array."""
     return (np.arange(batch) * rows * n)[:, None, None] + (n * np.arange(count))[:, None] + np.arange(n)
 
 
-def _span_polynomials(t, degree, width):
+def _span_polynomials(t: np.ndarray, degree: int, width: np.ndarray) -> np.ndarray:
     """(n, spans * (k + 1)) power-basis coefficients of every basis function on every span.
 
     Column j * (k + 1) + p holds the coefficient of s^p on span k + j, s the local parameter
@@ -183,24 +185,24 @@ def _span_polynomials(t, degree, width):
     return table.reshape(n, -1)
 
 
-def dense_from_local(span, values, degree, n):
+def dense_from_local(span: np.ndarray, values: np.ndarray, degree: int, n: int) -> np.ndarray:
     """Dense basis values from local ones: values (k + 1, B, N) at span (B, N) -> (B, n, N)."""
     return _scatter_rows(np.moveaxis(values, 0, 1), span - degree, n)
 
 
-def greville_abscissae(t, degree):
+def greville_abscissae(t: np.ndarray, degree: int) -> np.ndarray:
     """Greville abscissae of a full knot vector: the mean of each pole's k interior knots, (n,)."""
     t = np.asarray(t, dtype=float)
     count = len(t) - degree - 1
     return np.array([t[i + 1:i + degree + 1].mean() for i in range(count)])
 
 
-def kron_rows(along_u, along_v):
+def kron_rows(along_u: np.ndarray, along_v: np.ndarray) -> np.ndarray:
     """Row-wise Kronecker products of dense bases: (N, n_u), (N, n_v) -> (N, n_u * n_v)."""
     return (along_u[:, :, None] * along_v[:, None, :]).reshape(along_u.shape[0], -1)
 
 
-def _derivatives_from_table(ndu, degree, n_derivatives):
+def _derivatives_from_table(ndu: np.ndarray, degree: int, n_derivatives: int) -> np.ndarray:
     """Derivatives of the non-zero basis functions from the A2.3 table.
 
     Returns (n_derivatives + 1, k + 1, N): entry [d, r] is the d-th derivative of basis span - k + r.
@@ -236,7 +238,8 @@ def _derivatives_from_table(ndu, degree, n_derivatives):
     return ders
 
 
-def basis_derivatives(t, degree, x, n_derivatives=0):
+def basis_derivatives(t: np.ndarray, degree: int, x: np.ndarray,
+                      n_derivatives: int = 0) -> tuple[np.ndarray, np.ndarray]:
     """Non-zero basis functions and their derivatives at many parameters.
 
     t: full knot vector; degree: k; x: (N,) parameters inside [t[k], t[-k-1]];
@@ -252,7 +255,7 @@ def basis_derivatives(t, degree, x, n_derivatives=0):
     return span, _derivatives_from_table(_basis_table(t, degree, x, span), degree, n_derivatives)
 
 
-def design_matrices(t, degree, x, n_derivatives=0):
+def design_matrices(t: np.ndarray, degree: int, x: np.ndarray, n_derivatives: int = 0) -> np.ndarray:
     """Dense collocation matrices of all basis functions and their derivatives.
 
     t: full knot vector of n + k + 1 knots; x: (N,) parameters.
@@ -264,7 +267,7 @@ def design_matrices(t, degree, x, n_derivatives=0):
     return np.stack([dense_from_local(span[None], d[:, None], degree, n)[0].T for d in ders])
 
 
-def second_difference_matrix(n):
+def second_difference_matrix(n: int) -> np.ndarray:
     """(n - 2, n) matrix of second differences c[i] - 2 c[i+1] + c[i+2] of a pole row."""
     d = np.zeros((max(n - 2, 0), n))
     idx = np.arange(n - 2)
@@ -274,7 +277,7 @@ def second_difference_matrix(n):
     return d
 
 
-def radical_inverse(indices, base):
+def radical_inverse(indices: np.ndarray, base: int) -> np.ndarray:
     """Van der Corput radical inverse of non-negative integers in a prime base.
 
     indices: (N,) ints. Returns (N,) floats in [0, 1).

@@ -14,8 +14,13 @@ judges the copied points on the copy itself.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from .nurbs import NurbsPatch
+    from .surface import SurfaceModel
 
 RASTER = 9
 TOLERANCE_MM = 1e-6
@@ -53,7 +58,7 @@ class RigidCopy:
         return ", ".join(parts) or "in place"
 
 
-def raster(model, count=RASTER, centres=False):
+def raster(model: NurbsPatch, count: int = RASTER, centres: bool = False) -> np.ndarray:
     """(count^2, 2) parameters over the model's parameter rectangle, row by row: from corner to
     corner, or (centres) at the centres of count x count equal cells."""
     u0, u1, v0, v1 = model.bounds
@@ -62,13 +67,13 @@ def raster(model, count=RASTER, centres=False):
     return np.stack([u, v], -1).reshape(-1, 2)
 
 
-def widths(model):
+def widths(model: NurbsPatch) -> np.ndarray:
     """(2,) the widths of the model's parameter rectangle."""
     u0, u1, v0, v1 = model.bounds
     return np.array([u1 - u0, v1 - v0])
 
 
-def rigid_fit(source, target):
+def rigid_fit(source: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
     """(rotation (3, 3), translation (3,), largest residual mm) of the proper rigid motion that takes
     points source (M, 3) closest to target (M, 3) in least squares (Kabsch)."""
     source_mean, target_mean = source.mean(0), target.mean(0)
@@ -84,14 +89,15 @@ class FacePrint:
     """What the comparison needs of one face: model (SurfaceModel), area (mm^2), and its points
     and normals at the :func:`raster` of its parameter rectangle."""
 
-    def __init__(self, model, area):
+    def __init__(self, model: SurfaceModel, area: float) -> None:
         self.model, self.area = model, float(area)
         self.widths = widths(model)
         places = raster(model)
         self.points, self.normals = model.points(places), model.normals(places)
 
 
-def rigid_copy(original: FacePrint, copy: FacePrint, index: int = 0, tolerance: float = TOLERANCE_MM):
+def rigid_copy(original: FacePrint, copy: FacePrint, index: int = 0,
+               tolerance: float = TOLERANCE_MM) -> RigidCopy | None:
     """The RigidCopy by which ``copy`` copies ``original`` (both FacePrints; index: the original's
     index, kept in the answer), None where it does not (see the module docstring)."""
     if abs(original.area - copy.area) > AREA_RTOL * max(original.area, copy.area):

@@ -30,9 +30,18 @@ area).
 
 Points outside the feasible cells are moved to the nearest feasible cell centre.
 """
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from typing import TYPE_CHECKING, cast
+
 import numpy as np
 from scipy.ndimage import distance_transform_edt, maximum_filter, minimum_filter
 from scipy.spatial import cKDTree
+
+if TYPE_CHECKING:
+    from .nurbs import NurbsPatch
+    from .surface import SurfaceModel
 
 CELLS = 256 * 256
 MIN_CELLS_PER_SIDE = 16
@@ -59,8 +68,11 @@ class FaceDomain:
     cell the raster has off it).
     """
 
-    def __init__(self, bounds, trimmed=False, edge_offset=0.0, on_face=None, feasible=None, area=None,
-                 loops=None, reach=np.inf, margin=0.0, unreached=None, unreached_area=0.0, out_of_reach=None):
+    def __init__(self, bounds: Sequence[float], trimmed: bool = False, edge_offset: float = 0.0,
+                 on_face: np.ndarray | None = None, feasible: np.ndarray | None = None, area: float | None = None,
+                 loops: Sequence[np.ndarray] | None = None, reach: float = np.inf, margin: float = 0.0,
+                 unreached: np.ndarray | None = None, unreached_area: float = 0.0,
+                 out_of_reach: np.ndarray | None = None) -> None:
         self.bounds = tuple(float(b) for b in bounds)
         self.trimmed = trimmed
         self.edge_offset = float(edge_offset)
@@ -72,15 +84,15 @@ class FaceDomain:
         self.shape = np.array(feasible.shape if feasible is not None else (1, 1))
         self._on_face = on_face
         self._loops = loops if trimmed else None
-        self._near_loops = None
-        self._crossings = None
+        self._near_loops: np.ndarray | None = None
+        self._crossings: LoopCrossings | None = None
         if self._loops is not None:
             touched = np.zeros(tuple(self.shape), dtype=bool)
             cells = self._cells(np.concatenate(self._loops))
             touched[cells[:, 0], cells[:, 1]] = True
             self._near_loops = maximum_filter(touched, size=NEAR_CELLS)
         self._feasible = feasible
-        self._nearest = None
+        self._nearest: np.ndarray | None = None
         self.feasible_area = area
         self.lower = np.array([self.bounds[0], self.bounds[2]])
         self.upper = np.array([self.bounds[1], self.bounds[3]])
@@ -91,28 +103,28 @@ class FaceDomain:
             self.upper = np.array([self.bounds[0], self.bounds[2]]) + (np.array([rows.max(), cols.max()]) + 1) * cell
 
     @property
-    def exact(self):
+    def exact(self) -> bool:
         """True when the domain is the plain parameter rectangle (no raster involved)."""
         return self._feasible is None
 
     @property
-    def empty(self):
+    def empty(self) -> bool:
         """True when no point of the face keeps the edge offset."""
         return self._feasible is not None and not self._feasible.any()
 
-    def _cells(self, uv):
+    def _cells(self, uv: np.ndarray) -> np.ndarray:
         """Raster cell indices (..., 2) of uv (..., 2), clipped to the raster."""
         u0, u1, v0, v1 = self.bounds
         scale = self.shape / np.array([u1 - u0, v1 - v0])
         cells = np.floor((np.asarray(uv, dtype=float) - [u0, v0]) * scale)
         return np.clip(np.nan_to_num(cells, nan=-1), 0, self.shape - 1).astype(int)
 
-    def _in_rectangle(self, uv):
+    def _in_rectangle(self, uv: np.ndarray) -> np.ndarray:
         uv = np.asarray(uv, dtype=float)
         low, high = np.array(self.bounds[0::2]), np.array(self.bounds[1::2])
         return np.all((uv >= low) & (uv <= high), axis=-1)
 
-    def _lookup(self, raster, uv):
+    def _lookup(self, raster: np.ndarray | None, uv: np.ndarray) -> np.ndarray:
         """In the rectangle and, where there is a raster, in a True cell of it: (...,) bool."""
         inside = self._in_rectangle(uv)
         if raster is None:
@@ -120,7 +132,7 @@ class FaceDomain:
         cells = self._cells(uv)
         return inside & raster[cells[..., 0], cells[..., 1]]
 
-    def on_face(self, uv):
+    def on_face(self, uv: np.ndarray) -> np.ndarray:
         """True where uv: (..., 2) lies on the face (inside its trimming loops): (...,) bool.
 
         Points in raster cells near a trimming loop are tested against the loops themselves
@@ -131,13 +143,14 @@ class FaceDomain:
         if self._loops is None:
             return inside
         cells = self._cells(uv)
+        assert self._near_loops is not None   # set in __init__ whenever there are loops
         near = self._in_rectangle(uv) & self._near_loops[cells[..., 0], cells[..., 1]]
         if self._crossings is None:
             self._crossings = LoopCrossings(self._loops)
         inside[near] = self._crossings.inside(uv[near])
         return inside
 
-    def reached(self, uv):
+    def reached(self, uv: np.ndarray) -> np.ndarray:
         """False where uv: (..., 2) lies in a cell of the face a probe cannot reach, else True
         (everywhere when no probe was asked): (...,) bool."""
         uv = np.asarray(uv, dtype=float)
@@ -146,12 +159,12 @@ class FaceDomain:
         cells = self._cells(uv)
         return ~self._out_of_reach[cells[..., 0], cells[..., 1]]
 
-    def judged(self, uv):
+    def judged(self, uv: np.ndarray) -> np.ndarray:
         """True where uv: (..., 2) lies on the face and where a probe reaches it (the part of
         the face a substitute's deviation is measured over): (...,) bool."""
         return self.on_face(uv) & self.reached(uv)
 
-    def contains(self, uv):
+    def contains(self, uv: np.ndarray) -> np.ndarray:
         """True where uv: (..., 2) is a feasible probe position: (...,) bool (on the face by
         :meth:`on_face`, near the loops tested against the loops themselves)."""
         feasible = self._lookup(self._feasible, uv)
@@ -159,7 +172,7 @@ class FaceDomain:
             feasible &= self.on_face(uv)
         return feasible
 
-    def project(self, uv):
+    def project(self, uv: np.ndarray) -> np.ndarray:
         """Nearest feasible point for each uv: (..., 2) -> (..., 2); feasible points stay put."""
         uv = np.asarray(uv, dtype=float)
         low, high = np.array(self.bounds[0::2]), np.array(self.bounds[1::2])
@@ -176,19 +189,20 @@ class FaceDomain:
         centres = low + (target + 0.5) * (high - low) / self.shape
         return np.where(ok[..., None], clipped, centres)
 
-    def unreached_rectangles(self):
+    def unreached_rectangles(self) -> np.ndarray:
         """(K, 4) rectangles (u0, u1, v0, v1) covering the unreached cells (see
         :func:`cell_rectangles`); (0, 4) without any or without a probe."""
         if self.unreached is None:
             return np.zeros((0, 4))
         return cell_rectangles(self.bounds, self.unreached)
 
-    def from_unit(self, unit):
+    def from_unit(self, unit: np.ndarray) -> np.ndarray:
         """Map points of the unit square, (..., 2) in [0, 1]^2, onto the feasible box."""
         return self.lower + np.asarray(unit, dtype=float) * (self.upper - self.lower)
 
 
-def face_domain(model, edge_offset=0.0, reachable=None):
+def face_domain(model: SurfaceModel, edge_offset: float = 0.0,
+                reachable: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None) -> FaceDomain:
     """The FaceDomain of a SurfaceModel's face, keeping ``edge_offset`` mm from its edges.
 
     reachable: None, or callable(points (M, 3) mm, normals (M, 3) unit) -> (M,) bool, where a
@@ -224,7 +238,7 @@ def face_domain(model, edge_offset=0.0, reachable=None):
                       0.0 if unreached is None else float(cell_areas[unreached].sum()), out_of_reach)
 
 
-def cell_rectangles(bounds, cells):
+def cell_rectangles(bounds: Sequence[float], cells: np.ndarray) -> np.ndarray:
     """Parameter rectangles covering the True cells of a raster: (K, 4) rows (u0, u1, v0, v1).
 
     bounds: (u0, u1, v0, v1) of the raster; cells: (R_u, R_v) bool. Each row's runs of True
@@ -245,7 +259,8 @@ def cell_rectangles(bounds, cells):
                             v0 + runs[firsts, 1] * dv, v0 + runs[firsts, 2] * dv])
 
 
-def reachable_cells(model, on_face, reachable, centres):
+def reachable_cells(model: NurbsPatch, on_face: np.ndarray, reachable: Callable[[np.ndarray, np.ndarray], np.ndarray],
+                    centres: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Where a probe reaches the raster's cells: (placeable, judged), each (R_u, R_v) bool.
 
     The coarse cells (about REACH_CELLS in all, each covering whole cells of the raster) over
@@ -269,10 +284,11 @@ def reachable_cells(model, on_face, reachable, centres):
     placeable, judged = np.zeros(coarse, dtype=bool), np.ones(coarse, dtype=bool)
     placeable.ravel()[asked], judged.ravel()[asked] = answers, answers
     fine = (np.arange(shape[0])[:, None] // factor, np.arange(shape[1])[None, :] // factor)
-    return tuple(minimum_filter(cells, size=3, mode="nearest")[fine] for cells in (placeable, judged))
+    return cast("tuple[np.ndarray, np.ndarray]",
+                tuple(minimum_filter(cells, size=3, mode="nearest")[fine] for cells in (placeable, judged)))
 
 
-def raster_shape(model):
+def raster_shape(model: NurbsPatch) -> tuple[int, int]:
     """(R_u, R_v) cells of the raster, about CELLS in all, in proportion to the face's 3D extent
     along u and along v (the longest iso-parametric line of SHAPE_SAMPLES in each direction),
     so that the cells are about square in 3D; at least MIN_CELLS_PER_SIDE along each."""
@@ -287,7 +303,7 @@ def raster_shape(model):
     return cells_u, max(CELLS // cells_u, MIN_CELLS_PER_SIDE)
 
 
-def _cell_centres(bounds, shape):
+def _cell_centres(bounds: Sequence[float], shape: Sequence[int]) -> np.ndarray:
     """(R_u, R_v, 2) centres of the raster cells of ``shape`` (R_u, R_v) over the rectangle."""
     u0, u1, v0, v1 = bounds
     u = u0 + (np.arange(shape[0]) + 0.5) * (u1 - u0) / shape[0]
@@ -295,11 +311,11 @@ def _cell_centres(bounds, shape):
     return np.stack(np.meshgrid(u, v, indexing="ij"), axis=-1)
 
 
-def _inside_loops(loops, centres):
+def _inside_loops(loops: Sequence[np.ndarray], centres: np.ndarray) -> np.ndarray:
     """Even-odd classification of the raster cell centres against the trimming loops: (R_u, R_v) bool."""
     u = centres[:, 0, 0]
     v = centres[0, :, 1]
-    crossings = [[] for _ in v]
+    crossings: list[list[np.ndarray]] = [[] for _ in v]
     for loop in loops:
         a, b = loop, np.roll(loop, -1, axis=0)
         low, high = np.minimum(a[:, 1], b[:, 1]), np.maximum(a[:, 1], b[:, 1])
@@ -317,7 +333,7 @@ def _inside_loops(loops, centres):
     return inside
 
 
-def inside_loops(loops, uv):
+def inside_loops(loops: Sequence[np.ndarray], uv: np.ndarray) -> np.ndarray:
     """Even-odd test of points uv (M, 2) against the loops (list of (K, 2) closed polygons): (M,) bool."""
     return LoopCrossings(loops).inside(uv)
 
@@ -330,7 +346,7 @@ class LoopCrossings:
     loops: list of (K, 2) closed polygons (the last vertex joins the first).
     """
 
-    def __init__(self, loops, bands=BANDS):
+    def __init__(self, loops: Sequence[np.ndarray], bands: int = BANDS) -> None:
         starts = np.concatenate(loops)
         ends = np.concatenate([np.roll(loop, -1, axis=0) for loop in loops])
         spanning = starts[:, 1] != ends[:, 1]
@@ -344,11 +360,11 @@ class LoopCrossings:
         first, last = self.band(low), self.band(high)
         self.members = [np.flatnonzero((first <= b) & (last >= b)) for b in range(bands)]
 
-    def band(self, v):
+    def band(self, v: np.ndarray) -> np.ndarray:
         """Band index (...,) int of v (...,), clipped to the bands."""
         return np.clip(np.floor((np.asarray(v, dtype=float) - self.v0) / self.width), 0, self.bands - 1).astype(int)
 
-    def inside(self, uv, block=4096):
+    def inside(self, uv: np.ndarray, block: int = 4096) -> np.ndarray:
         """(M,) bool: uv (M, 2) inside the polygons (even-odd rule)."""
         uv = np.asarray(uv, dtype=float).reshape(-1, 2)
         inside = np.zeros(len(uv), dtype=bool)
@@ -361,7 +377,7 @@ class LoopCrossings:
                 inside[chosen] = self._crossings(uv[chosen], segments) % 2 == 1
         return inside
 
-    def _crossings(self, uv, segments):
+    def _crossings(self, uv: np.ndarray, segments: np.ndarray) -> np.ndarray:
         """Crossings (M,) of the rays from uv (M, 2) towards +u with the given segments."""
         starts, ends = self.starts[segments], self.ends[segments]
         u, v = uv[:, 0, None], uv[:, 1, None]
@@ -370,7 +386,7 @@ class LoopCrossings:
         return (crosses & (at > u)).sum(axis=1)
 
 
-def _edge_distance(samples, points):
+def _edge_distance(samples: np.ndarray, points: np.ndarray) -> np.ndarray:
     """3D distance (mm) from each cell centre, points (R_u, R_v, 3), to the nearest of the edge
     samples (K, 3): (R_u, R_v). Every point of an edge is within about half the largest gap
     between consecutive samples of a sample; less that and half the cell's diagonal, it is a
@@ -378,14 +394,14 @@ def _edge_distance(samples, points):
     return cKDTree(samples).query(points.reshape(-1, 3))[0].reshape(points.shape[:2])
 
 
-def _cell_diagonals(points):
+def _cell_diagonals(points: np.ndarray) -> np.ndarray:
     """Approximate 3D diagonal of each raster cell from its neighbours' centres: (R_u, R_v) mm."""
     du = np.linalg.norm(np.gradient(points, axis=0), axis=-1)
     dv = np.linalg.norm(np.gradient(points, axis=1), axis=-1)
     return np.hypot(du, dv)
 
 
-def _cell_areas(points):
+def _cell_areas(points: np.ndarray) -> np.ndarray:
     """Approximate 3D area of each raster cell: (R_u, R_v) mm^2."""
     su = np.gradient(points, axis=0)
     sv = np.gradient(points, axis=1)

@@ -12,15 +12,18 @@ modules are not found (``freecadcmd``'s home, ``/usr/lib/freecad/``, has them). 
 SIGSEGV handler then ends the process with exit code 1, silently): :func:`add_module_folders`
 puts those folders on ``sys.path`` as FreeCAD's own start-up does.
 """
+from __future__ import annotations
+
 import importlib
 import importlib.util
 import os
 import sys
+from typing import Any
 
 FREECAD_LIB_DIRS = ("/usr/lib/freecad-python3/lib", "/usr/lib/freecad/lib")
 
 
-def add_freecad_path():
+def add_freecad_path() -> None:
     """Append FreeCAD's lib folder to sys.path where FreeCAD is not importable already."""
     if importlib.util.find_spec("FreeCAD") is not None:
         return
@@ -29,7 +32,7 @@ def add_freecad_path():
             sys.path.append(folder)
 
 
-def add_module_folders(freecad):
+def add_module_folders(freecad: Any) -> None:
     """Append the folders of FreeCAD's built-in modules (``<resources>/Mod/<name>``) to sys.path
     where FreeCAD's home has no Mod folder (FreeCAD imported from a plain Python)."""
     if os.path.isdir(os.path.join(freecad.getHomePath(), "Mod")):
@@ -43,7 +46,7 @@ def add_module_folders(freecad):
             sys.path.append(folder)
 
 
-def import_freecad():
+def import_freecad() -> Any:
     """Import FreeCAD (its lib folder and module folders on sys.path) and return it."""
     add_freecad_path()
     freecad = importlib.import_module("FreeCAD")
@@ -51,7 +54,7 @@ def import_freecad():
     return freecad
 
 
-def prepare_freecad():
+def prepare_freecad() -> None:
     """Import FreeCAD with its folders on sys.path, where it is installed."""
     try:
         import_freecad()
@@ -59,7 +62,7 @@ def prepare_freecad():
         pass
 
 
-def import_part():
+def import_part() -> Any:
     """Return FreeCAD's ``Part`` module; ImportError naming the folders tried when it is missing."""
     try:
         import_freecad()

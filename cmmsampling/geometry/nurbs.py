@@ -3,10 +3,18 @@
 Pure numpy: no FreeCAD import, so worker processes can load it quickly. Units are mm; parameters
 ``uv`` lie in ``bounds`` (the face's parameter range).
 """
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from .bspline import KnotBasis, design_matrices
 
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
 
 DEGENERATE_STEPS = (1e-7, 1e-5, 1e-3)
 DEGENERATE_RATIO = 1e-8
@@ -20,7 +28,8 @@ class NurbsPatch:
     face), so that they point out of the material. rational: weights not all equal.
     """
 
-    def __init__(self, degrees, poles, weights, uknots, vknots, bounds, reversed_face=False):
+    def __init__(self, degrees: Sequence[int], poles: ArrayLike, weights: ArrayLike, uknots: ArrayLike,
+                 vknots: ArrayLike, bounds: Sequence[float], reversed_face: bool = False) -> None:
         self.degrees = tuple(int(d) for d in degrees)
         self.poles = np.asarray(poles, dtype=float)
         self.weights = np.asarray(weights, dtype=float)
@@ -37,18 +46,18 @@ class NurbsPatch:
         by_v = self._homogeneous if self.rational else self.poles
         self._by_v = np.ascontiguousarray(by_v.transpose(1, 2, 0)).reshape(-1, by_v.shape[0])
 
-    def patch(self):
+    def patch(self) -> NurbsPatch:
         """This surface as a plain NurbsPatch (what a worker process needs)."""
         return NurbsPatch(self.degrees, self.poles, self.weights, self.uknots, self.vknots,
                           self.bounds, self.reversed)
 
     @property
-    def span(self):
+    def span(self) -> tuple[float, float]:
         """(du, dv): the lengths of the parameter range."""
         u0, u1, v0, v1 = self.bounds
         return (u1 - u0, v1 - v0)
 
-    def speed_bounds(self):
+    def speed_bounds(self) -> tuple[float, ...]:
         """(L_u, L_v) mm per parameter unit: |F_u| <= L_u and |F_v| <= L_v over the knot range, so
         |F(a) - F(b)| <= L_u |a_u - b_u| + L_v |a_v - b_v| for parameters a, b of the range.
 
@@ -70,7 +79,7 @@ class NurbsPatch:
             bounds.append((speed + reach * spread) / float(self.weights.min()))
         return tuple(bounds)
 
-    def _homogeneous_derivatives(self, uv, order):
+    def _homogeneous_derivatives(self, uv: np.ndarray, order: int) -> dict[tuple[int, int], np.ndarray]:
         """Derivatives of the homogeneous surface A(u, v) = sum w P N, w(u, v) = sum w N.
 
         uv: (N, 2). Returns dict {(a, b): (N, 4)} for all a + b <= order.
@@ -87,7 +96,7 @@ class NurbsPatch:
                 out[(a, b)] = np.einsum("njc,nj->nc", along_u, bv[b])
         return out
 
-    def derivatives(self, uv, order=1):
+    def derivatives(self, uv: np.ndarray, order: int = 1) -> dict[tuple[int, int], np.ndarray]:
         """Surface point and partial derivatives up to ``order`` (0, 1 or 2), rational-exact.
 
         uv: (N, 2) in the parameter range. Returns dict {(a, b): (N, 3)} with the a-th u- and
@@ -109,7 +118,7 @@ class NurbsPatch:
             ) / w[(0, 0)]
         return s
 
-    def points_by_coordinate(self, u, v):
+    def points_by_coordinate(self, u: np.ndarray, v: np.ndarray) -> np.ndarray:
         """Surface points, coordinate before the points: u, v (..., N) parameters -> (..., 3, N) mm.
 
         The poles are first contracted with the u basis (one matrix product per leading index),
@@ -124,14 +133,14 @@ class NurbsPatch:
             return combined[..., :3, :] / combined[..., 3:, :]
         return combined
 
-    def points(self, uv):
+    def points(self, uv: np.ndarray) -> np.ndarray:
         """Surface points, uv: (..., 2) -> (..., 3) mm."""
         uv = np.asarray(uv, dtype=float)
         flat = uv.reshape(-1, 2)
         xyz = self.points_by_coordinate(flat[:, 0], flat[:, 1]).T
         return xyz.reshape(uv.shape[:-1] + (3,))
 
-    def normals(self, uv):
+    def normals(self, uv: np.ndarray) -> np.ndarray:
         """Unit normals pointing out of the material (face orientation respected).
 
         uv: (..., 2) -> (..., 3). On a degenerate edge (a pole row collapsed to one point, a
@@ -155,7 +164,7 @@ class NurbsPatch:
             degenerate[index[~still]] = False
         return normals.reshape(uv.shape[:-1] + (3,))
 
-    def _plain_normals(self, uv):
+    def _plain_normals(self, uv: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Normals from su x sv at uv: (M, 2) -> (normals (M, 3), degenerate (M,) bool,
         across (M, 2): the parameter to move along to leave a degenerate edge)."""
         d = self.derivatives(uv, 1)
@@ -167,14 +176,14 @@ class NurbsPatch:
         across = np.where(along_v_vanishes[:, None], [1.0, 0.0], [0.0, 1.0])
         return normals, degenerate, across
 
-    def _towards_middle(self, uv, across, step):
+    def _towards_middle(self, uv: np.ndarray, across: np.ndarray, step: float) -> np.ndarray:
         """uv: (M, 2) moved ``step`` of the parameter range along ``across`` towards the middle."""
         u0, u1, v0, v1 = self.bounds
         span = np.array([u1 - u0, v1 - v0])
         towards = np.where(np.array([u0 + u1, v0 + v1]) / 2 >= uv, 1.0, -1.0)
         return uv + step * span * across * towards
 
-    def curvatures(self, uv):
+    def curvatures(self, uv: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Mean and Gaussian curvature at uv: (N, 2) -> (H, K), each (N,), in 1/mm and 1/mm^2.
 
         The sign of H follows the outward normal.
@@ -189,7 +198,7 @@ class NurbsPatch:
         gauss = (l_ * n_ - m_ * m_) / det
         return mean, gauss
 
-    def raster(self, size):
+    def raster(self, size: tuple[int, int]) -> np.ndarray:
         """A regular raster of the parameter range: size (n_u, n_v) -> uv (n_u, n_v, 2)."""
         u0, u1, v0, v1 = self.bounds
         u = np.linspace(u0, u1, size[0])
@@ -198,7 +207,7 @@ class NurbsPatch:
 
 
 
-def _derivative_poles(poles, knots, degree):
+def _derivative_poles(poles: np.ndarray, knots: np.ndarray, degree: int) -> np.ndarray:
     """Poles of a B-spline's derivative along the first axis: poles (n, ...) with the full knot
     vector ``knots`` -> (n - 1, ...), degree (P_{i+1} - P_i) / (t_{i+k+1} - t_{i+1}) (0 where the
     knots coincide: that basis function is zero)."""
@@ -207,7 +216,7 @@ def _derivative_poles(poles, knots, degree):
     return np.diff(poles, axis=0) * scale.reshape((-1,) + (1,) * (poles.ndim - 1))
 
 
-def unit_normals(su, sv, reversed_face):
+def unit_normals(su: np.ndarray, sv: np.ndarray, reversed_face: bool) -> np.ndarray:
     """Normalised su x sv, flipped for a Reversed face. su, sv: (N, 3) -> (N, 3)."""
     n = np.cross(su, sv)
     with np.errstate(invalid="ignore", divide="ignore"):

@@ -6,15 +6,22 @@ onto the face's surface (``Surface.parameter``, GeomAPI_ProjectPointOnSurf); whe
 inside the face (``isPartOfDomain``) and nearer, it is the answer. Both feet are points of the
 face, so the smaller distance is never below the true one.
 """
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from .freecad_env import import_part
 
-Part = import_part()
+if TYPE_CHECKING:   # FreeCAD ships no type stubs: to the type checker Part's classes are Any
+    import Part
+else:
+    Part = import_part()
 import FreeCAD  # noqa: E402  (importable once import_part() has set the path)
 
 
-def distances_to_face(face, points):
+def distances_to_face(face: Part.Face, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The distance (N,) mm from each point (N, 3) mm to the Part.Face ``face`` and the nearest
     point on it (N, 3) mm, the nearer of BRepExtrema's and the surface projection's (see the
     module docstring). One OCC query of each kind per point: for checks, not optimiser loops."""
@@ -25,13 +32,13 @@ def distances_to_face(face, points):
     return distances, feet
 
 
-def _extrema(face, point):
+def _extrema(face: Part.Face, point: np.ndarray) -> tuple[float, np.ndarray]:
     """(distance mm, foot (3,) mm) of BRepExtrema from point (3,) mm to the face."""
     distance, pairs, _ = face.distToShape(Part.Vertex(FreeCAD.Vector(*point)))
     return distance, np.array(tuple(pairs[0][0]))
 
 
-def _nearer(face, point, distance, foot):
+def _nearer(face: Part.Face, point: np.ndarray, distance: float, foot: np.ndarray) -> tuple[float, np.ndarray]:
     """(distance, foot) of the surface projection of point (3,) mm where it lies on the face and
     nearer than ``distance`` mm, else the given pair. The projection's parameters are held to the
     face's parameter range: beyond a corner they were seen 3e-10 past it, where the face

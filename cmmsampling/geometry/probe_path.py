@@ -28,12 +28,12 @@ class PathOrder:
     length_after: float
 
     @property
-    def saving(self):
+    def saving(self) -> float:
         """Shortening of the path in mm (length_before - length_after)."""
         return self.length_before - self.length_after
 
 
-def path_length(points, order=None):
+def path_length(points: np.ndarray, order: np.ndarray | None = None) -> float:
     """Length in mm of the open path through points (N, 3) mm, visited in order (N,) int (default: given)."""
     sequence = np.asarray(points, dtype=float)
     if order is not None:
@@ -41,7 +41,7 @@ def path_length(points, order=None):
     return float(np.linalg.norm(np.diff(sequence, axis=0), axis=1).sum())
 
 
-def unchanged(points):
+def unchanged(points: np.ndarray) -> PathOrder:
     """The given order of points (N, 3) mm as a PathOrder (nothing saved)."""
     length = path_length(points)
     return PathOrder(np.arange(len(points)), length, length)
@@ -66,7 +66,7 @@ def short_path(points: np.ndarray) -> PathOrder:
     return PathOrder(order, path_length(points), path_length(points, order))
 
 
-def nearest_neighbour(distances, start=0):
+def nearest_neighbour(distances: np.ndarray, start: int = 0) -> np.ndarray:
     """Greedy open path: from start, always on to the closest point not yet visited.
 
     distances: (N, N) mm, symmetric. Returns the order, (N,) int.
@@ -82,7 +82,7 @@ def nearest_neighbour(distances, start=0):
     return order
 
 
-def two_opt(distances, order, tolerance):
+def two_opt(distances: np.ndarray, order: np.ndarray, tolerance: float) -> np.ndarray:
     """Reverse segments of the open path ``order`` while one shortens it by more than tolerance (mm).
 
     distances: (N, N) mm, symmetric; order: (N,) int. The open path is closed through a virtual
@@ -111,12 +111,12 @@ def two_opt(distances, order, tolerance):
     return np.roll(tour, -(virtual + 1))[:-1]
 
 
-def _length(distances, order):
+def _length(distances: np.ndarray, order: np.ndarray) -> float:
     """Length in mm of the open path ``order`` (N,) through a (N, N) distance matrix."""
     return float(distances[order[:-1], order[1:]].sum())
 
 
-def _checked_points(points):
+def _checked_points(points: np.ndarray) -> np.ndarray:
     """(N, 3) finite float array; ValueError naming the bad shape or values."""
     array = np.asarray(points, dtype=float)
     if array.ndim != 2 or array.shape[1] != 3:

@@ -7,8 +7,9 @@ from the original analytic one).
 """
 from __future__ import annotations
 
+from collections.abc import Sequence
 from functools import cached_property
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -43,7 +44,7 @@ class SurfaceModel(NurbsPatch):
     itself or its ``toNurbs()``); source_face: the face as given.
     """
 
-    def __init__(self, face, source_face, surface):
+    def __init__(self, face: Part.Face, source_face: Part.Face, surface: Part.BSplineSurface) -> None:
         super().__init__(
             (surface.UDegree, surface.VDegree),
             [[tuple(p) for p in row] for row in surface.getPoles()],
@@ -57,7 +58,7 @@ class SurfaceModel(NurbsPatch):
         self.source_face = source_face
 
     @classmethod
-    def from_face(cls, face):
+    def from_face(cls, face: Part.Shape) -> SurfaceModel:
         """Model of a Part.Face: B-spline faces as they are, any other surface via ``toNurbs()``.
 
         Periodic B-splines are made non-periodic (same geometry, clamped knots).
@@ -75,35 +76,35 @@ class SurfaceModel(NurbsPatch):
         return cls(evaluated, face, surface)
 
     @cached_property
-    def area(self):
+    def area(self) -> float:
         """The face's area, mm^2 (OCC)."""
         return float(self.face.Area)
 
     @cached_property
-    def extent(self):
+    def extent(self) -> np.ndarray:
         """(3,) lengths of the face's bounding box along x, y and z, mm (OCC)."""
         box = self.face.BoundBox
         return np.array([box.XLength, box.YLength, box.ZLength])
 
     @property
-    def diagonal(self):
+    def diagonal(self) -> float:
         """Length of the face's bounding-box diagonal, mm."""
         return float(np.linalg.norm(self.extent))
 
     @cached_property
-    def trimmed(self):
+    def trimmed(self) -> bool:
         """True when the face is smaller than its surface over the face's parameter range (a
         trimmed boundary or holes)."""
         full = self.face.Surface.toShape(*self.face.ParameterRange)
         return (abs(full.Area - self.area) > TRIM_AREA_TOLERANCE * full.Area
                 or len(self.face.Wires) > 1)
 
-    def trim_loops(self, step):
+    def trim_loops(self, step: float) -> list[np.ndarray]:
         """The face's boundary loops as (u, v) polygons: list of (K, 2) arrays, one per wire,
         each its edges' samples (:meth:`trim_edges`) end to end."""
         return [np.concatenate(edges) for edges in self.trim_edges(step) if edges]
 
-    def trim_edges(self, step):
+    def trim_edges(self, step: float) -> list[list[np.ndarray]]:
         """The samples of the face's edges in (u, v), wire by wire: a list per wire of (K, 2)
         arrays, one per edge in the wire's order, each running the way the wire does.
 
@@ -123,14 +124,14 @@ class SurfaceModel(NurbsPatch):
         return wires
 
     @cached_property
-    def edge_spans(self):
+    def edge_spans(self) -> list[list[tuple[Any, float, float]]]:
         """The face's edges cut where their curve on the surface is less than C^SPAN_CONTINUITY
         smooth (at such knots of a B-spline curve), so that a cubic through the samples of one
         span follows it closely: a list per wire of (curve, start, end) in the wire's order, the
         parameters running the way the wire does (start > end on a reversed edge)."""
         wires = []
         for wire in self.face.Wires:
-            spans = []
+            spans: list[tuple[Any, float, float]] = []
             for edge in wire.OrderedEdges or wire.Edges:
                 curve, first, last = self.face.curveOnSurface(edge)[:3]
                 cuts = np.concatenate([[first], _breaks(curve, first, last), [last]])
@@ -141,13 +142,13 @@ class SurfaceModel(NurbsPatch):
             wires.append(spans)
         return wires
 
-    def span_samples(self, counts):
+    def span_samples(self, counts: Sequence[Sequence[int]]) -> list[list[np.ndarray]]:
         """Each edge span (:attr:`edge_spans`) at ``counts`` (a list per wire of ints) equal steps
         of its parameter, from its start to its end: a list per wire of (count, 2) uv arrays."""
         return [[_curve_uv(*span, count) for span, count in zip(spans, wire_counts)]
                 for spans, wire_counts in zip(self.edge_spans, counts)]
 
-    def distance_to_face(self, uv):
+    def distance_to_face(self, uv: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """OCC's distance (mm) from the model's points at uv (N, 2) to the face, and the nearest
         points on it: ((N,) mm, (N, 3) mm), by BRepExtrema (``distToShape``) alone: a probe point
         counts as on the face only where that finds it so too, although it may put a point of the
@@ -157,7 +158,7 @@ class SurfaceModel(NurbsPatch):
         return (np.array([d[0] for d in found]),
                 np.array([tuple(d[1][0][0]) for d in found]).reshape(-1, 3))
 
-    def on_face(self, uv):
+    def on_face(self, uv: np.ndarray) -> np.ndarray:
         """(N,) True where the points at uv (N, 2) lie on the face by OCC: inside its boundary by
         OCC's face classifier (``isPartOfDomain``) and within :attr:`tolerance` of it. Both are
         asked: on a planar face with tolerant edges OCC's distance was seen to be 0 for a point
@@ -166,21 +167,21 @@ class SurfaceModel(NurbsPatch):
         return (off <= self.tolerance) & inside
 
     @property
-    def tolerance(self):
+    def tolerance(self) -> float:
         """mm a point may lie from the face and count as on it: ON_FACE_MM, or the face's own
         tolerance where that is larger (OCC's distance to a valid face with a tolerant surface).
         Not its edges' tolerance: on a plane whose edges are 0.014 mm tolerant (Ventilator Face16)
         points 0.014-0.024 mm outside its boundary counted as on it."""
         return max(ON_FACE_MM, float(self.face.Tolerance))
 
-    def _occ_placement(self, uv):
+    def _occ_placement(self, uv: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """OCC's view of the points at uv (N, 2): (distance (N,) mm, nearest face points (N, 3)
         mm, inside the boundary by the face classifier (N,) bool)."""
         uv = np.asarray(uv, dtype=float)
         off, feet = self.distance_to_face(uv)
         return off, feet, np.array([self.face.isPartOfDomain(u, v) for u, v in uv], dtype=bool)
 
-    def onto_face(self, uv):
+    def onto_face(self, uv: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """uv (N, 2) with every point that is not on the face (:meth:`on_face`) moved onto it.
 
         An off point goes to the parameters of its nearest point on the face (OCC), and from there
@@ -196,7 +197,7 @@ class SurfaceModel(NurbsPatch):
             uv[i] = self._inward(uv[i], feet[i])
         return uv, moved, off
 
-    def _inward(self, outside, foot):
+    def _inward(self, outside: np.ndarray, foot: np.ndarray) -> np.ndarray:
         """Parameters (2,) of a point on the face near ``foot`` (3,) mm, the nearest face point
         of the parameters ``outside`` (2,)."""
         low, high = np.array(self.bounds[0::2]), np.array(self.bounds[1::2])
@@ -214,7 +215,7 @@ class SurfaceModel(NurbsPatch):
                          "may be broken: check it with Part's Check geometry")
 
 
-def as_face(shape):
+def as_face(shape: Any) -> Part.Face:
     """The single Part.Face in ``shape`` (a Face, or a Shape holding exactly one face).
 
     Raises TypeError naming what was given otherwise.
@@ -240,7 +241,7 @@ def as_face(shape):
     )
 
 
-def points_of(face, count=3):
+def points_of(face: Part.Face, count: int = 3) -> np.ndarray:
     """Up to ``count`` points on a face (mm): its coarse tessellation's first, middle and last
     vertices, (K, 3)."""
     deflection = max(face.BoundBox.DiagonalLength / 20.0, 1e-6)
@@ -249,14 +250,14 @@ def points_of(face, count=3):
     return np.array([[vertices[k].x, vertices[k].y, vertices[k].z] for k in chosen], dtype=float)
 
 
-def lies_on(face, shape, tolerance=1e-4):
+def lies_on(face: Part.Face, shape: Part.Shape, tolerance: float = 1e-4) -> bool:
     """True when face is part of shape: a few of its points (:func:`points_of`) lie within
     tolerance mm (or the shapes' own tolerance, if larger) of shape."""
     allowed = max(tolerance, face.Tolerance, shape.getTolerance(1))
     return all(shape.distToShape(Part.Vertex(FreeCAD.Vector(*point)))[0] <= allowed for point in points_of(face))
 
 
-def reference_poles():
+def reference_poles() -> np.ndarray:
     """Poles of the reference surface: (9, 9, 3) mm.
 
     x_i = 12.5 i, y_j = 12.5 j (i, j = 0..8),
@@ -269,7 +270,8 @@ def reference_poles():
     return np.stack([x, y, z], axis=-1)
 
 
-def make_bspline_surface(poles, degrees, weights=None, uknots=None, vknots=None):
+def make_bspline_surface(poles: np.ndarray, degrees: Sequence[int], weights: np.ndarray | None = None,
+                         uknots: np.ndarray | None = None, vknots: np.ndarray | None = None) -> Part.BSplineSurface:
     """A Part.BSplineSurface from poles (n_u, n_v, 3), degrees (k_u, k_v) and full knot vectors.
 
     Knots default to clamped uniform on [0, 1]; weights (n_u, n_v) default to 1.
@@ -300,13 +302,13 @@ def reference_face() -> Part.Face:
     return make_bspline_surface(reference_poles(), (5, 5)).toShape()
 
 
-def _curve_uv(curve, start, end, count):
+def _curve_uv(curve: Any, start: float, end: float, count: int) -> np.ndarray:
     """(count, 2) points of a 2D curve at equal parameter steps from start to end (count may
     be 0)."""
     return np.array([(p.x, p.y) for p in map(curve.value, np.linspace(start, end, count))]).reshape(-1, 2)
 
 
-def _breaks(curve, first, last):
+def _breaks(curve: Any, first: float, last: float) -> np.ndarray:
     """The parameters strictly between first and last where a 2D curve is less than
     C^SPAN_CONTINUITY smooth: a B-spline's knots of multiplicity above degree - SPAN_CONTINUITY;
     none for other curves."""

@@ -4,7 +4,11 @@ Refused input raises :class:`InputError` (a ValueError) or, for a value of the w
 :class:`InputTypeError` (also a TypeError): the panels and the command line show its message in
 one line, and treat any other exception as a fault with its traceback.
 """
+from __future__ import annotations
+
 import numbers
+from collections.abc import Sequence
+from typing import Any, cast
 
 import numpy as np
 
@@ -17,7 +21,7 @@ class InputTypeError(InputError, TypeError):
     """Input of the wrong kind (e.g. a solid where a face is expected); the message says what to give."""
 
 
-def check_int(name, value, minimum):
+def check_int(name: str, value: Any, minimum: int) -> int:
     """Return value as int (16.0 counts as 16); TypeError if it is not a whole number (True is none),
     ValueError if below minimum."""
     if isinstance(value, bool) or not isinstance(value, numbers.Integral):
@@ -30,7 +34,8 @@ def check_int(name, value, minimum):
     return int(value)
 
 
-def check_real(name, value, minimum=None, maximum=None, above=None):
+def check_real(name: str, value: Any, minimum: float | None = None, maximum: float | None = None,
+               above: float | None = None) -> float:
     """Return value as float; TypeError if not a number, ValueError if NaN, infinite or out of range.
 
     minimum/maximum are inclusive limits, above an exclusive lower limit.
@@ -49,7 +54,7 @@ def check_real(name, value, minimum=None, maximum=None, above=None):
     return value
 
 
-def check_pair(name, value, minimum):
+def check_pair(name: str, value: Any, minimum: int) -> tuple[int, int]:
     """An int or a pair of ints, each at least minimum -> (a, b)."""
     if np.ndim(value) == 0:
         value = check_int(name, value, minimum)
@@ -57,10 +62,10 @@ def check_pair(name, value, minimum):
     pair = tuple(value)
     if len(pair) != 2:
         raise InputError(f"{name} must be one whole number or a pair (along u, along v), got {value!r}")
-    return tuple(check_int(f"{name}[{i}]", v, minimum) for i, v in enumerate(pair))
+    return cast("tuple[int, int]", tuple(check_int(f"{name}[{i}]", v, minimum) for i, v in enumerate(pair)))
 
 
-def check_choice(name, value, choices):
+def check_choice(name: str, value: Any, choices: Sequence[Any]) -> Any:
     """value must be one of choices; ValueError listing them otherwise."""
     if value not in choices:
         known = ", ".join(repr(c) for c in choices)
@@ -68,7 +73,7 @@ def check_choice(name, value, choices):
     return value
 
 
-def check_uv(uv, n=None):
+def check_uv(uv: Any, n: int | None = None) -> np.ndarray:
     """(N, 2) finite float array; ValueError naming the bad shape or values."""
     array = np.asarray(uv, dtype=float)
     if array.ndim != 2 or array.shape[1] != 2:

@@ -15,7 +15,10 @@ against measurement):
 
 Pairs of points are found by neighbour searches, so nothing of size N^2 is left.
 """
+from __future__ import annotations
+
 import os
+from collections.abc import Callable, Sequence
 
 from ..geometry.validation import InputError, check_int
 
@@ -31,14 +34,14 @@ FLOAT = 8
 SAFE_SHARE = 0.8
 
 
-def base_bytes(poles, nodes=DEFAULT_GRID_NODES):
+def base_bytes(poles: Sequence[int], nodes: int = DEFAULT_GRID_NODES) -> int:
     """Memory (bytes) every run needs for a substitute with ``poles`` (n_u, n_v), judged on a
     grid of ``nodes`` nodes."""
     count = poles[0] * poles[1]
     return FIXED_BYTES + GRID_NODE_BYTES * max(nodes - DEFAULT_GRID_NODES, 0) + FIT_ARRAYS * FLOAT * count ** 2
 
 
-def available_bytes():
+def available_bytes() -> int | None:
     """Memory this machine has free for a new allocation (Linux MemAvailable), bytes, or None
     where the system does not say."""
     try:
@@ -51,26 +54,26 @@ def available_bytes():
     return None
 
 
-def free_bytes():
+def free_bytes() -> int | None:
     """The free memory runs are checked against, bytes (None: unknown): the environment variable
     CMMSAMPLING_MEMORY_BYTES where set (tests, a batch job's limit), else :func:`available_bytes`."""
     limit = os.environ.get("CMMSAMPLING_MEMORY_BYTES")
     return check_int("CMMSAMPLING_MEMORY_BYTES", int(limit), 1) if limit else available_bytes()
 
 
-def fits(needed, free):
+def fits(needed: float, free: float | None) -> bool:
     """True when ``needed`` bytes are within SAFE_SHARE of ``free`` (or free is unknown)."""
     return free is None or needed <= SAFE_SHARE * free
 
 
-def gib(size):
+def gib(size: float) -> str:
     """Bytes as a short TiB, GiB or MiB figure for messages."""
     if size >= 2**40:
         return f"{size / 2**40:.1f} TiB"
     return f"{size / 2**30:.1f} GiB" if size >= 2**30 else f"{size / 2**20:.0f} MiB"
 
 
-def check_fits(needed, n, largest_n, what):
+def check_fits(needed: float, n: int, largest_n: Callable[[float], int | None], what: str) -> None:
     """ValueError when ``needed`` bytes exceed SAFE_SHARE of the free memory.
 
     n: the points asked for; largest_n: callable (free bytes) -> the largest N that fits, for the
@@ -79,6 +82,7 @@ def check_fits(needed, n, largest_n, what):
     free = free_bytes()
     if fits(needed, free):
         return
+    assert free is not None   # fits() holds where the free memory is unknown
     largest = largest_n(SAFE_SHARE * free)
     advice = f"at most about n = {largest} fits" if largest else "no run fits"
     raise InputError(

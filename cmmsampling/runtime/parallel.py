@@ -16,6 +16,8 @@ is noticed on its closed channel (never a signal: see :mod:`cmmsampling.runtime.
 its share is computed here. Each particle's fitness is computed exactly as in one process, so the
 result is the same either way; :attr:`TwoProcessObjective.fallback` says why one process was used.
 """
+from __future__ import annotations
+
 import atexit
 import itertools
 import os
@@ -26,6 +28,8 @@ import sys
 import tempfile
 import threading
 import time
+from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 
@@ -38,7 +42,7 @@ BOOT = ("import sys; sys.path.insert(0, sys.argv[1]); "
 _tokens = itertools.count()
 
 
-def python_executable():
+def python_executable() -> str | None:
     """A Python interpreter of this process's version, also when running inside FreeCAD; None
     where there is none."""
     name = f"python{sys.version_info.major}.{sys.version_info.minor}"
@@ -48,7 +52,7 @@ def python_executable():
     return candidate if os.path.exists(candidate) else None
 
 
-def ignore_broken_pipes():
+def ignore_broken_pipes() -> None:
     """Let a write to a pipe whose reader has died raise BrokenPipeError instead of ending this
     process. Python's own start-up sets that; FreeCAD 1.0 and 1.1 leave SIGPIPE at its default,
     and a local process ended on Cancel while a pool's thread wrote to it then ended FreeCAD
@@ -59,14 +63,14 @@ def ignore_broken_pipes():
         signal.signal(signal.SIGPIPE, signal.SIG_IGN)
 
 
-def package_parent():
+def package_parent() -> str:
     """The folder (or zip file) that holds the imported ``cmmsampling`` package: what a worker
     process puts first on its sys.path."""
     package = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
     return os.path.dirname(package)
 
 
-def single_threaded_environment():
+def single_threaded_environment() -> dict[str, str]:
     """This process's environment with the numeric libraries limited to one thread each (a
     worker process shares the machine's cores with this one)."""
     return dict(os.environ, OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1", MKL_NUM_THREADS="1")
@@ -79,7 +83,7 @@ class WorkerUnavailable(RuntimeError):
 class Worker:
     """One worker process and the channel to it; WorkerUnavailable when it does not start."""
 
-    def __init__(self, executable, start_seconds=START_SECONDS):
+    def __init__(self, executable: str, start_seconds: float = START_SECONDS) -> None:
         ignore_broken_pipes()
         ours, theirs = socket.socketpair()
         self.errors = tempfile.TemporaryFile()
@@ -96,7 +100,7 @@ class Worker:
         self.channel = Channel(ours)
         self.pid = self._handshake(start_seconds)
 
-    def _handshake(self, seconds):
+    def _handshake(self, seconds: float) -> int:
         """The worker's pid from its first message; WorkerUnavailable (the worker ended) when it
         exits or stays silent for ``seconds``."""
         try:
@@ -108,14 +112,14 @@ class Worker:
             raise WorkerUnavailable(reason) from exc
         return pid
 
-    def settle(self, seconds=5.0):
+    def settle(self, seconds: float = 5.0) -> None:
         """Give a worker whose channel closed ``seconds`` to exit, so that its exit code is known."""
         try:
             self.process.wait(seconds)
         except subprocess.TimeoutExpired:
             pass
 
-    def why(self, silent=None):
+    def why(self, silent: str | None = None) -> str:
         """Why the worker is gone, in words: its exit code and the last line it wrote on stderr
         (e.g. a ModuleNotFoundError, unless it was closed already); ``silent`` when it is still
         running."""
@@ -129,22 +133,22 @@ class Worker:
         ending = f"was killed by signal {-code}" if code < 0 else f"exited with code {code}"
         return f"the second process {ending}" + (f": {lines[-1].strip()}" if lines else "")
 
-    def alive(self):
+    def alive(self) -> bool:
         """True while the worker process runs."""
         return self.process.poll() is None
 
-    def send(self, message):
+    def send(self, message: Any) -> None:
         """Send a request; OSError when the worker has gone."""
         self.channel.send(message)
 
-    def receive(self):
+    def receive(self) -> Any:
         """The worker's reply payload; EOFError when it has gone, RuntimeError when it reports a failure."""
         status, payload = self.channel.receive()
         if status != "ok":
             raise RuntimeError(f"the second process failed:\n{payload}")
         return payload
 
-    def close(self):
+    def close(self) -> None:
         """End the worker and close the channel."""
         if self.alive():
             self.process.kill()
@@ -153,10 +157,10 @@ class Worker:
         self.errors.close()
 
 
-_worker = None
+_worker: Worker | None = None
 
 
-def shared_worker():
+def shared_worker() -> tuple[Worker | None, str | None]:
     """The session's worker process, started on first use (or again after it died). Returns
     (worker, None), or (None, the reason in words) where it cannot run."""
     global _worker
@@ -175,7 +179,7 @@ def shared_worker():
     return _worker, None
 
 
-def _close_shared_worker():
+def _close_shared_worker() -> None:
     if _worker is not None:
         _worker.close()
 
@@ -200,17 +204,17 @@ class SplitChoice:
     MAX_WINDOW = 960
     TRIALS = 3
 
-    def __init__(self):
+    def __init__(self) -> None:
         self.window = self.WINDOW
         self.phase = 0
         self.split = True
-        self._seconds = {True: [], False: []}
+        self._seconds: dict[bool, list[float]] = {True: [], False: []}
 
-    def next_split(self):
+    def next_split(self) -> bool:
         """True when the next call is to be split."""
         return self.phase % 2 == 0 if self.phase < 2 * self.TRIALS else self.split
 
-    def record(self, split, seconds):
+    def record(self, split: bool, seconds: float) -> None:
         """Count a call that ran ``split`` and took ``seconds`` per point set."""
         phase = self.phase
         self.phase = (phase + 1) % self.window
@@ -234,7 +238,11 @@ class TwoProcessObjective:
     is None while the worker shares the work, else why it does not (a sentence).
     """
 
-    def __init__(self, objective, measured=False):
+    # A Worker, None after a failure; Any because the lambdas given to _guard use it while it is set,
+    # which the type checker cannot follow into a lambda.
+    worker: Any
+
+    def __init__(self, objective: Callable[..., np.ndarray], measured: bool = False) -> None:
         self.objective = objective
         self.token = next(_tokens)
         self.worker, self.fallback = shared_worker()
@@ -245,18 +253,18 @@ class TwoProcessObjective:
             self._guard(lambda: (self.worker.send(("load", self.token, objective)), self.worker.receive()))
 
     @property
-    def parallel(self):
+    def parallel(self) -> bool:
         """True while the worker process shares the work."""
         return self.worker is not None
 
-    def check_worker(self):
+    def check_worker(self) -> None:
         """Notice a worker that has gone while it was not asked (a measured run that scored its
         swarms here alone): it is pinged, and ``fallback`` says why when it does not answer (its
         channel closes when it dies, so a worker just killed is found gone, never taken as alive)."""
         if self.worker is not None:
             self._guard(lambda: (self.worker.send(("ping",)), self.worker.receive()))
 
-    def _guard(self, action):
+    def _guard(self, action: Callable[[], Any]) -> Any:
         """Run a worker action; on any failure drop the worker, say why, and return None."""
         try:
             return action()
@@ -270,11 +278,11 @@ class TwoProcessObjective:
             return None
 
     @property
-    def beats(self):
+    def beats(self) -> bool:
         """True when the objective takes the values to beat (see DeviationObjective)."""
         return getattr(self.objective, "beats", False)
 
-    def __call__(self, uv, above=None):
+    def __call__(self, uv: np.ndarray, above: np.ndarray | None = None) -> np.ndarray:
         """The objective's values of uv (P, N, 2), as the objective called alone (above: (P,) or
         None, passed on with the share of each process)."""
         uv = np.asarray(uv, dtype=float)
@@ -289,11 +297,11 @@ class TwoProcessObjective:
         self.choice.record(split, (time.perf_counter() - start) / uv.shape[0])
         return values
 
-    def _here(self, uv, above, rows=slice(None)):
+    def _here(self, uv: np.ndarray, above: np.ndarray | None, rows: slice = slice(None)) -> np.ndarray:
         """The objective's values of uv[rows] in this process."""
         return self.objective(uv[rows]) if above is None else self.objective(uv[rows], above[rows])
 
-    def _split(self, uv, above):
+    def _split(self, uv: np.ndarray, above: np.ndarray | None) -> np.ndarray:
         """The values of uv (P, N, 2), half of them scored by the worker."""
         half = (uv.shape[0] + 1) // 2
         theirs = None if above is None else above[half:]

@@ -6,8 +6,11 @@ thread. threadpoolctl (Debian's python3-threadpoolctl) does the switching; witho
 keeps its own setting. Its controller, which finds the loaded libraries (20 ms each time), is
 made once per process.
 """
+from __future__ import annotations
+
 import contextlib
 import functools
+from typing import Any
 
 import numpy  # noqa: F401 (loads the BLAS before the controller looks for it)
 
@@ -18,19 +21,19 @@ except ImportError:
 
 
 @functools.lru_cache(maxsize=1)
-def _controller():
+def _controller() -> Any:
     """The process's ThreadpoolController (the BLAS numpy and scipy loaded at the first call)."""
     return ThreadpoolController()
 
 
-def blas_threads(count=1):
+def blas_threads(count: int = 1) -> contextlib.AbstractContextManager[Any]:
     """Context manager limiting BLAS to ``count`` threads (a no-op without threadpoolctl)."""
     if ThreadpoolController is None:
         return contextlib.nullcontext()
     return _controller().limit(limits=count, user_api="blas")
 
 
-def blas_description():
+def blas_description() -> str:
     """The BLAS numpy calls, in words: library, version and the kernels it chose for this
     processor (e.g. "openblas 0.3.21, Haswell kernels"); "unknown" without threadpoolctl."""
     if ThreadpoolController is None:

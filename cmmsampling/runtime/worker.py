@@ -6,14 +6,17 @@ and evaluates the point sets it is sent, until the parent closes the channel or 
 ("load", token, objective), ("eval", token, uv (P, N, 2), above (P,) or None), ("ping",).
 Replies: ("ok", values (P,)) or ("error", message).
 """
+from __future__ import annotations
+
 import os
 import socket
 import traceback
+from typing import Any
 
 from .channel import Channel
 
 
-def main(fd):
+def main(fd: int) -> None:
     """Serve the parent on the socket ``fd`` until it goes away."""
     channel = Channel(socket.socket(fileno=fd))
     try:
@@ -23,9 +26,9 @@ def main(fd):
     serve(channel)
 
 
-def serve(channel):
+def serve(channel: Channel) -> None:
     """Answer requests until the parent closes the channel or has gone."""
-    objectives = {}
+    objectives: dict[int, Any] = {}
     while True:
         try:
             request = channel.receive()
@@ -41,7 +44,7 @@ def serve(channel):
             return
 
 
-def _answer(request, objectives):
+def _answer(request: tuple[Any, ...], objectives: dict[int, Any]) -> tuple[str, Any]:
     """The reply to one request; objectives: {token: objective} (only the last one loaded)."""
     if request[0] == "load":
         objectives.clear()
