@@ -13,7 +13,7 @@ from __future__ import annotations
 import os
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, cast
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
@@ -87,7 +87,7 @@ class Inspection:
     notes: list = field(default_factory=list)
     substitute_poles: np.ndarray | None = None
     substitute_deviation: object = None
-    space: object = None
+    space: Any = None
     measured_file: str = ""
     zone_offset: float = 0.0
     face_forms: dict = field(default_factory=dict)

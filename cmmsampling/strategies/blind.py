@@ -8,7 +8,7 @@ normals follow from ``problem.model``. :data:`RECORDS` describes them to the res
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -319,7 +319,7 @@ def _check_coverage(problem: SamplingProblem, face_points: np.ndarray, points: n
     face_points: (M, 3) mm spread over the feasible face; points: (count, 3) mm the grid's nodes on
     the face (before the surplus is dropped); axis: the machine axis the footprint is seen along.
     """
-    even = float(np.sqrt(problem.domain.feasible_area / count))
+    even = float(np.sqrt(cast(float, problem.domain.feasible_area) / count))
     gap = float(cKDTree(points).query(face_points)[0].max())
     if gap > COVERAGE * even:
         raise InputError(
