@@ -20,7 +20,7 @@ export CMMSAMPLING_ROOT="$root" CMMSAMPLING_PYTEST_ARGS="$pytest_args"
 export CMMSAMPLING_ARTIFACTS="${CMMSAMPLING_ARTIFACTS:-$root/artifacts/gui}"
 cd "$home"
 set +e
-timeout --kill-after=10 "${CMMSAMPLING_GUI_TIMEOUT:-1800}" \
+timeout --kill-after=10 "${CMMSAMPLING_GUI_TIMEOUT:-3600}" \
   xvfb-run -a -s "-screen 0 1280x1024x24" freecad "$root/tests/gui/run_gui_tests.py" 2>"$home/freecad.stderr"
 code=$?
 set -e

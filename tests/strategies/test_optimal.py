@@ -48,6 +48,7 @@ def test_bound_agrees_with_an_independent_minimax(small):
     assert lower <= bound.lower * (1 + 1e-9) and bound.lower <= upper * (1 + 1e-9)
 
 
+@pytest.mark.quality
 def test_bound_is_below_the_surface_it_is_about(small):
     """x = 0 is one of the reshaped surfaces: the bound never exceeds the surface's own maximum."""
     rng = np.random.default_rng(0)
@@ -57,6 +58,7 @@ def test_bound_is_below_the_surface_it_is_about(small):
         assert 0 < bound.lower <= bound.upper <= exact.maximum * (1 + 1e-9)
 
 
+@pytest.mark.quality
 @pytest.mark.parametrize("strategy", sorted(cmmsampling.self_contained()))
 def test_no_strategy_beats_its_local_bound(strategy):
     options = {"pso": {"iterations": 30, "population": 10}, "optimal": {"max_evaluations": 300}}
