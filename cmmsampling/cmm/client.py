@@ -14,6 +14,7 @@ from __future__ import annotations
 import os
 import socket
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -42,7 +43,7 @@ class MeasurementStopped(RuntimeError):
     (the message says which). ``run``: the MeasuredRun of the points measured before, written;
     ``connection_lost``: the connection is gone (nothing more can be sent on it)."""
 
-    def __init__(self, message, run=None, connection_lost=False):
+    def __init__(self, message: str, run: MeasuredRun | None = None, connection_lost: bool = False) -> None:
         super().__init__(message)
         self.run = run
         self.connection_lost = connection_lost
@@ -194,8 +195,9 @@ class Connection:
             self.timeout_s = timeout
 
 
-def measure(source, server: str, out: str | os.PathLike = "measured.csv", tool: str | None = None, progress=None,
-            timeout_s: float = 60.0, log: str | os.PathLike | None = None) -> MeasuredRun:
+def measure(source: object, server: str, out: str | os.PathLike = "measured.csv", tool: str | None = None,
+            progress: Callable[[str | None], bool | None] | None = None, timeout_s: float = 60.0,
+            log: str | os.PathLike | None = None) -> MeasuredRun:
     """Measure the planned points of source (a SamplingResult, PartPlan, PointSet or the
     workbench's probe points) on the CMM behind an I++ DME server and write the contact points.
 

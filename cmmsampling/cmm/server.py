@@ -18,6 +18,7 @@ import socketserver
 import threading
 import time
 from dataclasses import dataclass, field
+from typing import Any, cast
 
 import numpy as np
 
@@ -94,11 +95,13 @@ class SimulatedCMM:
     move_s: seconds each move and point measurement takes; port: 0 for a free one. ``commands``
     lists every command line received, ``connections`` counts the clients served."""
 
-    def __init__(self, part, tools=None, homed=False, move_s=0.0, port=0):
+    def __init__(self, part: VirtualPart, tools: dict[str, float] | None = None, homed: bool = False, move_s: float = 0.0,
+                 port: int = 0) -> None:
         self.part = part
         self.tools = dict(tools or {"Probe1": 1.0})
         self.homed, self.move_s = homed, float(move_s)
-        self.commands, self.connections = [], 0
+        self.commands: list[str] = []
+        self.connections = 0
         owner = self
 
         class Handler(socketserver.StreamRequestHandler):
@@ -112,16 +115,17 @@ class SimulatedCMM:
         self._thread = None
 
     @classmethod
-    def measuring(cls, source, form_error=0.0, misplacement=None, seed=0, noise=0.0, **options):
+    def measuring(cls, source: object, form_error: float = 0.0, misplacement: Misplacement | None = None, seed: int = 0,
+                  noise: float = 0.0, **options: Any) -> SimulatedCMM:
         """The server of the part simulate_measurement measures for source's planned points (the
         same form error, misplacement and seed; VirtualPart.of); options: tools, homed, move_s,
         port."""
         return cls(VirtualPart.of(source, form_error, misplacement, seed, noise), **options)
 
     @property
-    def address(self):
+    def address(self) -> str:
         """'127.0.0.1:port' of the listening socket."""
-        host, port = self._server.server_address
+        host, port = cast(tuple, self._server.server_address)
         return f"{host}:{port}"
 
     def __enter__(self):
@@ -137,11 +141,11 @@ class SimulatedCMM:
         self._server.server_close()
         self._thread.join(5)
 
-    def serve(self, connection):
+    def serve(self, connection: socket.socket) -> None:
         """One client: lines read by a reader thread into a queue, executed in order (an AbortE
         reaches a running move through the queue)."""
         self.connections += 1
-        lines = queue.Queue()
+        lines: queue.Queue[str | None] = queue.Queue()
         threading.Thread(target=_read_lines, args=(connection, lines), daemon=True).start()
         state = MachineState(homed=self.homed)
         while True:
@@ -155,7 +159,7 @@ class SimulatedCMM:
                 except OSError:
                     return
 
-    def execute(self, line, state, pending):
+    def execute(self, line: str, state: MachineState, pending: queue.Queue) -> list[str]:
         """The answer lines to one command line."""
         found = _COMMAND.match(line)
         if found is None:
@@ -174,7 +178,7 @@ class SimulatedCMM:
         answers.append(f"{tag} %")
         return answers
 
-    def run(self, method, arguments, state, pending):
+    def run(self, method: str, arguments: str, state: MachineState, pending: queue.Queue) -> list[str]:
         """The data lines of one method (CommandFailed for an error)."""
         needs_session = method not in ("StartSession", "AbortE", "ClearAllErrors")
         if needs_session and not state.session:

@@ -1,7 +1,13 @@
 """PointSet: labelled probe points with approach vectors, the unit every exporter and reader uses."""
+from __future__ import annotations
+
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from ..strategies.result import SamplingResult
 
 
 @dataclass
@@ -34,10 +40,10 @@ class PointSet:
         return len(self.labels)
 
     @classmethod
-    def from_result(cls, result, source=""):
+    def from_result(cls, result: SamplingResult, source: str = "") -> PointSet:
         """The probe points of a SamplingResult; source names the face (e.g. 'Body:Face3')."""
         substitute = result.space.evaluate(result.poles, result.uv)
-        metadata = {"source": source, **result.settings, **result.deviation.figures()}
+        metadata: dict[str, Any] = {"source": source, **result.settings, **result.deviation.figures()}
         return cls(
             labels=result.labels,
             points=np.array(result.points, dtype=float),

@@ -45,6 +45,11 @@ from .points_needed import (DEFAULT_MAX_POINTS, RISE_FACTOR, check_max_points, f
 
 if TYPE_CHECKING:   # FreeCAD ships no type stubs: to the type checker Part's classes are Any
     import Part
+
+    from ..access.probe import Motion
+    from ..access.probe_moves import ProbeMoves
+    from ..formats.pointset import PointSet
+    from ..strategies.result import SamplingResult
 else:
     Part = import_part()
 FIT_KEYS = ("fit_degree", "fit_poles", "smoothing", "grid")
@@ -203,31 +208,31 @@ class PartPlan:
     notes: list = field(default_factory=list)
 
     @property
-    def placed(self):
+    def placed(self) -> list[FacePlan]:
         """The faces that hold points."""
         return [face for face in self.faces if face.placed]
 
     @property
-    def refused(self):
+    def refused(self) -> list[FacePlan]:
         """The faces that hold no points, each with its reason."""
         return [face for face in self.faces if not face.placed]
 
     @property
-    def n_total(self):
+    def n_total(self) -> int:
         """Points over all faces."""
         return sum(face.n for face in self.faces)
 
     @property
-    def area(self):
+    def area(self) -> float:
         """Area of all the faces, mm^2."""
         return sum(face.area for face in self.faces)
 
     @property
-    def worst(self):
+    def worst(self) -> float:
         """The largest maximum deviation over the faces with points, mm (NaN without any)."""
         return max((face.maximum for face in self.placed), default=float("nan"))
 
-    def result(self, name):
+    def result(self, name: str) -> SamplingResult:
         """The SamplingResult of a face of the plan (computed again from its points: the fit,
         the deviation and OCC's check), for the document; its settings are the face's run's (the
         edge offset and spacing it used among them)."""
@@ -238,17 +243,17 @@ class PartPlan:
         result.settings = {**result.settings, **face.settings}
         return result
 
-    def point_set(self):
+    def point_set(self) -> PointSet:
         """The plan's points as one PointSet (cmmsampling.formats.pointset): labels '<face>_P<i>',
         each point's face, the plan's facts (:func:`cmmsampling.planning.plan_points.plan_point_set`)."""
         return plan_point_set(self)
 
-    def probe_moves(self, motion=None):
+    def probe_moves(self, motion: Motion | None = None) -> ProbeMoves:
         """The collision-free probe path through every point of a plan made with a probe
         (cmmsampling.access.probe_moves.ProbeMoves; motion: the CMM's speeds, a Motion)."""
         return plan_moves(self, motion)
 
-    def table(self):
+    def table(self) -> str:
         """The per-part table as text: face, area, N, deviation, bound, tolerance met, notes;
         then the plan's own notes, a line each."""
         lines = [f"{'face':<10} {'area mm^2':>10} {'N':>5} {'max mm':>9} {'bound mm':>9} {'met':>4}  notes"]
