@@ -33,7 +33,7 @@ class SamplingProblem:
 
     model: SurfaceModel; settings: the checked SampleSettings (n, the substitute's degree,
     poles and smoothing, the grid, seed, workers), whose n, seed and workers the problem
-    carries as attributes; domain: the face's FaceDomain (cmmsampling.geometry.domain: the
+    reads as properties; domain: the face's FaceDomain (cmmsampling.geometry.domain: the
     trim, the edge offset, what the probe reaches); min_spacing: mm between any two points, the
     settings' or the face's default (spacing_by_default True); measured_split: workers is the
     default, so a swarm is split only where that is measured faster; reachability: None, or
@@ -47,12 +47,8 @@ class SamplingProblem:
         self.model = model
         self.settings = settings
         self.reachability = reachability
-        self.n = settings.n
-        self.seed = settings.seed
-        self.workers = settings.workers
         self.min_spacing = min_spacing
         self.spacing_by_default = spacing_by_default
-        self.measured_split = not settings.workers_given
         self.domain = domain
         self.space = SubstituteSpace(settings.fit_degree, settings.fit_poles, model.bounds, settings.smoothing)
         self.grid = EvaluationGrid(model, settings.grid)
@@ -60,6 +56,26 @@ class SamplingProblem:
         self._check: DeviationObjective | None = None
         self._bounds: LocalBounds | None = None
         self._judged: dict[bool, list] = {}
+
+    @property
+    def n(self) -> int:
+        """Points wanted (the settings')."""
+        return self.settings.n
+
+    @property
+    def seed(self) -> int:
+        """The seed of the strategies' random parts (the settings')."""
+        return self.settings.seed
+
+    @property
+    def workers(self) -> int:
+        """Processes an optimiser's swarm is spread over, 1 or 2 (the settings')."""
+        return self.settings.workers
+
+    @property
+    def measured_split(self) -> bool:
+        """True where workers is the default: a swarm is split only where that is measured faster."""
+        return not self.settings.workers_given
 
     @property
     def reached(self) -> Callable[[np.ndarray], np.ndarray] | None:
