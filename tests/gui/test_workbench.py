@@ -134,6 +134,12 @@ def test_panel_fits_the_default_width_of_the_combo_view(doc, artifacts):
     task_button(CANCEL).click()
 
 
+def estimate_s(line):
+    """The seconds a "Time: about N s" line gives, or None for any other text."""
+    found = re.fullmatch(r"Time: about (\d+) s", line.text())
+    return int(found.group(1)) if found else None
+
+
 def test_the_panel_estimates_the_runs_time_before_it_starts(doc):
     form = open_panel(doc)
     line = child(form, "timeInfo")
@@ -141,12 +147,13 @@ def test_the_panel_estimates_the_runs_time_before_it_starts(doc):
     fill(form, "optimal", time_limit=0.0, max_evaluations=0)
     assert wait_until(lambda: "until the descent converges" in line.text(), 5), line.text()
     fill(form, "optimal", time_limit=30.0)
-    # the time limit plus the time to build the problem (under a second quiet, more on a busy machine)
-    assert wait_until(lambda: re.fullmatch(r"Time: about 3[0-5] s", line.text()), 5), line.text()
+    # the time limit, once, plus the time to build the problem and judge the result (under a second
+    # quiet, 6 s beside three other FreeCADs on two cores)
+    assert wait_until(lambda: estimate_s(line) is not None, 5), line.text()
+    assert 30 <= estimate_s(line) < 60, line.text()
     fill(form, "halton")
-    # a blind layout takes milliseconds; on a busy machine (the estimate counts the processes sharing
-    # the cores) it may read a second or two
-    assert wait_until(lambda: re.fullmatch(r"Time: (under a second|about [12] s)", line.text()), 5), line.text()
+    # a blind layout takes milliseconds, the problem's build a second or two on a busy machine
+    assert wait_until(lambda: line.text() == "Time: under a second" or (estimate_s(line) or 30) < 10, 5), line.text()
     task_button(CANCEL).click()
 
 
