@@ -109,6 +109,8 @@ def fit_field(x: np.ndarray, deviations: np.ndarray) -> FieldFit:
     x, d = np.asarray(x, float), np.asarray(deviations, float)
     if len(d) < 3:
         raise InputError(f"an error map needs at least 3 measured points on the face, got {len(d)}")
+    if not (np.isfinite(x).all() and np.isfinite(d).all()):
+        raise InputError("an error map needs finite points and deviations: drop the points the CMM did not measure")
     distance = np.sqrt(((x[:, None] - x[None]) ** 2).sum(-1))
     np.fill_diagonal(distance, np.inf)
     spacing = float(np.median(distance.min(1)))
@@ -120,6 +122,9 @@ def fit_field(x: np.ndarray, deviations: np.ndarray) -> FieldFit:
             found = _likelihood(base, ratio, d)
             if found is not None and (best is None or found[0] > best[0]):
                 best = found + (length, ratio)
+    if best is None:
+        raise InputError(f"no error map fits these {len(d)} deviations (no covariance was positive definite): "
+                         "check for repeated points")
     _, mean, variance, length, ratio = best
     factor = cho_factor(matern(x, x, length, variance) + (ratio * variance + JITTER) * np.eye(len(d)))
     return FieldFit(x, cho_solve(factor, d - mean), mean, float(length), float(variance), float(ratio * variance))

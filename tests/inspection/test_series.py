@@ -9,6 +9,7 @@ import pytest
 
 import cmmsampling
 from cmmsampling.cli import main as cli_main
+from cmmsampling.fitting import series as series_fit
 from cmmsampling.fitting.series import SeriesModel, fit_field, greedy_design
 from cmmsampling.strategies import part_error
 from cmmsampling.strategies.registry import baseline
@@ -143,3 +144,13 @@ def test_the_command_line_samples_a_next_part_from_earlier_parts_files(series, t
     assert capsys.readouterr().err.strip() == (
         "error: part_error learns where the series' parts err from earlier parts: give --prior FILE (an earlier "
         "part's measured points on this face) once per part")
+
+
+def test_an_error_map_of_points_it_cannot_use_is_refused_in_one_line(monkeypatch):
+    x = np.random.default_rng(2).uniform(0, 20, (12, 2))
+    d = 0.01 * np.sin(x[:, 0] / 5)
+    with pytest.raises(cmmsampling.InputError, match="finite points and deviations: drop the points"):
+        fit_field(x, np.where(np.arange(12) == 3, np.nan, d))
+    monkeypatch.setattr(series_fit, "_likelihood", lambda base, ratio, deviations: None)
+    with pytest.raises(cmmsampling.InputError, match="no error map fits these 12 deviations"):
+        fit_field(x, d)
