@@ -53,7 +53,7 @@ class Probe:
     approach: float = 3.0
     clearance: float = 2.0
     max_tilt: float = 30.0
-    index_step: float = 7.5
+    index_step: float | None = 7.5
     max_head_angle: float = 105.0
 
     def __post_init__(self) -> None:
@@ -199,7 +199,7 @@ def candidate_axes(normals: np.ndarray, probe: Probe) -> tuple[np.ndarray, np.nd
     if probe.index_step is None:
         axes = _rings(normals, probe.max_tilt)
     else:
-        axes = np.repeat(axes_of(_index_grid(probe))[None], len(normals), axis=0)
+        axes = np.repeat(axes_of(_index_grid(probe.index_step, probe.max_head_angle))[None], len(normals), axis=0)
     tilt = np.degrees(np.arccos(np.clip(np.einsum("nkc,nc->nk", axes, normals), -1.0, 1.0)))
     usable = (tilt <= probe.max_tilt + 1e-9) & (np.degrees(np.arccos(np.clip(axes[..., 2], -1.0, 1.0)))
                                                 <= probe.max_head_angle + 1e-9)
@@ -207,13 +207,13 @@ def candidate_axes(normals: np.ndarray, probe: Probe) -> tuple[np.ndarray, np.nd
     return np.take_along_axis(axes, order[..., None], axis=1), np.take_along_axis(usable, order, axis=1)
 
 
-def _index_grid(probe: Probe) -> np.ndarray:
-    """(A, B) degrees of an indexing head's orientations, about index_step apart on the sphere:
-    A in steps up to max_head_angle, B in multiples of the step that keep neighbours about a step
-    apart (near the vertical, neighbouring B differ by far less than a step in direction)."""
-    step = probe.index_step
+def _index_grid(step: float, max_head_angle: float) -> np.ndarray:
+    """(A, B) degrees of an indexing head's orientations, about ``step`` degrees apart on the
+    sphere: A in steps up to max_head_angle degrees, B in multiples of the step that keep
+    neighbours about a step apart (near the vertical, neighbouring B differ by far less than a step
+    in direction)."""
     grid = [(0.0, 0.0)]
-    for a in np.arange(step, probe.max_head_angle + 1e-9, step):
+    for a in np.arange(step, max_head_angle + 1e-9, step):
         stride = step * max(1, int(round(1.0 / np.sin(np.radians(a)))))
         grid += [(a, b) for b in np.arange(-180.0 + stride, 180.0 + 1e-9, stride)]
     return np.array(grid)

@@ -94,6 +94,20 @@ def test_the_probe_is_checked_and_its_head_angles_are_the_axis():
     assert np.allclose(np.round(angles / 7.5) * 7.5, angles, atol=1e-6), "an index step of 7.5 deg"
 
 
+def test_a_continuous_head_starts_at_the_normal_and_tilts_in_rings(beside_wall):
+    continuous = PROBE.with_values(index_step=None)
+    normal = np.array([0.0, 0.6, 0.8])
+    candidates, usable = candidate_axes([normal], continuous)
+    tilts = np.degrees(np.arccos(np.clip(candidates[0] @ normal, -1, 1)))
+    assert np.allclose(np.linalg.norm(candidates[0], axis=1), 1.0)
+    assert tilts[0] < 1e-6 and usable[0, 0], "the normal itself first: no head grid to snap to"
+    assert tilts.max() <= continuous.max_tilt + 1e-6 and len(np.unique(np.round(tilts, 6))) > 3
+    points, normals = floor_points(np.linspace(10.5, 30.0, 40), [20.0], 10.0)
+    access = reach(continuous, Obstacles(beside_wall), points, normals)
+    assert access.reachable[points[:, 0] > 12.0].all() and not access.reachable[points[:, 0] < 10.9].any()
+    assert_clear(beside_wall, points, normals, access)
+
+
 def test_a_narrow_slot_floor_is_reachable_only_near_its_middle(slot):
     floor = floor_of(slot, 15.0)
     points, normals = floor_points([10.0, 30.0, 50.0], np.linspace(17.1, 22.9, 30), 15.0)

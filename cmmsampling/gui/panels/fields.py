@@ -49,6 +49,11 @@ def checked_data(listing):
     return [item.data(QtCore.Qt.UserRole) for item in items if item.checkState() == QtCore.Qt.Checked]
 
 
+def head_steps(probe):
+    """How the probe's head turns, in words: "in 7.5 deg steps", or "continuously"."""
+    return "continuously" if probe.index_step is None else f"in {probe.index_step:g} deg steps"
+
+
 def probe_choice(parent, none_tip, outcome, tip):
     """A choice of the probe whose reach is judged (object name "probe"): "not judged" (tooltip
     ``none_tip``) or a preset of cmmsampling.PROBES, each entry holding its name (tooltip: what it
@@ -58,7 +63,7 @@ def probe_choice(parent, none_tip, outcome, tip):
     add_choice(choice, "", "not judged", none_tip)
     for name, probe in PROBES.items():
         add_choice(choice, name, name, f"Keep to what this probe reaches on the part, stylus tilted up to "
-                   f"{probe.max_tilt:g} deg in {probe.index_step:g} deg steps; {outcome}")
+                   f"{probe.max_tilt:g} deg {head_steps(probe)}; {outcome}")
     choice.setToolTip(tip)
     return choice
 
