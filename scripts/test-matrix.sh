@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
-# Run the whole test suite (scripts/test.sh: headless, then GUI under Xvfb) on the FreeCAD of other
-# Debian suites: trixie (Debian 13, FreeCAD 1.0) and sid (FreeCAD 1.1), each inside a Debian root
-# built with debootstrap, the suites side by side; in each root the Addon Manager also installs the workbench from a git URL
-# served from a bare clone of this checkout's HEAD (tests/addon_manager_install.py). Needs root
+# Run what a FreeCAD version can change (scripts/test.sh --versions: the headless unit layer and the
+# GUI tests under Xvfb, side by side, but the quality layer and the tests marked once, which the
+# host runs) on the FreeCAD of other Debian suites: trixie (Debian 13, FreeCAD 1.0) and sid
+# (FreeCAD 1.1), each inside a Debian root built with debootstrap, the suites side by side; in each
+# root the Addon Manager also installs the workbench from a git URL served from a bare clone of
+# this checkout's HEAD (tests/addon_manager_install.py). Needs root
 # (debootstrap, mount, chroot), git and deb.debian.org.
 #
 # The roots are built once per machine and kept in $CMMSAMPLING_ROOTS (default
@@ -169,7 +171,7 @@ run_suite() {
   # run_suite SUITE: the README's test command and the Addon Manager check inside the root.
   local suite="$1" start=$SECONDS code=0
   log "$suite: $(in_root "$suite" 'freecadcmd --version 2>/dev/null | head -n 1' || true)"
-  in_root "$suite" "bash scripts/test.sh" || code=$?
+  in_root "$suite" "bash scripts/test.sh --versions" || code=$?
   log "$suite: scripts/test.sh exited with $code after $((SECONDS - start)) s"
   in_root "$suite" "$ADDON_CHECK" || code=1
   return "$code"

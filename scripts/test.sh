@@ -6,17 +6,24 @@
 # layers side by side end sooner than one after the other).
 #   bash scripts/test.sh                 # every test but those marked quality or slow (pytest.ini)
 #   bash scripts/test.sh --quality       # the quality layer too: what CI runs on the host
+#   bash scripts/test.sh --versions      # what a FreeCAD version can change: all but the tests marked
+#                                        # once too (what the FreeCAD 1.0 and 1.1 roots run)
 #   bash scripts/test.sh --quick         # the quick layer alone, headless (seconds): while editing
 #   bash scripts/test.sh -k export       # other arguments go to the headless pytest run
 # Exit code: non-zero if either run fails.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/install-deps.sh
-layers=(-m "not slow and not quality")
+layers=(-m "not slow and not quality")   # what the GUI run selects
+headless=("${layers[@]}")                # what the headless run selects (with --quality, that layer runs apart)
 with_quality=0
 if [ "${1:-}" = "--quality" ]; then
   layers=(-m "not slow")
   with_quality=1
+  shift
+elif [ "${1:-}" = "--versions" ]; then
+  layers=(-m "not slow and not quality and not once")
+  headless=("${layers[@]}")
   shift
 elif [ "${1:-}" = "--quick" ]; then
   shift
@@ -34,7 +41,7 @@ if [ "$with_quality" = 1 ]; then
   quality=$!
 fi
 status=0
-/usr/bin/python3 -m pytest -q -p no:cacheprovider tests -m "not slow and not quality" "$@" || status=$?
+/usr/bin/python3 -m pytest -q -p no:cacheprovider tests "${headless[@]}" "$@" || status=$?
 echo "[test] headless: $((SECONDS - start)) s, exit $status" >&2
 if [ -n "$quality" ]; then
   quality_status=0

@@ -22,6 +22,8 @@ def reference():
     return cmmsampling.reference_face()
 
 
+from support.once import ONCE  # noqa: E402
+
 # The quick layer (``-m quick``, seconds in all): the numeric core's and the formats' modules, to run
 # while editing. They stay in the unit layer too; scripts/test.sh --quick runs them alone.
 QUICK = {"fitting/test_closest_points.py", "fitting/test_edge_nodes.py", "fitting/test_fitting.py",
@@ -34,7 +36,18 @@ QUICK = {"fitting/test_closest_points.py", "fitting/test_edge_nodes.py", "fittin
 
 
 def pytest_collection_modifyitems(config, items):
-    """Mark the tests of the QUICK modules ``quick``."""
+    """Mark the tests of the QUICK modules ``quick`` and those ONCE names ``once``; refuse a name
+    in ONCE that no test of its module collected here has (a renamed test would run everywhere)."""
+    seen, modules = set(), set()
     for item in items:
-        if os.path.relpath(str(item.fspath), TESTS).replace(os.sep, "/") in QUICK:
+        module = os.path.relpath(str(item.fspath), TESTS).replace(os.sep, "/")
+        node = f"{module}::{item.name}"
+        modules.add(module)
+        if module in QUICK:
             item.add_marker(pytest.mark.quick)
+        if node in ONCE:
+            item.add_marker(pytest.mark.once)
+            seen.add(node)
+    stale = sorted(node for node in ONCE - seen if node.split("::")[0] in modules)
+    if stale and not config.getoption("keyword") and not config.getoption("deselect"):
+        raise pytest.UsageError(f"tests/support/once.py names tests that are not there: {stale}")

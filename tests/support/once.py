@@ -1,0 +1,73 @@
+"""The tests the FreeCAD 1.0 and 1.1 roots skip (``-m "not once"``, scripts/test.sh --versions):
+each took half a second or more, and every line of cmmsampling it runs is run by a test the roots
+keep (so every FreeCAD, Python and numpy version still runs that code); none of them is about
+what a version changes most: OCC's answers on given faces, the shared CAD files, documents,
+files, processes, Cancel or the install. They run on the host (FreeCAD 0.20) in every CI.
+
+Picked by scripts/once-candidates.py from a coverage run with each test's context and the
+unit layer's durations; two GUI tests by hand (a second Ventilator plan with the probe, whose
+Cancel test with the probe runs on every version, and the study's time estimate, whose thread
+the sample panel's estimate test runs). Node ids relative to tests/.
+"""
+
+ONCE = frozenset({
+    "access/test_access.py::test_a_large_ball_touches_a_large_plain_face",
+    "access/test_access.py::test_every_travel_move_keeps_the_clearance_and_the_path_is_short[beside_wall]",
+    "access/test_access.py::test_every_travel_move_keeps_the_clearance_and_the_path_is_short[overhang]",
+    "access/test_reached_domain.py::test_a_face_that_misses_the_tolerance_says_why_in_one_line",
+    "access/test_reached_domain.py::test_a_face_the_probe_reaches_in_part_is_judged_where_it_reaches[16]",
+    "access/test_reached_domain.py::test_a_face_the_probe_reaches_in_part_is_judged_where_it_reaches[64]",
+    "access/test_reached_domain.py::test_a_search_with_the_probe_meets_a_tolerance_over_what_it_reaches",
+    "fitting/test_edge_nodes.py::test_the_cubic_through_a_bent_edges_nodes_stays_on_the_edge[band]",
+    "fitting/test_edge_nodes.py::test_the_cubic_through_a_bent_edges_nodes_stays_on_the_edge[hole]",
+    "fitting/test_neighbour_searches.py::test_spaced_keeps_the_same_greedy_subset_as_plain_loops",
+    "fitting/test_neighbour_searches.py::test_spaced_thins_a_crowd_in_bounded_memory",
+    "gui/test_compare_export.py::test_the_panel_estimates_the_studys_time",
+    "gui/test_plan_part.py::test_a_ventilator_plan_with_a_probe",
+    "inspection/test_datums.py::test_a_shifted_top_fails_relative_to_datums_and_passes_floated",
+    "inspection/test_free_motions.py::test_a_blade_names_its_weak_slide_and_does_not_slide_exact_points",
+    "inspection/test_free_motions.py::test_a_cylinder_names_its_axis",
+    "inspection/test_free_motions.py::test_a_part_turned_on_the_table_gets_the_verdict_of_one_put_exactly[180.0]",
+    "inspection/test_free_motions.py::test_a_part_turned_on_the_table_gets_the_verdict_of_one_put_exactly[90.0]",
+    "inspection/test_series.py::test_part_error_records_what_the_model_expects",
+    "inspection/test_series.py::test_the_greedy_designs_variances_are_those_the_map_finds_at_its_points",
+    "inspection/test_uncertainty.py::test_each_trial_is_what_a_full_inspection_of_its_points_finds",
+    "inspection/test_uncertainty.py::test_the_decision_keeps_the_uncertainty_as_a_guard_band[0.01-conforms]",
+    "inspection/test_uncertainty.py::test_the_decision_keeps_the_uncertainty_as_a_guard_band[0.024-undecided]",
+    "inspection/test_uncertainty.py::test_the_monte_carlo_is_seeded",
+    "package/test_api.py::test_pso_never_worse_than_the_uniform_layouts",
+    "package/test_files_given.py::test_the_report_escapes_a_registered_strategys_label",
+    "package/test_properties.py::test_any_face_any_strategy_gives_usable_points",
+    "package/test_refused_input.py::test_1_the_largest_probe_judges_a_plate_in_bounded_memory",
+    "package/test_refused_input.py::test_5_the_steps_of_a_billion_points_are_found_by_bisection",
+    "planning/test_part_plan.py::test_a_rigid_copy_takes_its_originals_points_judged_on_itself",
+    "planning/test_part_plan.py::test_a_tolerance_no_n_meets_names_the_best_reached",
+    "planning/test_part_plan.py::test_an_optimal_search_stops_each_run_that_meets_and_takes_the_same_steps",
+    "planning/test_part_plan.py::test_every_face_that_holds_points_meets_the_tolerance_or_says_why",
+    "planning/test_part_plan.py::test_the_progress_shows_each_face_under_way_its_n_and_best_so_far[1]",
+    "planning/test_part_plan.py::test_the_progress_shows_each_face_under_way_its_n_and_best_so_far[2]",
+    "planning/test_part_plan.py::test_the_progress_tallies_faces_points_and_time_left",
+    "planning/test_search_cost.py::test_a_search_builds_the_face_domain_once",
+    "planning/test_search_cost.py::test_the_bracket_holds_the_bound[holed_face]",
+    "planning/test_search_cost.py::test_the_bracket_holds_the_bound[rational_patch_face]",
+    "planning/test_search_cost.py::test_the_bracket_holds_the_bound[rational_saddle]",
+    "planning/test_search_cost.py::test_the_search_decision_is_the_bound_s[16]",
+    "strategies/test_ball_spacing.py::test_points_on_a_2_mm_blade_keep_a_ball_s_separation[pso-options0]",
+    "strategies/test_ball_spacing.py::test_points_on_a_2_mm_blade_keep_a_ball_s_separation[random-options1]",
+    "strategies/test_first_run_defaults.py::test_an_optimiser_on_a_curved_face_still_runs",
+    "strategies/test_first_run_defaults.py::test_more_poles_than_points_is_said",
+    "strategies/test_first_run_defaults.py::test_the_time_estimate_follows_the_strategys_steps",
+    "strategies/test_optimal.py::test_bound_about_the_reference_fit",
+    "strategies/test_optimal.py::test_optimal_honours_min_spacing_and_budget",
+    "strategies/test_optimal.py::test_the_time_limit_counts_from_the_start_of_the_run",
+    "strategies/test_strategies.py::test_a_few_coarse_layouts_that_hit_a_thin_face_once_do_not_stop_a_large_n",
+    "strategies/test_strategies.py::test_curvature_strategy_puts_more_points_where_the_face_bends",
+    "strategies/test_strategies.py::test_random_strategies_follow_the_seed",
+    "strategies/test_strategy_records.py::test_a_registered_strategy_runs_in_sample_and_compare",
+    "study/test_study.py::test_bounds_are_about_the_best_run_at_each_n",
+    "study/test_study.py::test_every_run_matches_a_separate_sample_call[curvature_gaussian]",
+    "study/test_study.py::test_every_run_matches_a_separate_sample_call[optimal]",
+    "study/test_study.py::test_every_run_matches_a_separate_sample_call[pso]",
+    "study/test_study.py::test_every_run_matches_a_separate_sample_call[random]",
+    "study/test_study.py::test_the_probe_constraints_hold_in_every_run_as_in_sample",
+})
