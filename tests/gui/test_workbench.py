@@ -162,17 +162,16 @@ def test_the_panel_shows_the_runs_memory_and_refuses_what_does_not_fit(doc, monk
     form = open_panel(doc)
     [line] = [w for w in widgets() if w.objectName() == "memoryInfo" and w.isVisible()]
     fill(form, "pso", n=81)
-    process_events(0.1)
-    assert line.text().startswith("Memory: about") and line.text().endswith("of 2.0 GiB free")
+    assert wait_until(lambda: line.text().startswith("Memory: about") and line.text().endswith("of 2.0 GiB free"),
+                      0.1), line.text()
     assert task_button(OK).isEnabled()
     fill(form, "pso", n=20000)
-    process_events(0.2)
-    assert "more than this machine can spare (2.0 GiB free): lower N" in line.text()
+    assert wait_until(lambda: "more than this machine can spare (2.0 GiB free): lower N" in line.text(), 0.2), \
+        line.text()
     assert not task_button(OK).isEnabled()
     main_window().grab().save(os.path.join(artifacts, "task_panel_memory.png"))
     fill(form, "halton", n=81)
-    process_events(0.1)
-    assert task_button(OK).isEnabled() and "more than" not in line.text()
+    assert wait_until(lambda: task_button(OK).isEnabled() and "more than" not in line.text(), 0.1), line.text()
     task_button(CANCEL).click()
 
 
@@ -184,11 +183,11 @@ def test_the_face_can_be_picked_again_in_the_panel(doc):
     form.pickFace.click()
     assert form.faceLabel.text().startswith("Click a face")
     FreeCADGui.Selection.addSelection(box, "Edge1")
-    process_events(0.2)
-    assert "Box.Edge1 is an edge" in form.faceLabel.text() and form.pickFace.isChecked()
+    assert wait_until(lambda: "Box.Edge1 is an edge" in form.faceLabel.text(), 0.2), form.faceLabel.text()
+    assert form.pickFace.isChecked()
     FreeCADGui.Selection.addSelection(box, "Face3")
-    process_events(0.2)
-    assert form.faceLabel.text() == "Box.Face3" and not form.pickFace.isChecked()
+    assert wait_until(lambda: form.faceLabel.text() == "Box.Face3" and not form.pickFace.isChecked(), 0.2), \
+        form.faceLabel.text()
     task_button(CANCEL).click()
 
 
@@ -465,8 +464,8 @@ def test_reevaluate_command_after_the_face_changed_and_when_orphaned(doc):
     FreeCADGui.Selection.addSelection(group)
     assert command.isActive()
     FreeCADGui.runCommand(REEVALUATE)
-    process_events(0.2)
-    assert not points.Outdated and abs(points.MaxDeviation.Value - old) > 0.1
+    assert wait_until(lambda: not points.Outdated, 0.2)
+    assert abs(points.MaxDeviation.Value - old) > 0.1
     said = (f"Re-evaluated Body:Face1: maximum deviation {points.MaxDeviation.Value:.4f} mm (was {old:.4f} mm), "
             "up to date.")
     assert said in dock_text("Report view") and FreeCADGui.getMainWindow().statusBar().currentMessage() == said
