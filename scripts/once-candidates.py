@@ -14,8 +14,6 @@ import collections
 import re
 import sys
 
-import coverage
-
 # What a FreeCAD version changes most: OCC's answers on given faces, the shared CAD files,
 # documents, files, processes, Cancel, the command line and the install.
 VERSION_ROOMS = ("tests/fitting/test_delivered_deviation.py", "tests/fitting/test_geometric_deviation.py",
@@ -39,6 +37,8 @@ def durations(log: str) -> collections.Counter:
 
 def lines_by_test(database: str) -> dict:
     """{node id: the (file, line) pairs of cmmsampling it ran} from a coverage file with test contexts."""
+    import coverage
+
     data = coverage.CoverageData(database)
     data.read()
     ran = collections.defaultdict(set)
