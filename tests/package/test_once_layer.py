@@ -10,7 +10,8 @@ ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)
 
 
 def picker():
-    spec = importlib.util.spec_from_file_location("once_candidates", os.path.join(ROOT, "scripts", "once-candidates.py"))
+    path = os.path.join(ROOT, "scripts", "once-candidates.py")
+    spec = importlib.util.spec_from_file_location("once_candidates", path)
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module
