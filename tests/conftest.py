@@ -14,6 +14,8 @@ for folder in (ROOT, TESTS):
     if folder not in sys.path:
         sys.path.insert(0, folder)
 
+from support.once import ONCE  # noqa: E402  (tests/support, on the path from here on)
+
 
 @pytest.fixture(scope="session")
 def reference():
@@ -21,8 +23,6 @@ def reference():
 
     return cmmsampling.reference_face()
 
-
-from support.once import ONCE  # noqa: E402
 
 # The quick layer (``-m quick``, seconds in all): the numeric core's and the formats' modules, to run
 # while editing. They stay in the unit layer too; scripts/test.sh --quick runs them alone.
