@@ -104,7 +104,8 @@ def write_inspection(points, inspection):
     points.Decision = decision(inspection)
     points.Records = json.dumps({"datums": [datum.as_record() for datum in inspection.datums],
                                  "uncertainty": None if inspection.uncertainty is None
-                                 else inspection.uncertainty.as_record()})
+                                 else inspection.uncertainty.as_record(),
+                                 "beyond_edges": list(inspection.beyond_edges)})
 
 
 def face_lines(inspection):
@@ -223,7 +224,8 @@ class MeasuredPoints(TypedProxy):
                           measured_file=obj.MeasuredFile, zone_offset=float(obj.ZoneOffset.Value),
                           face_forms={name: float(value) for name, value in obj.FaceForms.items()},
                           normals=normals, datums=[DatumFit.from_record(item) for item in records.get("datums", [])],
-                          uncertainty=None if spread is None else ProfileUncertainty.from_record(spread))
+                          uncertainty=None if spread is None else ProfileUncertainty.from_record(spread),
+                          beyond_edges=list(records.get("beyond_edges", [])))
 
     def execute(self, obj):
         """Shape: a compound of the aligned points as vertices."""

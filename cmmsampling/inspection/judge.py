@@ -3,7 +3,8 @@ against a profile tolerance (ISO 1101, form only: a zone of width t centred on t
 on a surface offset from it by o, ISO 1101's UZ: o = +-t/2 makes the zone unilateral).
 
 The deviation of an aligned measured point is its signed distance from the CAD face it was
-planned on, along the face's outward normal (+ out of the material). The profile is the width
+planned on, the face bounded by its edges (+ out of the material): along the face's outward
+normal, or, for a point beyond an edge, to its foot on the edge (cmmsampling.inspection.closest). The profile is the width
 of the smallest zone centred where the tolerance's zone is that holds every point:
 2 max |d - o|. A point passes where |d - o| <= t / 2, a face (or the part) where its profile is
 at most t.
@@ -69,7 +70,9 @@ class Inspection:
     substitute fitted to the aligned measured points at their planned (u, v), and
     substitute_deviation: its DeviationStats against the CAD face (the deviation map); else None;
     measured_file: the file read ('' for a PointSet); normals: (N, 3) unit, the face's outward
-    normal at each aligned point's closest point (the point's foot is points - deviations * normals);
+    normal at each aligned point's closest point, or for a point beyond an edge the direction from
+    its foot on the edge (the point's foot is points - deviations * normals); beyond_edges: the
+    labels of the points beyond an edge of their face, judged by their distance to the edge;
     datums: a DatumFit per datum of the frame the points were judged in (cmmsampling.inspection.
     datums; empty: the form profile, floated); uncertainty: the ProfileUncertainty of the
     profile (cmmsampling.inspection.uncertainty) or None where none was given.
@@ -95,6 +98,7 @@ class Inspection:
     datums: list = field(default_factory=list)
     uncertainty: ProfileUncertainty | None = None
     planned_faces: dict = field(default_factory=dict)
+    beyond_edges: list = field(default_factory=list)
 
     def deviation_map(self, uv: np.ndarray, prior: Sequence[Inspection] | SeriesModel | None = None,
                       face: str | None = None) -> np.ndarray:
@@ -239,8 +243,17 @@ class Inspection:
         if len(faces) > 1:
             lines += [f"{name}: profile {value:.4f} mm" + self._face_verdict(name, value) + self._form_text(name)
                       for name, value in faces.items()]
-        notes = self.notes + ([] if self.uncertainty is None else self.uncertainty.notes)
+        notes = self.notes + ([] if self.uncertainty is None else self.uncertainty.notes) + self._edge_notes()
         return "\n".join(lines + [f"note: {note}" for note in notes])
+
+    def _edge_notes(self) -> list[str]:
+        """The note naming the points beyond an edge of their face (none where there are none)."""
+        count = len(self.beyond_edges)
+        if not count:
+            return []
+        names = ", ".join(self.beyond_edges[:8]) + (" ..." if count > 8 else "")
+        return [f"{count} point{'s lie' if count > 1 else ' lies'} beyond an edge of {'their' if count > 1 else 'its'} "
+                f"face, judged by the distance to the edge: {names}"]
 
     def _alignment_words(self) -> str:
         """'alignment min_max (7 steps' or 'aligned on datums A|B|C (then min_max, 3 steps in the
@@ -359,6 +372,7 @@ def inspect(source: object, measured: str | os.PathLike | PointSet, alignment: s
     read = _measured_point_set(measured)
     contact = _contact_points(read, probe_radius)
     order, notes = pair(planned, read)
+    notes = ([read.metadata["units_read"]] if "units_read" in read.metadata else []) + notes
     owner = np.zeros(len(order[0]), dtype=int) if planned.owner is None else planned.owner[order[1]]
     nominal = planned.points[order[1]] if planned.points is not None else np.full((len(order[0]), 3), np.nan)
     sources, kept = datum_points(wanted, planned, order, owner, contact, part, probe_radius)
@@ -372,7 +386,7 @@ def inspect(source: object, measured: str | os.PathLike | PointSet, alignment: s
     with reused():
         closers = [FaceCloser(face) if np.any(owner == index) else None for index, face in enumerate(planned.faces)]
         stages = [Stage(source.datum.label, source.name, source.datum.criterion, source.points,
-                        FaceCloser(source.face)) for source in sources]
+                        FaceCloser(source.face, bounded=False)) for source in sources]
 
     def closest(where: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         return _closest(closers, owner, where)
@@ -392,7 +406,8 @@ def inspect(source: object, measured: str | os.PathLike | PointSet, alignment: s
                             deviations, found.matrix, found, tolerance, [planned.names[i] for i in owner], notes,
                             measured_file=os.fspath(measured) if isinstance(measured, (str, os.PathLike)) else "",
                             zone_offset=zone_offset, normals=closest(aligned)[1], datums=[] if frame is None else frame.datums,
-                            planned_faces=dict(zip(planned.names, planned.faces)))
+                            planned_faces=dict(zip(planned.names, planned.faces)),
+                            beyond_edges=[read.labels[i] for i in order[0][_beyond_edges(closers, owner, aligned)]])
     if len(set(owner.tolist())) > 1 and alignment != "none":
         told("aligning each face alone")
         inspection.face_forms = _face_forms(points, owner, closers, planned.names, found, locked, zone_offset, notes)
@@ -647,6 +662,18 @@ def pair(planned: Planned, measured: PointSet) -> tuple[tuple[np.ndarray, np.nda
     why = ("the file has no labels" if measured.metadata.get("labels") == "by order"
            else "the measured labels are not the planned ones")
     return (rows, rows), [f"paired by order: {why}"]
+
+
+def _beyond_edges(closers: Sequence[FaceCloser | None], owner: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """(N,) bool: the points (N, 3) mm (owner (N,) their faces' indices into closers) whose foot
+    on their face lies on an edge, the point beyond it."""
+    beyond = np.zeros(len(points), dtype=bool)
+    for index, closer in enumerate(closers):
+        rows = np.flatnonzero(owner == index)
+        if rows.size:
+            assert closer is not None   # a face with points has its FaceCloser
+            beyond[rows] = closer.edges(points[rows])[2]
+    return beyond
 
 
 def _closest(closers: Sequence[FaceCloser | None], owner: np.ndarray,
