@@ -1,8 +1,11 @@
 """The columns of a measured-points table named by its header, as CMM software writes them.
 
 A header names the columns in any case and order: the label (``name``, ``label``, ``id``,
-``point``, ``feature``, ...), x, y, z and optionally the vector i, j, k; a unit in brackets or
-after an underscore (``X [mm]``, ``x_mm``) is ignored. Reports that give each coordinate twice,
+``point``, ``feature``, ...), x, y, z and optionally the vector i, j, k. A coordinate's unit, in
+brackets or as a word of its own (``X [inch]``, ``X (in)``, ``x_mm``, ``Z um``, any case), is read
+and the values converted to mm (LENGTH_UNITS_MM); text in brackets that is neither a unit nor a
+nominal or measured mark (``X [furlong]``) is refused, so that no value is read in a unit the file
+did not mean; no unit: mm. Reports that give each coordinate twice,
 nominal and measured (``X nom``, ``X act``, ``Meas X``, ``XACT``), are read from the measured
 columns; a table with nominal columns only is refused, since it holds no measurement.
 """
@@ -19,13 +22,20 @@ COORDINATES = ("x", "y", "z", "i", "j", "k")
 VECTOR_NAMES = {"nx": "i", "ny": "j", "nz": "k"}
 MEASURED_WORDS = ("measured", "actual", "meas", "act", "mea")
 NOMINAL_WORDS = ("nominal", "theoretical", "theo", "target", "nom")
-UNIT_WORDS = {"mm", "inch", "in", "um", "m"}
+# The length units a header may give a coordinate in: mm per unit (u stands for the micro sign).
+LENGTH_UNITS_MM = {"mm": 1.0, "millimeter": 1.0, "millimeters": 1.0, "millimetre": 1.0, "millimetres": 1.0,
+                   "cm": 10.0, "m": 1000.0, "meter": 1000.0, "meters": 1000.0, "metre": 1000.0, "metres": 1000.0,
+                   "um": 1e-3, "micron": 1e-3, "microns": 1e-3, "micrometer": 1e-3, "micrometers": 1e-3,
+                   "micrometre": 1e-3, "micrometres": 1e-3, "in": 25.4, "inch": 25.4, "inches": 25.4}
+BRACKETS = re.compile(r"[\[(](.*?)[\])]")
 
 
 def header_columns(fields: list[str], path: str, line_number: int) -> dict[str, Any] | None:
-    """{"label": column or None, "x", "y", "z": column, "i", "j", "k": column or None} from a
-    header's fields, or None where the fields do not name x, y and z (not a header).
-    InputError where they name only nominal coordinates."""
+    """{"label": column or None, "x", "y", "z": column, "i", "j", "k": column or None, "units":
+    {"x", "y", "z": (mm per unit, the unit as written, '' for none)}} from a header's fields, or
+    None where the fields do not name x, y and z (not a header).
+    InputError where they name only nominal coordinates, or a coordinate's unit this reader does
+    not know."""
     found: dict[str, dict[str, int]] = {}
     for column, field in enumerate(fields):
         name, kind = _column_name(field)
@@ -39,7 +49,38 @@ def header_columns(fields: list[str], path: str, line_number: int) -> dict[str, 
         return None
     if any(chosen[name] is None for name in "ijk"):
         chosen.update(i=None, j=None, k=None)
+    chosen["units"] = {name: column_unit(fields[chosen[name]], path, line_number) for name in "xyz"}
     return chosen
+
+
+def column_unit(field: str, path: str, line_number: int) -> tuple[float, str]:
+    """(mm per unit, the unit as written or '' for none: mm) of a coordinate column's header
+    field; InputError where its brackets hold a word that is no unit (LENGTH_UNITS_MM) nor a
+    nominal or measured mark, or it names two units."""
+    text = _plain_letters(field)
+    units = [word for word in _words(BRACKETS.sub(" ", text)) if word in LENGTH_UNITS_MM]
+    for inside in BRACKETS.findall(text):
+        words = _words(inside)
+        if all(word in LENGTH_UNITS_MM for word in words):
+            units += words
+        elif not all(word in MEASURED_WORDS + NOMINAL_WORDS for word in words):
+            raise InputError(f"{path}, line {line_number}: column {field.strip()!r} gives its unit as "
+                             f"{inside.strip()!r}, which this reader does not know; name the unit as mm, um, cm, m "
+                             "or in (inch)")
+    if len(set(LENGTH_UNITS_MM[unit] for unit in units)) > 1:
+        raise InputError(f"{path}, line {line_number}: column {field.strip()!r} names two units ({', '.join(units)}); "
+                         "give one")
+    return (LENGTH_UNITS_MM[units[0]], units[0]) if units else (1.0, "")
+
+
+def _plain_letters(field: str) -> str:
+    """A header field in lower case, the micro sign written u."""
+    return field.lower().replace("\u00b5", "u").replace("\u03bc", "u")
+
+
+def _words(text: str) -> list[str]:
+    """The words and numbers of a header field's text."""
+    return re.findall(r"[a-z]+|\d+", text)
 
 
 def _measured_column(kinds: dict[str, int] | None, name: str, path: str, line_number: int) -> int | None:
@@ -58,8 +99,10 @@ def _measured_column(kinds: dict[str, int] | None, name: str, path: str, line_nu
 def _column_name(field: str) -> tuple[str | None, str]:
     """(what the column holds: 'label' or one of COORDINATES or None, its kind: 'measured',
     'nominal' or 'plain') of a header field."""
-    text = re.sub(r"[\[(].*?[\])]", " ", field.lower())
-    words = [word for word in re.findall(r"[a-z]+|\d+", text) if word not in UNIT_WORDS]
+    text = _plain_letters(field)
+    marks = [word for inside in BRACKETS.findall(text) for word in _words(inside)
+             if word in MEASURED_WORDS + NOMINAL_WORDS]
+    words = [word for word in _words(BRACKETS.sub(" ", text)) if word not in LENGTH_UNITS_MM] + marks
     joined = "".join(words)
     if joined in LABEL_NAMES:
         return "label", "plain"

@@ -116,6 +116,11 @@ def read_labelled_text(text: str, path: str = "<text>") -> PointSet:
     data = np.array(rows)
     assert layout is not None   # set by the first point's line, and there is one
     metadata = {} if layout["label"] is not None else {"labels": "by order"}
+    units = layout.get("units", {})
+    if any(unit[0] != 1.0 for unit in units.values()):
+        data[:, :3] *= [units[name][0] for name in "xyz"]
+        metadata["units_read"] = ("coordinates read in " + ", ".join(f"{name} {units[name][1] or 'mm'}" for name in "xyz")
+                                  + " (the header's units) and converted to mm")
     return PointSet(labels, data[:, :3], data[:, 3:], metadata=metadata)
 
 

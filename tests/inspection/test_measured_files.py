@@ -43,6 +43,37 @@ def test_a_header_names_the_columns(measured, header, separator):
     same_verdict(cmmsampling.inspect(planned, path), reference)
 
 
+@pytest.mark.parametrize("units, per_mm", [
+    (("X [inch]", "Y [inch]", "Z [inch]"), 1 / 25.4), (("X (in)", "Y (IN)", "z (In)"), 1 / 25.4),
+    (("X [um]", "Y [\u00b5m]", "Z [UM]"), 1000.0), (("X [mm]", "Y mm", "Z_MM"), 1.0),
+    (("X act [in]", "Y act (inch)", "Z act inches"), 1 / 25.4), (("X [cm]", "Y [cm]", "Z [cm]"), 0.1)],
+    ids=["[inch]", "(in)", "[um]", "[mm]", "act [in]", "[cm]"])
+def test_units_in_a_header_are_read_and_stated(measured, units, per_mm):
+    """A header's units convert the values to mm, and the inspection says so; before, inches and
+    micrometres were read as mm: an absurd FAIL with no word about units."""
+    planned, made, reference, folder = measured
+    path = folder / "units.csv"
+    path.write_text("\n".join([",".join(("Name",) + units)] + [
+        ",".join([label] + [f"{c * per_mm:.10f}" for c in made.actual[k]]) for k, label in enumerate(made.labels)]))
+    found = cmmsampling.inspect(planned, path)
+    assert found.labels == reference.labels
+    np.testing.assert_allclose(found.deviations, reference.deviations, atol=1e-6)   # 10 digits, not the DMIS 7
+    assert any("converted to mm" in note for note in found.notes) == (per_mm != 1.0)
+
+
+@pytest.mark.parametrize("header, words", [
+    ("Name,X [furlong],Y [furlong],Z [furlong]", "column 'X [furlong]' gives its unit as 'furlong', which this "
+                                                 "reader does not know"),
+    ("Name,X [mm in],Y,Z", "column 'X [mm in]' names two units (mm, in)")])
+def test_a_unit_word_that_is_not_understood_is_refused(measured, header, words):
+    planned, made, _, folder = measured
+    path = folder / "strange_units.csv"
+    path.write_text("\n".join([header] + [",".join(row) for row in rows(made)]))
+    with pytest.raises(InputError) as raised:
+        cmmsampling.inspect(planned, path)
+    assert words in str(raised.value) and "strange_units.csv, line 1" in str(raised.value)
+
+
 def test_columns_in_another_order_and_a_report_of_nominal_and_measured_values(measured):
     """A report gives each coordinate nominal and measured (and a deviation): the measured columns
     are read, in whatever order; a report of nominal columns only holds no measurement."""
