@@ -38,6 +38,8 @@ OCC_AGREEMENT_MM = 1e-6
 # A foot is on an edge where the point lies more than this (mm) off the normal through it: the
 # surface's own feet (Newton's and OCC's) lie off it by 1e-9 mm or less.
 EDGE_REACH_MM = 1e-6
+# Every DENSE_STEP-th raster node of the face (and every edge node) stands for the whole face.
+DENSE_STEP = 2
 
 
 def distance_directions(points: np.ndarray, feet: np.ndarray,
@@ -95,6 +97,17 @@ class FaceCloser:
             return nearest, normals, np.zeros(len(points), dtype=bool)
         directions, on_edge = distance_directions(points, nearest, normals)
         return nearest, directions, on_edge
+
+
+def dense_nodes(closer: FaceCloser) -> tuple[np.ndarray, np.ndarray]:
+    """(points (M, 3) mm, outward normals (M, 3)): every DENSE_STEP-th raster node on the face
+    and every edge node, the face as a whole."""
+    nodes = closer.nodes
+    kept = np.zeros_like(nodes.counted)
+    kept[::DENSE_STEP, ::DENSE_STEP] = True
+    kept &= nodes.counted
+    return (np.vstack([nodes.points[kept], nodes.edge_points]),
+            np.vstack([nodes.normals[kept], nodes.edge_normals]))
 
 
 def confirm_with_occ(faces: Sequence[Part.Face], owner: np.ndarray, points: np.ndarray, deviations: np.ndarray,

@@ -33,6 +33,11 @@ from .align import (DEGREES_OF_FREEDOM, WEAK_SENSITIVITY, Alignment, Closest, _l
                     _motion_names, _offset_by, signed_distances, tangent, transform, twist_jacobian)
 
 DATUM_CRITERIA = ("tangent", "least_squares")
+# A datum's points spread more than DATUM_FORM_SHARE times the profile tolerance about its
+# associated face (DATUM_FORM_MM without a tolerance) are not taken: points of another face, or
+# a datum too rough to judge a profile from.
+DATUM_FORM_SHARE = 5.0
+DATUM_FORM_MM = 1.0
 # The regularisation of a datum's motion metric, as a share of its trace: a motion that moves
 # none of its points (a turn about the line they lie on) counts as weakly held, not singular.
 METRIC_FLOOR = 1e-12
@@ -92,13 +97,16 @@ class DatumFit:
 class Stage:
     """Points aligned in one step of a frame: label and face (names), criterion (one of
     DATUM_CRITERIA, or an alignment method for the toleranced surface), points (M, 3) mm
-    (measured), closest: callable (M, 3) -> (feet, outward normals), each (M, 3)."""
+    (measured), closest: callable (M, 3) -> (feet, outward normals), each (M, 3); surface:
+    (points (K, 3) mm, outward normals (K, 3)) spread over the nominal face in the CAD frame,
+    from which the motions its geometry could fix are found (None: from its points alone)."""
 
     label: str
     face: str
     criterion: str
     points: np.ndarray
     closest: Closest
+    surface: tuple[np.ndarray, np.ndarray] | None = None
 
 
 @dataclass
@@ -173,7 +181,8 @@ def align_on_datums(datums: Sequence[Stage], toleranced: Stage, start: np.ndarra
     for stage in datums:
         moved = transform(matrix, stage.points)
         held, weak = split_motions(moved, stage.closest(moved)[1], allowed, pivot)
-        _check_datum(stage, held.shape[1])
+        could = split_motions(*stage.surface, allowed, pivot)[0] if stage.surface is not None else held
+        _check_datum(stage, held.shape[1], could)
         fit = tangent if stage.criterion == "tangent" else _least_squares
         matrix = fit(stage.points, stage.closest, held, matrix, pivot)[0]
         link = _link(stage, matrix, held, pivot, first)
@@ -200,14 +209,35 @@ def align_on_datums(datums: Sequence[Stage], toleranced: Stage, start: np.ndarra
     return Frame(alignment, fits, links + [last])
 
 
-def _check_datum(stage: Stage, held: int) -> None:
-    """InputError where a datum fixes no motion or has too few points for those it fixes."""
-    if held == 0:
+def _check_datum(stage: Stage, held: int, could: np.ndarray) -> None:
+    """InputError where a datum's face fixes none of the motions left free (could (6, C): those
+    its geometry could fix), where it has fewer points than those motions (a plane 3 as primary,
+    a cylinder 4), or where its points fix fewer of them than its face could (points on one line
+    of a plane): the next datum would take over motions this one should fix."""
+    count, needed = len(stage.points), could.shape[1]
+    if needed == 0:
         raise InputError(f"datum {stage.label} ({stage.face}) fixes none of the motions the datums before it leave "
                          "free; give another face as this datum or leave it out")
-    if len(stage.points) < held:
-        raise InputError(f"datum {stage.label} ({stage.face}) has {len(stage.points)} measured points for the {held} "
-                         f"motions it fixes; measure at least {held} points on it")
+    if count < needed:
+        raise InputError(f"datum {stage.label} ({stage.face}) has {count} measured point{'s' * (count != 1)}; its "
+                         f"face fixes {needed} motions the datums before it leave free: measure at least {needed} "
+                         "points on it")
+    if held < needed:
+        raise InputError(f"datum {stage.label} ({stage.face}): its {count} points fix {held} of the {needed} motions "
+                         "its face fixes; spread them over the face (not along one line)")
+
+
+def check_datum_forms(fits: Sequence[DatumFit], tolerance: float | None) -> None:
+    """InputError naming the first datum whose points spread (DatumFit.form, mm) more than
+    DATUM_FORM_SHARE times the profile tolerance (mm; None: DATUM_FORM_MM) about its face."""
+    limit = DATUM_FORM_MM if tolerance is None else DATUM_FORM_SHARE * tolerance
+    for fit in fits:
+        if fit.form > limit:
+            bound = (f"{DATUM_FORM_SHARE:g} times the tolerance, {limit:g} mm" if tolerance is not None
+                     else f"{limit:g} mm, the limit without a tolerance")
+            raise InputError(f"datum {fit.label} ({fit.face}): its {fit.count} points spread {fit.form:.4g} mm about "
+                             f"the associated face, more than {bound}; are they points of another face? measure the "
+                             "datum again or name its face")
 
 
 def _link(stage: Stage, matrix: np.ndarray, held: np.ndarray, pivot: np.ndarray, first: int) -> Link:

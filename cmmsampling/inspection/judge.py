@@ -30,9 +30,9 @@ from ..strategies.face_setup import reused
 from ..planning.part_plan import PartPlan
 from ..strategies.result import SamplingResult
 from .align import ALIGNMENTS, PROFILE_KINDS, Alignment, AlignmentCancelled, Closest, align, check_locked, kabsch
-from .datums import Datum, Frame, Stage, align_on_datums, as_datums, floating_frame
+from .datums import Datum, Frame, Stage, align_on_datums, as_datums, check_datum_forms, floating_frame
 from .uncertainty import NO_UNCERTAINTY, ProfileUncertainty, decide, profile_uncertainty
-from .closest import OCC_AGREEMENT_MM, OCC_CONFIRMED, FaceCloser, confirm_with_occ
+from .closest import OCC_AGREEMENT_MM, OCC_CONFIRMED, FaceCloser, confirm_with_occ, dense_nodes
 from .measured import read_measured
 from .series import deviation_map, face_rows
 
@@ -385,8 +385,7 @@ def inspect(source: object, measured: str | os.PathLike | PointSet, alignment: s
     told("preparing the faces")
     with reused():
         closers = [FaceCloser(face) if np.any(owner == index) else None for index, face in enumerate(planned.faces)]
-        stages = [Stage(source.datum.label, source.name, source.datum.criterion, source.points,
-                        FaceCloser(source.face, bounded=False)) for source in sources]
+        stages = [_datum_stage(source) for source in sources]
 
     def closest(where: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         return _closest(closers, owner, where)
@@ -396,6 +395,7 @@ def inspect(source: object, measured: str | os.PathLike | PointSet, alignment: s
                                        [source.nominal for source in sources] + [nominal])
     found, frame = _aligned(points, closest, alignment, locked, start, zone_offset, stages, progress,
                             uncertainty is not None)
+    check_datum_forms([] if frame is None else frame.datums, tolerance)
     told("confirming the decisive points with OCC")
     aligned = found.apply(points)
     deviations, disagreement = confirm_with_occ(planned.faces, owner, aligned, found.deviations, zone_offset)
@@ -471,6 +471,13 @@ def datum_points(datums: Sequence[Datum], planned: Planned, order: tuple[np.ndar
         sources.append(DatumSource(datum, name, planned.faces[index], contact[order[0][rows]],
                                    np.full((int(rows.sum()), 3), np.nan) if nominal is None else nominal))
     return sources, kept
+
+
+def _datum_stage(source: DatumSource) -> Stage:
+    """The Stage of a datum: its points on its face's surface extended past the edges (ISO
+    5459's unlimited ideal feature), the face's raster standing for what its geometry could fix."""
+    closer = FaceCloser(source.face, bounded=False)
+    return Stage(source.datum.label, source.name, source.datum.criterion, source.points, closer, dense_nodes(closer))
 
 
 def _aligned(points: np.ndarray, closest: Closest, alignment: str, locked: tuple[str, ...], start: np.ndarray | None,

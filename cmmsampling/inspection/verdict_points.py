@@ -25,7 +25,7 @@ from ..strategies.face_setup import reused
 from ..strategies.registry import baseline
 from ..strategies.sampling import sample
 from .align import align
-from .closest import FaceCloser
+from .closest import FaceCloser, dense_nodes
 from .simulate import form_waves
 
 if TYPE_CHECKING:   # FreeCAD ships no type stubs: to the type checker Part's classes are Any
@@ -40,8 +40,6 @@ PARTS = 40
 SHARE = 0.1
 COVERAGE = 0.95
 MIN_PARTS = 20
-# Every DENSE_STEP-th raster node of the face (and every edge node) stands for the whole face.
-DENSE_STEP = 2
 
 
 @dataclass
@@ -104,17 +102,6 @@ def points_for_verdict(face: Part.Face, tolerance: float, form_error: float, *, 
     enough = np.flatnonzero(np.quantile(gaps, COVERAGE, axis=1) < share * tolerance)
     return VerdictPoints(counts[enough[0]] if enough.size else None, counts, gaps, true, tolerance, share,
                          form_error, strategy)
-
-
-def dense_nodes(closer: FaceCloser) -> tuple[np.ndarray, np.ndarray]:
-    """(points (M, 3) mm, outward normals (M, 3)): every DENSE_STEP-th raster node on the face
-    and every edge node, the face as a whole."""
-    nodes = closer.nodes
-    kept = np.zeros_like(nodes.counted)
-    kept[::DENSE_STEP, ::DENSE_STEP] = True
-    kept &= nodes.counted
-    return (np.vstack([nodes.points[kept], nodes.edge_points]),
-            np.vstack([nodes.normals[kept], nodes.edge_normals]))
 
 
 def zone_width(points: np.ndarray, closer: FaceCloser, alignment: str) -> float:
