@@ -34,7 +34,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import linprog
+from scipy.optimize import linprog, nnls
 
 from ..geometry.validation import InputError
 
@@ -77,6 +77,15 @@ TRUST_SHIFT_MM = 1.0
 TRUST_SHRINK = 0.25
 # A tangent datum's fit weighs a point left out of the material this many times its distance.
 TANGENT_PENALTY = 10.0
+# Tangent associations whose largest distance is within TANGENT_TIE_MM (mm) of the least, every
+# point in the material (to ROUNDING_MM), are all tangent solutions: ISO 5459's criterion does not
+# choose among them (a plane rocking on two points in line with its deepest one). 10 nm, far below
+# what a CMM resolves, and far above what a micrometre of probing error across the plane does to
+# the largest distance of a plane rocking on a line (its deepest point off the line by 1 um, the
+# plane turned by 1e-4 rad: 1e-7 mm), so that a family of tangent planes stays one family whatever
+# the points' errors along the face.
+TANGENT_TIE_MM = 1e-5
+ROUNDING_MM = 1e-9
 
 
 @dataclass
@@ -389,6 +398,52 @@ def tangent_merit(deviations: np.ndarray) -> float:
     """mm, how far deviations (N,) mm are from a tangent datum's: max -d, plus TANGENT_PENALTY
     times the farthest point out of the material (d > 0)."""
     return max(-float(deviations.min()), 0.0) + TANGENT_PENALTY * max(float(deviations.max()), 0.0)
+
+
+def tangent_set(deviations: np.ndarray, jacobian: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(A (2M, H), b (2M,)): the steps x with A x <= b that keep the linear model d + J x of a
+    tangent solution (deviations d (M,) mm, jacobian J (M, H)) tangent: every point in the
+    material (no farther out than the farthest is now, to ROUNDING_MM) and the largest distance
+    at most max(-d) + TANGENT_TIE_MM."""
+    deepest = max(-float(deviations.min()), 0.0)
+    outside = max(float(deviations.max()), 0.0) + ROUNDING_MM
+    return (np.vstack([jacobian, -jacobian]),
+            np.concatenate([outside - deviations, deepest + TANGENT_TIE_MM + deviations]))
+
+
+def tangent_choice(deviations: np.ndarray, jacobian: np.ndarray) -> np.ndarray:
+    """The step x (H,) to the tangent solution whose distances' sum of squares is least, among
+    those of :func:`tangent_set` (the constrained L2 secondary criterion; unique, where the
+    tangent criterion alone may leave a family; J (M, H) of full column rank): with J = Q R and
+    z = R x + Q^T d, min |z| subject to the set's constraints, a least distance programme solved
+    exactly through non-negative least squares (Lawson and Hanson, ch. 23); no step where the set
+    is empty."""
+    upper, bound = tangent_set(deviations, jacobian)
+    orthogonal, triangle = np.linalg.qr(jacobian)
+    inverse = np.linalg.inv(triangle)
+    base = orthogonal.T @ deviations
+    rows = -(upper @ inverse)
+    floor = -(bound + upper @ inverse @ base)
+    stacked = np.vstack([rows.T, floor[None, :]])
+    target = np.r_[np.zeros(jacobian.shape[1]), 1.0]
+    residual = stacked @ nnls(stacked, target, maxiter=50 * stacked.shape[1])[0] - target
+    if abs(residual[-1]) <= 1e-15:
+        return np.zeros(jacobian.shape[1])
+    return inverse @ (-residual[:-1] / residual[-1] - base)
+
+
+def tangent_extent(deviations: np.ndarray, jacobian: np.ndarray) -> float:
+    """mm: how far the tangent solutions of :func:`tangent_set` move the points at most, along any
+    one column of J (units that move the points about 1 mm RMS): max - min of each coordinate by
+    a linear programme each; 0 for a unique solution."""
+    upper, bound = tangent_set(deviations, jacobian)
+    size, reach = jacobian.shape[1], 0.0
+    for column in range(size):
+        ends = [linprog(sign * np.eye(size)[column], A_ub=upper, b_ub=bound, bounds=[(None, None)] * size,
+                        method="highs") for sign in (1.0, -1.0)]
+        if all(end.success for end in ends):
+            reach = max(reach, float(ends[1].x[column] - ends[0].x[column]))
+    return reach
 
 
 def _linear_programmes(points: np.ndarray, closest: Closest, basis: np.ndarray, matrix: np.ndarray,

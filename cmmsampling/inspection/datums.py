@@ -30,7 +30,8 @@ from scipy.linalg import eigh
 from ..formats.pointset import PointSet
 from ..geometry.validation import InputError
 from .align import (DEGREES_OF_FREEDOM, WEAK_SENSITIVITY, Alignment, Closest, _least_squares, _min_max,
-                    _motion_names, _offset_by, signed_distances, tangent, transform, twist_jacobian)
+                    _motion_names, _offset_by, _step_matrix, signed_distances, tangent, tangent_choice,
+                    tangent_extent, transform, twist_jacobian)
 
 DATUM_CRITERIA = ("tangent", "least_squares")
 # A datum's points spread more than DATUM_FORM_SHARE times the profile tolerance about its
@@ -38,6 +39,9 @@ DATUM_CRITERIA = ("tangent", "least_squares")
 # a datum too rough to judge a profile from.
 DATUM_FORM_SHARE = 5.0
 DATUM_FORM_MM = 1.0
+# A tangent datum whose equally good associations (align.TANGENT_TIE_MM) move its points more
+# than this (mm RMS) is named not unique: 0.1 um, what a CMM's probing begins to resolve.
+ROCKING_MM = 1e-4
 # The regularisation of a datum's motion metric, as a share of its trace: a motion that moves
 # none of its points (a turn about the line they lie on) counts as weakly held, not singular.
 METRIC_FLOOR = 1e-12
@@ -63,7 +67,9 @@ class Datum:
 class DatumFit:
     """One datum as associated: label; face: its name; criterion; count: its points; held: the
     motions it fixed (0 .. 6); deviations: (M,) mm, its points' signed distances from its face
-    in the frame (+ out of the material); form: mm, their spread (max - min)."""
+    in the frame (+ out of the material); form: mm, their spread (max - min); rocking: mm, how
+    far the tangent associations as good as the one chosen move its points (0: one only; more
+    than ROCKING_MM: not unique, the least squares among them chosen, align.tangent_choice)."""
 
     label: str
     face: str
@@ -71,6 +77,7 @@ class DatumFit:
     count: int
     held: int
     deviations: np.ndarray
+    rocking: float = 0.0
 
     @property
     def form(self) -> float:
@@ -89,8 +96,10 @@ class DatumFit:
 
     def text(self) -> str:
         """'A (Face1, tangent, 3 motions, 12 points, form 0.0012 mm)'."""
+        rocking = (f", not unique: tangent solutions {1000 * self.rocking:.2f} um apart, the least squares among "
+                   "them taken" if self.rocking > ROCKING_MM else "")
         return (f"{self.label} ({self.face}, {self.criterion.replace('_', ' ')}, {self.held} motion"
-                f"{'' if self.held == 1 else 's'}, {self.count} points, form {self.form:.4f} mm)")
+                f"{'' if self.held == 1 else 's'}, {self.count} points, form {self.form:.4f} mm{rocking})")
 
 
 @dataclass
@@ -184,10 +193,12 @@ def align_on_datums(datums: Sequence[Stage], toleranced: Stage, start: np.ndarra
         could = split_motions(*stage.surface, allowed, pivot)[0] if stage.surface is not None else held
         _check_datum(stage, held.shape[1], could)
         fit = tangent if stage.criterion == "tangent" else _least_squares
-        matrix = fit(stage.points, stage.closest, held, matrix, pivot)[0]
+        matrix, rocking = fit(stage.points, stage.closest, held, matrix, pivot)[0], 0.0
+        if stage.criterion == "tangent":
+            matrix, rocking = _tangent_chosen(stage, matrix, held, pivot)
         link = _link(stage, matrix, held, pivot, first)
         fits.append(DatumFit(stage.label, stage.face, stage.criterion, len(stage.points), held.shape[1],
-                             link.deviations))
+                             link.deviations, rocking))
         links.append(link)
         first, allowed = first + len(stage.points), weak
     zone = _offset_by(toleranced.closest, offset)
@@ -207,6 +218,17 @@ def align_on_datums(datums: Sequence[Stage], toleranced: Stage, start: np.ndarra
                           float(np.linalg.norm(moved - toleranced.points, axis=1).max()),
                           last.deviations + offset, motion_names(weak, length), False)
     return Frame(alignment, fits, links + [last])
+
+
+def _tangent_chosen(stage: Stage, matrix: np.ndarray, held: np.ndarray,
+                    pivot: np.ndarray) -> tuple[np.ndarray, float]:
+    """(matrix (4, 4), rocking mm): a tangent datum's association ``matrix`` moved to the least
+    squares among the tangent solutions on its linear model (exact for a plane), and how far
+    those solutions move its points (align.tangent_extent)."""
+    link = _link(stage, matrix, held, pivot, 0)
+    jacobian = link.jacobian @ held
+    step = tangent_choice(link.deviations, jacobian)
+    return _step_matrix(step, held, pivot) @ matrix, tangent_extent(link.deviations, jacobian)
 
 
 def _check_datum(stage: Stage, held: int, could: np.ndarray) -> None:

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
@@ -413,8 +413,11 @@ def inspect(source: object, measured: str | os.PathLike | PointSet, alignment: s
         inspection.face_forms = _face_forms(points, owner, closers, planned.names, found, locked, zone_offset, notes)
     if uncertainty is not None:
         assert frame is not None   # _aligned gives the Frame where an uncertainty is asked for (linear)
+        again = Again(points, closest, alignment, locked, start, zone_offset, stages, owner, len(planned.names),
+                      found.matrix)
         inspection.uncertainty = profile_uncertainty(
-            frame, owner, planned.names, uncertainty, seed, lambda trials: told(f"propagating the probing uncertainty (Monte Carlo): {trials} trials"))
+            frame, owner, planned.names, uncertainty, seed,
+            lambda trials: told(f"propagating the probing uncertainty (Monte Carlo): {trials} trials"), again)
     if isinstance(source, SamplingResult):
         rebuild(inspection, source, order[1])
     return inspection
@@ -471,6 +474,39 @@ def datum_points(datums: Sequence[Datum], planned: Planned, order: tuple[np.ndar
         sources.append(DatumSource(datum, name, planned.faces[index], contact[order[0][rows]],
                                    np.full((int(rows.sum()), 3), np.nan) if nominal is None else nominal))
     return sources, kept
+
+
+@dataclass
+class Again:
+    """The whole alignment of an inspection, to run again on its points with errors added (the
+    Monte Carlo's check of its linear model, uncertainty.Recheck): points (N, 3) mm, the toleranced
+    measured points; closest, alignment, locked, start, offset and stages as the inspection had
+    them; owner (N,) each point's face, faces: how many; matrix (4, 4): the inspection's motion,
+    which turns the errors (drawn along the CAD axes) into the measured frame."""
+
+    points: np.ndarray
+    closest: Closest
+    alignment: str
+    locked: tuple[str, ...]
+    start: np.ndarray | None
+    offset: float
+    stages: list[Stage]
+    owner: np.ndarray
+    faces: int
+    matrix: np.ndarray
+
+    def __call__(self, errors: np.ndarray) -> np.ndarray:
+        """(F,) mm: each face's profile 2 max |d - o| (0 for a face without toleranced points) of
+        the inspection run again with errors (P, 3) mm added to its points, the datums' first."""
+        moved, first, stages = errors @ self.matrix[:3, :3], 0, []
+        for stage in self.stages:
+            stages.append(replace(stage, points=stage.points + moved[first:first + len(stage.points)]))
+            first += len(stage.points)
+        found, _ = _aligned(self.points + moved[first:], self.closest, self.alignment, self.locked, self.start,
+                            self.offset, stages, None, False)
+        off = np.abs(found.deviations - self.offset)
+        return np.array([2.0 * float(off[self.owner == face].max()) if np.any(self.owner == face) else 0.0
+                         for face in range(self.faces)])
 
 
 def _datum_stage(source: DatumSource) -> Stage:

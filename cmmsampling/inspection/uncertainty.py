@@ -19,6 +19,8 @@ ISO 14253-1's decision for a profile tolerance t (an upper limit): 'conforms' wh
 """
 from __future__ import annotations
 
+import time
+
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
@@ -26,7 +28,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from scipy.optimize import linprog
 
-from .align import chebyshev_programme
+from .align import chebyshev_programme, tangent_choice
 
 if TYPE_CHECKING:   # for the annotations only
     from .datums import Frame, Link
@@ -37,6 +39,15 @@ BATCH = 250
 MAX_TRIALS = 20000
 # A run's Cancel is asked this often (trials) inside a batch's linear programmes.
 CHECK_EVERY = 25
+# The first CHECKED_TRIALS trials are solved again by the full nonlinear inspection where the
+# caller gives one (a Recheck); where one of them differs from it by more than LINEAR_SLACK of U,
+# the linear model does not hold there, and U is that of FULL_TRIALS full re-inspections.
+CHECKED_TRIALS = 3
+LINEAR_SLACK = 0.1
+FULL_TRIALS = 200
+# recheck(errors (P, 3) mm, along the CAD axes, on every point in the links' order) -> (F,) mm,
+# each face's profile found by the whole inspection of the points with those errors added.
+Recheck = Callable[[np.ndarray], np.ndarray]
 CONFORMS, DOES_NOT_CONFORM, UNDECIDED = "conforms", "does not conform", "undecided"
 DECISIONS = (CONFORMS, DOES_NOT_CONFORM, UNDECIDED)
 NO_UNCERTAINTY = "no uncertainty given: the verdict takes the measured profile as exact"
@@ -48,7 +59,10 @@ class ProfileUncertainty:
     profile; faces: {face name: its U, mm}; trials: how many were run; mean_shift: mm, the
     trials' mean profile less the measured one (how much the probing error widens a profile on
     average); relative_error: the Monte Carlo's own relative error of U; seed; coverage: k;
-    profiles: (trials,) mm, each trial's profile (None once saved and read back)."""
+    profiles: (trials,) mm, each trial's profile (None once saved and read back); checked: mm,
+    the most one of the first CHECKED_TRIALS trials differed from the full inspection of the same
+    points (None: not checked); full: U is that of FULL_TRIALS full re-inspections, the linear
+    model having failed that check."""
 
     probing: float
     expanded: float
@@ -60,6 +74,8 @@ class ProfileUncertainty:
     coverage: float = COVERAGE_FACTOR
     notes: list = field(default_factory=list)
     profiles: np.ndarray | None = None
+    checked: float | None = None
+    full: bool = False
 
     def as_record(self) -> dict[str, Any]:
         """The figures as a JSON-friendly dict (the trials' profiles left out)."""
@@ -72,8 +88,11 @@ class ProfileUncertainty:
 
     def text(self) -> str:
         """'U = 0.0042 mm (k = 2; u = 0.001 mm per point, 750 Monte Carlo trials, its own error 3.1 %)'."""
+        how = "full re-inspections" if self.full else "Monte Carlo trials"
+        checked = ("" if self.checked is None or self.full else
+                   f"; {CHECKED_TRIALS} of them met full re-inspections to {1000 * self.checked:.3f} um")
         return (f"U = {self.expanded:.4f} mm (k = {self.coverage:g}; probing u = {self.probing:g} mm per point, "
-                f"{self.trials} Monte Carlo trials, their own error {100 * self.relative_error:.1f} %)")
+                f"{self.trials} {how}, their own error {100 * self.relative_error:.1f} %{checked})")
 
 
 def decide(profile: float, expanded: float, tolerance: float) -> str:
@@ -88,7 +107,8 @@ def decide(profile: float, expanded: float, tolerance: float) -> str:
 
 
 def profile_uncertainty(frame: Frame, owner: np.ndarray, names: list[str], probing: float, seed: int = 0,
-                        check: Callable[[int], None] | None = None) -> ProfileUncertainty:
+                        check: Callable[[int], None] | None = None,
+                        recheck: Recheck | None = None) -> ProfileUncertainty:
     """The ProfileUncertainty of a Frame (cmmsampling.inspection.datums: its Links, the datums'
     then the toleranced surface's, the last one's deviations from the zone's centre) under
     probing error u = probing mm per point and axis, taken along the outward normals each
@@ -96,31 +116,56 @@ def profile_uncertainty(frame: Frame, owner: np.ndarray, names: list[str], probi
 
     owner: (N,) int, the face of each toleranced point (the last link's rows); names: the faces' names;
     check: callable(trials done) before each batch and every CHECK_EVERY trials of a batch's
-    linear programmes (it may raise to stop the run: the inspection's Cancel)."""
+    linear programmes (it may raise to stop the run: the inspection's Cancel); recheck: the full
+    inspection of points with errors added (a Recheck), which the first CHECKED_TRIALS trials
+    must meet to LINEAR_SLACK of U, else U is that of FULL_TRIALS of it (None: no check)."""
     rng = np.random.default_rng(seed)
     normals = np.vstack([link.jacobian[:, 3:] for link in frame.links])
     faces = [np.flatnonzero(owner == index) for index in range(len(names))]
-    profiles = np.empty((0, len(names)))
+    profiles, first = np.empty((0, len(names))), None
     while True:
         done = len(profiles)
         asked = None if check is None else lambda trials: check(done + trials)
         if asked is not None:
             asked(0)
         noise = rng.normal(0.0, probing, size=(BATCH, len(normals), 3))
+        first = noise[:CHECKED_TRIALS] if first is None else first
         profiles = np.vstack([profiles, trial_profiles(frame.links, np.einsum("tpi,pi->tp", noise, normals), faces,
                                                        asked)])
         error = relative_error(profiles.max(axis=1))
         if error <= SAMPLING_ERROR or len(profiles) >= MAX_TRIALS:
             break
-    whole = profiles.max(axis=1)
-    measured = 2.0 * float(np.abs(frame.links[-1].deviations).max())
     notes = [] if error <= SAMPLING_ERROR else [
         f"the Monte Carlo stopped at {MAX_TRIALS} trials with its own error {100 * error:.1f} %"]
+    checked, full = None, False
+    if recheck is not None:
+        checked = float(np.abs(np.array([recheck(draw).max() for draw in first]) - profiles[:CHECKED_TRIALS].max(axis=1)).max())
+        if checked > LINEAR_SLACK * COVERAGE_FACTOR * float(profiles.max(axis=1).std(ddof=1)):
+            began = time.monotonic()
+            profiles, full = _full_trials(recheck, rng, probing, len(normals), check), True
+            error = relative_error(profiles.max(axis=1))
+            notes = [f"the linear model's trials differed from full re-inspections by up to {checked:.2g} mm, more "
+                     f"than {LINEAR_SLACK:g} of U: U is that of {FULL_TRIALS} full re-inspections "
+                     f"({time.monotonic() - began:.0f} s)"]
+    whole = profiles.max(axis=1)
+    measured = 2.0 * float(np.abs(frame.links[-1].deviations).max())
     return ProfileUncertainty(probing, COVERAGE_FACTOR * float(whole.std(ddof=1)),
                               {name: COVERAGE_FACTOR * float(profiles[:, index].std(ddof=1))
                                for index, name in enumerate(names) if faces[index].size},
                               len(whole), float(whole.mean()) - measured, float(error), seed, notes=notes,
-                              profiles=whole)
+                              profiles=whole, checked=checked, full=full)
+
+
+def _full_trials(recheck: Recheck, rng: np.random.Generator, probing: float, count: int,
+                 check: Callable[[int], None] | None) -> np.ndarray:
+    """(FULL_TRIALS, F) mm: each face's profile from full re-inspections of the points (count of
+    them) with normal errors (probing mm per axis) drawn from rng; check(trials done) before each."""
+    profiles = []
+    for trial in range(FULL_TRIALS):
+        if check is not None:
+            check(trial)
+        profiles.append(recheck(rng.normal(0.0, probing, size=(count, 3))))
+    return np.array(profiles)
 
 
 def relative_error(values: np.ndarray) -> float:
@@ -173,12 +218,15 @@ def _chebyshev_programme(deviations: np.ndarray, jacobian: np.ndarray) -> np.nda
 
 
 def _tangent_programme(deviations: np.ndarray, jacobian: np.ndarray) -> np.ndarray:
-    """x (H,) minimising max -(d + J x) with every d + J x <= 0: minimise s, -s <= d + J x <= 0."""
+    """x (H,) minimising max -(d + J x) with every d + J x <= 0 (minimise s, -s <= d + J x <= 0),
+    the least squares among the solutions where they are many (align.tangent_choice), as the
+    inspection chose its datum."""
     count, size = jacobian.shape
     upper = np.vstack([np.hstack([jacobian, np.zeros((count, 1))]), np.hstack([-jacobian, -np.ones((count, 1))])])
     solved = linprog(np.r_[np.zeros(size), 1.0], A_ub=upper, b_ub=np.concatenate([-deviations, deviations]),
                      bounds=[(None, None)] * size + [(0, None)], method="highs")
-    return _solved(solved.x[:size] if solved.success else None)
+    step = _solved(solved.x[:size] if solved.success else None)
+    return step + tangent_choice(deviations + jacobian @ step, jacobian)
 
 
 def _solved(step: np.ndarray | None) -> np.ndarray:

@@ -4,6 +4,7 @@ On a plane the Monte Carlo meets the closed-form propagation (GUM's law, the pro
 sensitivity to each point through the least-squares fit); on a curved face with datums each
 trial of the Monte Carlo (solved on the linear model) is what a full inspection of the same
 perturbed points finds."""
+import re
 from dataclasses import replace
 
 import numpy as np
@@ -11,6 +12,7 @@ import pytest
 from support.faces import Part
 
 import cmmsampling
+import cmmsampling.inspection.judge
 from cmmsampling.geometry.blocks import datum_block
 from cmmsampling.formats.exporting import as_point_set
 from cmmsampling.formats.pointset import PointSet
@@ -120,3 +122,23 @@ def test_the_monte_carlo_reports_its_trials_and_stops_on_cancel(block):
                             progress=progress)
     trials = [message for message in said if message and "Monte Carlo" in message]
     assert trials == [f"propagating the probing uncertainty (Monte Carlo): {count} trials" for count in (0, 25, 50)]
+
+
+@pytest.mark.quality
+def test_where_the_linear_model_fails_u_is_that_of_full_reinspections():
+    """A 2 mm ball probed with u = 0.6 mm: the linear model's trials miss full re-inspections by
+    about U, so U is that of 200 full re-inspections, and the summary says so with their time; at
+    u = 0.3 mm the first trials meet theirs to a tenth of U and the text says how closely."""
+    face = Part.makeSphere(2.0).Faces[0]
+    uv = np.random.default_rng(2).uniform([0.3, -1.0], [6.0, 1.0], (30, 2))
+    points = np.array([tuple(face.Surface.value(u, v)) for u, v in uv])
+    labels = [f"P{index}" for index in range(1, len(points) + 1)]
+    measured = PointSet(labels, points, np.full_like(points, np.nan))
+    planned = cmmsampling.inspection.judge.Planned(labels, points, [face], ["ball"], np.zeros(len(points), dtype=int))
+    rough = cmmsampling.inspect(planned, measured, alignment="best_fit", uncertainty=0.6)
+    assert rough.uncertainty.full and rough.uncertainty.trials == 200
+    assert rough.uncertainty.checked > 0.1 * rough.profile_uncertainty
+    assert re.search(r"U is that of 200 full re-inspections \(\d+ s\)", rough.summary())
+    fine = cmmsampling.inspect(planned, measured, alignment="best_fit", uncertainty=0.3)
+    assert not fine.uncertainty.full and fine.uncertainty.checked < 0.1 * fine.profile_uncertainty
+    assert "3 of them met full re-inspections to" in fine.summary()
