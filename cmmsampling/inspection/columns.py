@@ -43,7 +43,8 @@ def header_columns(fields: list[str], path: str, line_number: int) -> dict[str, 
             found.setdefault(name, {}).setdefault(kind, column)
     if not all(name in found for name in "xyz"):
         return None
-    chosen = {name: _measured_column(found.get(name), name, path, line_number) for name in COORDINATES}
+    chosen: dict[str, Any] = {name: _measured_column(found.get(name), name, path, line_number)
+                              for name in COORDINATES}
     chosen["label"] = found.get("label", {}).get("plain")
     if any(chosen[name] is None for name in "xyz"):
         return None
@@ -100,9 +101,9 @@ def _column_name(field: str) -> tuple[str | None, str]:
     """(what the column holds: 'label' or one of COORDINATES or None, its kind: 'measured',
     'nominal' or 'plain') of a header field."""
     text = _plain_letters(field)
-    marks = [word for inside in BRACKETS.findall(text) for word in _words(inside)
-             if word in MEASURED_WORDS + NOMINAL_WORDS]
-    words = [word for word in _words(BRACKETS.sub(" ", text)) if word not in LENGTH_UNITS_MM] + marks
+    inside = [word for bracket in BRACKETS.findall(text) for word in _words(bracket)
+              if word in MEASURED_WORDS + NOMINAL_WORDS]
+    words = [word for word in _words(BRACKETS.sub(" ", text)) if word not in LENGTH_UNITS_MM] + inside
     joined = "".join(words)
     if joined in LABEL_NAMES:
         return "label", "plain"

@@ -55,7 +55,7 @@ def check_against_occ(face, found):
     np.testing.assert_allclose(np.abs(found.deviations), occ, atol=1e-6)
     zone = occ_minimum_zone(face, found.measured, found.transform)
     assert found.profile == pytest.approx(zone, rel=0.01)
-    assert found.beyond_edges and f"beyond an edge of their face" in found.summary()
+    assert found.beyond_edges and "beyond an edge of their face" in found.summary()
     assert set(found.beyond_edges) <= set(found.labels)
 
 
