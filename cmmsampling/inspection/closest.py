@@ -12,6 +12,9 @@ A point's distance is to the bounded face, not to its surface extended past an e
 zone is swept by a ball along the bounded nominal): where the foot lies on an edge, the point is
 judged by its whole distance to that foot, signed by the side of the face it lies on, and the
 direction the distance grows in (:func:`distance_directions`) stands for the normal in every fit.
+A zone offset o (ISO 1101's UZ) moves the foot by o along that direction, so a point past an edge
+is judged by |d - o| too (not by its distance to the offset surface's own edge: the same over the
+face, a simplification past it).
 """
 from __future__ import annotations
 
