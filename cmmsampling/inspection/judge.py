@@ -398,6 +398,7 @@ def inspect(source: object, measured: str | os.PathLike | PointSet, alignment: s
     check_datum_forms([] if frame is None else frame.datums, tolerance)
     told("confirming the decisive points with OCC")
     aligned = found.apply(points)
+    _, normals, on_edge = _closest_on_edges(closers, owner, aligned)
     deviations, disagreement = confirm_with_occ(planned.faces, owner, aligned, found.deviations, zone_offset)
     if disagreement > OCC_AGREEMENT_MM:
         notes.append(f"OCC's distances at the {OCC_CONFIRMED} points farthest from the zone's centre differ from the "
@@ -405,9 +406,9 @@ def inspect(source: object, measured: str | os.PathLike | PointSet, alignment: s
     inspection = Inspection([read.labels[i] for i in order[0]], nominal, points, aligned,
                             deviations, found.matrix, found, tolerance, [planned.names[i] for i in owner], notes,
                             measured_file=os.fspath(measured) if isinstance(measured, (str, os.PathLike)) else "",
-                            zone_offset=zone_offset, normals=closest(aligned)[1], datums=[] if frame is None else frame.datums,
+                            zone_offset=zone_offset, normals=normals, datums=[] if frame is None else frame.datums,
                             planned_faces=dict(zip(planned.names, planned.faces)),
-                            beyond_edges=[read.labels[i] for i in order[0][_beyond_edges(closers, owner, aligned)]])
+                            beyond_edges=[read.labels[i] for i in order[0][on_edge]])
     if len(set(owner.tolist())) > 1 and alignment != "none":
         told("aligning each face alone")
         inspection.face_forms = _face_forms(points, owner, closers, planned.names, found, locked, zone_offset, notes)
@@ -707,26 +708,24 @@ def pair(planned: Planned, measured: PointSet) -> tuple[tuple[np.ndarray, np.nda
     return (rows, rows), [f"paired by order: {why}"]
 
 
-def _beyond_edges(closers: Sequence[FaceCloser | None], owner: np.ndarray, points: np.ndarray) -> np.ndarray:
-    """(N,) bool: the points (N, 3) mm (owner (N,) their faces' indices into closers) whose foot
-    on their face lies on an edge, the point beyond it."""
-    beyond = np.zeros(len(points), dtype=bool)
+def _closest_on_edges(closers: Sequence[FaceCloser | None], owner: np.ndarray,
+                      points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Feet (N, 3) mm, the directions the distances grow in (N, 3: the outward normals, or from
+    an edge, FaceCloser.edges) and on_edge (N,) bool of points (N, 3) on their own faces
+    (closers: a FaceCloser per face, None for a face without points; owner (N,) the face of each
+    point)."""
+    feet, normals, on_edge = np.empty_like(points), np.empty_like(points), np.zeros(len(points), dtype=bool)
     for index, closer in enumerate(closers):
         rows = np.flatnonzero(owner == index)
         if rows.size:
             assert closer is not None   # a face with points has its FaceCloser
-            beyond[rows] = closer.edges(points[rows])[2]
-    return beyond
+            feet[rows], normals[rows], on_edge[rows] = closer.edges(points[rows])
+    return feet, normals, on_edge
 
 
 def _closest(closers: Sequence[FaceCloser | None], owner: np.ndarray,
              points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Feet (N, 3) mm and outward normals (N, 3) of points (N, 3) on their own faces (closers:
-    a FaceCloser per face, None for a face without points; owner (N,) the face of each point)."""
-    feet, normals = np.empty_like(points), np.empty_like(points)
-    for index, closer in enumerate(closers):
-        rows = np.flatnonzero(owner == index)
-        if rows.size:
-            assert closer is not None   # a face with points has its FaceCloser
-            feet[rows], normals[rows] = closer(points[rows])
+    """Feet (N, 3) mm and outward normals (N, 3) of points (N, 3) on their own faces, as
+    :func:`_closest_on_edges` finds them."""
+    feet, normals, _ = _closest_on_edges(closers, owner, points)
     return feet, normals
