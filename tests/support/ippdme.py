@@ -1,6 +1,7 @@
 """NIST's I++ DME command checker and response parser (../shared/reference/ippdme-nist), built
 with g++ once per session: :func:`check_commands` and :func:`check_answers` feed them a stream and
 return what they complain of."""
+import atexit
 import functools
 import os
 import shutil
@@ -14,12 +15,14 @@ NIST = os.path.join(os.path.dirname(ROOT), "shared", "reference", "ippdme-nist")
 
 @functools.lru_cache(maxsize=2)
 def built(folder="checker", macro="CHECKER_MAIN"):
-    """The path of NIST's program in folder built with g++ (main by macro); None where g++ or the
-    NIST sources are missing."""
+    """The path of NIST's program in folder built with g++ (main by macro) in a temporary folder
+    removed when the process ends; None where g++ or the NIST sources are missing."""
     sources = os.path.join(NIST, folder)
     if shutil.which("g++") is None or not os.path.isdir(sources):
         return None
-    binary = os.path.join(tempfile.mkdtemp(prefix="nist-ippdme-"), folder)
+    built_in = tempfile.mkdtemp(prefix="nist-ippdme-")
+    atexit.register(shutil.rmtree, built_in, True)
+    binary = os.path.join(built_in, folder)
     files = sorted(os.path.join(sources, name) for name in os.listdir(sources) if name.endswith(".cpp"))
     subprocess.run(["g++", "-O1", "-w", f"-D{macro}", "-o", binary, *files], check=True, timeout=300)
     return binary
