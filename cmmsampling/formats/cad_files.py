@@ -3,7 +3,7 @@ that ``python -m cmmsampling faces`` prints."""
 import os
 
 from ..geometry.validation import InputError
-from .files import check_readable
+from .files import CAD_FILES, check_readable, check_size
 
 
 # The CAD file types read_shape reads: {extension: FreeCAD's name for the format}
@@ -12,13 +12,16 @@ CAD_TYPES = {".step": "STEP", ".stp": "STEP", ".iges": "IGES", ".igs": "IGES", "
 
 
 def read_shape(path):
-    """The shape in a STEP, IGES or BREP file; InputError naming the problem otherwise."""
+    """The shape in a STEP, IGES or BREP file; InputError naming the problem otherwise (among them
+    a path that is no regular file, refused before OCC opens it, and a file over
+    :data:`cmmsampling.formats.files.CAD_FILES`)."""
     import Part
 
     extension = os.path.splitext(path)[1].lower()
     if extension not in CAD_TYPES:
         raise InputError(f"{path}: unknown file type {extension!r}; use a STEP, IGES or BREP file")
     path = check_readable(path, "CAD file")
+    check_size(path, "CAD file", CAD_FILES)
     kind = CAD_TYPES[extension]
     try:
         shape = Part.read(path)

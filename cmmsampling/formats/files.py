@@ -1,11 +1,15 @@
 """Writing a point file so that it is whole or not there: a temporary file beside the target,
 fsync, then a rename; the temporary files of writes killed midway are removed later. And the
-checks of a path before a file is written there or read from it."""
+checks of a path before a file is written there or read from it, and the one capped read of a
+point file's text that every reader goes through (:func:`read_text`)."""
+from __future__ import annotations
+
 import errno
 import os
 import re
 import stat
 import tempfile
+from dataclasses import dataclass
 
 from ..geometry.validation import InputError, InputTypeError
 
@@ -18,6 +22,30 @@ class ExportError(OSError):
 TEMPORARY = re.compile(r"^\..+\.(?P<pid>\d+)\.[A-Za-z0-9_]{8}\.tmp$")
 # What FreeCAD writes a document to before it renames it over the file: <file name>.<uuid>
 FREECAD_TEMPORARY = r"\.[0-9A-Fa-f]{8}-[0-9A-Fa-f]{4}-[0-9A-Fa-f]{4}-[0-9A-Fa-f]{4}-[0-9A-Fa-f]{12}"
+# What a path that is neither a folder nor a regular file names, by the test of its mode: a reader
+# would block on a pipe or socket with nothing written to it, and read a device without end.
+NOT_REGULAR = ((stat.S_ISFIFO, "a named pipe (FIFO)"), (stat.S_ISCHR, "a character device"),
+               (stat.S_ISBLK, "a block device"), (stat.S_ISSOCK, "a socket"))
+
+
+@dataclass(frozen=True)
+class SizeLimit:
+    """The most a kind of file may hold, in bytes, and the words of a refusal: what the limit
+    amounts to (``hint``) and what to do with a larger file (``advice``)."""
+
+    most: int
+    hint: str
+    advice: str
+
+
+# Every point file read (read_points, inspect's measured files: DMIS, CSV, XYZIJK, QIF, tables of
+# text): about a million points of DMIS output or QIF results, read in seconds and a few hundred MB.
+POINT_FILES = SizeLimit(100 * 2 ** 20, "about a million points", "split the file by face or part and read each piece")
+# A CAD file (STEP, IGES, BREP), which OCC reads by its path (only the stated size of a regular file
+# can be checked): an assembly's STEP file runs to hundreds of MB, and OCC takes some ten times a
+# file's size in memory, so a part exported alone is far below this.
+CAD_FILES = SizeLimit(2 ** 30, "OCC takes some ten times that in memory",
+                      "export the part alone, not its whole assembly")
 
 
 def check_writable(path):
@@ -42,8 +70,9 @@ def path_of(path, kind):
 
 
 def check_readable(path, kind):
-    """The path as a str when it names a file this process can read; else InputError in one line
-    that names the path, the problem and what to give: a folder, a missing file, a loop of
+    """The path as a str when it names a regular file this process can read; else InputError in
+    one line that names the path, the problem and what to give, before the file is opened: a
+    folder, a named pipe, a device or a socket (:data:`NOT_REGULAR`), a missing file, a loop of
     symbolic links (or one that leads nowhere), no permission. kind: what the file should be
     ("point file", "CAD file"); a path of another type: see :func:`path_of`."""
     path = path_of(path, kind)
@@ -59,9 +88,53 @@ def check_readable(path, kind):
         raise InputError(f"{path}: no such file") from exc
     if stat.S_ISDIR(mode):
         raise InputError(f"{path}: is a folder, not a {kind}; give the file's path")
+    check_regular(path, mode, kind)
     if not os.access(path, os.R_OK):
         raise InputError(f"{path}: no permission to read it; give a {kind} you may read (or change its permissions)")
     return path
+
+
+def check_regular(path: str, mode: int, kind: str) -> None:
+    """InputError naming path, what it is and what to give unless ``mode`` (its st_mode) is a
+    regular file's."""
+    if not stat.S_ISREG(mode):
+        what = next((name for test, name in NOT_REGULAR if test(mode)), "no regular file")
+        raise InputError(f"{path}: is {what}, not a {kind}; give a regular file's path (save what it delivers to a "
+                         "file first)")
+
+
+def check_size(path: str, kind: str, limit: SizeLimit) -> None:
+    """InputError naming the file, its size and the limit when the regular file at path states
+    more than ``limit.most`` bytes (its st_size); a size within 1 MB of the limit in bytes."""
+    size = os.stat(path).st_size
+    if size > limit.most:
+        shown = _amount(size) if size - limit.most >= 2 ** 20 else f"{size} bytes"
+        raise InputError(f"{path}: {shown} is more than a {kind} may hold ({_amount(limit.most)}, "
+                         f"{limit.hint}); {limit.advice}")
+
+
+def read_text(path: str | os.PathLike[str], kind: str) -> str:
+    """The text of a point file: :func:`check_readable`, :func:`check_size` with
+    :data:`POINT_FILES`, then at most ``POINT_FILES.most + 1`` bytes read (a file still being
+    written, or one of /proc, states less than it holds), decoded as UTF-8 (a byte-order mark
+    dropped, bytes that do not decode replaced, line ends as written). InputError in one line for
+    each refusal; kind: what the file should be ("point file", "measured-points file")."""
+    limit = POINT_FILES
+    name = check_readable(path, kind)
+    check_size(name, kind, limit)
+    # O_NONBLOCK: a pipe put in the file's place since the check does not block the open.
+    with os.fdopen(os.open(name, os.O_RDONLY | os.O_NONBLOCK), "rb") as stream:
+        check_regular(name, os.fstat(stream.fileno()).st_mode, kind)
+        data = stream.read(limit.most + 1)
+    if len(data) > limit.most:
+        raise InputError(f"{name}: holds more than a {kind} may ({_amount(limit.most)}, {limit.hint}) though it "
+                         f"states {_amount(os.stat(name).st_size)}; {limit.advice}")
+    return data.decode("utf-8-sig", errors="replace")
+
+
+def _amount(size):
+    """A number of bytes in words: whole MB from 1 MB up, else bytes."""
+    return f"{size / 2 ** 20:.0f} MB" if size >= 2 ** 20 else f"{size} bytes"
 
 
 def _temporary_file(target):

@@ -13,12 +13,12 @@ import os
 
 from ..geometry.validation import InputError, check_choice
 from . import csv_points, dmis, qif, xyzijk
-from .files import check_readable, path_of
+from .files import path_of, read_text
 from .pointset import PointSet
 from .registry import FORMATS, FileFormat, export_filter, extensions, register_format, unregister_format
 
-__all__ = ["FORMATS", "FileFormat", "READER_KEYS", "export_filter", "read_points", "register_format",
-           "resolve_format", "unregister_format"]
+__all__ = ["FORMATS", "FileFormat", "READER_KEYS", "export_filter", "points_from_text", "read_points",
+           "register_format", "resolve_format", "unregister_format"]
 
 for _record in (dmis.FORMAT, xyzijk.FORMAT, csv_points.FORMAT, qif.FORMAT):
     register_format(_record)
@@ -53,12 +53,17 @@ def read_points(path: str | os.PathLike, format: str | None = None) -> PointSet:
     by position (``labels: by order``), INCH files converted to mm; CSV: label, x..k and, where present, u, v and deviation.
     Metadata stated in the file's comments comes back in ``metadata`` (``probe_radius_mm``, ``frame``,
     ``frame_origin_mm``, ... where stated), plus ``format`` and ``path``.
-    Returns a PointSet; ValueError naming the file and line for what cannot be read.
+    Returns a PointSet; ValueError naming the file and line for what cannot be read, InputError
+    for a file that is no regular file or holds more than a point file may
+    (:func:`cmmsampling.formats.files.read_text`).
     """
     fmt = resolve_format(path_of(path, "point file"), format)
-    path = check_readable(path, "point file")
-    with open(path, encoding="utf-8-sig", errors="replace", newline="") as stream:
-        text = stream.read()
-    point_set = FORMATS[fmt].read(text, os.fspath(path))
-    point_set.metadata.update({"format": fmt, "path": os.path.abspath(path)})
+    return points_from_text(read_text(path, "point file"), os.fspath(path), fmt)
+
+
+def points_from_text(text: str, path: str, format: str) -> PointSet:
+    """The PointSet in a point file's text read as the registered format named ``format``; path:
+    the file's, for messages and the metadata's ``path`` (``format`` there too)."""
+    point_set = FORMATS[format].read(text, path)
+    point_set.metadata.update({"format": format, "path": os.path.abspath(path)})
     return point_set

@@ -16,8 +16,8 @@ from typing import Any
 
 import numpy as np
 
-from ..formats.files import check_readable
-from ..formats.pointfiles import read_points, resolve_format
+from ..formats.files import read_text
+from ..formats.pointfiles import points_from_text, resolve_format
 from ..formats.pointset import PointSet
 from ..formats.registry import FORMATS
 from ..formats.text import number
@@ -28,25 +28,21 @@ from .text_report import is_text_report, read_text_report
 # Lines that say nothing about a point: comments of CSV, DMIS and C-like exports.
 COMMENT = re.compile(r"\s*(#|//|\$\$|;)")
 FIELD_COUNTS = {3: "x y z", 4: "label x y z", 6: "x y z i j k", 7: "label x y z i j k"}
-# The largest measured-points file read (bytes): about a million points of DMIS output, read in
-# seconds and a few hundred MB; a larger one is refused before it is read.
-MAX_FILE_BYTES = 100 * 2 ** 20
 
 
 def read_measured(path: str | os.PathLike) -> PointSet:
     """The measured points of a file: a PointSet of contact points or ball centres (normals NaN
-    where the file gives no vectors). DMIS, XYZIJK and QIF files and CSV files with the project's
-    header go through :func:`cmmsampling.read_points` (a DMIS program or a QIF plan without
-    measured points is refused); any other text is read as labelled x, y, z
-    lines (:func:`read_labelled_text`)."""
-    path = check_readable(path, "measured-points file")
-    size = os.path.getsize(path)
-    if size > MAX_FILE_BYTES:
-        raise InputError(f"{path}: {size / 2 ** 20:.0f} MB is more than a measurement this reader takes "
-                         f"({MAX_FILE_BYTES // 2 ** 20} MB, about a million points); split the file by face or "
-                         "part and inspect each")
-    if _project_file(path):
-        point_set = read_points(path)
+    where the file gives no vectors). The file is read once, as every point file is
+    (:func:`cmmsampling.formats.files.read_text`: a regular file of at most 100 MB); DMIS, XYZIJK
+    and QIF files and CSV files with the project's header are read as
+    :func:`cmmsampling.read_points` reads them (a DMIS program or a QIF plan without measured
+    points is refused); any other text is read as labelled x, y, z lines
+    (:func:`read_labelled_text`)."""
+    text = read_text(path, "measured-points file")
+    path = os.fspath(path)
+    fmt = _project_format(path, text)
+    if fmt is not None:
+        point_set = points_from_text(text, path, fmt)
         if point_set.metadata.get("dmis_features") == "nominal":
             raise InputError(f"{path}: holds the program's nominal points only (F(label)=FEAT/POINT), no measured "
                              "FA(label) values; give the DMIS output file the CMM wrote after measuring")
@@ -54,30 +50,28 @@ def read_measured(path: str | os.PathLike) -> PointSet:
             raise InputError(f"{path}: a QIF plan (planned points, no measured point set or feature measurement); "
                              "give the QIF results file the CMM software wrote after measuring")
         return point_set
-    with open(path, encoding="utf-8-sig", errors="replace") as stream:
-        text = stream.read()
     if is_text_report(text):
-        point_set = read_text_report(text, os.fspath(path))
+        point_set = read_text_report(text, path)
     else:
-        point_set = read_labelled_text(text, os.fspath(path))
+        point_set = read_labelled_text(text, path)
         point_set.metadata["format"] = "labelled text"
     point_set.metadata["path"] = os.path.abspath(path)
     return point_set
 
 
-def _project_file(path: str | os.PathLike) -> bool:
-    """True for a file one of the registered formats reads as its own: by its extension, and where
-    the format tells its files by their header (``FileFormat.recognises``: CSV's label,x,y,z,i,j,k,
-    XYZIJK's), by the file's first line that is no comment."""
+def _project_format(path: str, text: str) -> str | None:
+    """The name of the registered format that reads the file as its own (None for none): by its
+    extension, and where the format tells its files by their header (``FileFormat.recognises``:
+    CSV's label,x,y,z,i,j,k, XYZIJK's), by the text's first line that is no comment."""
     try:
-        record = FORMATS[resolve_format(path, None)]
+        fmt = resolve_format(path, None)
     except InputError:
-        return False
-    if record.recognises is None:
-        return True
-    with open(path, encoding="utf-8-sig", errors="replace") as stream:
-        head = [line for line in stream.read(4096).splitlines() if line.strip() and not line.startswith("#")][:1]
-    return bool(record.recognises(head[0].lower().replace(" ", "") if head else ""))
+        return None
+    recognises = FORMATS[fmt].recognises
+    if recognises is None:
+        return fmt
+    head = [line for line in text[:4096].splitlines() if line.strip() and not line.startswith("#")][:1]
+    return fmt if recognises(head[0].lower().replace(" ", "") if head else "") else None
 
 
 def read_labelled_text(text: str, path: str = "<text>") -> PointSet:

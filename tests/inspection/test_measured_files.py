@@ -138,7 +138,7 @@ def test_a_file_too_large_is_refused_before_it_is_read(measured):
     path = folder / "huge.txt"
     with open(path, "wb") as stream:
         stream.truncate(200 * 2 ** 20)
-    with pytest.raises(InputError, match=r"huge.txt: 200 MB is more than a measurement this reader takes \(100 MB"):
+    with pytest.raises(InputError, match=r"huge.txt: 200 MB is more than a measured-points file may hold \(100 MB"):
         cmmsampling.inspect(planned, path)
 
 
