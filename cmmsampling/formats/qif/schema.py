@@ -19,6 +19,12 @@ class SchemaUnavailable(RuntimeError):
     """lxml or the schema files are missing, so a document cannot be checked."""
 
 
+class UncheckedDocument(ValueError):
+    """The schemas cannot judge a document: it uses an entity declared in its DOCTYPE (which lxml
+    keeps unexpanded here, so that no entity reaches outside the file), or lxml's validator fails
+    inside; the message says where and what to do."""
+
+
 @functools.lru_cache(maxsize=1)
 def qif_schema():
     """The QIF 3.0 schema set as an lxml XMLSchema (loaded once); SchemaUnavailable without
@@ -35,7 +41,8 @@ def qif_schema():
 
 def schema_errors(text: str | bytes) -> list[str]:
     """The QIF 3.0 schemas' complaints about a document's text ('line 12: ...'), [] when they
-    accept it; SchemaUnavailable when they cannot be loaded."""
+    accept it; SchemaUnavailable when they cannot be loaded, UncheckedDocument when they cannot
+    judge it."""
     from lxml import etree
 
     schema = qif_schema()
@@ -44,6 +51,14 @@ def schema_errors(text: str | bytes) -> list[str]:
         document = etree.fromstring(data, etree.XMLParser(resolve_entities=False, huge_tree=True))
     except etree.XMLSyntaxError as exc:
         return [f"not well-formed XML: {exc}"]
-    if schema.validate(etree.ElementTree(document)):
-        return []
+    entity = next(document.iter(etree.Entity), None)
+    if entity is not None:
+        raise UncheckedDocument(f"line {entity.sourceline} uses the XML entity {entity.text} (declared in its "
+                                "DOCTYPE), which the QIF 3.0 schema check does not expand; write the entity's text "
+                                "in its place, or export the file again")
+    try:
+        if schema.validate(etree.ElementTree(document)):
+            return []
+    except etree.XMLSchemaValidateError as exc:
+        raise UncheckedDocument(f"lxml's QIF 3.0 schema check failed inside ({exc}); export the file again") from None
     return [f"line {error.line}: {error.message}" for error in schema.error_log]
