@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import Any, cast
 
 import numpy as np
@@ -64,12 +64,43 @@ class Datum:
 
 
 @dataclass
+class DatumMeasurement:
+    """The points a datum was associated on, as an inspection took them: labels (M,); measured:
+    (M, 3) mm, contact points in the measured frame; nominal: (M, 3) mm, where they were planned
+    (NaN rows: the datum brought its own points, Datum.points); normals: (M, 3) unit, its face's
+    outward normals (the face extended past its edges) at the points' feet once aligned."""
+
+    labels: list
+    measured: np.ndarray
+    nominal: np.ndarray
+    normals: np.ndarray
+
+    @property
+    def own(self) -> bool:
+        """True where the datum brought its own points (none of them was planned)."""
+        return bool(np.isnan(self.nominal).all())
+
+    def as_record(self) -> dict[str, Any]:
+        """The points as a JSON-friendly dict (lists; NaN as JSON's NaN, which json reads back)."""
+        return {"labels": list(self.labels), **{name: getattr(self, name).tolist()
+                                                 for name in ("measured", "nominal", "normals")}}
+
+    @classmethod
+    def from_record(cls, record: dict[str, Any]) -> DatumMeasurement:
+        """The DatumMeasurement of :meth:`as_record`'s dict."""
+        arrays = [np.array(record[name], dtype=float).reshape(-1, 3) for name in ("measured", "nominal", "normals")]
+        return cls(list(record["labels"]), *arrays)
+
+
+@dataclass
 class DatumFit:
     """One datum as associated: label; face: its name; criterion; count: its points; held: the
     motions it fixed (0 .. 6); deviations: (M,) mm, its points' signed distances from its face
     in the frame (+ out of the material); form: mm, their spread (max - min); rocking: mm, how
     far the tangent associations as good as the one chosen move its points (0: one only; more
-    than ROCKING_MM: not unique, the least squares among them chosen, align.tangent_choice)."""
+    than ROCKING_MM: not unique, the least squares among them chosen, align.tangent_choice);
+    measurement: its points (a DatumMeasurement; None where they were not kept: an inspection
+    saved before they were)."""
 
     label: str
     face: str
@@ -78,6 +109,7 @@ class DatumFit:
     held: int
     deviations: np.ndarray
     rocking: float = 0.0
+    measurement: DatumMeasurement | None = field(default=None, repr=False)
 
     @property
     def form(self) -> float:
@@ -87,12 +119,16 @@ class DatumFit:
     def as_record(self) -> dict[str, Any]:
         """The fit as a JSON-friendly dict."""
         return {"label": self.label, "face": self.face, "criterion": self.criterion, "count": self.count,
-                "held": self.held, "deviations": [float(value) for value in self.deviations]}
+                "held": self.held, "deviations": [float(value) for value in self.deviations],
+                "measurement": None if self.measurement is None else self.measurement.as_record()}
 
     @classmethod
     def from_record(cls, record: dict[str, Any]) -> DatumFit:
-        """The DatumFit of :meth:`as_record`'s dict."""
-        return cls(**cast("dict[str, Any]", {**record, "deviations": np.array(record["deviations"], dtype=float)}))
+        """The DatumFit of :meth:`as_record`'s dict (one saved without its points: measurement None)."""
+        measurement = record.get("measurement")
+        return cls(**cast("dict[str, Any]", {**record, "deviations": np.array(record["deviations"], dtype=float),
+                                             "measurement": None if measurement is None
+                                             else DatumMeasurement.from_record(measurement)}))
 
     def text(self) -> str:
         """'A (Face1, tangent, 3 motions, 12 points, form 0.0012 mm)'."""
