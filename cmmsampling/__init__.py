@@ -50,6 +50,8 @@ _API = {
     "measured_deviation": "measurement",
     "inspect": "inspection.judge",
     "Inspection": "inspection.judge",
+    "read_record": "formats.qif.record",
+    "InspectionRecord": "formats.qif.record",
     "Datum": "inspection.datums",
     "points_for_verdict": "inspection.verdict_points",
     "simulate_measurement": "inspection.simulate",
