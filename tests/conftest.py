@@ -51,3 +51,30 @@ def pytest_collection_modifyitems(config, items):
     stale = sorted(node for node in ONCE - seen if node.split("::")[0] in modules)
     if stale and not config.getoption("keyword") and not config.getoption("deselect"):
         raise pytest.UsageError(f"tests/support/once.py names tests that are not there: {stale}")
+
+
+# The second line of every DMIS program cmmsampling writes.
+WRITTEN_BY_US = "$$ probe points written by cmmsampling"
+
+
+@pytest.fixture(scope="session", autouse=True)
+def every_program_the_tests_write_passes_the_dmis_grammar(tmp_path_factory):
+    """After the session: every DMIS program cmmsampling wrote in the tests' temporary folders
+    passes the DMIS grammar (tests/support/dmis_syntax); the session's last test errs where
+    one does not, naming the file and its first complaints."""
+    yield
+    from support import dmis_syntax
+
+    failing = {}
+    for folder, _, names in os.walk(tmp_path_factory.getbasetemp()):
+        for name in names:
+            path = os.path.join(folder, name)
+            if os.path.splitext(name)[1].lower() not in (".dmi", ".dmis") or not os.path.isfile(path):
+                continue
+            with open(path, encoding="ascii", errors="replace") as stream:
+                text = stream.read()
+            if text.split("\n")[1:2] == [WRITTEN_BY_US]:
+                errors = dmis_syntax.check(text)
+                if errors:
+                    failing[path] = errors[:3]
+    assert not failing, f"DMIS programs the tests wrote fail the grammar: {failing}"

@@ -10,6 +10,7 @@ import numpy as np
 
 from ..access.probe import head_angles
 from ..geometry.validation import InputError
+from . import dmis_datums
 from .frames import placement_from_metadata
 from .pointset import PointSet
 from .registry import FileFormat
@@ -30,15 +31,20 @@ DMIS_COMMENT = "$$"
 DMIS_COMMENT_CONTINUED = "$$+"
 DMIS_CONTINUATION = "$"
 ANGLE_DECIMALS = 4
-# The head's mounting vector of an SNSDEF: a vertical head on the quill (the ball below the pivot
-# at A = 0), +Z as DMIS writes it for a vertical CMM.
-HEAD_MOUNTING = (0.0, 0.0, 1.0)
+# The vector of an SNSDEF: a vertical head on the quill, the stylus pointing down (-Z) at A = 0,
+# as NIST's DMIS test program writes it for a vertical CMM (its SNSDEF and SNSMNT ZVEC).
+HEAD_MOUNTING = (0.0, 0.0, -1.0)
+# The sensor of a program without a probe path: the probe vertical (head angles A0 B0).
+VERTICAL_SENSOR = "A0B0"
 DMIS_FEATURE_POINT = re.compile(r"(FA?)\(([^()]*)\)=FEAT/POINT,([A-Z]+),(.*)\Z", re.IGNORECASE)
 # The output device the program writes its results to, and the part alignment it assumes (no
 # datums planned: the operator sets the part's frame before the automatic run).
 OUTPUT_DEVICE = "RESULTS"
 ALIGNMENT_ASSUMED = ["$$ part alignment: the part's frame must be set (aligned to the CAD model's",
                      "$$+ coordinates) before this program runs; it measures no datum features"]
+DATUMS_MEASURED = ["$$ part alignment: the datum features are measured first, in the frame the",
+                   "$$+ operator set (the part on the CAD model's coordinates to within the search",
+                   "$$+ distance); the frame they set is then the CAD model's for the rest"]
 # Any feature's definition, a MEAS block's start and a probed point.
 OTHER_FEATURE = re.compile(r"(FA?)\(([^()]*)\)=FEAT/([A-Z]+)", re.IGNORECASE)
 MEAS_BLOCK = re.compile(r"MEAS/([A-Z]+),FA?\(([^()]*)\)", re.IGNORECASE)
@@ -52,11 +58,14 @@ LENGTH_UNITS_MM = {"MM": 1.0, "CM": 10.0, "METER": 1000.0, "INCH": 25.4, "FEET":
 
 
 def write(point_set, facts, options):
-    """A DMIS 5.2 input program measuring each point once: FEAT/POINT, MEAS/POINT, PTMEAS, ENDMES,
-    then OUTPUT/FA(label) of the measured point to the output file the program opens
+    """A DMIS 5.2 input program measuring each point once: the sensors (SNSDEF, one per head
+    orientation of a probe path, else the vertical VERTICAL_SENSOR; options.probe: the probe as a
+    dict of cmmsampling.Probe's fields) selected before their points (SNSLCT), FEAT/POINT,
+    MEAS/POINT, PTMEAS, ENDMES, then OUTPUT/FA(label) of the measured point to the output file the program opens
     (DEVICE/STOR '<name>.dmo', OPEN ... OUTPUT; CLOSE before ENDFIL), which the CMM fills with
-    FA(label)=FEAT/POINT actuals (what :func:`read` takes back). The part's frame is stated as
-    set by the operator before the run (ALIGNMENT_ASSUMED): the plan has no datums."""
+    FA(label)=FEAT/POINT actuals (what :func:`read` takes back). Without datums the part's frame
+    is stated as set by the operator before the run (ALIGNMENT_ASSUMED); a plan's datums and
+    profile tolerance are written as :mod:`cmmsampling.formats.dmis_datums` says."""
     check_dmis_labels(point_set.labels)
     xyz = fixed(point_set.points, COORDINATE_DECIMALS)
     ijk = fixed(point_set.normals, VECTOR_DECIMALS)
@@ -64,33 +73,81 @@ def write(point_set, facts, options):
                for key, text in comment_entries(point_set, facts, options)]
     lines = [f"DMISMN/'{options.name}',{DMIS_VERSION}", f"{DMIS_COMMENT} probe points written by cmmsampling"]
     lines += metadata_comment_lines(entries, f"{DMIS_COMMENT} ", DMIS_COMMENT_CONTINUED, DMIS_LINE_LIMIT)
-    sensors = sensor_labels(point_set) if point_set.travel is not None else None
-    lines += ["UNITS/MM,ANGDEC", "MODE/AUTO,PROG,MAN" if sensors is not None else "MODE/PROG,MAN"]
-    lines += ALIGNMENT_ASSUMED
+    path = point_set.travel is not None
+    sensors = sensor_labels(point_set) if path else [VERTICAL_SENSOR] * len(point_set)
+    groups = dmis_datums.datum_groups(point_set)
+    lines += ["UNITS/MM,ANGDEC", "MODE/AUTO,PROG,MAN" if path else "MODE/PROG,MAN"]
+    lines += DATUMS_MEASURED if groups else ALIGNMENT_ASSUMED
     lines += frame_statements(facts)
     lines += [f"DID({OUTPUT_DEVICE})=DEVICE/STOR,'{options.name[:DMIS_NAME_LIMIT - 4]}.dmo'",
               f"OPEN/DID({OUTPUT_DEVICE}),FDATA,DMIS,OUTPUT"]
     distances = {"APPRCH": options.approach, "RETRCT": options.retract, "SEARCH": options.search}
     lines += [f"SNSET/{word},{fixed(value, COORDINATE_DECIMALS).item()}" for word, value in distances.items()]
-    if sensors is not None:
-        lines += sensor_definitions(sensors, options.probe or {})
-    selected = None
-    for index, (label, position, vector) in enumerate(zip(point_set.labels, xyz.tolist(), ijk.tolist())):
-        if sensors is not None:
-            leaving, arriving = point_set.travel[index]
-            lines += goto_lines(leaving)
-            if sensors[index] != selected:
-                selected = sensors[index]
-                lines.append(f"SNSLCT/S({selected})")
-            lines += goto_lines(arriving)
-        lines += dmis_statement([f"F({label})=FEAT/POINT", "CART", *position], vector)
-        lines += dmis_statement(["MEAS/POINT", f"F({label})", "1"])
-        lines += dmis_statement(["PTMEAS/CART", *position], vector)
-        lines += ["ENDMES", f"OUTPUT/FA({label})"]
-    if sensors is not None:
-        lines += goto_lines(point_set.travel[-1][0])
+    lines += sensor_definitions(sensors, options.probe or {})
+    lines += _measured_lines(point_set, xyz, ijk, sensors, groups)
     lines += [f"CLOSE/DID({OUTPUT_DEVICE})", "ENDFIL"]
     return "\n".join(without_repeated_gotos(lines)) + "\n"
+
+
+def _measured_lines(point_set, xyz, ijk, sensors, groups):
+    """The points' statements in order: the datum points (each datum's feature and DATDEF after
+    its points), the frame they set and their OUTPUTs; then the profile tolerances and the other
+    points, each face's profile reported after its last point (cmmsampling.formats.dmis_datums)."""
+    labels = list(point_set.labels)
+    datum_rows = np.concatenate([group.rows for group in groups]) if groups else np.empty(0, dtype=int)
+    others = np.setdiff1d(np.arange(len(labels)), datum_rows)
+    if len(datum_rows) and not np.array_equal(datum_rows, np.arange(len(datum_rows))):
+        raise InputError("a program with datums measures the datum points first; give them first, each datum's "
+                         "together, primary first")
+    lines, selected = [], None
+    for group in groups:
+        for index in group.rows:
+            point_lines, selected = _point_lines(point_set, index, xyz, ijk, sensors, selected, output=False)
+            lines += point_lines
+        lines += dmis_datums.datum_feature_lines(group, labels, dmis_statement)
+    lines += dmis_datums.frame_lines(groups, dmis_statement)
+    lines += [f"OUTPUT/FA({labels[index]})" for index in datum_rows]
+    faces = _toleranced_faces(point_set, others)
+    tolerance = point_set.metadata.get("tolerance_mm")
+    if faces and tolerance is not None:
+        lines += dmis_datums.tolerance_lines(list(faces), float(tolerance), groups, dmis_statement)
+    for index in others:
+        point_lines, selected = _point_lines(point_set, index, xyz, ijk, sensors, selected, output=True)
+        lines += point_lines
+        face = point_set.faces[index] if point_set.faces is not None else None
+        if tolerance is not None and face in faces and faces[face][-1] == index:
+            lines += dmis_datums.profile_lines(face, [labels[k] for k in faces[face]], dmis_statement)
+    if point_set.travel is not None:
+        lines += goto_lines(point_set.travel[-1][0])
+    return lines
+
+
+def _toleranced_faces(point_set, rows):
+    """{face: its point indices in order} of the points at rows that name their face ({} where
+    the points name none)."""
+    if point_set.faces is None:
+        return {}
+    faces = {}
+    for index in rows:
+        faces.setdefault(point_set.faces[index], []).append(int(index))
+    return faces
+
+
+def _point_lines(point_set, index, xyz, ijk, sensors, selected, output):
+    """(lines, sensor selected after them) of one point: the travel before it and its sensor
+    where it changes, FEAT/POINT, MEAS/POINT, PTMEAS, ENDMES and, with output, its OUTPUT."""
+    leaving, arriving = point_set.travel[index] if point_set.travel is not None else ((), ())
+    lines = goto_lines(leaving)
+    if sensors[index] != selected:
+        selected = sensors[index]
+        lines.append(f"SNSLCT/S({selected})")
+    lines += goto_lines(arriving)
+    label, position, vector = point_set.labels[index], xyz[index].tolist(), ijk[index].tolist()
+    lines += dmis_statement([f"F({label})=FEAT/POINT", "CART", *position], vector)
+    lines += dmis_statement(["MEAS/POINT", f"F({label})", "1"])
+    lines += dmis_statement(["PTMEAS/CART", *position], vector)
+    lines += ["ENDMES"] + ([f"OUTPUT/FA({label})"] if output else [])
+    return lines, selected
 
 
 def frame_statements(facts):

@@ -9,13 +9,13 @@ atomically (:mod:`cmmsampling.formats.files`): a failed export leaves an existin
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass, replace
+from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 
-from ..access.probe import Motion
+from ..access.probe import Motion, Probe
 from ..access.probe_moves import probe_moves
-from ..geometry.probe_path import PathOrder, short_path, unchanged
+from ..geometry.probe_path import PathOrder, path_length, short_path, unchanged
 from ..geometry.validation import InputError, InputTypeError, check_choice, check_real
 from ..strategies.result import SamplingResult
 from .dmis import dmis_program_name
@@ -124,7 +124,7 @@ def export_results(inspection, path, fmt, label=None, **asked):
 
 
 def export(source: SamplingResult | PointSet | object, path: str | os.PathLike, format: str | None = None,
-           *, frame: object = None, probe_radius: float = 0.0, order: str = "as_optimised", name: str | None = None,
+           *, frame: object = None, probe_radius: float = 0.0, order: str | None = None, name: str | None = None,
            approach: float = 2.0, retract: float = 2.0, search: float = 5.0, comments: bool = True,
            motion: Motion | None = None, label: str | None = None) -> ExportReport | ResultsReport:
     """Write probe points to a file for a CMM.
@@ -146,9 +146,14 @@ def export(source: SamplingResult | PointSet | object, path: str | os.PathLike, 
     order: 'as_optimised' keeps the source's order, 'short_path' visits the points along a short
     path (nearest neighbour + 2-opt, :mod:`cmmsampling.geometry.probe_path`), 'probe_path' along
     the collision-free path of a run made with the part (``sample(..., part=)``,
-    :mod:`cmmsampling.access.probe_moves`): DMIS then gets the sensors (SNSDEF, SNSLCT) and the
-    GOTO moves between the points, CSV the probe axis of each point; motion: the CMM's speeds for
-    the time estimate (cmmsampling.access.probe.Motion).
+    :mod:`cmmsampling.access.probe_moves`): DMIS then gets a sensor per head orientation and the
+    GOTO moves between the points, CSV the probe axis of each point; None (the default):
+    'probe_path' for a source made with the part and a probe (:func:`made_with_probe`: the same
+    program File > Export writes; one whose probe cannot reach every point is refused, never
+    written through the part), else 'as_optimised'. Every DMIS program selects its sensor
+    (SNSDEF, SNSLCT: the run's probe, else cmmsampling.Probe()'s 2 mm ball, vertical) and
+    states its ball radius; motion: the CMM's speeds for the time estimate
+    (cmmsampling.access.probe.Motion).
     name: DMIS program name (default: the file name without extension); approach, retract,
     search: DMIS SNSET distances, mm; comments: write the source's metadata (source face,
     strategy, parameters, deviation figures) as comments; the frame, probe radius and order are
@@ -161,8 +166,9 @@ def export(source: SamplingResult | PointSet | object, path: str | os.PathLike, 
     fmt = resolve_format(path, format)
     if is_inspection(source):
         return export_results(source, path, fmt, label, frame=(frame, None), probe_radius=(probe_radius, 0.0),
-                              order=(order, "as_optimised"))
-    check_choice("order", order, list(ORDERS))
+                              order=(order, None))
+    order = check_choice("order", order, list(ORDERS)) if order is not None else (
+        "probe_path" if made_with_probe(source) else "as_optimised")
     radius = check_real("probe_radius", probe_radius, minimum=0.0)
     options = WriteOptions(
         name=dmis_program_name(_stem(path) if name is None else name),
@@ -178,12 +184,15 @@ def export(source: SamplingResult | PointSet | object, path: str | os.PathLike, 
     if order == "probe_path":
         moves = probe_moves(source, motion)
         point_set = along_moves(point_set, moves)
+    probe = point_set.metadata.get("probe") or asdict(Probe())
+    options = replace(options, probe=probe)
+    if FORMATS[fmt].contact_nominals and radius == 0.0 and not float(point_set.metadata.get("probe_radius_mm", 0.0)):
+        radius = 0.5 * float(probe["ball_diameter"])
     point_set, facts = prepared(point_set, placement, radius, frame_name, FORMATS[fmt].contact_nominals)
     if moves is not None:
         path_order = PathOrder(np.arange(len(point_set)), moves.baseline, moves.travel)
-        options = replace(options, probe=point_set.metadata.get("probe"))
     else:
-        path_order = short_path(point_set.points) if order == "short_path" else unchanged(point_set.points)
+        path_order = short_path_within(point_set) if order == "short_path" else unchanged(point_set.points)
         point_set = reordered(point_set, path_order.order)
     facts.update(order=order, path_length_mm=path_order.length_after)
     text = FORMATS[fmt].write(point_set, facts, options)
@@ -191,6 +200,38 @@ def export(source: SamplingResult | PointSet | object, path: str | os.PathLike, 
     return ExportReport(target, fmt, len(point_set), order, path_order.length_before, path_order.length_after,
                         facts["frame"], facts.get("probe_radius_mm", 0.0), 0 if moves is None else moves.detours,
                         None if moves is None else moves.seconds, facts.get("ball_radius_mm", 0.0))
+
+
+def measuring_groups(point_set: PointSet) -> list[np.ndarray]:
+    """The point indices a program measures one group after the other: each datum face's points
+    (metadata ``datums``, primary first), then the others; one group without datums."""
+    datums = point_set.metadata.get("datums") or {}
+    if not datums or point_set.faces is None:
+        return [np.arange(len(point_set))]
+    faces = np.array(point_set.faces, dtype=object)
+    groups = [np.flatnonzero(faces == face) for face in datums.values()]
+    rest = np.flatnonzero(~np.isin(faces, list(datums.values())))
+    return [group for group in groups + [rest] if group.size]
+
+
+def short_path_within(point_set: PointSet) -> PathOrder:
+    """A short path (cmmsampling.geometry.probe_path.short_path) through each of the point set's
+    measuring groups in turn (the datum points first): a PathOrder over all its points."""
+    groups = measuring_groups(point_set)
+    order = np.concatenate([group[short_path(point_set.points[group]).order] for group in groups])
+    return PathOrder(order, path_length(point_set.points), path_length(point_set.points, order))
+
+
+def made_with_probe(source: object) -> bool:
+    """True for a source made with the part and a probe, whose export follows the collision-free
+    probe path by default: a SamplingResult run with part= (its access), a PartPlan made with
+    probe=, a document object whose Proxy says ``follows_probe(obj)``."""
+    follows = getattr(getattr(source, "Proxy", None), "follows_probe", None)
+    if callable(follows):
+        return bool(follows(source))
+    if isinstance(source, SamplingResult):
+        return source.access is not None
+    return getattr(source, "probe", None) is not None and callable(getattr(source, "probe_moves", None))
 
 
 def along_moves(point_set, moves):

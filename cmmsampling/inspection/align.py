@@ -36,6 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import linprog, nnls
 
+from ..geometry.motions import WEAK_SENSITIVITY, twist_jacobian
 from ..geometry.validation import InputError
 
 # closest(points (M, 3) mm) -> (feet (M, 3) mm, outward unit normals (M, 3)) on a CAD face.
@@ -64,10 +65,6 @@ COST_TOLERANCE = 1e-12
 # points may slide along a little), where rounding alone decides whether a step lowers the sum.
 GAIN_FLOOR_MM2 = 1e-18
 SCALE_FLOOR = 1e-6
-# A motion the points hold weakly: moving them 1 mm along it (a turn that moves them 1 mm RMS)
-# changes their RMS distance from the face by less than this, mm: 1 % of the motion, so that a
-# micrometre of probing error would set it to a tenth of a millimetre or more.
-WEAK_SENSITIVITY = 0.01
 # A degree of freedom (rx .. z) is named free where at most this share of it (by length, in mm
 # of motion) lies outside the weakly held motions.
 NAMED_SHARE = 0.1
@@ -317,12 +314,6 @@ def _model(points: np.ndarray, closest: Closest, basis: np.ndarray,
     feet, normals = closest(points)
     centre = points.mean(axis=0) if pivot is None else pivot
     return signed_distances(points, feet, normals), twist_jacobian(points, normals, centre) @ basis, centre
-
-
-def twist_jacobian(points: np.ndarray, normals: np.ndarray, pivot: np.ndarray) -> np.ndarray:
-    """(M, 6): how the signed distances of points (M, 3) mm (outward normals (M, 3)) change by a
-    twist (rotation vector w rad about pivot (3,) mm, shift s mm): ((p - pivot) x n, n)."""
-    return np.hstack([np.cross(points - pivot, normals), normals])
 
 
 def _step_matrix(step: np.ndarray, basis: np.ndarray, centre: np.ndarray) -> np.ndarray:

@@ -8,7 +8,7 @@ plane square to it two, a tertiary one. Which motions a datum fixes is found fro
 not assumed from its type: the motions left free, as a basis of small rigid motions (twists:
 a rotation vector about a fixed pivot and a shift), are split by how strongly they move the
 datum's points off its face (the generalised eigenvalues of the point-to-plane normal matrix
-against the motions' own size; the weak ones, below align.WEAK_SENSITIVITY, stay free for
+against the motions' own size; the weak ones, below motions.WEAK_SENSITIVITY, stay free for
 the next datum). A free-form datum surface fixes whatever it holds.
 
 A datum is associated by one of DATUM_CRITERIA: 'tangent' (ISO 5459's default: the face laid
@@ -25,13 +25,12 @@ from dataclasses import dataclass, field, replace
 from typing import Any, cast
 
 import numpy as np
-from scipy.linalg import eigh
 
 from ..formats.pointset import PointSet
 from ..geometry.validation import InputError
-from .align import (DEGREES_OF_FREEDOM, WEAK_SENSITIVITY, Alignment, Closest, _least_squares, _min_max,
-                    _motion_names, _offset_by, _step_matrix, signed_distances, tangent, tangent_choice,
-                    tangent_extent, transform, twist_jacobian)
+from ..geometry.motions import split_motions, twist_jacobian
+from .align import (DEGREES_OF_FREEDOM, Alignment, Closest, _least_squares, _min_max, _motion_names, _offset_by,
+                    _step_matrix, signed_distances, tangent, tangent_choice, tangent_extent, transform)
 
 DATUM_CRITERIA = ("tangent", "least_squares")
 # A datum's points spread more than DATUM_FORM_SHARE times the profile tolerance about its
@@ -42,9 +41,6 @@ DATUM_FORM_MM = 1.0
 # A tangent datum whose equally good associations (align.TANGENT_TIE_MM) move its points more
 # than this (mm RMS) is named not unique: 0.1 um, what a CMM's probing begins to resolve.
 ROCKING_MM = 1e-4
-# The regularisation of a datum's motion metric, as a share of its trace: a motion that moves
-# none of its points (a turn about the line they lie on) counts as weakly held, not singular.
-METRIC_FLOOR = 1e-12
 
 
 @dataclass(frozen=True)
@@ -183,23 +179,6 @@ class Frame:
 def free_twists(locked: Sequence[str]) -> np.ndarray:
     """(6, K): the unit twists of the degrees of freedom not locked (DEGREES_OF_FREEDOM order)."""
     return np.eye(6)[:, [index for index, name in enumerate(DEGREES_OF_FREEDOM) if name not in locked]]
-
-
-def split_motions(points: np.ndarray, normals: np.ndarray, allowed: np.ndarray,
-                  pivot: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(held (6, H), weak (6, K - H)): the twists of allowed (6, K) that move points (M, 3) mm
-    off their face (outward normals (M, 3)) by at least WEAK_SENSITIVITY mm RMS per mm RMS of
-    the points' own motion, and those that do not; a held column moves the points 1 mm RMS."""
-    if not allowed.shape[1]:
-        return allowed, allowed
-    jacobian = twist_jacobian(points, normals, pivot) @ allowed
-    arms = points - pivot
-    motion = np.cross(allowed[:3].T[None, :, :], arms[:, None, :]) + allowed[3:].T[None, :, :]
-    metric = np.einsum("mki,mli->kl", motion, motion) / len(points)
-    metric += METRIC_FLOOR * np.trace(metric) * np.eye(len(metric))
-    values, vectors = eigh(jacobian.T @ jacobian / len(points), metric)
-    weak = np.sqrt(np.maximum(values, 0.0)) < WEAK_SENSITIVITY
-    return allowed @ vectors[:, ~weak], allowed @ vectors[:, weak]
 
 
 def motion_names(twists: np.ndarray, length: float) -> tuple[str, ...]:

@@ -343,7 +343,8 @@ def inspect(source: object, measured: str | os.PathLike | PointSet, alignment: s
     zone_offset: o, mm, the zone's centre from the nominal (ISO 1101's UZ, + out of the material;
     +-t/2 a unilateral zone outside or inside), which the alignment centres the points on and
     the profile and the verdict are taken from.
-    datums: the datum reference frame, Datums (cmmsampling.inspection.datums) or face names
+    datums: the datum reference frame (default: the source's own, a plan made with datums=),
+    Datums (cmmsampling.inspection.datums) or face names
     ('Face3', a tangent datum labelled A, B, C in order), primary first: the part is aligned on
     them and the other points are judged in their frame, floated by ``alignment`` only in the
     motions the datums leave free (the profile is location and form); a datum's points are
@@ -366,7 +367,7 @@ def inspect(source: object, measured: str | os.PathLike | PointSet, alignment: s
     tolerance = None if tolerance is None else check_real("tolerance", tolerance, above=0.0)
     zone_offset = check_real("zone_offset", zone_offset)
     uncertainty = None if uncertainty is None else check_real("uncertainty", uncertainty, above=0.0)
-    wanted = as_datums(datums)
+    wanted = as_datums(datums if datums else getattr(source, "datums", None) or None)
     told("reading the measured points")
     planned = _planned(source, part)
     read = _measured_point_set(measured)

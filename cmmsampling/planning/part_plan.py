@@ -109,7 +109,9 @@ class FacePlan:
     access: how the probe reaches each point and where on the face it reaches none
     (cmmsampling.access.reach.Access) when the plan judged the probe's reach, else None;
     copy_of: where the face is a rigid copy of another whose points it took, that face's name
-    and the motion, e.g. 'Face55 (turned 30 deg, moved 41.2 mm)' ('' for a face searched itself).
+    and the motion, e.g. 'Face55 (turned 30 deg, moved 41.2 mm)' ('' for a face searched itself);
+    datum: the datum label of a datum face ('A'), whose points are spread to hold the frame
+    (cmmsampling.planning.datum_points), not sampled for its form ('' for a toleranced face).
     """
 
     name: str
@@ -129,6 +131,7 @@ class FacePlan:
     seconds: float = 0.0
     access: Access | None = None
     copy_of: str = ""
+    datum: str = ""
 
     @property
     def axes(self):
@@ -181,6 +184,8 @@ class FacePlan:
         or 'Face7: no points (the face is narrower than ...)'."""
         if not self.placed:
             return f"{self.name}: no points ({self.reason})"
+        if self.datum:
+            return f"{self.name}: datum {self.datum}, {self.n} points spread to fix {self.settings['motions']} motions"
         met = {None: "", True: ", tolerance met", False: ", tolerance not met"}[self.met]
         reach = f", {self.tilted} tilted" if self.tilted else ""
         reach += f", {self.unreached} unreachable" if self.unreached else ""
@@ -193,7 +198,9 @@ class PartPlan:
     'points'), tolerance (mm) or budget (points), the strategy and the seconds it took;
     cancelled when stopped early (faces not run have no points and say so); part: the shape
     planned and probe: the Probe whose reach was judged (None when not); notes: sentences on how
-    the faces ran where that differs from what was asked (fewer processes, failed workers)."""
+    the faces ran where that differs from what was asked (fewer processes, failed workers);
+    datums: the datum faces' names, primary first (datums A, B, C ...), whose faces come first
+    in ``faces`` and are measured first ([] for none)."""
 
     faces: list
     mode: str
@@ -206,6 +213,7 @@ class PartPlan:
     part: object = field(default=None, repr=False)
     probe: object = None
     notes: list = field(default_factory=list)
+    datums: list = field(default_factory=list)
 
     @property
     def placed(self) -> list[FacePlan]:
@@ -228,9 +236,14 @@ class PartPlan:
         return sum(face.area for face in self.faces)
 
     @property
+    def toleranced(self) -> list[FacePlan]:
+        """The faces with points that are no datum faces."""
+        return [face for face in self.placed if not face.datum]
+
+    @property
     def worst(self) -> float:
-        """The largest maximum deviation over the faces with points, mm (NaN without any)."""
-        return max((face.maximum for face in self.placed), default=float("nan"))
+        """The largest maximum deviation over the toleranced faces with points, mm (NaN without any)."""
+        return max((face.maximum for face in self.toleranced), default=float("nan"))
 
     def result(self, name: str) -> SamplingResult:
         """The SamplingResult of a face of the plan (computed again from its points: the fit,
@@ -258,6 +271,11 @@ class PartPlan:
         then the plan's own notes, a line each."""
         lines = [f"{'face':<10} {'area mm^2':>10} {'N':>5} {'max mm':>9} {'bound mm':>9} {'met':>4}  notes"]
         for face in self.faces:
+            if face.datum:
+                notes = "; ".join([f"datum {face.datum}: points spread to fix {face.settings['motions']} motions"]
+                                  + ([face.notes] if face.notes else []))
+                lines.append(f"{face.name:<10} {face.area:>10.1f} {face.n:>5} {'':>9} {'':>9} {'':>4}  {notes}")
+                continue
             lines.append(f"{face.name:<10} {face.area:>10.1f} {face.n:>5} {face.maximum:>9.4f} {face.bound:>9.4f} "
                          f"{face.met_text:>4}  {face.notes}")
         lines.append(f"{'part':<10} {self.area:>10.1f} {self.n_total:>5} {self.worst:>9.4f}")
@@ -269,7 +287,7 @@ def plan(shape_or_faces: Part.Shape | list, tolerance: float | None = None, n_to
          strategy: str = BEST_STRATEGY, *, faces: list | None = None, n_max: int = DEFAULT_MAX_POINTS,
          edge_offset: float | None = None, processes: int | None = None, scheduler: object = None,
          progress: Callable | None = None, probe: Probe | None = None, part: Part.Shape | None = None,
-         resume: PartPlan | None = None, **arguments) -> PartPlan:
+         resume: PartPlan | None = None, datums: list | None = None, **arguments) -> PartPlan:
     """Probe points for a whole part: to a tolerance on every face, or a total of points.
 
     shape_or_faces: a Part.Shape (its faces, or those numbered from 1 in ``faces``, e.g.
@@ -291,12 +309,20 @@ def plan(shape_or_faces: Part.Shape | list, tolerance: float | None = None, n_to
     ``export(plan, order="probe_path")`` writes a collision-free path); part: the shape the probe
     must keep clear of (default: shape_or_faces when it is a shape); resume: a cancelled
     tolerance plan of the same faces, tolerance and strategy, whose faces done are kept and not
-    run again. Returns a PartPlan.
+    run again; datums: the datum faces of the part's datum reference frame, primary first, by
+    number as in ``faces`` ([3, 1, 5]; shape_or_faces a shape) or by name (['Face3', 'Face1']):
+    labelled A, B, C, taken out of the toleranced faces, their points spread to hold the motions
+    each fixes (cmmsampling.planning.datum_points; reachable by the probe where one is given),
+    measured first; ``inspect(plan, measured)`` then aligns on them. Returns a PartPlan.
     """
     if (tolerance is None) == (n_total is None):
         raise InputError("give either tolerance= (mm, the deviation every face must meet) or n_total= "
                          "(the points of the whole part), not both or neither")
     named = named_faces(shape_or_faces, faces)
+    datum_faces = _datum_faces(shape_or_faces, named, datums)
+    named = [(name, face) for name, face in named if name not in dict(datum_faces)]
+    if not named:
+        raise InputError("every face to plan is a datum face: give the toleranced faces too (faces=[...])")
     part, part_brep = _part(shape_or_faces, part, probe)
     arguments = {"workers": 1, **arguments}
     if edge_offset is not None:
@@ -323,10 +349,50 @@ def plan(shape_or_faces: Part.Shape | list, tolerance: float | None = None, n_to
             raise InputError("resume= continues a plan to a tolerance; plan a total of points (n_total=) anew")
         result = _plan_budget(named, check_int("n_total", n_total, 1), strategy, arguments, processes, scheduler,
                               progress, part_brep, probe)
+    with_datums(result, datum_faces, probe, part, arguments.get("edge_offset"))
     result.seconds = time.perf_counter() - start
-    result.shapes = dict(named)
+    result.shapes = {**dict(datum_faces), **dict(named)}
     result.part, result.probe = part, probe
     return result
+
+
+def _datum_faces(shape_or_faces, named, datums):
+    """[(name, Part.Face)] of the datum faces, primary first: datums by number of a shape's faces
+    or by name among named and the shape's faces; InputError naming one that is not there or
+    given twice."""
+    if datums is None or (hasattr(datums, "__len__") and not len(datums)):
+        return []
+    if isinstance(datums, (str, int)):
+        datums = [datums]
+    if all(isinstance(item, (int, np.integer)) and not isinstance(item, bool) for item in datums):
+        if not isinstance(shape_or_faces, Part.Shape):
+            raise InputError("datums= by number picks faces of a shape; with a list of faces, give their names")
+        return named_faces(shape_or_faces, list(datums))
+    known = dict(named_faces(shape_or_faces) if isinstance(shape_or_faces, Part.Shape) else named)
+    names = [str(item) for item in datums]
+    missing = [name for name in names if name not in known]
+    if missing:
+        raise InputError(f"datum {missing[0]!r} is no face of the part; give the datum faces by number or as "
+                         "'Face3', primary first")
+    if len(set(names)) != len(names):
+        raise InputError("a datum face is given twice; give each datum once, primary first")
+    return [(name, known[name]) for name in names]
+
+
+def with_datums(result, datum_faces, probe, part, edge_offset):
+    """Put the datum faces' FacePlans (their points spread for the frame) first in result's faces
+    and its datums in ``result.datums``."""
+    from .datum_points import plan_datums
+
+    if not datum_faces:
+        return
+    planned = plan_datums(datum_faces, probe, part, edge_offset)
+    faces = [FacePlan(datum.face, float(dict(datum_faces)[datum.face].Area), len(datum.points), datum.uv,
+                      datum.points, datum.normals, strategy="datum",
+                      settings={"datum": datum.label, "motions": datum.motions}, access=datum.access,
+                      datum=datum.label) for datum in planned]
+    result.faces = faces + result.faces
+    result.datums = [datum.face for datum in planned]
 
 
 def _part(shape_or_faces, part, probe):

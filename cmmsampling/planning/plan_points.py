@@ -24,10 +24,13 @@ def plan_point_set(plan):
     if not placed:
         raise InputError("the plan has no points: " + "; ".join(f"{f.name}: {f.reason}" for f in plan.faces))
     labels = [f"{face.name}_P{i}" for face in placed for i in range(1, face.n + 1)]
+    toleranced = [face for face in placed if not face.datum]
     metadata = {"source": "part plan", "strategy": plan.strategy, "mode": plan.mode, "faces": len(plan.faces),
                 "points_per_face": {face.name: face.n for face in placed}, "worst_max_mm": plan.worst,
-                "max_deviation_mm": {face.name: float(face.maximum) for face in placed},
-                **spacing_by_face({face.name: face.settings for face in placed})}
+                "max_deviation_mm": {face.name: float(face.maximum) for face in toleranced},
+                **spacing_by_face({face.name: face.settings for face in toleranced})}
+    if plan.datums:
+        metadata["datums"] = {face.datum: face.name for face in placed if face.datum}
     if plan.tolerance is not None:
         metadata["tolerance_mm"] = plan.tolerance
     if plan.budget is not None:

@@ -19,6 +19,8 @@ from cmmsampling.access.probe_moves import moves_through
 
 PROBE = Probe()
 UP = np.array([0.0, 0.0, 1.0])
+# The head's mounting vector in a sensor's SNSDEF, pivot to ball centre, whatever its angles.
+MOUNTING = "0.000000000,0.000000000,-1.000000000"
 
 
 def vector(values):
@@ -53,6 +55,14 @@ def overhang():
 def beside_wall():
     """A base (top at z = 10) with a wall 50 mm high over x = 0..10."""
     return Part.makeBox(60, 40, 10).fuse(Part.makeBox(10, 40, 60, vector((0, 0, 10)))).removeSplitter()
+
+
+@pytest.fixture(scope="module")
+def channel():
+    """A base (top at z = 10) between two walls 50 mm high over x = 0..10 and 50..60: the floor
+    between them, 40 mm wide, takes the probe tilted away from each wall near it."""
+    walls = [Part.makeBox(10, 40, 50, vector((x, 0, 10))) for x in (0, 50)]
+    return Part.makeBox(60, 40, 10).fuse(walls).removeSplitter()
 
 
 def occ_gaps(part, point, normal, axis, probe=PROBE):
@@ -150,11 +160,12 @@ def test_a_floor_beside_a_wall_tilts_away_from_it(beside_wall):
     assert_clear(beside_wall, points, normals, access)
 
 
-def path_through(part, points, normals):
+def path_through(part, points, normals, by_orientation=True):
     obstacles = Obstacles(part)
     access = reach(PROBE, obstacles, points, normals)
     kept = access.reachable
-    return moves_through(PROBE, obstacles, points[kept], normals[kept], access.axes[kept])
+    return moves_through(PROBE, obstacles, points[kept], normals[kept], access.axes[kept],
+                         by_orientation=by_orientation)
 
 
 @pytest.mark.parametrize("name", ["slot", "overhang", "beside_wall"])
@@ -167,11 +178,14 @@ def test_every_travel_move_keeps_the_clearance_and_the_path_is_short(name, reque
     points = np.column_stack([rng.uniform(low, high, (40, 2)), np.full(40, height)])
     normals = np.tile(UP, (40, 1))
     moves = path_through(part, points, normals)
+    by_travel = path_through(part, points, normals, by_orientation=False)
     print(f"{name}: {len(moves.order)} points, path {moves.travel:.1f} mm, straight nearest-neighbour order "
           f"{moves.straight:.1f} mm (with its detours {moves.baseline:.1f} mm), {moves.detours} detours, "
-          f"about {moves.seconds:.0f} s")
+          f"{moves.orientations} orientations, {moves.tip_changes} tip changes ({by_travel.tip_changes} ordered by "
+          f"travel alone), about {moves.seconds:.0f} s")
     assert len(moves.order) >= 10 and sorted(moves.order) == list(range(len(moves.order)))
-    assert moves.travel <= moves.baseline + 1e-6
+    assert by_travel.travel <= by_travel.baseline + 1e-6, "by travel alone, never longer than the straight order"
+    assert moves.seconds <= by_travel.seconds + 1e-9 and moves.tip_changes < max(moves.orientations, 1)
     need = {"travel": PROBE.radius + PROBE.clearance, "axis": PROBE.radius}
     for kind, gap in need.items():
         for start, end in zip(*moves.segments(kind)):
@@ -219,11 +233,11 @@ def test_sampling_with_the_part_keeps_to_what_the_probe_reaches(slot):
         cmmsampling.sample(floor, 16, "halton", part=slot, probe=Probe(ball_diameter=7.0, stylus_diameter=2.0))
 
 
-def test_a_probe_path_program_names_its_sensors_and_moves(beside_wall, tmp_path):
+def test_a_probe_path_program_names_its_sensors_and_moves(channel, tmp_path):
     from support import dmis_syntax
 
-    floor = floor_of(beside_wall, 10.0)
-    result = cmmsampling.sample(floor, 25, "uniform_parametric", part=beside_wall, grid=20, edge_offset=0.5)
+    floor = floor_of(channel, 10.0)
+    result = cmmsampling.sample(floor, 25, "uniform_parametric", part=channel, grid=20, edge_offset=0.5)
     assert result.access.reachable.all() and result.access.tilted.any()
     assert any("reached only with the stylus tilted" in note for note in result.notes)
     report = cmmsampling.export(result, tmp_path / "wall.dmi", order="probe_path")
@@ -237,12 +251,12 @@ def test_a_probe_path_program_names_its_sensors_and_moves(beside_wall, tmp_path)
     repeats = [k for k in range(1, len(expected)) if (expected[k] == expected[k - 1]).all()]
     np.testing.assert_allclose(gotos, np.delete(expected, repeats, axis=0), atol=1e-3)   # no move to where it is
     assert "MODE/AUTO,PROG,MAN" in text.splitlines()   # a program with moves runs on DCC
-    sensors = {tuple(np.round(a, 4)) for a in head_angles(result.access.axes)}
+    sensors = {tuple(np.round(a, 4) + 0.0) for a in head_angles(result.access.axes)}
     assert text.count("=SNSDEF/PROBE,INDEX,POL,") == len(sensors) >= 2
+    assert text.count("SNSLCT/S(") == len(sensors), "each orientation selected once: its points together"
     reach = f"{PROBE.stylus_length + PROBE.body_length:.7f},{PROBE.ball_diameter:.7f}"
-    assert text.count("SNSLCT/S(") >= 2 and (   # the head's mounting vector, pivot to ball centre
-        f"S(A0B0)=SNSDEF/PROBE,INDEX,POL,0.0000,0.0000,0.000000000,0.000000000,1.000000000,{reach}"
-    ) in text.replace("$\n", "")
+    for a, b in sensors:
+        assert f"S(A{a:g}B{b:g})=SNSDEF/PROBE,INDEX,POL,{a:.4f},{b:.4f},{MOUNTING},{reach}" in text.replace("$\n", "")
     assert report.order == "probe_path" and report.length_after == pytest.approx(moves.travel)
     assert "Collision-free probe path" in str(report) and report.seconds > 0
     back = cmmsampling.read_points(tmp_path / "wall.dmi")
@@ -284,10 +298,14 @@ def test_a_plan_with_a_probe_keeps_to_its_reach_and_writes_one_path(beside_wall,
             assert list(points.Labels) == [f"{face.name}_P{k}" for k in range(1, face.n + 1)]
         sheet = next(obj for obj in group.Group if obj.TypeId == "Spreadsheet::Sheet")
         below = 7 + len(plan.faces)
-        assert [sheet.get(f"A{below + k}") for k in (1, 2, 3)] == ["Probe", "Probe path", "Measuring time"]
+        assert [sheet.get(f"A{below + k}") for k in (1, 2, 3, 4, 5)] == [
+            "Probe", "Probe path", "Measuring time", "Orientations", "Tip changes"]
         assert sheet.get(f"B{below + 1}").startswith("2 mm ball, 20 mm stylus")
         assert sheet.get(f"B{below + 2}") == pytest.approx(report.length_after)
         assert sheet.get(f"B{below + 3}") == pytest.approx(report.seconds)
+        moves = plan.probe_moves()
+        assert [sheet.get(f"B{below + k}") for k in (4, 5)] == [moves.orientations, moves.tip_changes]
+        assert text.count("SNSLCT/S(") == moves.tip_changes + 1 <= moves.orientations + 1
         exported = cmmsampling.document.export([group], str(tmp_path / "from_document.dmi"))
         from_document = (tmp_path / "from_document.dmi").read_text()
         assert dmis_syntax.check(from_document) == [] and exported.order == "probe_path"

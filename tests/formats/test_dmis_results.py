@@ -86,3 +86,37 @@ def test_nists_output_of_a_circle_is_named_not_dropped(reference):
         cmmsampling.read_points(nist_program("output.dms"))
     with pytest.raises(InputError, match=r"FA\(A_CIRCLE\) CIRCLE"):
         cmmsampling.inspect(reference, nist_program("output.dms"))
+
+
+# The statement kinds we write that NIST's program uses too (SNSDEF: the indexed head's form we
+# write), each with how to tell it and the pattern of our grammar.
+SHARED_FORMS = {
+    "SNSDEF": (lambda c: "=SNSDEF/PROBE,INDEX," in c, dmis_syntax.SENSOR),
+    "SNSLCT": (lambda c: c.startswith("SNSLCT/"), dmis_syntax.SELECT),
+    "FEAT/PLANE": (lambda c: "=FEAT/PLANE," in c, dmis_syntax.FEATURE),
+    "DATDEF": (lambda c: c.startswith("DATDEF/"), dmis_syntax.DATDEF),
+    "DATSET": (lambda c: "=DATSET/DAT(" in c, dmis_syntax.DATSET),
+    "OUTPUT": (lambda c: c.startswith("OUTPUT/"), dmis_syntax.OUTPUTS["OUTPUT"]),
+    "OPEN": (lambda c: c.startswith("OPEN/"), dmis_syntax.OUTPUTS["OPEN"]),
+    "DEVICE": (lambda c: "=DEVICE/STOR," in c, dmis_syntax.OUTPUTS["DID"]),
+    "PTMEAS": (lambda c: c.startswith("PTMEAS/"), dmis_syntax.POINT),
+    "TRANS": (lambda c: "=TRANS/XORIG," in c and "YORIG" in c, dmis_syntax.TRANSLATE),
+}
+
+
+def as_we_write(statement):
+    """A NIST statement in our spelling: no blanks, whole numbers with a decimal point."""
+    compact = statement.replace(" ", "")
+    return re.sub(r"(?<![\w.])([+-]?\d+)(?![\d.])(?=,|$)", r"\1.0", compact)
+
+
+def test_the_statement_forms_we_write_are_nists():
+    statements, _ = cmmsampling.formats.dmis.dmis_statements(open(nist_program("IMTS_M_clean.dmi")).read())
+    seen = set()
+    for _, statement in statements:
+        compact = as_we_write(statement)
+        for kind, (is_kind, pattern) in SHARED_FORMS.items():
+            if is_kind(compact):
+                seen.add(kind)
+                assert pattern.match(compact), f"NIST's {statement!r} is not in our form {pattern.pattern!r}"
+    assert seen == set(SHARED_FORMS), f"NIST's program lacks {set(SHARED_FORMS) - seen}"

@@ -80,7 +80,13 @@ def test_round_trip(point_sets, tmp_path, fmt, face):
         assert back.metadata["source"] == f"{face}:Face1"
         assert back.metadata["max_mm"] == original.metadata["max_mm"]
         assert back.metadata["fit_poles"] == original.metadata["fit_poles"]
-        assert back.metadata["frame"] == "global" and back.metadata["probe_radius_mm"] == 0
+        assert back.metadata["frame"] == "global"
+        if fmt == "dmis":
+            assert back.metadata["ball_radius_mm"] == 1.0 and "probe_radius_mm" not in back.metadata, \
+                "contact points, the sensor's ball (cmmsampling.Probe()'s 2 mm) stated"
+            assert "S(A0B0)=SNSDEF/PROBE,INDEX,POL,0.0000,0.0000,$" in path.read_text()
+        else:
+            assert back.metadata["probe_radius_mm"] == 0
 
 
 def test_a_sampling_result_exports_with_its_own_labels(results, tmp_path):

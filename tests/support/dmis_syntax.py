@@ -5,8 +5,8 @@ ending in ``$`` goes on in the next one. Statements, in this order::
 
     DMISMN/'name',NN.N                        first
     UNITS/MM,ANGDEC   MODE/[AUTO,]PROG,MAN   SNSET/(APPRCH|RETRCT|SEARCH),d
-    D(label)=TRANS/XORIG,x,YORIG,y,ZORIG,z     after UNITS, before any FEAT
-    D(label)=ROTAT/(XAXIS|YAXIS|ZAXIS),a      the datum's TRANS before it, before any FEAT
+    D(label)=TRANS/XORIG,x,YORIG,y,ZORIG,z     after UNITS, before any FEAT or right after a DATSET
+    D(label)=ROTAT/(XAXIS|YAXIS|ZAXIS),a      the datum's TRANS before it, as TRANS
     S(label)=SNSDEF/PROBE,INDEX,POL,a,b,i,j,k,l,d   label new, (i, j, k) the head's mounting
                                               vector (unit), l and d positive
     SNSLCT/S(label)                           label defined, not inside MEAS
@@ -15,10 +15,18 @@ ending in ``$`` goes on in the next one. Statements, in this order::
     DID(label)=DEVICE/STOR,'name'              after UNITS, before any FEAT
     OPEN/DID(label),FDATA,DMIS,OUTPUT          its DEVICE before it, before any FEAT
     F(label)=FEAT/POINT,CART,x,y,z,i,j,k      label new, after UNITS
+    F(label)=FEAT/PLANE,CART,x,y,z,i,j,k      label new, after UNITS (a datum's nominal plane)
+    F(label)=FEAT/PATERN,F(a),F(b),...        label new, its members defined
+    CONST/PLANE,F(label),BF,FA(a),FA(b),...   a PLANE's feature, its members measured: measured
+    CONST/PATERN,F(label),BUILD,FA(a),...     a PATERN's feature, its members measured: measured
+    DATDEF/FA(label),DAT(x)                   a measured feature becomes datum x (new)
+    D(label)=DATSET/DAT(x),[XYZ]DIR,[XYZ]ORIG,...  datums defined; each axis and origin once
+    T(label)=TOL/PROFS,lo,up[,DAT(x)...]      label new, lo < up, its datums defined
     MEAS/POINT,F(label),n                     label defined, not inside another MEAS
     PTMEAS/CART,x,y,z,i,j,k                   only inside MEAS, n of them
     ENDMES                                    closes MEAS
-    OUTPUT/FA(label)                          a measured feature's, its device open, not inside MEAS
+    OUTPUT/FA(label)[,TA(t)...]               a measured feature's, its device open, not inside MEAS,
+                                              its tolerances defined
     CLOSE/DID(label)                          an open device's, not inside MEAS
     ENDFIL                                    last
 
@@ -40,10 +48,16 @@ SIMPLE = {
     "ENDMES": re.compile(r"ENDMES\Z"),
     "ENDFIL": re.compile(r"ENDFIL\Z"),
 }
-FEATURE = re.compile(r"F\(([^()]*)\)=FEAT/POINT,CART,(.*)\Z")
+FEATURE = re.compile(r"F\(([^()]*)\)=FEAT/(POINT|PLANE),CART,(.*)\Z")
+PATTERN = re.compile(rf"F\(([^()]*)\)=FEAT/PATERN((?:,F\({LABEL}\))+)\Z")
+CONSTRUCT = re.compile(rf"CONST/(PLANE|PATERN),F\(({LABEL})\),(BF|BUILD)((?:,FA\({LABEL}\))+)\Z")
+DATDEF = re.compile(rf"DATDEF/FA\(({LABEL})\),DAT\(({LABEL})\)\Z")
+DATSET = re.compile(rf"D\(({LABEL})\)=DATSET/((?:DAT\({LABEL}\)(?:,[XYZ](?:DIR|ORIG))+,?)+)\Z")
+TOLERANCE = re.compile(rf"T\(({LABEL})\)=TOL/PROFS,({NUMBER}),({NUMBER})((?:,DAT\({LABEL}\))*)\Z")
+MEMBERS = re.compile(rf"FA?\(({LABEL})\)")
 OUTPUTS = {"DID": re.compile(rf"DID\(({LABEL})\)=DEVICE/STOR,'[ -&(-~]+'\Z"),
            "OPEN": re.compile(rf"OPEN/DID\(({LABEL})\),FDATA,DMIS,OUTPUT\Z"),
-           "OUTPUT": re.compile(rf"OUTPUT/FA\(({LABEL})\)\Z"),
+           "OUTPUT": re.compile(rf"OUTPUT/FA\(({LABEL})\)((?:,TA\({LABEL}\))*)\Z"),
            "CLOSE": re.compile(rf"CLOSE/DID\(({LABEL})\)\Z")}
 MEASURE = re.compile(r"MEAS/POINT,F\(([^()]*)\),(.*)\Z")
 POINT = re.compile(r"PTMEAS/CART,(.*)\Z")
@@ -115,6 +129,10 @@ class ProgramState:
         self.ended = False
         self.automatic = False
         self.previous = ""
+        self.kinds = {}
+        self.datum_features = set()
+        self.tolerances = set()
+        self.frame_set = False
 
     def take(self, statement):
         """Errors of the next statement, given the state; updates the state."""
@@ -131,7 +149,11 @@ class ProgramState:
         if keyword == "S" and statement.startswith("S("):
             return self.sensor(statement)
         if keyword == "D" and statement.startswith("D("):
-            return self.datum(statement)
+            return self.datum_set(statement) if "=DATSET/" in statement else self.datum(statement)
+        if keyword == "T" and statement.startswith("T("):
+            return self.tolerance(statement)
+        if keyword in ("CONST", "DATDEF"):
+            return self.construct(keyword, statement)
         if keyword in ("SNSLCT", "GOTO"):
             return self.move(keyword, statement)
         if keyword in ("DID", "OPEN", "OUTPUT", "CLOSE"):
@@ -193,9 +215,59 @@ class ProgramState:
         errors = label_errors(label)
         if rotated is not None and label not in self.datums:
             errors.append(f"ROTAT of D({label}) before its TRANS")
-        if not self.units or self.features or self.measuring:
-            errors.append("a datum statement belongs after UNITS and before the first FEAT")
+        if not self.units or (self.features and not self.frame_set) or self.measuring:
+            errors.append("a datum statement belongs after UNITS and before the first FEAT, or after a DATSET")
         self.datums.add(label)
+        return errors
+
+    def datum_set(self, statement):
+        """D(label)=DATSET/DAT(x),words,...: its datums defined, each axis direction and origin
+        word at most once; the frame statements may follow."""
+        match = DATSET.match(statement)
+        if match is None:
+            return [f"malformed DATSET: {statement!r}"]
+        errors = ["statement inside MEAS"] if self.measuring else []
+        used = re.findall(r"DAT\(([^()]*)\)", match.group(2))
+        errors += [f"DATSET of DAT({label}) before its DATDEF" for label in used if label not in self.datum_features]
+        words = re.findall(r"[XYZ](?:DIR|ORIG)", match.group(2))
+        errors += [f"{word} given twice" for word in set(words) if words.count(word) > 1]
+        self.frame_set = True
+        return errors
+
+    def construct(self, keyword, statement):
+        """CONST/PLANE,F(l),BF,FA(..).. and CONST/PATERN,F(l),BUILD,FA(..).. of measured members
+        (the feature measured after it); DATDEF/FA(l),DAT(x) of a measured feature."""
+        if keyword == "DATDEF":
+            match = DATDEF.match(statement)
+            if match is None:
+                return [f"malformed DATDEF: {statement!r}"]
+            feature, datum = match.groups()
+            errors = [] if feature in self.measured else [f"DATDEF of FA({feature}) before it was measured"]
+            errors += [f"DAT({datum}) defined twice"] if datum in self.datum_features else []
+            self.datum_features.add(datum)
+            return errors
+        match = CONSTRUCT.match(statement)
+        if match is None:
+            return [f"malformed CONST: {statement!r}"]
+        kind, label, method, members = match.groups()
+        errors = [] if self.kinds.get(label) == kind else [f"CONST/{kind} of F({label}), which is no {kind} feature"]
+        errors += [] if (kind, method) in (("PLANE", "BF"), ("PATERN", "BUILD")) else [f"CONST/{kind} by {method}"]
+        errors += [f"CONST of FA({member}) before it was measured" for member in MEMBERS.findall(members)
+                   if member not in self.measured]
+        self.measured.add(label)
+        return errors + (["statement inside MEAS"] if self.measuring else [])
+
+    def tolerance(self, statement):
+        """T(label)=TOL/PROFS,lo,up[,DAT(x)...]."""
+        match = TOLERANCE.match(statement)
+        if match is None:
+            return [f"malformed TOL: {statement!r}"]
+        label, low, high, datums = match.groups()
+        errors = label_errors(label) + ([] if float(low) < float(high) else [f"TOL/PROFS {low} is not below {high}"])
+        errors += [f"TOL of DAT({datum}) before its DATDEF" for datum in re.findall(r"DAT\(([^()]*)\)", datums)
+                   if datum not in self.datum_features]
+        errors += [f"T({label}) defined twice"] if label in self.tolerances else []
+        self.tolerances.add(label)
         return errors
 
     def output(self, keyword, statement):
@@ -216,6 +288,8 @@ class ProgramState:
             self.devices[label] = True
         elif keyword == "OUTPUT":
             errors += [] if label in self.measured else [f"OUTPUT of FA({label}) before it was measured"]
+            errors += [f"TA({tolerance}) before its TOL" for tolerance in re.findall(r"TA\(([^()]*)\)", match.group(2))
+                       if tolerance not in self.tolerances]
             errors += [] if any(self.devices.values()) else ["OUTPUT with no output device open"]
         elif not self.devices.get(label):
             errors.append(f"CLOSE of DID({label}), which is not open")
@@ -235,12 +309,20 @@ class ProgramState:
         return errors + ([] if match.group(1) in self.sensors else [f"SNSLCT of S({match.group(1)}) before its SNSDEF"])
 
     def feature(self, statement):
-        """F(label)=FEAT/POINT,CART,x,y,z,i,j,k."""
-        match = FEATURE.match(statement)
-        if match is None:
-            return [f"malformed FEAT: {statement!r}"]
-        label, fields = match.groups()
-        errors = label_errors(label) + numbers_errors(fields)
+        """F(label)=FEAT/POINT or PLANE,CART,x,y,z,i,j,k; F(label)=FEAT/PATERN,F(..),..."""
+        pattern = PATTERN.match(statement)
+        if pattern is not None:
+            label, members = pattern.groups()
+            errors = label_errors(label) + [f"PATERN of F({member}) before its FEAT"
+                                            for member in MEMBERS.findall(members) if member not in self.features]
+            kind = "PATERN"
+        else:
+            match = FEATURE.match(statement)
+            if match is None:
+                return [f"malformed FEAT: {statement!r}"]
+            label, kind, fields = match.groups()
+            errors = label_errors(label) + numbers_errors(fields)
+        self.kinds[label] = kind
         if label in self.features:
             errors.append(f"F({label}) defined twice")
         if not self.units:

@@ -71,10 +71,10 @@ def resources(doc, ball_radius, probe):
         return [device]
     sensors = doc.add(holder, "DetachableSensors", n=1)
     sensor_element, sensor = doc.with_id(sensors, "SimpleTactileProbeSensor")
+    doc.add(sensor_element, "Name", f"ball {2 * ball_radius:g} mm")
     if probe:
         doc.attributes(sensor_element, [("D1", f"{key}_mm" if key != "max_tilt" else f"{key}_deg", decimal(float(value)))
                                         for key, value in probe.items() if isinstance(value, (int, float))])
-    doc.add(sensor_element, "Name", f"ball {2 * ball_radius:g} mm")
     doc.add(doc.add(sensor_element, "TipEndGeometry"), "TipEndGeometryEnum", "SPHERE")
     doc.add(sensor_element, "TipEndDiameter", decimal(2.0 * ball_radius))
     doc.id_list(cmm, "SensorIds", [sensor])

@@ -1,0 +1,92 @@
+"""A plan made with datums: the datum faces planned for the frame (points spread to hold the
+motions each fixes, measured first), its DMIS program setting the part's frame from them
+(CONST/PLANE BF, DATDEF, DATSET, the move to the CAD frame) and stating the profile (TOL/PROFS,
+TA), run by a simulated CMM that fills its OUTPUT, and the output judged with the plan's datums
+as inspect(..., datums=...) judges the same points: no datum or tolerance typed twice."""
+import numpy as np
+import pytest
+from support.dmis_cmm import DmisCMM
+from support.dmis_syntax import check
+
+import cmmsampling
+from cmmsampling.geometry.blocks import DATUM_FACES, TOP, datum_block
+from cmmsampling.geometry.validation import InputError
+from cmmsampling.inspection.align import transform
+from cmmsampling.inspection.simulate import Misplacement, form_waves
+
+MISPLACED = {"rx": 0.4, "ry": -0.3, "rz": 0.9, "x": 1.2, "y": -2.0, "z": 0.5}
+
+
+@pytest.fixture(scope="module")
+def block():
+    return datum_block()
+
+
+@pytest.fixture(scope="module")
+def planned(block):
+    return cmmsampling.plan(block, tolerance=0.05, faces=[3], datums=[1, 5, 4], processes=1,
+                            strategy="uniform_parametric")
+
+
+def test_the_datum_faces_come_first_with_points_spread_for_the_frame(planned):
+    assert [(face.name, face.datum) for face in planned.faces] == [
+        ("Face1", "A"), ("Face5", "B"), ("Face4", "C"), ("Face3", "")]
+    assert planned.datums == ["Face1", "Face5", "Face4"]
+    motions = [face.settings["motions"] for face in planned.faces[:3]]
+    assert motions == [3, 2, 1], "a primary plane fixes 3 motions, the secondary 2, the tertiary 1"
+    assert [face.n for face in planned.faces[:3]] == [6, 4, 4]
+    base = planned.faces[0].points
+    assert np.ptp(base[:, 0]) > 60 and np.ptp(base[:, 1]) > 30, "spread over the 100 x 60 base"
+    assert "datum A: points spread to fix 3 motions" in planned.table()
+    assert np.isfinite(planned.worst) and planned.worst == planned.faces[3].maximum
+
+
+def test_inspect_takes_the_datums_from_the_plan(planned, block, tmp_path):
+    measured = cmmsampling.simulate_measurement(planned, tmp_path / "m.csv", form_error=0.02, noise=0.001, seed=7,
+                                                misplacement=MISPLACED)
+    own = cmmsampling.inspect(planned, measured.path, part=block, tolerance=0.05)
+    typed = cmmsampling.inspect(planned, measured.path, part=block, tolerance=0.05, datums=list(DATUM_FACES))
+    assert [datum.label for datum in own.datums] == ["A", "B", "C"]
+    assert own.profile == typed.profile and own.passed == typed.passed
+
+
+@pytest.mark.parametrize("datums, message", [
+    ([9], "the shape has faces 1 to 6; there is no face 9"),
+    (["Face9"], "datum 'Face9' is no face of the part"),
+    (["Face1", "Face1"], "a datum face is given twice"),
+])
+def test_bad_datums_are_refused_before_any_run(block, datums, message):
+    with pytest.raises(InputError, match=message):
+        cmmsampling.plan(block, tolerance=0.05, faces=[3], datums=datums, processes=1)
+
+
+def test_the_program_sets_the_frame_from_the_datums_and_states_the_profile(planned, block, tmp_path):
+    cmmsampling.export(planned, tmp_path / "block.dmi")
+    text = (tmp_path / "block.dmi").read_text()
+    assert check(text) == []
+    statements = [line for line in text.splitlines() if not line.startswith("$$")]
+    assert "DATDEF/FA(DAT_A),DAT(A)" in statements and "DATDEF/FA(DAT_C),DAT(C)" in statements
+    assert "D(DRF)=DATSET/DAT(A),ZDIR,ZORIG,DAT(B),XDIR,XORIG,DAT(C),YORIG" in statements
+    assert "T(PROF_Face3)=TOL/PROFS,-0.0250000,0.0250000,DAT(A),DAT(B),DAT(C)" in statements
+    assert "OUTPUT/FA(Face3),TA(PROF_Face3)" in statements
+    first_toleranced = next(k for k, line in enumerate(statements) if line.startswith("F(Face3_P1)="))
+    assert statements.index("D(DRF)=DATSET/DAT(A),ZDIR,ZORIG,DAT(B),XDIR,XORIG,DAT(C),YORIG") < first_toleranced
+    assert max(k for k, line in enumerate(statements) if line.startswith("PTMEAS")) > first_toleranced
+
+    part = Misplacement(**MISPLACED).matrix(np.array([50.0, 30.0, 15.0]))
+    points = planned.point_set().points
+    cmm = DmisCMM({name: block.Faces[int(name[4:]) - 1] for name in ("Face1", "Face3", "Face4", "Face5")}, part,
+                  form_waves(points, 0.02, 7))
+    (tmp_path / "block.dmo").write_text(cmm.run(text))
+    read = cmmsampling.read_points(tmp_path / "block.dmo")
+    assert read.labels == planned.point_set().labels, "every point reported, datums first"
+    nominal = planned.point_set().points
+    on_table = transform(part, nominal)
+    assert np.abs(on_table - nominal).max() > 1.0, "the part lies mm away from its CAD place on the table"
+    toleranced = np.array([label.startswith("Face3_") for label in read.labels])
+    assert np.abs(read.points - nominal)[toleranced].max() < 0.1, \
+        "touched where planned and reported in the CAD frame the datums set"
+    own = cmmsampling.inspect(planned, tmp_path / "block.dmo", part=block, tolerance=0.05)
+    typed = cmmsampling.inspect(planned, tmp_path / "block.dmo", part=block, tolerance=0.05, datums=list(DATUM_FACES))
+    assert abs(own.profile - typed.profile) < 1e-12 and own.passed == typed.passed
+    assert own.profile < 0.05 and TOP == "Face3"
