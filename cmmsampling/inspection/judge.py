@@ -30,7 +30,8 @@ from ..strategies.face_setup import reused
 from ..planning.part_plan import PartPlan
 from ..strategies.result import SamplingResult
 from .align import ALIGNMENTS, PROFILE_KINDS, Alignment, AlignmentCancelled, Closest, align, check_locked, kabsch
-from .datums import Datum, Frame, Stage, align_on_datums, as_datums, check_datum_forms, floating_frame
+from .datums import (Datum, DatumFit, DatumMeasurement, Frame, Stage, align_on_datums, as_datums, check_datum_forms,
+                     floating_frame)
 from .uncertainty import NO_UNCERTAINTY, ProfileUncertainty, decide, profile_uncertainty
 from .closest import OCC_AGREEMENT_MM, OCC_CONFIRMED, FaceCloser, confirm_with_occ, dense_nodes
 from .measured import read_measured
@@ -376,7 +377,7 @@ def inspect(source: object, measured: str | os.PathLike | PointSet, alignment: s
     notes = ([read.metadata["units_read"]] if "units_read" in read.metadata else []) + notes
     owner = np.zeros(len(order[0]), dtype=int) if planned.owner is None else planned.owner[order[1]]
     nominal = planned.points[order[1]] if planned.points is not None else np.full((len(order[0]), 3), np.nan)
-    sources, kept = datum_points(wanted, planned, order, owner, contact, part, probe_radius)
+    sources, kept = datum_points(wanted, planned, order, owner, contact, part, probe_radius, read.labels)
     order, owner, nominal = (order[0][kept], order[1][kept]), owner[kept], nominal[kept]
     if not len(order[0]):
         raise InputError("every measured point lies on a datum face: measure the toleranced face too, or give "
@@ -407,7 +408,8 @@ def inspect(source: object, measured: str | os.PathLike | PointSet, alignment: s
     inspection = Inspection([read.labels[i] for i in order[0]], nominal, points, aligned,
                             deviations, found.matrix, found, tolerance, [planned.names[i] for i in owner], notes,
                             measured_file=os.fspath(measured) if isinstance(measured, (str, os.PathLike)) else "",
-                            zone_offset=zone_offset, normals=normals, datums=[] if frame is None else frame.datums,
+                            zone_offset=zone_offset, normals=normals,
+                            datums=[] if frame is None else _measured_datums(frame.datums, sources, stages, found),
                             planned_faces=dict(zip(planned.names, planned.faces)),
                             beyond_edges=[read.labels[i] for i in order[0][on_edge]])
     if len(set(owner.tolist())) > 1 and alignment != "none":
@@ -438,29 +440,31 @@ def _start(points: list[np.ndarray], nominals: list[np.ndarray]) -> np.ndarray |
 class DatumSource:
     """Where a datum's points come from: datum (a Datum), name: its face's name, face: the
     Part.Face, points: (M, 3) mm contact points (measured frame), nominal: (M, 3) mm planned
-    (NaN where it brings its own points)."""
+    (NaN where it brings its own points), labels: M, the points' labels."""
 
     datum: Datum
     name: str
     face: object
     points: np.ndarray
     nominal: np.ndarray
+    labels: list
 
 
 def datum_points(datums: Sequence[Datum], planned: Planned, order: tuple[np.ndarray, np.ndarray], owner: np.ndarray,
-                 contact: np.ndarray, part: Part.Shape | None,
-                 probe_radius: float | None) -> tuple[list[DatumSource], np.ndarray]:
+                 contact: np.ndarray, part: Part.Shape | None, probe_radius: float | None,
+                 labels: Sequence[str]) -> tuple[list[DatumSource], np.ndarray]:
     """(DatumSources, kept (N,) bool): each datum's points, and which of the paired points
-    (order: (measured rows (N,) into contact (P, 3) mm, planned rows (N,)), owner (N,) their
-    planned faces) stay toleranced (those of a datum's face that brings no points of its own
-    go to the datum)."""
+    (order: (measured rows (N,) into contact (P, 3) mm and labels (P,), planned rows (N,)),
+    owner (N,) their planned faces) stay toleranced (those of a datum's face that brings no
+    points of its own go to the datum)."""
     kept, sources = np.ones(len(order[0]), dtype=bool), []
     for datum in datums:
         name = datum.face if isinstance(datum.face, str) else f"datum {datum.label}"
         if datum.points is not None:
             face = _datum_face(datum, planned, part)
-            own = _contact_points(_datum_point_set(datum), probe_radius)
-            sources.append(DatumSource(datum, name, face, own, np.full_like(own, np.nan)))
+            given = _datum_point_set(datum)
+            own = _contact_points(given, probe_radius)
+            sources.append(DatumSource(datum, name, face, own, np.full_like(own, np.nan), list(given.labels)))
             continue
         index = planned_face(planned, name)
         if index is None:
@@ -474,8 +478,19 @@ def datum_points(datums: Sequence[Datum], planned: Planned, order: tuple[np.ndar
         kept &= ~rows
         nominal = planned.points[order[1][rows]] if planned.points is not None else None
         sources.append(DatumSource(datum, name, planned.faces[index], contact[order[0][rows]],
-                                   np.full((int(rows.sum()), 3), np.nan) if nominal is None else nominal))
+                                   np.full((int(rows.sum()), 3), np.nan) if nominal is None else nominal,
+                                   [labels[row] for row in order[0][rows]]))
     return sources, kept
+
+
+def _measured_datums(fits: Sequence[DatumFit], sources: Sequence[DatumSource], stages: Sequence[Stage],
+                     found: Alignment) -> list[DatumFit]:
+    """The DatumFits of a frame with the points each was associated on (a DatumMeasurement: its
+    source's labels, contact points and nominals, and its face's outward normals at the points
+    aligned by ``found``), for the results' record."""
+    return [replace(fit, measurement=DatumMeasurement(source.labels, source.points, source.nominal,
+                                                      stage.closest(found.apply(source.points))[1]))
+            for fit, source, stage in zip(fits, sources, stages)]
 
 
 @dataclass
