@@ -27,16 +27,16 @@ from xml.etree.ElementTree import Element
 
 import numpy as np
 
-from ...geometry.validation import InputError
-from ...inspection.datums import Datum
-from ..files import read_text
-from ..pointset import PointSet
-from .read import QIFDocument, parsed
-from .results import DATUM_ALGORITHMS, OWN_POINTS, PART_DECISION_STATUS, PRECEDENCES
-from .xml import tag
+from ..formats.files import read_text
+from ..formats.pointset import PointSet
+from ..formats.qif.read import QIFDocument, parsed
+from ..formats.qif.results import DATUM_ALGORITHMS, OWN_POINTS, PART_DECISION_STATUS, PRECEDENCES
+from ..formats.qif.xml import tag
+from ..geometry.validation import InputError
+from .datums import Datum
 
 if TYPE_CHECKING:   # judge imports FreeCAD's Part: imported when a record is judged
-    from ...inspection.judge import Inspection, Progress
+    from .judge import Inspection, Progress
 
 # The attributes every record states (the others are stated where they apply).
 RECORD_FACTS = ("alignment", "lockedMotions", "zoneOffset_mm", "profile_mm", "pointOrder")
@@ -93,7 +93,7 @@ class InspectionRecord:
         the points were planned on; part=: the shape of a PartPlan) on the recorded points with
         the recorded :attr:`options`; changes: any of those options to judge otherwise (e.g.
         tolerance=0.04). InputError for another keyword."""
-        from ...inspection.judge import inspect
+        from .judge import inspect
 
         unknown = sorted(set(changes) - set(self.options))
         if unknown:
