@@ -30,7 +30,8 @@ import numpy as np
 from ..formats.files import read_text
 from ..formats.pointset import PointSet
 from ..formats.qif.read import QIFDocument, parsed
-from ..formats.qif.results import DATUM_ALGORITHMS, OWN_POINTS, PART_DECISION_STATUS, PRECEDENCES
+from ..formats.qif.datum_frame import DATUM_ALGORITHMS, OWN_POINTS, PRECEDENCES
+from ..formats.qif.results import PART_DECISION_STATUS
 from ..formats.qif.xml import tag
 from ..geometry.validation import InputError
 from .datums import Datum

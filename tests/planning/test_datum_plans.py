@@ -90,3 +90,23 @@ def test_the_program_sets_the_frame_from_the_datums_and_states_the_profile(plann
     typed = cmmsampling.inspect(planned, tmp_path / "block.dmo", part=block, tolerance=0.05, datums=list(DATUM_FACES))
     assert abs(own.profile - typed.profile) < 1e-12 and own.passed == typed.passed
     assert own.profile < 0.05 and TOP == "Face3"
+
+
+def test_the_qif_plan_carries_the_datum_features_and_the_frame(planned, tmp_path):
+    from xml.etree import ElementTree
+
+    cmmsampling.export(planned, tmp_path / "block.qif")   # refused unless the QIF 3.0 schemas take it
+    root = ElementTree.parse(tmp_path / "block.qif").getroot()
+    ns = {"q": "http://qifstandards.org/xsd/qif3"}
+    definitions = root.findall("q:DatumDefinitions/q:DatumDefinition", ns)
+    assert [d.findtext("q:DatumLabel", namespaces=ns) for d in definitions] == ["A", "B", "C"]
+    nominal_names = {n.get("id"): n.findtext("q:Name", namespaces=ns)
+                     for n in root.iter("{http://qifstandards.org/xsd/qif3}PointDefinedSurfaceFeatureNominal")}
+    features = [nominal_names[d.findtext("q:FeatureNominalIds/q:Id", namespaces=ns)] for d in definitions]
+    assert [name.split()[0] for name in features] == ["Face1", "Face5", "Face4"]
+    frame = root.find("q:DatumReferenceFrames/q:DatumReferenceFrame", ns)
+    precedences = [d.findtext("q:Precedence/q:PrecedenceEnum", namespaces=ns) for d in frame.findall("q:Datums/q:Datum", ns)]
+    assert precedences == ["PRIMARY", "SECONDARY", "TERTIARY"]
+    profiles = root.findall(".//q:SurfaceProfileCharacteristicDefinition", ns)
+    assert len(profiles) == 1 and profiles[0].findtext("q:DatumReferenceFrameId", namespaces=ns) == frame.get("id")
+    assert len(root.findall(".//q:SurfaceProfileCharacteristicItem", ns)) == 1, "the top's profile, none on a datum"

@@ -21,9 +21,11 @@ What goes where (docs/qif.md tells why):
 from __future__ import annotations
 
 import json
+from dataclasses import dataclass
 
 import numpy as np
 
+from .datum_frame import datum_definitions, framed_profile, reference_frame
 from .xml import QIFWriter, decimal, extension, extension_child, new_qpid, numbers
 
 APPLICATION = "cmmsampling"
@@ -249,6 +251,25 @@ def product(doc, name):
     return part
 
 
+@dataclass(frozen=True)
+class PlannedDatum:
+    """A datum of a plan: label ('A'), face ('Face1'), criterion (the inspection's default,
+    tangent); measurement None (its points are the measured file's, planned on its face)."""
+
+    label: str
+    face: str
+    criterion: str = "tangent"
+    measurement: None = None
+
+
+def planned_datums(point_set):
+    """The PlannedDatums a point set's metadata states (``datums``: {label: face}, primary first)
+    whose faces hold points; [] for none."""
+    faces = set(point_set.faces or [])
+    return [PlannedDatum(label, face) for label, face in (point_set.metadata.get("datums") or {}).items()
+            if face in faces]
+
+
 def write(point_set, facts, options):
     """The QIF 3.0 plan document (text) of a written PointSet (contact points in probe order),
     its facts (frame, the ball's radius, order) and the WriteOptions (the probe of a path)."""
@@ -259,12 +280,20 @@ def write(point_set, facts, options):
     tolerance = point_set.metadata.get("tolerance_mm")
     standard = None if tolerance is None else doc.standard()
     doc.units()
+    datums = planned_datums(point_set)
+    defined = datum_definitions(doc, datums) if datums else []
+    frame_id = reference_frame(doc, datums, defined, None) if datums else None
     resource_ids = resources(doc, float(facts.get("ball_radius_mm", 0.0)), options.probe)
     part = product(doc, name)
     groups = face_groups(point_set)
     found = features(doc, point_set, groups, resource_ids)
     doc.id_list(part, "FeatureNominalIds", [found[face][0] for face, _ in groups])
-    items = {} if tolerance is None else characteristics(doc, groups, found, tolerance, standard, resource_ids[0])
+    for datum, (element, _) in zip(datums, defined):
+        doc.id_list(element, "FeatureNominalIds", [found[datum.face][0]])
+    toleranced = [(face, rows) for face, rows in groups if face not in {datum.face for datum in datums}]
+    items = {} if tolerance is None else characteristics(doc, toleranced, found, tolerance, standard, resource_ids[0])
+    if items and frame_id is not None:
+        framed_profile(doc, 0.0, frame_id)
     rules_id = new_qpid()
     plan(doc, point_set, groups, found, items, resource_ids, rules_id, facts)
     rules(doc, point_set, groups, rules_id)
