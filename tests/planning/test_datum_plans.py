@@ -3,6 +3,8 @@ motions each fixes, measured first), its DMIS program setting the part's frame f
 (CONST/PLANE BF, DATDEF, DATSET, the move to the CAD frame) and stating the profile (TOL/PROFS,
 TA), run by a simulated CMM that fills its OUTPUT, and the output judged with the plan's datums
 as inspect(..., datums=...) judges the same points: no datum or tolerance typed twice."""
+import re
+
 import numpy as np
 import pytest
 from support.dmis_cmm import DmisCMM
@@ -110,3 +112,16 @@ def test_the_qif_plan_carries_the_datum_features_and_the_frame(planned, tmp_path
     profiles = root.findall(".//q:SurfaceProfileCharacteristicDefinition", ns)
     assert len(profiles) == 1 and profiles[0].findtext("q:DatumReferenceFrameId", namespaces=ns) == frame.get("id")
     assert len(root.findall(".//q:SurfaceProfileCharacteristicItem", ns)) == 1, "the top's profile, none on a datum"
+
+
+def test_a_live_cmm_measures_the_datums_first_and_the_plan_judges_them(planned, block, tmp_path):
+    with cmmsampling.SimulatedCMM.measuring(planned, form_error=0.02, misplacement=MISPLACED, seed=7) as cmm:
+        run = cmmsampling.measure(planned, cmm.address, tmp_path / "live.csv")
+    touched = np.array([[float(value) for value in re.findall(r"[XYZ]\(([-\d.]+)\)", command)]
+                        for command in run.commands if " PtMeas(" in command])
+    assert len(touched) == planned.n_total
+    np.testing.assert_allclose(touched[:14], planned.point_set().points[:14], atol=1e-6)   # the datums first
+    own = cmmsampling.inspect(planned, run, part=block, tolerance=0.05)
+    typed = cmmsampling.inspect(planned, run, part=block, tolerance=0.05, datums=list(DATUM_FACES))
+    assert [datum.label for datum in own.datums] == ["A", "B", "C"]
+    assert abs(own.profile - typed.profile) < 1e-12 and own.passed is typed.passed is True
