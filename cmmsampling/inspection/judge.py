@@ -340,7 +340,8 @@ def inspect(source: object, measured: str | os.PathLike | PointSet, alignment: s
     'none' (cmmsampling.inspection.align), started from the
     measured points' rigid match to their planned nominals (unless a degree of freedom is
     locked), the motions the points do not hold kept there (``free_motions``); locked: degrees
-    of freedom held fixed (rx, ry, rz, x, y, z); tolerance: the profile tolerance t, mm;
+    of freedom held fixed (rx, ry, rz, x, y, z); tolerance: the profile tolerance t, mm
+    (default: a PartPlan's own, as its programs state it);
     zone_offset: o, mm, the zone's centre from the nominal (ISO 1101's UZ, + out of the material;
     +-t/2 a unilateral zone outside or inside), which the alignment centres the points on and
     the profile and the verdict are taken from.
@@ -365,6 +366,8 @@ def inspect(source: object, measured: str | os.PathLike | PointSet, alignment: s
     if alignment not in ALIGNMENTS:
         raise InputError(f"alignment must be one of {', '.join(ALIGNMENTS)}, got {alignment!r}")
     locked = check_locked(locked)
+    if tolerance is None and isinstance(source, PartPlan):
+        tolerance = source.tolerance
     tolerance = None if tolerance is None else check_real("tolerance", tolerance, above=0.0)
     zone_offset = check_real("zone_offset", zone_offset)
     uncertainty = None if uncertainty is None else check_real("uncertainty", uncertainty, above=0.0)

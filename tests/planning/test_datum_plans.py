@@ -88,9 +88,10 @@ def test_the_program_sets_the_frame_from_the_datums_and_states_the_profile(plann
     toleranced = np.array([label.startswith("Face3_") for label in read.labels])
     assert np.abs(read.points - nominal)[toleranced].max() < 0.1, \
         "touched where planned and reported in the CAD frame the datums set"
-    own = cmmsampling.inspect(planned, tmp_path / "block.dmo", part=block, tolerance=0.05)
+    own = cmmsampling.inspect(planned, tmp_path / "block.dmo", part=block)
     typed = cmmsampling.inspect(planned, tmp_path / "block.dmo", part=block, tolerance=0.05, datums=list(DATUM_FACES))
-    assert abs(own.profile - typed.profile) < 1e-12 and own.passed == typed.passed
+    assert own.tolerance == 0.05, "the plan's tolerance, as its program states it"
+    assert abs(own.profile - typed.profile) < 1e-12 and own.passed is typed.passed is True
     assert own.profile < 0.05 and TOP == "Face3"
 
 
