@@ -140,22 +140,27 @@ def Vector(values: Sequence[float] | np.ndarray) -> FreeCAD.Vector:
 @dataclass(frozen=True)
 class Motion:
     """How the CMM moves: move_speed between points (mm/s), touch_speed over the approach
-    (mm/s), point_time: what each touch adds (settling, the trigger), s."""
+    (mm/s), point_time: what each touch adds (settling, the trigger), s; index_time: what each
+    change of an indexing head's orientation adds (the head unlocks, turns and locks again), s:
+    about 3 s on a PH10-class head, 0 for a head that turns while the CMM moves."""
 
     move_speed: float = 200.0
     touch_speed: float = 4.0
     point_time: float = 0.3
+    index_time: float = 3.0
 
     def __post_init__(self) -> None:
         check_real("move_speed", self.move_speed, above=0.0)
         check_real("touch_speed", self.touch_speed, above=0.0)
         check_real("point_time", self.point_time, 0.0)
+        check_real("index_time", self.index_time, 0.0)
 
-    def seconds(self, travel: float, points: int, approach: float) -> float:
-        """Estimated measuring time, s: ``travel`` mm of moves at move_speed, and per point
-        the approach (mm) at touch_speed, the retract at move_speed and point_time."""
+    def seconds(self, travel: float, points: int, approach: float, index_moves: int = 0) -> float:
+        """Estimated measuring time, s: ``travel`` mm of moves at move_speed, per point the
+        approach (mm) at touch_speed, the retract at move_speed and point_time, and index_time
+        per index move of the head (``index_moves``, the changes of orientation along the path)."""
         per_point = approach / self.touch_speed + approach / self.move_speed + self.point_time
-        return travel / self.move_speed + points * per_point
+        return travel / self.move_speed + points * per_point + index_moves * self.index_time
 
 
 # Common styli on a TP20-like body (13.2 mm, 40 mm to the head), mm.
@@ -199,12 +204,20 @@ def candidate_axes(normals: np.ndarray, probe: Probe) -> tuple[np.ndarray, np.nd
     if probe.index_step is None:
         axes = _rings(normals, probe.max_tilt)
     else:
-        axes = np.repeat(axes_of(_index_grid(probe.index_step, probe.max_head_angle))[None], len(normals), axis=0)
+        axes = np.repeat(index_axes(probe)[None], len(normals), axis=0)
     tilt = np.degrees(np.arccos(np.clip(np.einsum("nkc,nc->nk", axes, normals), -1.0, 1.0)))
     usable = (tilt <= probe.max_tilt + 1e-9) & (np.degrees(np.arccos(np.clip(axes[..., 2], -1.0, 1.0)))
                                                 <= probe.max_head_angle + 1e-9)
     order = np.argsort(np.where(usable, tilt, np.inf), axis=1, kind="stable")
     return np.take_along_axis(axes, order[..., None], axis=1), np.take_along_axis(usable, order, axis=1)
+
+
+def index_axes(probe: Probe) -> np.ndarray:
+    """(K, 3) unit: the axes of an indexing head's orientations (Probe.index_step, up to
+    max_head_angle from the vertical), the vertical first; ValueError for a continuous head."""
+    if probe.index_step is None:
+        raise InputError("a continuous head (index_step None) has no index orientations")
+    return axes_of(_index_grid(probe.index_step, probe.max_head_angle))
 
 
 def _index_grid(step: float, max_head_angle: float) -> np.ndarray:

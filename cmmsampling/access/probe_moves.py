@@ -7,9 +7,15 @@ both share an axis and the move keeps the clearance (the ball's sweep grown by t
 the stylus and the body at poses along the move, grown by it); otherwise it leaves along its
 axis to the part's box grown by the ball radius and the clearance (``e``), rises to the
 clearance plane above that box (``u``), crosses, and comes down the next point's way. The head
-turns to the next axis on the clearance plane. The order is a nearest-neighbour path improved
-by 2-opt on these travel lengths, never longer than the straight nearest-neighbour order with
-the detours it needs. All coordinates are ball centres, mm.
+turns to the next axis on the clearance plane: an indexing head's index move, which costs
+``Motion.index_time`` seconds, as long as ``index_time * move_speed`` mm of travel. The order is
+the quickest, in travel plus index moves, of: the points orientation by orientation (each
+orientation's points along a short path, the orientations chained end to nearest end), as it is
+and improved by 2-opt on travel plus index moves; the nearest-neighbour path on travel plus index
+moves, improved likewise; the nearest-neighbour paths improved by 2-opt on travel alone (the order
+when index moves cost nothing); and the straight nearest-neighbour order: never slower than that
+order with the detours and index moves it needs.
+``by_orientation=False`` orders by travel alone. All coordinates are ball centres, mm.
 """
 from __future__ import annotations
 
@@ -21,6 +27,7 @@ from scipy.spatial.distance import cdist
 from ..geometry.probe_path import nearest_neighbour, two_opt
 from ..geometry.validation import InputError
 from .obstacles import Obstacles, along_segments
+from .orientations import orientation_changes, orientation_labels
 from .probe import Motion, Probe
 
 # Poses checked along a straight travel move are at most this many mm apart.
@@ -40,9 +47,13 @@ class ProbeMoves:
     or 'travel' (keeps the clearance); travel: mm, the length of everything but the touches;
     straight: mm, the straight nearest-neighbour path through the ready positions (collisions
     ignored); baseline: mm, that order's travel with the detours it needs (``travel`` is never
-    longer); detours: the travel moves that go over the clearance plane; seconds: estimated
-    measuring time (Motion); ready: (N, 3) the ready positions in the points' own order; legs:
-    the travel before each point in visiting order and after the last (see :func:`_legs`).
+    longer when ordered by travel alone); detours: the travel moves that go over the clearance
+    plane; seconds: estimated measuring time (Motion: the moves, the touches and, for an
+    indexing head, index_time per tip change); ready: (N, 3) the ready positions in the points'
+    own order; legs: the travel before each point in visiting order and after the last (see
+    :func:`_legs`); orientations: the distinct head orientations (probe axes) of the points;
+    tip_changes: the changes of orientation along the path (the index moves; a DMIS program's
+    SNSLCT after its first).
     """
 
     order: np.ndarray
@@ -55,6 +66,8 @@ class ProbeMoves:
     seconds: float
     ready: np.ndarray
     legs: list
+    orientations: int = 0
+    tip_changes: int = 0
 
     def travel_pairs(self) -> list[tuple[np.ndarray, ...]]:
         """The legs as N + 1 pairs (leaving, arriving) of (M, 3) positions, mm (PointSet.travel)."""
@@ -67,10 +80,11 @@ class ProbeMoves:
 
 
 def moves_through(probe: Probe, obstacles: Obstacles, points: np.ndarray, normals: np.ndarray, axes: np.ndarray,
-                  motion: Motion | None = None) -> ProbeMoves:
+                  motion: Motion | None = None, by_orientation: bool = True) -> ProbeMoves:
     """The path through reachable points (N, 3) mm with normals (N, 3) and probe axes (N, 3)
-    unit (:func:`cmmsampling.access.reach.reach`); motion: speeds for the time estimate
-    (default Motion()). Returns ProbeMoves."""
+    unit (:func:`cmmsampling.access.reach.reach`); motion: speeds and index time for the time
+    estimate and the order (default Motion()); by_orientation: order for the least estimated time,
+    index moves included (see the module's docstring); False: by travel alone. Returns ProbeMoves."""
     points, normals, axes = (np.asarray(v, dtype=float).reshape(-1, 3) for v in (points, normals, axes))
     motion = motion or Motion()
     centres, ready = probe.stations(points, normals)
@@ -79,18 +93,26 @@ def moves_through(probe: Probe, obstacles: Obstacles, points: np.ndarray, normal
     above = np.column_stack([exits[:, :2], np.maximum(exits[:, 2], plane)])
     direct = _direct_moves(probe, obstacles, ready, axes)
     lengths = _travel_lengths(ready, exits, above, direct)
-    order = _short_order(lengths, cdist(ready, ready))
+    ends = _end_lengths(ready, exits, above)
+    labels = orientation_labels(axes)
+    indexing = probe.index_step is not None
+    if by_orientation:
+        index_length = motion.index_time * motion.move_speed if indexing else 0.0
+        order = _quick_order(lengths, cdist(ready, ready), ends, labels, index_length)
+    else:
+        order = _short_order(lengths, cdist(ready, ready))
     legs = _legs(order, ready, exits, above, direct)
     waypoints, kinds = _waypoints(order, centres, legs)
     steps = np.linalg.norm(np.diff(waypoints, axis=0), axis=1)
     travel = float(steps[kinds != "touch"].sum())
     plain = nearest_neighbour(cdist(ready, ready))
     straight = float(np.linalg.norm(np.diff(ready[plain], axis=0), axis=1).sum())
-    ends = _end_lengths(ready, exits, above)
     baseline = float(lengths[plain[:-1], plain[1:]].sum() + ends[plain[0]] + ends[plain[-1]])
     detours = int(np.count_nonzero(~direct[order[:-1], order[1:]]))
-    return ProbeMoves(order, waypoints, kinds, travel, straight, baseline, detours,
-                      motion.seconds(travel, len(points), probe.approach), ready, legs)
+    changes = orientation_changes(labels, order)
+    seconds = motion.seconds(travel, len(points), probe.approach, changes if indexing else 0)
+    return ProbeMoves(order, waypoints, kinds, travel, straight, baseline, detours, seconds, ready, legs,
+                      int(labels.max(initial=-1)) + 1, changes)
 
 
 def _end_lengths(ready: np.ndarray, exits: np.ndarray, above: np.ndarray) -> np.ndarray:
@@ -163,6 +185,65 @@ def _short_order(lengths: np.ndarray, straight: np.ndarray) -> np.ndarray:
     orders = [two_opt(lengths, nearest_neighbour(lengths), tolerance),
               two_opt(lengths, nearest_neighbour(straight), tolerance)]
     return min(orders, key=lambda order: float(lengths[order[:-1], order[1:]].sum()))
+
+
+def _quick_order(lengths: np.ndarray, straight: np.ndarray, ends: np.ndarray, labels: np.ndarray,
+                 index_length: float) -> np.ndarray:
+    """(N,) int: the visiting order of least travel plus ``index_length`` mm per change of
+    orientation (an index move's time as travel), from the clearance plane down to the first
+    point (ends (N,) mm) and back up from the last included: among the straight
+    nearest-neighbour order, :func:`_short_order`'s, the points orientation by orientation
+    (:func:`_grouped_order`) and, 2-opt improved on that cost, that order and the
+    nearest-neighbour path on the cost.
+    lengths, straight: (N, N) mm (travel, straight lines); labels: (N,) int orientations."""
+    if len(lengths) < 3:
+        return np.arange(len(lengths))
+    cost = lengths + index_length * (labels[:, None] != labels[None, :])
+    tolerance = 1e-12 * max(float(cost.max()), 1.0)
+    grouped = _grouped_order(lengths, ends, labels)
+    candidates = [nearest_neighbour(straight), _short_order(lengths, straight), grouped,
+                  two_opt(cost, grouped, tolerance), two_opt(cost, nearest_neighbour(cost), tolerance)]
+    return min(candidates, key=lambda order: _open_length(cost, ends, order))
+
+
+def _open_length(cost: np.ndarray, ends: np.ndarray, order: np.ndarray) -> float:
+    """mm: the cost (N, N) along an order (N,) int, with the ends (N,) of its first and last point."""
+    return float(cost[order[:-1], order[1:]].sum() + ends[order[0]] + ends[order[-1]])
+
+
+def _grouped_order(lengths: np.ndarray, ends: np.ndarray, labels: np.ndarray) -> np.ndarray:
+    """(N,) int: the points orientation by orientation (labels (N,) int), each orientation's
+    points along a short path on the travel lengths (N, N) mm (:func:`_group_path`), chained end
+    to nearest end (:func:`_chained`) from each orientation's path in turn, either way round; the
+    shortest of these with its ends (N,) mm."""
+    paths = [_group_path(lengths, np.flatnonzero(labels == label)) for label in np.unique(labels)]
+    chains = [_chained(lengths, paths, first, backwards) for first in range(len(paths)) for backwards in (False, True)]
+    return min(chains, key=lambda order: _open_length(lengths, ends, order))
+
+
+def _group_path(lengths: np.ndarray, members: np.ndarray) -> np.ndarray:
+    """The points ``members`` (M,) int in a short open order on the travel lengths (N, N) mm:
+    nearest neighbour, then 2-opt."""
+    if len(members) < 3:
+        return members
+    within = lengths[np.ix_(members, members)]
+    return members[two_opt(within, nearest_neighbour(within), 1e-12 * max(float(within.max()), 1.0))]
+
+
+def _chained(lengths: np.ndarray, paths: list[np.ndarray], first: int, backwards: bool) -> np.ndarray:
+    """(N,) int: the paths (each (M,) int) one after the other: paths[first] (reversed when
+    backwards), then always the path whose nearer end is nearest the last point on the travel
+    lengths (N, N) mm, entered at that end."""
+    pieces = [paths[first][::-1] if backwards else paths[first]]
+    left = [k for k in range(len(paths)) if k != first]
+    while left:
+        end = pieces[-1][-1]
+        heads = lengths[end, [paths[k][0] for k in left]]
+        tails = lengths[end, [paths[k][-1] for k in left]]
+        nearest = int(np.argmin(np.minimum(heads, tails)))
+        chosen = paths[left.pop(nearest)]
+        pieces.append(chosen if heads[nearest] <= tails[nearest] else chosen[::-1])
+    return np.concatenate(pieces)
 
 
 def _legs(order: np.ndarray, ready: np.ndarray, exits: np.ndarray, above: np.ndarray,

@@ -18,12 +18,14 @@ A point ``p`` with normal ``n`` (out of the material) is reachable along an axis
   a narrow slot may not leave; travel moves do (:mod:`cmmsampling.access.probe_moves`).
 
 The head tries the axes nearest the normal first (:func:`cmmsampling.access.probe.candidate_axes`).
+The final points of a run then take as few of an indexing head's orientations as reach them all
+(:func:`fewest_orientations`), each change of orientation costing the CMM seconds.
 """
 from __future__ import annotations
 
 import contextlib
 import time
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -33,7 +35,8 @@ from ..geometry.freecad_env import import_part
 from ..geometry.surface import lies_on
 from ..geometry.validation import InputError
 from .obstacles import MAX_POINTS, Obstacles
-from .probe import Probe, Vector, candidate_axes, head_angles
+from .orientations import Reaches, greedy_cover
+from .probe import Probe, Vector, candidate_axes, head_angles, index_axes
 
 if TYPE_CHECKING:   # FreeCAD ships no type stubs: to the type checker Part's classes are Any
     import Part
@@ -46,8 +49,9 @@ class Access:
     """How each point is reached: reachable (N,) bool; axes (N, 3) unit, the probe's axis at
     each reachable point (NaN where none); tilts (N,) degrees between axis and normal; angles
     (N, 2) head angles A, B in degrees (see :func:`cmmsampling.access.probe.head_angles`); ranks
-    (N,) int, which of the head's orientations nearest the normal reached it (0: the nearest,
-    -1: none); unreached: (K, 4) parameter rectangles (u0, u1, v0, v1) of the face where the
+    (N,) int, the first of the head's orientations nearest the normal that reaches it (0: the
+    nearest, -1: none; the axis taken may be another that serves more points, see
+    :func:`fewest_orientations`); unreached: (K, 4) parameter rectangles (u0, u1, v0, v1) of the face where the
     probe reaches no point, so none was placed there (cmmsampling.geometry.domain), None when
     not judged; unreached_area: their area, mm^2."""
 
@@ -153,6 +157,101 @@ def reach(probe: Probe, obstacles: Obstacles, points: np.ndarray, normals: np.nd
     return Access(reachable, axes, tilts, angles, ranks)
 
 
+def orientation_choices(probe: Probe, obstacles: Obstacles, points: np.ndarray, normals: np.ndarray,
+                        axes: np.ndarray, judged: bool) -> tuple[np.ndarray, np.ndarray, Reaches, np.ndarray]:
+    """Which of an indexing head's orientations reach each of some reachable points, for a set cover.
+
+    points, normals, axes: (N, 3) mm, unit, unit: the points, their normals and the axes they are
+    reached along (:func:`reach`). Returns (grid (K, 3) unit, the head's orientations
+    (:func:`cmmsampling.access.probe.index_axes`); tilts (N, K) degrees from each normal; reaches,
+    a Reaches: an orientation may reach a point within max_tilt of its normal and max_head_angle
+    of the vertical, and does where its pose is clear of the part (:func:`poses_blocked`, tested
+    when the cover asks), and, unless ``judged`` (a judge will measure them), is not one the fast
+    test is unsure of (:func:`unsure_poses`); each point's own axis reaches it; unsure (N, K) bool,
+    filled in as the poses are tested: the clear poses the fast test is unsure of).
+    """
+    grid = index_axes(probe)
+    tilts = np.degrees(np.arccos(np.clip(normals @ grid.T, -1.0, 1.0)))
+    upright = np.degrees(np.arccos(np.clip(grid[:, 2], -1.0, 1.0))) <= probe.max_head_angle + 1e-9
+    unsure = np.zeros(tilts.shape, dtype=bool)
+
+    def test(rows: np.ndarray, column: int) -> np.ndarray:
+        axes_k = np.repeat(grid[column][None, :], len(rows), axis=0)
+        clear = ~poses_blocked(probe, obstacles, points[rows], normals[rows], axes_k)
+        centres = points[rows[clear]] + probe.radius * normals[rows[clear]]
+        unsure[rows[clear], column] = unsure_poses(probe, obstacles, centres, axes_k[clear])
+        return clear if judged else clear & ~unsure[rows, column]
+
+    reaches = Reaches((tilts <= probe.max_tilt + 1e-9) & upright[None, :], test)
+    everyone = np.arange(len(points))
+    own = np.argmax(axes @ grid.T, axis=1)
+    reaches.possible[everyone, own] = True
+    reaches.set(everyone, own, True)
+    return grid, tilts, reaches, unsure
+
+
+# A judge of probe poses: ball centres (M, 3) mm, axes (M, 3) unit -> (M,) int8, 1 where the stylus
+# and the body are clear of the part, 0 where not, -1 where it gave no answer (its time ran out).
+PoseJudge = Callable[[np.ndarray, np.ndarray], np.ndarray]
+
+
+def fewest_orientations(probe: Probe, obstacles: Obstacles, points: np.ndarray, normals: np.ndarray,
+                        access: Access, judge: PoseJudge | None = None) -> tuple[Access, np.ndarray]:
+    """Points (N, 3) mm with normals (N, 3) unit re-aimed so that as few of an indexing head's
+    orientations as can serve them do: (their Access, judged (N,) bool: the axis taken was found
+    clear by ``judge``).
+
+    The greedy set cover (:func:`cmmsampling.access.orientations.greedy_cover`) over the
+    orientations clear of the part (:func:`orientation_choices`); a pose the fast test is unsure
+    of, other than the point's own axis in access, is taken only once ``judge`` (e.g. OCC's,
+    :meth:`Reachability.final`) finds it clear, and the cover runs again without those it finds
+    blocked or leaves unanswered (without a judge, not at all). The axes, tilts and angles change,
+    the reach and the ranks stay. A continuous head (index_step None), which needs no index move,
+    keeps each point's axis nearest its normal: the Access comes back as it is.
+    """
+    judged = np.zeros(len(access.reachable), dtype=bool)
+    if probe.index_step is None or not access.reachable.any():
+        return access, judged
+    reached = np.flatnonzero(access.reachable)
+    points = np.asarray(points, dtype=float).reshape(-1, 3)[reached]
+    normals = np.asarray(normals, dtype=float).reshape(-1, 3)[reached]
+    grid, tilts, reaches, unsure = orientation_choices(probe, obstacles, points, normals, access.axes[reached],
+                                                       judge is not None)
+    everyone = np.arange(len(reached))
+    found = np.zeros(tilts.shape, dtype=bool)
+    while True:
+        chosen = greedy_cover(reaches, tilts)
+        asking = unsure[everyone, chosen] & ~found[everyone, chosen]
+        if not asking.any():
+            break
+        assert judge is not None   # without one, the unsure poses reach nothing
+        rows, columns = everyone[asking], chosen[asking]
+        answers = np.asarray(judge(points[rows] + probe.radius * normals[rows], grid[columns]))
+        found[rows[answers == 1], columns[answers == 1]] = True
+        reaches.set(rows[answers != 1], columns[answers != 1], False)
+    judged[reached] = found[everyone, chosen]
+    axes, tilted, angles = access.axes.copy(), access.tilts.copy(), access.angles.copy()
+    axes[reached] = grid[chosen]
+    tilted[reached] = tilts[everyone, chosen]
+    angles[reached] = head_angles(axes[reached])
+    return Access(access.reachable.copy(), axes, tilted, angles, access.ranks.copy(), access.unreached,
+                  access.unreached_area), judged
+
+
+def unsure_poses(probe: Probe, obstacles: Obstacles, centres: np.ndarray, axes: np.ndarray) -> np.ndarray:
+    """(M,) bool: the poses, ball centres (M, 3) mm along axes (M, 3) unit, whose stylus or body
+    the fast test finds blocked once widened by another margin (``obstacles.margin``): near
+    enough to the part for OCC to judge them (:meth:`Reachability.final`)."""
+    count = len(centres)
+    if not count:
+        return np.zeros(0, dtype=bool)
+    starts = np.concatenate([centres + probe.stylus_start * axes, centres + probe.stylus_length * axes])
+    ends = np.concatenate([centres + probe.stylus_length * axes, centres + probe.reach * axes])
+    radii = np.repeat([0.5 * probe.stylus_diameter, 0.5 * probe.body_diameter], count) + obstacles.margin
+    blocked = obstacles.cylinders_blocked(starts, ends, radii)
+    return blocked[:count] | blocked[count:]
+
+
 class ExactPoses:
     """OCC's verdict on single probe poses, from the part's faces near each pose.
 
@@ -203,8 +302,11 @@ class ExactPoses:
 
 # How far OCC may find the touching ball inside the part (mm) and still call it a touch.
 TOUCH_TOLERANCE = 1e-3
-# The seconds OCC's stylus and body checks may take for the final points of one run.
+# The seconds OCC's stylus and body checks may take for the final points of one run, and the
+# share of them the orientations' cover may take first (the poses it would take instead of the
+# axes nearest the normals).
 EXACT_SECONDS = 20.0
+COVER_SHARE = 0.5
 # The coarsest the part's model may know its surface, as a share of the ball's radius: the touch
 # test takes that much off the ball.
 COARSEST_DEFLECTION = 0.5
@@ -265,18 +367,22 @@ class Reachability:
 
     def final(self, points: np.ndarray, normals: np.ndarray) -> tuple[Access, list[int], int]:
         """The Access of final points (M, 3) mm with normals (M, 3) unit, all on one face: each
-        point's axis from the fast test, then its pose measured with OCC (:class:`ExactPoses`):
+        point's axis from the fast test, as few of an indexing head's orientations as serve them
+        all (:func:`fewest_orientations`), then its pose measured with OCC (:class:`ExactPoses`):
         the ball's touch at every point, the stylus and the body where the fast test is unsure
-        (:meth:`unsure`), for at most EXACT_SECONDS in all. A pose OCC finds touching the part
-        anywhere but at the ball's contact is unreachable. Returns (Access, [index of each point
-        OCC refused], the number of unsure poses the time left to the fast test, which errs on
-        the side of blocking)."""
+        (:meth:`unsure`), for at most EXACT_SECONDS in all (the cover's own questions, the poses
+        it would take instead of the axis nearest the normal, in the first COVER_SHARE of them).
+        A pose OCC finds touching the part anywhere but at the ball's contact is unreachable.
+        Returns (Access, [index of each point OCC refused], the number of unsure poses the time
+        left to the fast test, which errs on the side of blocking)."""
+        ends = time.perf_counter() + EXACT_SECONDS
         access = reach(self.probe, self.obstacles, points, normals)
+        access, judged = fewest_orientations(self.probe, self.obstacles, points, normals, access,
+                                             self.judge_until(ends - (1.0 - COVER_SHARE) * EXACT_SECONDS))
         reached = np.flatnonzero(access.reachable)
         centres = points[reached] + self.probe.radius * normals[reached]
-        doubtful = self.unsure(centres, access.axes[reached])
+        doubtful = self.unsure(centres, access.axes[reached]) & ~judged[reached]
         refused, unmeasured, outward = [], 0, None
-        ends = time.perf_counter() + EXACT_SECONDS
         for index, centre, doubt in zip(reached, centres, doubtful):
             touches = self.exact.ball_gap(centre) < -TOUCH_TOLERANCE
             if not touches and outward is None:   # one face's normals all point out of the part, or all in
@@ -293,13 +399,21 @@ class Reachability:
             access.ranks[refused] = -1
         return access, refused, unmeasured
 
+    def judge_until(self, deadline: float) -> PoseJudge:
+        """A PoseJudge (:func:`fewest_orientations`) that measures the stylus and the body with OCC
+        (:meth:`ExactPoses.body_clear`) until time.perf_counter() passes ``deadline`` (s), then
+        answers -1."""
+        def judge(centres: np.ndarray, axes: np.ndarray) -> np.ndarray:
+            answers = np.full(len(centres), -1, dtype=np.int8)
+            for k, (centre, axis) in enumerate(zip(centres, axes)):
+                if time.perf_counter() > deadline:
+                    break
+                answers[k] = int(self.exact.body_clear(centre, axis))
+            return answers
+        return judge
+
     def unsure(self, centres: np.ndarray, axes: np.ndarray) -> np.ndarray:
         """(M,) bool: the poses, ball centres (M, 3) mm along axes (M, 3) unit, whose stylus or body
         the fast test finds blocked once widened by another margin (it found them clear with
-        one): near enough to the part for OCC to judge them."""
-        probe, count = self.probe, len(centres)
-        starts = np.concatenate([centres + probe.stylus_start * axes, centres + probe.stylus_length * axes])
-        ends = np.concatenate([centres + probe.stylus_length * axes, centres + probe.reach * axes])
-        radii = np.repeat([0.5 * probe.stylus_diameter, 0.5 * probe.body_diameter], count) + self.obstacles.margin
-        blocked = self.obstacles.cylinders_blocked(starts, ends, radii) if count else np.zeros(0, bool)
-        return blocked[:count] | blocked[count:]
+        one): near enough to the part for OCC to judge them (:func:`unsure_poses`)."""
+        return unsure_poses(self.probe, self.obstacles, centres, axes)
