@@ -150,8 +150,8 @@ PLAN_COLUMNS = ("Face", "Area (mm^2)", "N", "Max deviation", "Local bound", "Tol
 def write_plan_report(sheet, plan, moves=None):
     """The per-part table of a plan in a spreadsheet: a title, the goal, one row per face and a
     row for the part (points in all, the worst face's deviation); below, for a plan made with a
-    probe, the probe and, given its path (moves: a ProbeMoves), the path's length (mm) and the
-    measuring time (s) as numbers. Area, N, maximum and bound are numbers (the deviations in mm,
+    probe, the probe and, given its path (moves: a ProbeMoves), the path's length (mm), the
+    measuring time (s), the head orientations and the tip changes as numbers. Area, N, maximum and bound are numbers (the deviations in mm,
     shown in micrometres; empty where there is none)."""
     goal = (f"tolerance {plan.tolerance:g} mm" if plan.tolerance is not None else f"{plan.budget} points")
     head = [("CMM sampling plan",), ("Goal", goal), ("Strategy", plan.strategy), (), PLAN_COLUMNS]
@@ -256,7 +256,10 @@ def _probe_rows(probe, moves):
     if moves is not None:
         rows += [("Probe path", float(moves.travel), "mm of moves between the points, "
                   f"{moves.detours} over the clearance plane"),
-                 ("Measuring time", float(moves.seconds), "s, estimated from the CMM's speeds")]
+                 ("Measuring time", float(moves.seconds), "s, estimated from the CMM's speeds and the head's "
+                  "index moves"),
+                 ("Orientations", moves.orientations, "head orientations the points are measured with"),
+                 ("Tip changes", moves.tip_changes, "changes of orientation along the path (index moves)")]
     return rows
 
 
