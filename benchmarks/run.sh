@@ -41,6 +41,9 @@ run_one() {
                         "Probe plans against their targets, as ratios to the prototype, beside a CPU-bound process" \
                         "$PY" benchmarks/probe_plans.py --beside-busy ;;
     probe-path) page probe-path "A part plan with the probe's reach and path (Ventilator.stp)" "$PY" benchmarks/probe_path.py ;;
+    probe-orientations) page probe-orientations \
+                          "Tip changes of the Ventilator's probe plans, before and after the orientations' set cover" \
+                          "$PY" benchmarks/probe_orientations.py ;;
     long-runs) page long-runs "Big and long runs: time and memory" "$PY" benchmarks/long_runs.py ;;
     paper-run-spread) page paper-run-spread "The paper's run over 12 seeds: the spread a test must allow" \
                         "$PY" benchmarks/paper_run_spread.py 12 ;;
@@ -55,7 +58,7 @@ run_one() {
     *) echo "unknown benchmark '$1'; choose from: $ALL" >&2; return 2 ;;
   esac
 }
-ALL="inspection-speed inspection-speed-busy speed part-plan-speed part-plan-ventilator part-plan-ventilator-optimal speed-busy long-runs memory near-optimal probe-plans probe-plans-busy probe-path part-plan-points delivered-deviation paper-run-spread series-error"
+ALL="inspection-speed inspection-speed-busy speed part-plan-speed part-plan-ventilator part-plan-ventilator-optimal speed-busy long-runs memory near-optimal probe-plans probe-plans-busy probe-path probe-orientations part-plan-points delivered-deviation paper-run-spread series-error"
 status=0
 for name in ${@:-$ALL}; do
   echo "== $name"
