@@ -19,6 +19,7 @@ order with the detours and index moves it needs.
 """
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -80,11 +81,14 @@ class ProbeMoves:
 
 
 def moves_through(probe: Probe, obstacles: Obstacles, points: np.ndarray, normals: np.ndarray, axes: np.ndarray,
-                  motion: Motion | None = None, by_orientation: bool = True) -> ProbeMoves:
+                  motion: Motion | None = None, by_orientation: bool = True,
+                  groups: Sequence[np.ndarray] | None = None) -> ProbeMoves:
     """The path through reachable points (N, 3) mm with normals (N, 3) and probe axes (N, 3)
     unit (:func:`cmmsampling.access.reach.reach`); motion: speeds and index time for the time
     estimate and the order (default Motion()); by_orientation: order for the least estimated time,
-    index moves included (see the module's docstring); False: by travel alone. Returns ProbeMoves."""
+    index moves included (see the module's docstring); False: by travel alone; groups: index
+    arrays covering the points once, visited one after the other, each in its own best order (a
+    plan's datum faces before the toleranced points; None: one group). Returns ProbeMoves."""
     points, normals, axes = (np.asarray(v, dtype=float).reshape(-1, 3) for v in (points, normals, axes))
     motion = motion or Motion()
     centres, ready = probe.stations(points, normals)
@@ -96,16 +100,23 @@ def moves_through(probe: Probe, obstacles: Obstacles, points: np.ndarray, normal
     ends = _end_lengths(ready, exits, above)
     labels = orientation_labels(axes)
     indexing = probe.index_step is not None
-    if by_orientation:
-        index_length = motion.index_time * motion.move_speed if indexing else 0.0
-        order = _quick_order(lengths, cdist(ready, ready), ends, labels, index_length)
-    else:
-        order = _short_order(lengths, cdist(ready, ready))
+    straight_lines = cdist(ready, ready)
+    index_length = motion.index_time * motion.move_speed if indexing else 0.0
+
+    def ordered(rows: np.ndarray) -> np.ndarray:
+        """rows in their best order (see by_orientation)."""
+        block = np.ix_(rows, rows)
+        if not by_orientation:
+            return rows[_short_order(lengths[block], straight_lines[block])]
+        return rows[_quick_order(lengths[block], straight_lines[block], ends[rows],
+                                 np.unique(labels[rows], return_inverse=True)[1], index_length)]
+
+    order = np.concatenate([ordered(np.asarray(rows)) for rows in (groups or [np.arange(len(points))])])
     legs = _legs(order, ready, exits, above, direct)
     waypoints, kinds = _waypoints(order, centres, legs)
     steps = np.linalg.norm(np.diff(waypoints, axis=0), axis=1)
     travel = float(steps[kinds != "touch"].sum())
-    plain = nearest_neighbour(cdist(ready, ready))
+    plain = nearest_neighbour(straight_lines)
     straight = float(np.linalg.norm(np.diff(ready[plain], axis=0), axis=1).sum())
     baseline = float(lengths[plain[:-1], plain[1:]].sum() + ends[plain[0]] + ends[plain[-1]])
     detours = int(np.count_nonzero(~direct[order[:-1], order[1:]]))

@@ -324,6 +324,7 @@ def plan(shape_or_faces: Part.Shape | list, tolerance: float | None = None, n_to
     if not named:
         raise InputError("every face to plan is a datum face: give the toleranced faces too (faces=[...])")
     part, part_brep = _part(shape_or_faces, part, probe)
+    datum_plans = _datum_plans(datum_faces, probe, part, edge_offset)
     arguments = {"workers": 1, **arguments}
     if edge_offset is not None:
         arguments["edge_offset"] = check_real("edge_offset", edge_offset, 0.0)
@@ -349,7 +350,7 @@ def plan(shape_or_faces: Part.Shape | list, tolerance: float | None = None, n_to
             raise InputError("resume= continues a plan to a tolerance; plan a total of points (n_total=) anew")
         result = _plan_budget(named, check_int("n_total", n_total, 1), strategy, arguments, processes, scheduler,
                               progress, part_brep, probe)
-    with_datums(result, datum_faces, probe, part, arguments.get("edge_offset"))
+    with_datums(result, datum_plans, dict(datum_faces))
     result.seconds = time.perf_counter() - start
     result.shapes = {**dict(datum_faces), **dict(named)}
     result.part, result.probe = part, probe
@@ -379,15 +380,23 @@ def _datum_faces(shape_or_faces, named, datums):
     return [(name, known[name]) for name in names]
 
 
-def with_datums(result, datum_faces, probe, part, edge_offset):
-    """Put the datum faces' FacePlans (their points spread for the frame) first in result's faces
-    and its datums in ``result.datums``."""
+def _datum_plans(datum_faces, probe, part, edge_offset):
+    """The DatumPoints of the datum faces (cmmsampling.planning.datum_points), before any face
+    runs: a datum the probe cannot reach is refused at once."""
     from .datum_points import plan_datums
 
     if not datum_faces:
+        return []
+    return plan_datums(datum_faces, probe, part, None if edge_offset is None else check_real("edge_offset",
+                                                                                          edge_offset, 0.0))
+
+
+def with_datums(result, planned, shapes):
+    """Put the datum faces' FacePlans (planned: their DatumPoints, shapes: {name: Part.Face})
+    first in result's faces and their names in ``result.datums``."""
+    if not planned:
         return
-    planned = plan_datums(datum_faces, probe, part, edge_offset)
-    faces = [FacePlan(datum.face, float(dict(datum_faces)[datum.face].Area), len(datum.points), datum.uv,
+    faces = [FacePlan(datum.face, float(shapes[datum.face].Area), len(datum.points), datum.uv,
                       datum.points, datum.normals, strategy="datum",
                       settings={"datum": datum.label, "motions": datum.motions}, access=datum.access,
                       datum=datum.label) for datum in planned]

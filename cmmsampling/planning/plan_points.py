@@ -60,4 +60,15 @@ def plan_moves(plan, motion=None):
                          "order='short_path', or plan again")
     points = np.concatenate([face.points for face in placed])
     normals = np.concatenate([face.normals for face in placed])
-    return moves_through(plan.probe, Obstacles(plan.part), points, normals, axes, motion)
+    return moves_through(plan.probe, Obstacles(plan.part), points, normals, axes, motion,
+                         groups=measuring_groups(placed))
+
+
+def measuring_groups(placed):
+    """The point indices of a plan's faces with points (FacePlans, datum faces first) measured
+    one group after the other: each datum face's, then all the others'."""
+    starts = np.cumsum([0] + [face.n for face in placed])
+    datums = [np.arange(starts[k], starts[k + 1]) for k, face in enumerate(placed) if face.datum]
+    rest = np.concatenate([np.arange(starts[k], starts[k + 1]) for k, face in enumerate(placed) if not face.datum]
+                          or [np.empty(0, dtype=int)])
+    return datums + ([rest] if rest.size else [])

@@ -52,6 +52,14 @@ def test_inspect_takes_the_datums_from_the_plan(planned, block, tmp_path):
     assert own.profile == typed.profile and own.passed == typed.passed
 
 
+def test_a_datum_the_probe_cannot_reach_is_refused_naming_it(block):
+    from cmmsampling.access.probe import Probe
+
+    with pytest.raises(InputError, match=r"datum A \(Face1\): the probe reaches only 0 points on it away from its "
+                                         "edges; choose another face as datum A"):
+        cmmsampling.plan(block, tolerance=0.05, faces=[3], datums=[1], processes=1, probe=Probe(), n_max=30)
+
+
 @pytest.mark.parametrize("datums, message", [
     ([9], "the shape has faces 1 to 6; there is no face 9"),
     (["Face9"], "datum 'Face9' is no face of the part"),
@@ -126,3 +134,20 @@ def test_a_live_cmm_measures_the_datums_first_and_the_plan_judges_them(planned, 
     typed = cmmsampling.inspect(planned, run, part=block, tolerance=0.05, datums=list(DATUM_FACES))
     assert [datum.label for datum in own.datums] == ["A", "B", "C"]
     assert abs(own.profile - typed.profile) < 1e-12 and own.passed is typed.passed is True
+
+
+def test_a_probe_plan_with_datums_measures_them_first_along_its_collision_free_path(block, tmp_path):
+    from cmmsampling.access.probe import Probe
+
+    probed = cmmsampling.plan(block, tolerance=0.05, faces=[3], datums=[5, 4], processes=1,
+                              strategy="uniform_parametric", probe=Probe(), n_max=30)   # the base lies on the table
+    assert probed.faces[0].access is not None and probed.faces[0].access.reachable.all()
+    report = cmmsampling.export(probed, tmp_path / "probed.dmi")
+    assert report.order == "probe_path", "made with a probe: its path by default"
+    text = (tmp_path / "probed.dmi").read_text()
+    assert check(text) == [] and "GOTO/" in text
+    measured = [line.split("(")[1].split(")")[0] for line in text.splitlines() if line.startswith("MEAS/POINT,")]
+    datum_points = sum(face.n for face in probed.faces if face.datum)
+    assert [label.split("_")[0] for label in measured[:datum_points]] == ["Face5"] * 6 + ["Face4"] * 4
+    assert "D(DRF)=DATSET/DAT(A),ZDIR,ZORIG,DAT(B),XDIR,XORIG" in text
+    assert all(label.startswith("Face3_") for label in measured[datum_points:])
