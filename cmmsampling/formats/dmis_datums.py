@@ -173,12 +173,19 @@ def tolerance_label(face: str) -> str:
     return f"PROF_{face}"
 
 
+# What DMIS cannot state of the verdict, said before the profile tolerances.
+VERDICT_COMMENT = ["$$ the CMM evaluates these profiles its own way; cmmsampling.inspect judges",
+                   "$$+ the same points to ISO 1101 on tangent datums (ISO 5459) with the",
+                   "$$+ expanded uncertainty U and ISO 14253-1's decision, which DMIS cannot state"]
+
+
 def tolerance_lines(faces: list[str], tolerance: float, groups: list[DatumGroup], statement) -> list[str]:
-    """T(PROF_<face>)=TOL/PROFS,-t/2,+t/2[,DAT(A),...] for each toleranced face (tolerance t mm)."""
+    """T(PROF_<face>)=TOL/PROFS,-t/2,+t/2[,DAT(A),...] for each toleranced face (tolerance t mm),
+    after VERDICT_COMMENT."""
     limits = fixed(np.array([-0.5 * tolerance, 0.5 * tolerance]), COORDINATE_DECIMALS).tolist()
     datums = [f"DAT({group.label})" for group in groups if group.plane is not None]
-    return [line for face in faces
-            for line in statement([f"T({tolerance_label(face)})=TOL/PROFS", *limits, *datums])]
+    return VERDICT_COMMENT + [line for face in faces
+                              for line in statement([f"T({tolerance_label(face)})=TOL/PROFS", *limits, *datums])]
 
 
 def profile_lines(face: str, labels: list[str], statement) -> list[str]:

@@ -42,7 +42,8 @@ class ExportReport:
     along the normals (0: contact points); ball_radius: mm, the radius stated beside contact
     points (DMIS); for a probe path: length_before is the straight
     nearest-neighbour order with the detours it needs, length_after the path's travel, detours
-    its moves over the clearance plane and seconds the estimated measuring time.
+    its moves over the clearance plane, seconds the estimated measuring time, orientations the
+    head orientations (sensors) and tip_changes the changes between them along the path.
     """
 
     path: str
@@ -56,6 +57,8 @@ class ExportReport:
     detours: int = 0
     seconds: float | None = None
     ball_radius: float = 0.0
+    orientations: int = 0
+    tip_changes: int = 0
 
     @property
     def saving(self):
@@ -73,7 +76,8 @@ class ExportReport:
         if self.order == "probe_path":
             return line + (f"Collision-free probe path: {self.length_after:.1f} mm of moves, {self.detours} over the "
                            f"clearance plane (the straight nearest-neighbour order with its detours: "
-                           f"{self.length_before:.1f} mm); about {self.seconds:.0f} s of measuring.")
+                           f"{self.length_before:.1f} mm); {self.orientations} head orientation(s), "
+                           f"{self.tip_changes} tip change(s); about {self.seconds:.0f} s of measuring.")
         if self.order == "short_path":
             line += f"Probe path {self.length_after:.1f} mm in the short-path order"
             if self.saving > 0:
@@ -199,7 +203,8 @@ def export(source: SamplingResult | PointSet | object, path: str | os.PathLike, 
     target = write_atomically(path, text, FORMATS[fmt].encoding)
     return ExportReport(target, fmt, len(point_set), order, path_order.length_before, path_order.length_after,
                         facts["frame"], facts.get("probe_radius_mm", 0.0), 0 if moves is None else moves.detours,
-                        None if moves is None else moves.seconds, facts.get("ball_radius_mm", 0.0))
+                        None if moves is None else moves.seconds, facts.get("ball_radius_mm", 0.0),
+                        0 if moves is None else moves.orientations, 0 if moves is None else moves.tip_changes)
 
 
 def measuring_groups(point_set: PointSet) -> list[np.ndarray]:

@@ -78,6 +78,7 @@ def test_the_program_sets_the_frame_from_the_datums_and_states_the_profile(plann
     assert "DATDEF/FA(DAT_A),DAT(A)" in statements and "DATDEF/FA(DAT_C),DAT(C)" in statements
     assert "D(DRF)=DATSET/DAT(A),ZDIR,ZORIG,DAT(B),XDIR,XORIG,DAT(C),YORIG" in statements
     assert "T(PROF_Face3)=TOL/PROFS,-0.0250000,0.0250000,DAT(A),DAT(B),DAT(C)" in statements
+    assert "$$+ expanded uncertainty U and ISO 14253-1's decision, which DMIS cannot state" in text
     assert "OUTPUT/FA(Face3),TA(PROF_Face3)" in statements
     first_toleranced = next(k for k, line in enumerate(statements) if line.startswith("F(Face3_P1)="))
     assert statements.index("D(DRF)=DATSET/DAT(A),ZDIR,ZORIG,DAT(B),XDIR,XORIG,DAT(C),YORIG") < first_toleranced
@@ -144,6 +145,8 @@ def test_a_probe_plan_with_datums_measures_them_first_along_its_collision_free_p
     assert probed.faces[0].access is not None and probed.faces[0].access.reachable.all()
     report = cmmsampling.export(probed, tmp_path / "probed.dmi")
     assert report.order == "probe_path", "made with a probe: its path by default"
+    assert f"{report.orientations} head orientation(s), {report.tip_changes} tip change(s)" in str(report)
+    assert 1 <= report.orientations and report.tip_changes <= report.orientations + 1
     text = (tmp_path / "probed.dmi").read_text()
     assert check(text) == [] and "GOTO/" in text
     measured = [line.split("(")[1].split(")")[0] for line in text.splitlines() if line.startswith("MEAS/POINT,")]
