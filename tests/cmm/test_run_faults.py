@@ -97,36 +97,54 @@ def _wait_for_points(path, count, process, limit_s=60.0):
     raise AssertionError(f"no {count} points in {path} (process ended: {process.poll()})")
 
 
+def held_at(point, release):
+    """A fault: the answer to the point's PtMeas waits until release (a threading.Event) is set,
+    so that a signal reaches the measuring process while it waits for that point, whatever the
+    machine's load."""
+
+    def hold(tag, answers):
+        release.wait(60)
+        return answers
+
+    return at("PtMeas", point, hold)
+
+
 def test_kill_9_leaves_the_points_measured_before_it_for_inspect(result, tmp_path):
-    with SimulatedCMM(VirtualPart.of(result, form_error=0.01, seed=3), move_s=0.1) as cmm:
+    release = threading.Event()
+    with faulty(result, held_at(10, release)) as cmm:
         process = _measuring_process(result, tmp_path, cmm.address)
         try:
             _wait_for_points(tmp_path / "p.csv", 9, process)
             process.kill()
         finally:
+            release.set()
             process.communicate(timeout=30)
     assert process.returncode == -signal.SIGKILL
     points = cmmsampling.read_points(tmp_path / "p.csv")
-    assert 9 <= len(points) < 16 and points.metadata["run_end"] == "in progress"
-    assert points.labels == result.labels[:len(points)]
+    assert len(points) == 9 and points.metadata["run_end"] == "in progress"
+    assert points.labels == result.labels[:9]
     log = (tmp_path / "run.log").read_text()
-    assert log.count(" # X(") >= len(points), "every point kept has its answer in the transcript"
+    last = log.splitlines()[-1]
+    assert log.count(" # X(") == 9 and last.startswith("> ") and " PtMeas(" in last, \
+        "the transcript up to the command under way"
     found = cmmsampling.inspect(result, tmp_path / "p.csv", tolerance=0.1)
-    assert len(found.labels) == len(points) and found.profile < 0.05
+    assert len(found.labels) == 9 and found.profile < 0.05
 
 
 def test_ctrl_c_keeps_the_points_and_ends_the_session(result, tmp_path):
-    with SimulatedCMM(VirtualPart.of(result), move_s=0.1) as cmm:
+    release = threading.Event()
+    with faulty(result, held_at(3, release)) as cmm:
         process = _measuring_process(result, tmp_path, cmm.address)
         try:
             _wait_for_points(tmp_path / "p.csv", 2, process)
             process.send_signal(signal.SIGINT)
         finally:
+            release.set()
             _, err = process.communicate(timeout=60)
     assert process.returncode != 0 and "KeyboardInterrupt" in err
-    assert "cmmsampling: Measured" in err, "the run is named in the exception's note"
+    assert "cmmsampling: Measured 2 of 16" in err, "the run is named in the exception's note"
     points = cmmsampling.read_points(tmp_path / "p.csv")
-    assert 2 <= len(points) < 16 and points.metadata["run_end"] == "stopped: interrupted (Ctrl-C)"
+    assert len(points) == 2 and points.metadata["run_end"] == "stopped: interrupted (Ctrl-C)"
     assert cmm.commands[-1].endswith("EndSession()")
 
 

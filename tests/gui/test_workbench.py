@@ -640,7 +640,8 @@ def test_the_export_report_says_in_words_what_was_written(doc, tmp_path):
     export_options.show_export_report(report)
     assert wait_until(lambda: "Wrote 25 points to " in dock_text("Report view")[len(before):], 2)
     line = dock_text("Report view")[len(before):]
-    assert f"Wrote 25 points to {path} (DMIS, global frame, contact points). Probe path " in line
+    assert (f"Wrote 25 points to {path} (DMIS, global frame, contact points, ball radius 1 mm stated). "
+            "Probe path ") in line
     assert f"{report.length_after:.1f} mm in the short-path order ({report.length_before:.1f} mm in the " \
            "optimised order: " in line and "% shorter)" in line
 
