@@ -79,9 +79,12 @@ def test_each_point_is_on_disk_when_the_next_one_is_asked_for(result, tmp_path):
 
 
 def _measuring_process(result, tmp_path, server):
-    """A process measuring result's points (exported to planned.csv) into p.csv with a log."""
+    """A process measuring result's points (exported to planned.csv) into p.csv with a log. It
+    takes Ctrl-C as a terminal's Python does, also where the tests run as a background job (whose
+    SIGINT a non-interactive shell ignores, and Python then leaves ignored)."""
     cmmsampling.export(result, tmp_path / "planned.csv")
-    script = (f"import sys\nsys.path.insert(0, {ROOT!r})\nimport cmmsampling\n"
+    script = (f"import signal, sys\nsignal.signal(signal.SIGINT, signal.default_int_handler)\n"
+              f"sys.path.insert(0, {ROOT!r})\nimport cmmsampling\n"
               f"cmmsampling.measure(cmmsampling.read_points({str(tmp_path / 'planned.csv')!r}), {server!r}, "
               f"{str(tmp_path / 'p.csv')!r}, log={str(tmp_path / 'run.log')!r})\n")
     return subprocess.Popen([PYTHON, "-c", script], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
