@@ -115,8 +115,11 @@ def datum_frame(planes: list[tuple[np.ndarray, np.ndarray]]) -> np.ndarray:
 
 
 def yaw_pitch_roll(rotation: np.ndarray) -> tuple[float, float, float]:
-    """Degrees (a, b, c) of a (3, 3) rotation R = Rz(a) Ry(b) Rx(c)."""
+    """Degrees (a, b, c) of a (3, 3) rotation R = Rz(a) Ry(b) Rx(c); at b = +-90 deg (where only
+    a -+ c is fixed) c = 0."""
     pitch = np.degrees(np.arcsin(np.clip(-rotation[2, 0], -1.0, 1.0)))
+    if np.hypot(rotation[0, 0], rotation[1, 0]) < 1e-12:
+        return float(np.degrees(np.arctan2(-rotation[0, 1], rotation[1, 1]))), float(pitch), 0.0
     yaw = np.degrees(np.arctan2(rotation[1, 0], rotation[0, 0]))
     roll = np.degrees(np.arctan2(rotation[2, 1], rotation[2, 2]))
     return float(yaw), float(pitch), float(roll)

@@ -154,3 +154,22 @@ def test_a_probe_plan_with_datums_measures_them_first_along_its_collision_free_p
     assert [label.split("_")[0] for label in measured[:datum_points]] == ["Face5"] * 6 + ["Face4"] * 4
     assert "D(DRF)=DATSET/DAT(A),ZDIR,ZORIG,DAT(B),XDIR,XORIG" in text
     assert all(label.startswith("Face3_") for label in measured[datum_points:])
+
+
+@pytest.mark.parametrize("yaw, pitch, roll", [(30, 10, 5), (10, 90, 0), (30, 90, 25), (-120, -90, 40),
+                                              (-120, 89.9999, 40), (170, -45, -170)])
+def test_the_frame_turns_recompose_the_rotation_at_any_pitch(yaw, pitch, roll):
+    """DATSET's move back to the CAD frame (ROTAT about Z, Y, X): Rz Ry Rx of the angles written
+    is the rotation, also at a pitch of +-90 deg, where only yaw -+ roll is fixed."""
+    from cmmsampling.formats.dmis_datums import yaw_pitch_roll
+
+    def turn(axis, degrees):
+        c, s = np.cos(np.radians(degrees)), np.sin(np.radians(degrees))
+        i, j = [k for k in range(3) if k != axis]
+        matrix = np.eye(3)
+        matrix[[i, i, j, j], [i, j, i, j]] = c, -s, s, c
+        return matrix if axis != 1 else matrix.T
+
+    rotation = turn(2, yaw) @ turn(1, pitch) @ turn(0, roll)
+    a, b, c = yaw_pitch_roll(rotation)
+    assert np.allclose(turn(2, a) @ turn(1, b) @ turn(0, c), rotation, atol=1e-9)
