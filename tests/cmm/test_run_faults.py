@@ -90,39 +90,37 @@ def _measuring_process(result, tmp_path, server):
     return subprocess.Popen([PYTHON, "-c", script], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
 
 
-def _wait_for_points(path, count, process, limit_s=60.0):
-    """Wait until the file at path holds at least count points (the process still running)."""
-    deadline = time.monotonic() + limit_s
-    while time.monotonic() < deadline and process.poll() is None:
-        if path.exists() and len(cmmsampling.read_points(path)) >= count:
-            return
-        time.sleep(0.02)
-    raise AssertionError(f"no {count} points in {path} (process ended: {process.poll()})")
-
-
-def held_at(point, release):
-    """A fault: the answer to the point's PtMeas waits until release (a threading.Event) is set,
-    so that a signal reaches the measuring process while it waits for that point, whatever the
-    machine's load."""
+def held_at(point, reached, release):
+    """A fault: the answer to the point's PtMeas waits until release (a threading.Event) is set;
+    reached is set when the command has come, so that a signal reaches the measuring process while
+    it waits for that point, whatever the machine's load."""
 
     def hold(tag, answers):
+        reached.set()
         release.wait(60)
         return answers
 
     return at("PtMeas", point, hold)
 
 
-def test_kill_9_leaves_the_points_measured_before_it_for_inspect(result, tmp_path):
-    release = threading.Event()
-    with faulty(result, held_at(10, release)) as cmm:
+def _signalled_while_held(result, tmp_path, point, signum):
+    """Run a measuring process against a CMM that holds the point's answer, send it signum while it
+    waits for that answer, and return (its return code, its stderr, the CMM)."""
+    reached, release = threading.Event(), threading.Event()
+    with faulty(result, held_at(point, reached, release)) as cmm:
         process = _measuring_process(result, tmp_path, cmm.address)
         try:
-            _wait_for_points(tmp_path / "p.csv", 9, process)
-            process.kill()
+            assert reached.wait(60), f"the measuring process never asked for point {point}: {process.poll()}"
+            process.send_signal(signum)
         finally:
             release.set()
-            process.communicate(timeout=30)
-    assert process.returncode == -signal.SIGKILL
+            _, err = process.communicate(timeout=60)
+    return process.returncode, err, cmm
+
+
+def test_kill_9_leaves_the_points_measured_before_it_for_inspect(result, tmp_path):
+    returncode, _, _ = _signalled_while_held(result, tmp_path, 10, signal.SIGKILL)
+    assert returncode == -signal.SIGKILL
     points = cmmsampling.read_points(tmp_path / "p.csv")
     assert len(points) == 9 and points.metadata["run_end"] == "in progress"
     assert points.labels == result.labels[:9]
@@ -135,16 +133,8 @@ def test_kill_9_leaves_the_points_measured_before_it_for_inspect(result, tmp_pat
 
 
 def test_ctrl_c_keeps_the_points_and_ends_the_session(result, tmp_path):
-    release = threading.Event()
-    with faulty(result, held_at(3, release)) as cmm:
-        process = _measuring_process(result, tmp_path, cmm.address)
-        try:
-            _wait_for_points(tmp_path / "p.csv", 2, process)
-            process.send_signal(signal.SIGINT)
-        finally:
-            release.set()
-            _, err = process.communicate(timeout=60)
-    assert process.returncode != 0 and "KeyboardInterrupt" in err
+    returncode, err, cmm = _signalled_while_held(result, tmp_path, 3, signal.SIGINT)
+    assert returncode != 0 and "KeyboardInterrupt" in err
     assert "cmmsampling: Measured 2 of 16" in err, "the run is named in the exception's note"
     points = cmmsampling.read_points(tmp_path / "p.csv")
     assert len(points) == 2 and points.metadata["run_end"] == "stopped: interrupted (Ctrl-C)"
