@@ -9,12 +9,13 @@ import numpy as np
 
 from ..access.obstacles import Obstacles
 from ..access.probe import Probe
-from ..formats.exporting import spacing_by_face
+from ..formats.exporting import measuring_groups, spacing_by_face
 from ..formats.pointset import PointSet
 from ..geometry.freecad_env import import_part
 from ..geometry.surface import SurfaceModel
 from ..geometry.validation import InputError
 from ..inspection.judge import Planned
+from ..planning.datum_points import datum_labels
 from ..access.probe_moves import moves_through
 from .object_types import PART_PLAN, PROBE_POINTS, SUBSTITUTE_SURFACE, plan_probe_points, source_face
 
@@ -268,10 +269,34 @@ class PartPlanGroup(TypedProxy):
 
     def __init__(self, obj):
         obj.Proxy = self
+        self.add_properties(obj)
+
+    @staticmethod
+    def add_properties(obj):
+        """Create the plan's stated properties it lacks (a group made by an earlier version has none):
+        Datums, the datum faces primary first, and Tolerance, the profile tolerance planned to."""
+        for kind, name, doc in (
+                ("App::PropertyStringList", "Datums",
+                 "The datum faces, primary first (datums A, B, C): measured first, the part's frame set on them"),
+                ("App::PropertyLength", "Tolerance",
+                 "The profile tolerance the plan was made to (mm); 0 for a plan to a total of points")):
+            if name not in obj.PropertiesList:
+                obj.addProperty(kind, name, "Plan", doc)
+                obj.setEditorMode(name, 1)
+
+    def onDocumentRestored(self, obj):
+        self.add_properties(obj)
+
+    def stated(self, obj):
+        """(the datum faces' names, primary first; the tolerance in mm or None): what the plan
+        states, which ``cmmsampling.inspect`` takes unless told otherwise."""
+        tolerance = float(getattr(obj, "Tolerance", 0.0))
+        return list(getattr(obj, "Datums", [])), (tolerance or None)
 
     def point_set(self, obj):
         """Every face's probe points as one :class:`cmmsampling.formats.pointset.PointSet`, face
-        by face; InputError for a plan group without points."""
+        by face (the datum faces first), with the plan's datums ({label: face}) and tolerance in
+        its metadata; InputError for a plan group without points."""
         members = plan_probe_points(obj)
         if not members:
             raise InputError(f"{obj.Label} holds no probe points: plan the part again")
@@ -285,6 +310,11 @@ class PartPlanGroup(TypedProxy):
                     **spacing_by_face({face: point_set.metadata for face, point_set in zip(faces, sets)})}
         if members[0].Probe:
             metadata["probe"] = json.loads(members[0].Probe)
+        datums, tolerance = self.stated(obj)
+        if datums:
+            metadata["datums"] = dict(zip(datum_labels(len(datums)), datums))
+        if tolerance is not None:
+            metadata["tolerance_mm"] = tolerance
         return PointSet(labels, np.concatenate([s.points for s in sets]), np.concatenate([s.normals for s in sets]),
                         np.concatenate([s.uv for s in sets]), np.concatenate([s.deviation for s in sets]), metadata,
                         [face for face, point_set in zip(faces, sets) for _ in range(len(point_set))],
@@ -314,7 +344,7 @@ class PartPlanGroup(TypedProxy):
         members = plan_probe_points(obj)
         probes = [ProbePoints.path_probe(member) for member in members]
         return moves_through(probes[0], Obstacles(members[0].Source[0].Shape), point_set.points, point_set.normals,
-                             point_set.axes, motion)
+                             point_set.axes, motion, groups=measuring_groups(point_set))
 
 
 class SubstituteSurface(TypedProxy):

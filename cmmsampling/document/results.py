@@ -3,6 +3,7 @@ changed: each in one transaction (one Undo removes it; a fault adds nothing)."""
 from __future__ import annotations
 
 import json
+from dataclasses import asdict
 
 import numpy as np
 
@@ -11,7 +12,7 @@ from ..formats.pointset import PointSet
 from ..geometry.freecad_env import import_part
 from ..geometry.surface import lies_on
 from ..geometry.validation import InputError, InputTypeError
-from ..planning.part_plan import PartPlan
+from ..planning.part_plan import DATUM_STRATEGY, PartPlan
 from ..access.probe_moves import probe_moves
 from ..strategies.result import SamplingResult
 from ..strategies.sampling import evaluate
@@ -81,11 +82,14 @@ def add_plan_to_document(plan: PartPlan, doc: FreeCAD.Document, part: FreeCAD.Do
     plan: a :class:`cmmsampling.planning.part_plan.PartPlan` of ``part``'s faces (a document
     object whose shape the plan's face names, Face1.., refer to); hide_others: as in
     :func:`add_to_document`. Creates a group "Plan <part label> (<strategy>)" holding a sub-group
-    per face with points (as :func:`add_to_document` makes it) and a "Plan report" spreadsheet:
-    face, area (mm^2), N, maximum deviation and bound (mm), tolerance met, notes, one row per
-    face and a row for the part, then the probe, its path's length and the measuring time.
-    replace: the group this function made for an earlier plan of the part (a cancelled plan that
-    ``plan`` resumed), removed with everything in it in the same transaction. Returns the group.
+    per datum face ("Datum A <part> Face1": its probe points only, spread to hold the frame, not
+    fitted), then one per toleranced face with points (as :func:`add_to_document` makes it) and a
+    "Plan report" spreadsheet: face, area (mm^2), N, maximum deviation and bound (mm), tolerance
+    met, notes, one row per face and a row for the part, then the probe, its path's length and
+    the measuring time. The group states the plan's datums and tolerance (Datums, Tolerance),
+    which its programs and ``inspect(group, measured)`` take. replace: the group this function
+    made for an earlier plan of the part (a cancelled plan that ``plan`` resumed), removed with
+    everything in it in the same transaction. Returns the group.
     """
     sources = [_check_source((part, face.name), doc) for face in plan.placed]
     replaced = _plan_objects(replace, doc)
@@ -93,20 +97,26 @@ def add_plan_to_document(plan: PartPlan, doc: FreeCAD.Document, part: FreeCAD.Do
         if not lies_on(plan.shapes[face.name], part.getSubObject(face.name)):
             raise InputError(f"{part.Label}.{face.name} is not the plan's {face.name}: give the object whose shape "
                              "was planned")
-    results = [plan.result(face.name) for face in plan.placed]
+    results = [None if face.datum else plan.result(face.name) for face in plan.placed]
     with transaction(doc, "Add part plan"):
         for obj in replaced:
             doc.removeObject(obj.Name)
         group = doc.addObject("App::DocumentObjectGroupPython", "Plan")
         PartPlanGroup(group)
+        group.Datums = list(plan.datums)
+        group.Tolerance = plan.tolerance or 0.0
         if hide_others:
             hide_results(doc)
         group.Label = f"Plan {part.Label} ({plan.strategy})"
         objects = []
-        for source, result in zip(sources, results):
+        for face, source, result in zip(plan.placed, sources, results):
             face_group = doc.addObject("App::DocumentObjectGroup", "Sampling")
-            face_group.Label = _group_label(result, source)
             group.addObject(face_group)
+            if face.datum:
+                face_group.Label = f"Datum {face.datum} {source[0].Label} {source[1]}"
+                objects += _fill_datum_group(face_group, face, source, plan.probe)
+                continue
+            face_group.Label = _group_label(result, source)
             objects += _fill_result_group(face_group, result, source, with_path=False, label_prefix=f"{source[1]}_")
         sheet = doc.addObject("Spreadsheet::Sheet", "PlanReport")
         sheet.Label = "Plan report"
@@ -120,6 +130,28 @@ def add_plan_to_document(plan: PartPlan, doc: FreeCAD.Document, part: FreeCAD.Do
         write_plan_report(sheet, plan, moves)
         recompute(doc, objects + [sheet])
     return group
+
+
+def _fill_datum_group(group, face, source, probe):
+    """Add a datum face's probe points (face: its FacePlan) to ``group``, inside a transaction:
+    labels '<face>_P<i>', no substitute or report (a datum's few points hold the frame, they are
+    not fitted), the probe's reach where the plan judged it. Returns the objects."""
+    doc = group.Document
+    points = make_probe_points(doc, source)
+    points.LabelPrefix = f"{source[1]}_"
+    group.addObject(points)
+    points.Labels = [f"{source[1]}_P{i}" for i in range(1, face.n + 1)]
+    points.Points = [FreeCAD.Vector(*p) for p in np.asarray(face.points, dtype=float)]
+    points.Normals = [FreeCAD.Vector(*n) for n in np.asarray(face.normals, dtype=float)]
+    points.U = [float(u) for u in face.uv[:, 0]]
+    points.V = [float(v) for v in face.uv[:, 1]]
+    points.Deviation = [0.0] * face.n
+    points.Strategy = DATUM_STRATEGY
+    points.Parameters = json.dumps(face.settings, default=_json_value)
+    points.Notes = [f"datum {face.datum}: {face.n} points spread to fix {face.settings['motions']} motions of the "
+                    "part's frame; they are not fitted (no substitute or deviation)"]
+    write_access(points, face.access, None if probe is None else asdict(probe))
+    return [points]
 
 
 def _plan_objects(group, doc):
@@ -156,6 +188,9 @@ def reevaluate(points: FreeCAD.DocumentObject, occ_check: bool = True) -> Sampli
     face, problem = source_face(points)
     if face is None:
         raise InputError(f"cannot re-evaluate {points.Label}: {problem}")
+    if points.Strategy == DATUM_STRATEGY:
+        raise InputError(f"{points.SourceName or points.Label} holds a datum's points, spread to hold the part's frame "
+                         "and not fitted: plan the part again to place them on the face as it is now")
     face, renamed = _renumbered(points, face)
     settings = json.loads(points.Parameters)
     uv = np.column_stack([points.U, points.V])

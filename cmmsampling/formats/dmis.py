@@ -161,14 +161,9 @@ def frame_statements(facts):
     if placement is None:
         return []
     label = sanitise_labels([facts.get("frame_name") or "LOCAL"])[0]
-    origin = fixed(np.array(tuple(placement.Base)), COORDINATE_DECIMALS).tolist()
-    lines = [f"{DMIS_COMMENT} the local frame, from the part's CAD frame: TRANS, then ROTAT about Z, Y, X",
-             *dmis_statement([f"D({label})=TRANS/XORIG", origin[0], "YORIG", origin[1], "ZORIG", origin[2]])]
-    for axis, angle in zip(("ZAXIS", "YAXIS", "XAXIS"), placement.Rotation.getYawPitchRoll()):
-        text = fixed(angle, ANGLE_DECIMALS).item()
-        if float(text) != 0.0:
-            lines.append(f"D({label})=ROTAT/{axis},{text}")
-    return lines
+    frame = np.array(placement.toMatrix().A, dtype=float).reshape(4, 4)
+    return [f"{DMIS_COMMENT} the local frame, from the part's CAD frame: TRANS, then ROTAT about Z, Y, X",
+            *dmis_datums.placement_statements(label, frame, dmis_statement)]
 
 
 def without_repeated_gotos(lines):

@@ -15,7 +15,7 @@ from PySide import QtCore, QtGui
 from ..document import settings
 from ..formats.registry import measured_filter
 from ..inspection.align import ALIGNMENTS, DEGREES_OF_FREEDOM
-from ..inspection.judge import InspectionCancelled, inspect, verdict_words
+from ..inspection.judge import InspectionCancelled, inspect, stated, verdict_words
 from . import icon
 from .background import BackgroundTask, behind_progress
 from .qt_compat import asked
@@ -39,14 +39,19 @@ MAX_UNCERTAINTY_MM = 1.0
 class InspectDialog(QtGui.QDialog):
     """What to inspect the probe points ``title`` names with: the measured file, the alignment,
     the locked degrees of freedom and the tolerance (0: none), from the stored values; ``folder``:
-    where the file dialog starts without a stored file."""
+    where the file dialog starts without a stored file; states: (datum faces, tolerance mm or
+    None) a plan states, shown instead of the stored ones."""
 
-    def __init__(self, title, folder, parent=None):
+    def __init__(self, title, folder, parent=None, states=((), None)):
         super().__init__(parent)
         self.setObjectName("InspectMeasured")
         self.setWindowTitle(f"Inspect measured points: {title}")
         self.setWindowIcon(QtGui.QIcon(icon("Inspect.svg")))
         stored = settings.load(DEFAULTS)
+        if states[0]:
+            stored["InspectDatums"] = ", ".join(states[0])
+        if states[1] is not None:
+            stored["InspectTolerance"] = float(states[1])
         self.folder = os.path.dirname(stored["InspectFile"]) or folder
         layout = QtGui.QFormLayout(self)
         self.path = QtGui.QLineEdit(stored["InspectFile"], self)
@@ -161,12 +166,13 @@ def mm_box(parent, name, limits, value, tip):
 
 
 def ask_inspection(points):
-    """Ask what to inspect a probe-points object or a part plan's group with; None when the user
-    cancels, else the keyword arguments of cmmsampling.inspect (see InspectDialog.arguments)."""
+    """Ask what to inspect a probe-points object or a part plan's group with (a plan's datums and
+    tolerance shown as it states them); None when the user cancels, else the keyword arguments
+    of cmmsampling.inspect (see InspectDialog.arguments)."""
     doc = points.Document
     folder = os.path.dirname(doc.FileName) if doc.FileName else os.path.expanduser("~")
     groups = [o.Label for o in points.InList if o.isDerivedFrom("App::DocumentObjectGroup")]
-    dialog = InspectDialog((groups or [points.Label])[0], folder, FreeCADGui.getMainWindow())
+    dialog = InspectDialog((groups or [points.Label])[0], folder, FreeCADGui.getMainWindow(), stated(points))
     return asked(dialog, InspectDialog.arguments)
 
 

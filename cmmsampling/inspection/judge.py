@@ -341,11 +341,12 @@ def inspect(source: object, measured: str | os.PathLike | PointSet, alignment: s
     measured points' rigid match to their planned nominals (unless a degree of freedom is
     locked), the motions the points do not hold kept there (``free_motions``); locked: degrees
     of freedom held fixed (rx, ry, rz, x, y, z); tolerance: the profile tolerance t, mm
-    (default: a PartPlan's own, as its programs state it);
+    (default: a PartPlan's own, or a part plan's group's in a document, as its programs state it);
     zone_offset: o, mm, the zone's centre from the nominal (ISO 1101's UZ, + out of the material;
     +-t/2 a unilateral zone outside or inside), which the alignment centres the points on and
     the profile and the verdict are taken from.
-    datums: the datum reference frame (default: the source's own, a plan made with datums=),
+    datums: the datum reference frame (default: the source's own, a plan made with datums=, in the
+    console or in a document),
     Datums (cmmsampling.inspection.datums) or face names
     ('Face3', a tangent datum labelled A, B, C in order), primary first: the part is aligned on
     them and the other points are judged in their frame, floated by ``alignment`` only in the
@@ -366,12 +367,12 @@ def inspect(source: object, measured: str | os.PathLike | PointSet, alignment: s
     if alignment not in ALIGNMENTS:
         raise InputError(f"alignment must be one of {', '.join(ALIGNMENTS)}, got {alignment!r}")
     locked = check_locked(locked)
-    if tolerance is None and isinstance(source, PartPlan):
-        tolerance = source.tolerance
+    stated_datums, stated_tolerance = stated(source)
+    tolerance = stated_tolerance if tolerance is None else tolerance
     tolerance = None if tolerance is None else check_real("tolerance", tolerance, above=0.0)
     zone_offset = check_real("zone_offset", zone_offset)
     uncertainty = None if uncertainty is None else check_real("uncertainty", uncertainty, above=0.0)
-    wanted = as_datums(datums if datums else getattr(source, "datums", None) or None)
+    wanted = as_datums(datums if datums else stated_datums or None)
     told("reading the measured points")
     planned = _planned(source, part)
     read = _measured_point_set(measured)
@@ -428,6 +429,16 @@ def inspect(source: object, measured: str | os.PathLike | PointSet, alignment: s
     if isinstance(source, SamplingResult):
         rebuild(inspection, source, order[1])
     return inspection
+
+
+def stated(source: object) -> tuple[list, float | None]:
+    """(datum faces' names, primary first; tolerance in mm or None): what a source states for its
+    inspection: a PartPlan's datums and tolerance, a document object's (its Proxy's ``stated(obj)``,
+    a part plan's group), nothing for any other."""
+    if isinstance(source, PartPlan):
+        return list(source.datums), source.tolerance
+    method = getattr(getattr(source, "Proxy", None), "stated", None)
+    return method(source) if callable(method) else ([], None)
 
 
 def _start(points: list[np.ndarray], nominals: list[np.ndarray]) -> np.ndarray | None:

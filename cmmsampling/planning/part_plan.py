@@ -73,6 +73,8 @@ RETRIES = 1
 # otherwise: a face's search runs it at several N, so the plan's time stays bounded (the Plan part
 # panel starts with the same).
 PLAN_TIME_LIMIT_S = 10.0
+# The strategy a datum face's FacePlan names: its points are spread to hold the frame, not sampled.
+DATUM_STRATEGY = "datum"
 
 
 @dataclass
@@ -166,10 +168,12 @@ class FacePlan:
 
     @property
     def notes(self):
-        """Why the face holds no points or misses the tolerance, how many points the probe
+        """The datum a datum face's points hold, why the face holds no points or misses the
+        tolerance, how many points the probe
         reaches tilted or not at all, and where more points gave a larger maximum: one text (''
         when there is nothing to say)."""
-        parts = [self.reason] if self.reason else []
+        parts = [f"datum {self.datum}: points spread to fix {self.settings['motions']} motions"] if self.datum else []
+        parts += [self.reason] if self.reason else []
         parts += [f"{self.tilted} points tilted"] if self.tilted else []
         parts += [f"{self.unreached} points the probe cannot reach"] if self.unreached else []
         parts += [f"{self.unreached_area:.4g} mm^2 out of the probe's reach"] if self.unreached_area else []
@@ -272,9 +276,7 @@ class PartPlan:
         lines = [f"{'face':<10} {'area mm^2':>10} {'N':>5} {'max mm':>9} {'bound mm':>9} {'met':>4}  notes"]
         for face in self.faces:
             if face.datum:
-                notes = "; ".join([f"datum {face.datum}: points spread to fix {face.settings['motions']} motions"]
-                                  + ([face.notes] if face.notes else []))
-                lines.append(f"{face.name:<10} {face.area:>10.1f} {face.n:>5} {'':>9} {'':>9} {'':>4}  {notes}")
+                lines.append(f"{face.name:<10} {face.area:>10.1f} {face.n:>5} {'':>9} {'':>9} {'':>4}  {face.notes}")
                 continue
             lines.append(f"{face.name:<10} {face.area:>10.1f} {face.n:>5} {face.maximum:>9.4f} {face.bound:>9.4f} "
                          f"{face.met_text:>4}  {face.notes}")
@@ -397,7 +399,7 @@ def with_datums(result, planned, shapes):
     if not planned:
         return
     faces = [FacePlan(datum.face, float(shapes[datum.face].Area), len(datum.points), datum.uv,
-                      datum.points, datum.normals, strategy="datum",
+                      datum.points, datum.normals, strategy=DATUM_STRATEGY,
                       settings={"datum": datum.label, "motions": datum.motions}, access=datum.access,
                       datum=datum.label) for datum in planned]
     result.faces = faces + result.faces

@@ -448,3 +448,64 @@ def test_a_ventilator_plan_cancels_at_once_during_its_last_face(ventilator_doc, 
     main_window().grab().save(os.path.join(artifacts, "plan_part_cancelled_last_face.png"))
     task_button(CANCEL).click()
     assert wait_until(lambda: not FreeCADGui.Control.activeDialog(), 5)
+
+
+@pytest.fixture
+def block_doc(workbench):
+    """A document holding the datum block (cmmsampling.geometry.blocks) as the object Block."""
+    from cmmsampling.geometry.blocks import datum_block
+
+    yield from document_with("DatumPanel", {"Block": datum_block()})
+
+
+def test_datums_from_the_panel_are_planned_first_and_inspect_takes_them(block_doc, monkeypatch, tmp_path,
+                                                                         artifacts):
+    import cmmsampling
+    from cmmsampling.gui import inspect_dialog
+
+    from .helpers import handle_dialog
+
+    hold = hold_plan_at(monkeypatch, 99)
+    FreeCADGui.Selection.clearSelection()
+    FreeCADGui.Selection.addSelection(block_doc.Block, "Face3")
+    FreeCADGui.runCommand(commands.PlanPart.NAME)
+    assert wait_until(lambda: plan_form() is not None, 5), commands.PlanPart().reason()
+    form = plan_form()
+    fill(form, "uniform_parametric", tolerance=0.05, grid=20, n_max=200, processes=1)
+    datums = child(form, "datums")
+    assert datums.text() == "", "datums are the part's: never carried over from another plan"
+    for text, problem in (("Face1, Face9", "Datums: 'Face9' is no face of the part; give its faces as Face1 to Face6"),
+                          ("Face1 Face1", "Datums: a face is given twice"), ("Face3", "every face to plan is a datum")):
+        datums.setText(text)
+        task_button(OK).click()
+        process_events(0.2)
+        assert problem in form.status.text() and not hold.plans and FreeCADGui.Control.activeDialog()
+    datums.setText("Face1, Face5, Face4")
+    form.grab().save(os.path.join(artifacts, "plan_part_datums.png"))
+    task_button(OK).click()
+    assert wait_until(lambda: not FreeCADGui.Control.activeDialog(), 120), form.status.text()
+    [made] = hold.plans
+    assert made.datums == ["Face1", "Face5", "Face4"] and [face.datum for face in made.faces] == ["A", "B", "C", ""]
+    assert "datums=['Face1', 'Face5', 'Face4'])  # ran in the task panel" in dock_text("Python console")
+    group = next(o for o in block_doc.Objects if is_part_plan(o))
+    assert group.Datums == made.datums and group.Tolerance.Value == 0.05
+
+    measured = str(tmp_path / "block.csv")
+    cmmsampling.simulate_measurement(group, measured, form_error=0.02, seed=7,
+                                     misplacement={"rx": 0.4, "x": 1.2, "y": -2.0})
+    seen = {}
+
+    def choose(dialog):
+        seen["shown"] = (dialog.datums.text(), dialog.tolerance.value())
+        dialog.path.setText(measured)
+        dialog.accept()
+
+    FreeCADGui.Selection.clearSelection()
+    FreeCADGui.Selection.addSelection(group)
+    handle_dialog(inspect_dialog.InspectDialog, lambda: FreeCADGui.runCommand(commands.InspectMeasured.NAME),
+                  choose, 60)
+    assert seen["shown"] == ("Face1, Face5, Face4", 0.05), "the plan's datums and tolerance, not typed again"
+    [inspected] = [obj for obj in block_doc.Objects if obj.Label.startswith("Inspection ") and hasattr(obj, "Group")]
+    expected = cmmsampling.inspect(made, measured, part=block_doc.Block.Shape)
+    assert inspected.Group[0].Profile.Value == pytest.approx(expected.profile, abs=1e-9)
+    assert inspected.Label.endswith("(PASS)") and expected.passed

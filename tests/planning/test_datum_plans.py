@@ -173,3 +173,87 @@ def test_the_frame_turns_recompose_the_rotation_at_any_pitch(yaw, pitch, roll):
     rotation = turn(2, yaw) @ turn(1, pitch) @ turn(0, roll)
     a, b, c = yaw_pitch_roll(rotation)
     assert np.allclose(turn(2, a) @ turn(1, b) @ turn(0, c), rotation, atol=1e-9)
+
+
+@pytest.fixture
+def block_doc(block):
+    from support.faces import FreeCAD, closed
+
+    doc = FreeCAD.newDocument("DatumPlan")
+    name = doc.Name
+    try:
+        doc.addObject("Part::Feature", "Block").Shape = block
+        doc.recompute()
+        yield doc
+    finally:
+        closed(name)
+
+
+def statements_of(path):
+    """The DMIS statements of a program (its comments left out)."""
+    return [line for line in path.read_text().splitlines() if not line.startswith("$$")]
+
+
+def written(source, folder):
+    """export(source) to folder/block.dmi (the folder made): (the ExportReport, the path)."""
+    folder.mkdir()
+    return cmmsampling.export(source, folder / "block.dmi"), folder / "block.dmi"
+
+
+def test_the_plan_in_the_document_keeps_its_datums_and_tolerance_for_its_program_and_inspection(
+        planned, block, block_doc, tmp_path):
+    from support.faces import FreeCAD, closed
+
+    doc = block_doc
+    group = cmmsampling.add_plan_to_document(planned, doc, doc.Block)
+    assert group.Datums == ["Face1", "Face5", "Face4"] and group.Tolerance.Value == 0.05
+    subs = [g for g in group.Group if g.TypeId == "App::DocumentObjectGroup"]
+    assert [g.Label for g in subs] == ["Datum A Block Face1", "Datum B Block Face5", "Datum C Block Face4",
+                                       "Sampling Block Face3 (uniform_parametric)"]
+    datum = subs[0].Group[0]
+    assert len(subs[0].Group) == 1 and datum.Substitute is None and datum.Strategy == "datum"
+    assert list(datum.Labels) == [f"Face1_P{i}" for i in range(1, 7)]
+    np.testing.assert_allclose([tuple(p) for p in datum.Points], planned.faces[0].points, atol=1e-12)
+    sheet = doc.getObject("PlanReport")
+    assert sheet.get("A6") == "Face1" and sheet.get("G6").startswith("datum A: points spread to fix 3 motions")
+    with pytest.raises(InputError, match="Block:Face1 holds a datum's points, spread to hold the part's frame"):
+        cmmsampling.reevaluate(datum)
+
+    _, program = written(group, tmp_path / "doc")
+    _, console_program = written(planned, tmp_path / "console")
+    assert statements_of(program) == statements_of(console_program), \
+        "the document's plan writes the console's program: datums, frame, TOL/PROFS"
+    part = Misplacement(**MISPLACED).matrix(np.array([50.0, 30.0, 15.0]))
+    cmm = DmisCMM({name: block.Faces[int(name[4:]) - 1] for name in ("Face1", "Face3", "Face4", "Face5")}, part,
+                  form_waves(planned.point_set().points, 0.02, 7))
+    (tmp_path / "doc.dmo").write_text(cmm.run(program.read_text()))
+    own = cmmsampling.inspect(group, tmp_path / "doc.dmo")
+    typed = cmmsampling.inspect(group, tmp_path / "doc.dmo", tolerance=0.05, datums=list(DATUM_FACES))
+    console = cmmsampling.inspect(planned, tmp_path / "doc.dmo", part=block)
+    assert own.tolerance == 0.05 and [datum.label for datum in own.datums] == ["A", "B", "C"]
+    assert abs(own.profile - typed.profile) < 1e-12 and abs(own.profile - console.profile) < 1e-9
+    assert own.passed is typed.passed is console.passed is True
+
+    path, name = str(tmp_path / "plan.FCStd"), group.Name
+    doc.saveAs(path)
+    closed(doc.Name)
+    again = FreeCAD.openDocument(path)
+    try:
+        reopened = again.getObject(name)
+        assert reopened.Datums == ["Face1", "Face5", "Face4"] and reopened.Tolerance.Value == 0.05
+        assert statements_of(written(reopened, tmp_path / "reopened")[1]) == statements_of(console_program)
+    finally:
+        closed(again.Name)
+
+
+def test_a_probe_plan_with_datums_in_the_document_exports_the_consoles_path(block, block_doc, tmp_path):
+    from cmmsampling.access.probe import Probe
+
+    probed = cmmsampling.plan(block, tolerance=0.05, faces=[3], datums=[5, 4], processes=1,
+                              strategy="uniform_parametric", probe=Probe(), n_max=30)
+    group = cmmsampling.add_plan_to_document(probed, block_doc, block_doc.Block)
+    from_document, program = written(group, tmp_path / "doc")
+    from_console, console_program = written(probed, tmp_path / "console")
+    assert from_document.order == "probe_path" and from_document.tip_changes == from_console.tip_changes
+    assert statements_of(program) == statements_of(console_program), \
+        "datums first along the same collision-free path"

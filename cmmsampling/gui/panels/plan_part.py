@@ -40,6 +40,8 @@ SETTING_LABELS = {"time_limit": "Time limit per run"}
 # The face list's item data that marks a line of a face under way (replaced at each refresh).
 WORKING = QtCore.Qt.UserRole
 SPIN_BOXES = ("tolerance", "points", "n_max", "grid", "processes")
+# Values that belong to the part planned, not kept for the next plan (of another part, maybe).
+PART_VALUES = ("datums",)
 
 
 def strategy_settings():
@@ -61,16 +63,41 @@ def panel_defaults():
     return {
         "by_tolerance": True, "tolerance": 0.05, "points": 0, "strategy": BEST_STRATEGY,
         "n_max": DEFAULT_MAX_POINTS, "grid": DEFAULT_GRID, "processes": os.cpu_count() or 1, "edge_offset": AUTO,
-        "probe": "",
+        "probe": "", "datums": "",
         **{option: default for option, (_, default) in strategy_settings().items()},
     }
+
+
+def datum_names(text, count):
+    """(the datum faces' names, primary first; the problem, '' for none) of the Datums field's
+    text ('Face1, Face5, Face4', commas or spaces) on a part of count faces."""
+    names = [name for name in text.replace(",", " ").split() if name]
+    for name in names:
+        number = name[4:] if name.startswith("Face") else ""
+        if not number.isdigit() or not 1 <= int(number) <= count:
+            return names, (f"Datums: {name!r} is no face of the part; give its faces as Face1 to Face{count}, "
+                           "primary first")
+    if len(set(names)) != len(names):
+        return names, "Datums: a face is given twice; give each datum once, primary first"
+    return names, ""
+
+
+def datum_problem(values, numbers, count):
+    """What is wrong with the datums asked (values: the panel's, numbers: the faces planned of a
+    part of count faces), '' for nothing: a name that is no face, one given twice, or datums that
+    leave no toleranced face."""
+    names, problem = datum_names(values["datums"], count)
+    if not problem and names and not set(f"Face{k}" for k in numbers) - set(names):
+        problem = "Datums: every face to plan is a datum; select the toleranced faces too"
+    return problem
 
 
 def plan_arguments(values, numbers):
     """plan()'s keyword arguments for the panel's values and the face numbers planned: the goal,
     the strategy with the settings it offers (0 for "no limit" becomes None), n_max, grid,
     processes, the edge offset ("auto": each face's own, left out) and the probe whose reach is
-    judged (a preset of cmmsampling.PROBES, left out for none)."""
+    judged (a preset of cmmsampling.PROBES, left out for none) and the datum faces (left out
+    for none)."""
     goal = {"tolerance": values["tolerance"]} if values["by_tolerance"] else {"n_total": values["points"]}
     arguments = {"faces": list(numbers), **goal, "strategy": values["strategy"], "n_max": values["n_max"],
                  "processes": values["processes"], "grid": values["grid"]}
@@ -78,6 +105,9 @@ def plan_arguments(values, numbers):
         arguments["edge_offset"] = values["edge_offset"]
     if values["probe"] in PROBES:
         arguments["probe"] = PROBES[values["probe"]]
+    datums = [name for name in values["datums"].replace(",", " ").split() if name]
+    if datums:
+        arguments["datums"] = datums
     for setting in STRATEGIES[values["strategy"]].settings:
         value = values[setting.option]
         arguments[setting.option] = None if setting.option in NO_LIMIT and not value else value
@@ -149,10 +179,12 @@ class PlanPartTaskPanel(BackgroundRunPanel):
         self._add_setting_boxes()
         self.edge_offset = self._add_edge_offset()
         self.probe = self._add_probe_choice()
+        self.datums = self._add_datums()
         self.fields = Fields({"by_tolerance": (self.form.byTolerance, self.form.byPoints),
                               "strategy": self.form.strategy,
                               **{name: getattr(self.form, name) for name in SPIN_BOXES},
-                              "edge_offset": self.edge_offset, "probe": self.probe, **self.setting_boxes})
+                              "edge_offset": self.edge_offset, "probe": self.probe, "datums": self.datums,
+                              **self.setting_boxes})
         values = load_values()
         values["points"] = values["points"] or POINTS_PER_FACE * len(numbers)
         self.set_values(values)
@@ -207,6 +239,18 @@ class PlanPartTaskPanel(BackgroundRunPanel):
         self.form.settingsGroup.layout().addRow(QtGui.QLabel("Probe", self.form), choice)
         return choice
 
+    def _add_datums(self):
+        """The datum faces' field: names, primary first, as A, B, C on the drawing."""
+        field = QtGui.QLineEdit(self.form)
+        field.setObjectName("datums")
+        field.setPlaceholderText("none (e.g. Face1, Face5, Face4)")
+        field.setToolTip("The datum faces, primary first (A, B, C on the drawing): each gets points spread to hold "
+                         "the motions it fixes and is measured first; the programs set the part's frame on them and "
+                         "state the profile relative to them, and Inspect aligns on them. They need not be among the "
+                         "selected faces; a selected one is no longer toleranced.")
+        self.form.settingsGroup.layout().addRow(QtGui.QLabel("Datums", self.form), field)
+        return field
+
     def values(self):
         """The panel's values by name (see :func:`panel_defaults`)."""
         return self.fields.values()
@@ -224,7 +268,7 @@ class PlanPartTaskPanel(BackgroundRunPanel):
         offered = {setting.option for setting in STRATEGIES[strategy].settings} if strategy in STRATEGIES else set()
         by_tolerance = self.form.byTolerance.isChecked()
         for widget in (self.form.byTolerance, self.form.byPoints, self.form.strategy, self.form.n_max,
-                       self.form.grid, self.form.processes, self.edge_offset, self.probe):
+                       self.form.grid, self.form.processes, self.edge_offset, self.probe, self.datums):
             widget.setEnabled(idle)
         self.form.tolerance.setEnabled(idle and by_tolerance)
         self.form.points.setEnabled(idle and not by_tolerance)
@@ -255,6 +299,10 @@ class PlanPartTaskPanel(BackgroundRunPanel):
                              "has fewer faces now.", error=True)
             return
         values = self.values()
+        problem = datum_problem(values, self.source[1], len(shape.Faces))
+        if problem:
+            self.show_status(problem, error=True)
+            return
         save_values(values)
         self.form.progress.setTextVisible(True)
         faces = len(self.source[1])
@@ -336,11 +384,15 @@ class PlanPartTaskPanel(BackgroundRunPanel):
 
 
 def load_values():
-    """The values stored by the last plan, else the defaults."""
-    stored = settings.load({SETTINGS_PREFIX + name: value for name, value in panel_defaults().items()})
-    return {name[len(SETTINGS_PREFIX):]: value for name, value in stored.items()}
+    """The values stored by the last plan, else the defaults (the part's own values, its datums,
+    always the defaults)."""
+    defaults = panel_defaults()
+    stored = settings.load({SETTINGS_PREFIX + name: value for name, value in defaults.items()
+                            if name not in PART_VALUES})
+    return {**defaults, **{name[len(SETTINGS_PREFIX):]: value for name, value in stored.items()}}
 
 
 def save_values(values):
-    settings.save({SETTINGS_PREFIX + name: value for name, value in values.items()})
+    """Keep the values for the next plan, but the part's own (its datums: faces of this part)."""
+    settings.save({SETTINGS_PREFIX + name: value for name, value in values.items() if name not in PART_VALUES})
 
