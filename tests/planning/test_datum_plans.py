@@ -223,6 +223,9 @@ def test_the_plan_in_the_document_keeps_its_datums_and_tolerance_for_its_program
     _, console_program = written(planned, tmp_path / "console")
     assert statements_of(program) == statements_of(console_program), \
         "the document's plan writes the console's program: datums, frame, TOL/PROFS"
+    cmmsampling.export(group, tmp_path / "doc.qif")   # refused unless the QIF 3.0 schemas take it
+    qif = (tmp_path / "doc.qif").read_text()
+    assert qif.count("<DatumDefinition ") == 3 and qif.count("<SurfaceProfileCharacteristicItem ") == 1
     part = Misplacement(**MISPLACED).matrix(np.array([50.0, 30.0, 15.0]))
     cmm = DmisCMM({name: block.Faces[int(name[4:]) - 1] for name in ("Face1", "Face3", "Face4", "Face5")}, part,
                   form_waves(planned.point_set().points, 0.02, 7))
