@@ -15,7 +15,7 @@ from .frames import placement_from_metadata
 from .pointset import PointSet
 from .registry import FileFormat
 from .text import (COORDINATE_DECIMALS, VECTOR_DECIMALS, comment_entries, fixed, metadata_comment_lines, numbers,
-                   parse_metadata_comments)
+                   parse_metadata_comments, wrapped)
 
 NAME = "DMIS"
 DESCRIPTION = "DMIS 5.2 input program (FEAT/POINT, MEAS/POINT, PTMEAS)"
@@ -86,7 +86,20 @@ def write(point_set, facts, options):
     lines += sensor_definitions(sensors, options.probe or {})
     lines += _measured_lines(point_set, xyz, ijk, sensors, groups)
     lines += [f"CLOSE/DID({OUTPUT_DEVICE})", "ENDFIL"]
-    return "\n".join(without_repeated_gotos(lines)) + "\n"
+    return "\n".join(wrapped_comments(without_repeated_gotos(lines))) + "\n"
+
+
+def wrapped_comments(lines):
+    """The lines with each comment longer than a DMIS line broken before a space into pieces
+    that go on in ``$$+`` lines (joined, they give the comment back)."""
+    kept = []
+    for line in lines:
+        if not line.startswith(DMIS_COMMENT):
+            kept.append(line)
+            continue
+        start = len(DMIS_COMMENT_CONTINUED if line.startswith(DMIS_COMMENT_CONTINUED) else DMIS_COMMENT)
+        kept += wrapped(line, DMIS_LINE_LIMIT, DMIS_COMMENT_CONTINUED, start)
+    return kept
 
 
 def _measured_lines(point_set, xyz, ijk, sensors, groups):

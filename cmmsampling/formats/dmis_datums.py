@@ -7,12 +7,16 @@ A plan made with datums (``plan(..., datums=[...])``) states them in its points'
 - measures each datum face's points (FEAT/POINT, MEAS/POINT, PTMEAS), in the frame the
   operator set (the part roughly on the CAD model's coordinates, within the search distance);
 - for a planar datum face constructs the plane through them, least squares
-  (``F(DAT_A)=FEAT/PLANE,CART,x,y,z,i,j,k``, ``CONST/PLANE,F(DAT_A),BF,FA(..),...``) and makes it
-  the datum (``DATDEF/FA(DAT_A),DAT(A)``); a datum face that is no plane has no DMIS feature
-  here: a comment says so and its points stay for cmmsampling.inspect;
-- sets the datum reference frame where the datums are planes (``D(DRF)=DATSET/DAT(A),ZDIR,ZORIG,
-  DAT(B),XDIR,XORIG,DAT(C),YORIG``: A's normal is +Z and its plane Z = 0, B's normal projected
-  square to it +X and its plane X = 0, C's plane Y = 0), then moves to the CAD model's frame as
+  (``F(DAT_A)=FEAT/PLANE,CART,x,y,z,i,j,k``, ``CONST/PLANE,F(DAT_A),BF,FA(..),...``), for a
+  cylindrical one the cylinder (``F(DAT_B)=FEAT/CYLNDR,INNER,CART,x,y,z,i,j,k,d,l`` as NIST's
+  program writes a bore, ``CONST/CYLNDR,F(DAT_B),BF,...``), and makes it the datum
+  (``DATDEF/FA(DAT_A),DAT(A)``); a datum face that is neither has no DMIS feature here: a
+  comment says so and its points stay for cmmsampling.inspect;
+- sets the datum reference frame where the datums are planes and cylinders (e.g.
+  ``D(DRF)=DATSET/DAT(A),ZDIR,ZORIG,DAT(B),XDIR,XORIG,DAT(C),YORIG``: A's normal is +Z and its
+  plane Z = 0, B's normal projected square to it +X and its plane X = 0, C's plane Y = 0; a bore
+  B square to A sets XORIG,YORIG on its axis and a side C then XDIR: :func:`datum_frame`), then
+  moves to the CAD model's frame as
   the nominal datums place it in that frame (``D(CAD)=TRANS/...``, ``ROTAT/...``), so that every
   nominal after it is the CAD model's and every actual is reported in it;
 - reports the datum points (``OUTPUT/FA(..)``) once that frame is set, so all the points of the
@@ -35,30 +39,53 @@ from .text import COORDINATE_DECIMALS, VECTOR_DECIMALS, fixed
 
 ANGLE_DECIMALS = 4
 # A datum face's points are taken as on one plane when their normals agree to this (1 - cos)
-# and the points lie this close (mm) to the plane through their centroid.
+# and the points lie this close (mm) to the plane through their centroid; as on one cylinder when
+# their normals are square to one axis to this (|cos|) and the points lie this close (mm) to it.
 PLANE_NORMAL_AGREEMENT = 1e-9
 PLANE_DISTANCE_MM = 1e-6
-# DATSET's minor words for the primary, secondary and tertiary planar datum: the axis each
-# datum's normal gives (None: none) and the origin it sets.
-DATSET_WORDS = (("ZDIR", "ZORIG"), ("XDIR", "XORIG"), (None, "YORIG"))
+CYLINDER_AXIS_AGREEMENT = 1e-9
+CYLINDER_DISTANCE_MM = 1e-6
+# A direction or an origin the datum sets is stated for a frame axis it lies along to this (1 - |cos|).
+AXIS_AGREEMENT = 1e-6
 DRF_LABEL, CAD_LABEL = "DRF", "CAD"
+
+
+@dataclass
+class Cylinder:
+    """A datum cylinder: point (3,) mm on its axis (mid-way along the points), axis (3,) unit,
+    diameter and length (the points' extent along the axis) mm, inner (a bore: the material
+    outside it)."""
+
+    point: np.ndarray
+    axis: np.ndarray
+    diameter: float
+    length: float
+    inner: bool
 
 
 @dataclass
 class DatumGroup:
     """One datum of a program: label ('A'), face ('Face3'), rows (its points' indices in the
     point set), and its plane (centre (3,) mm, unit normal (3,) out of the material) where its
-    nominal points lie on one, else None."""
+    nominal points lie on one, or its Cylinder where they lie on one, else both None."""
 
     label: str
     face: str
     rows: np.ndarray
     plane: tuple[np.ndarray, np.ndarray] | None
+    cylinder: Cylinder | None = None
 
     @property
     def feature(self) -> str:
         """The datum feature's DMIS label, e.g. 'DAT_A'."""
         return f"DAT_{self.label}"
+
+    @property
+    def direction(self) -> np.ndarray | None:
+        """(3,) unit: the direction the datum gives a frame (a plane's normal, a cylinder's axis)."""
+        if self.plane is not None:
+            return self.plane[1]
+        return None if self.cylinder is None else self.cylinder.axis
 
 
 def datum_groups(point_set) -> list[DatumGroup]:
@@ -72,7 +99,9 @@ def datum_groups(point_set) -> list[DatumGroup]:
     for label, face in stated.items():
         rows = np.flatnonzero(faces == face)
         if rows.size:
-            groups.append(DatumGroup(label, face, rows, _plane(point_set.points[rows], point_set.normals[rows])))
+            points, normals = point_set.points[rows], point_set.normals[rows]
+            plane = _plane(points, normals)
+            groups.append(DatumGroup(label, face, rows, plane, None if plane is not None else _cylinder(points, normals)))
     return groups
 
 
@@ -89,29 +118,85 @@ def _plane(points: np.ndarray, normals: np.ndarray) -> tuple[np.ndarray, np.ndar
     return centre, normal
 
 
-def datum_frame(planes: list[tuple[np.ndarray, np.ndarray]]) -> np.ndarray:
-    """(4, 4): the datum reference frame of 1 to 3 planes (centre (3,), unit normal (3,)) in
-    precedence order, in the coordinates they are given in: rotation columns X, Y, Z and the
-    origin, as DATSET_WORDS sets them (A's normal Z; B's normal made square to Z, X, else the
-    given frame's X or Y axis made square to Z; Y = Z x X; the origin on each plane, nearest the
-    given frame's origin where fewer than 3 planes fix it). ValueError for planes that cannot
-    set it (B parallel to A; C square to Y)."""
-    normals = np.array([normal for _, normal in planes])
-    offsets = np.array([normal @ centre for centre, normal in planes])
-    z = normals[0]
-    across = normals[1] if len(planes) > 1 else (np.eye(3)[0] if abs(z[0]) < 0.9 else np.eye(3)[1])
-    x = across - (across @ z) * z
-    if np.linalg.norm(x) < 1e-6:
-        raise ValueError("datum B is parallel to datum A: it sets no direction")
-    x /= np.linalg.norm(x)
-    y = np.cross(z, x)
-    if len(planes) > 2 and abs(normals[2] @ y) < 1e-6:
-        raise ValueError("datum C is square to the Y axis datums A and B set: it sets no origin")
-    origin = np.linalg.lstsq(normals, offsets, rcond=None)[0]
+def _cylinder(points: np.ndarray, normals: np.ndarray) -> Cylinder | None:
+    """The Cylinder points (M, 3) mm with normals (M, 3) out of the material lie on (each point
+    p = c + r n with c on the axis: r > 0 a shaft, r < 0 a bore), else None (fewer than 5 points,
+    which no least-squares cylinder is fitted through, or no cylinder)."""
+    if len(points) < 5:
+        return None
+    axis = np.linalg.svd(normals)[2][-1]
+    if np.abs(normals @ axis).max() > CYLINDER_AXIS_AGREEMENT:
+        return None
+    across = np.eye(3) - np.outer(axis, axis)
+    flat = points @ across
+    rows = np.hstack([np.tile(np.eye(3), (len(points), 1)), normals.reshape(-1, 1)])
+    solved = np.linalg.lstsq(rows, flat.reshape(-1), rcond=None)[0]
+    centre, radius = solved[:3], solved[3]
+    if np.abs(flat - centre - radius * normals).max() > CYLINDER_DISTANCE_MM or abs(radius) < CYLINDER_DISTANCE_MM:
+        return None
+    heights = points @ axis
+    point = centre + 0.5 * (heights.min() + heights.max()) * axis
+    return Cylinder(point, axis, 2.0 * abs(float(radius)), float(np.ptp(heights)), bool(radius < 0))
+
+
+@dataclass
+class DatumFrame:
+    """The frame a program's datums set: frame (4, 4), its axes (rotation columns X, Y, Z) and
+    origin in the coordinates the datums are given in, and words: DATSET's minor words of each
+    datum in precedence order (e.g. ['ZDIR', 'ZORIG'], ['XORIG', 'YORIG'], ['XDIR'])."""
+
+    frame: np.ndarray
+    words: list
+
+
+def datum_frame(groups: list[DatumGroup]) -> DatumFrame:
+    """The DatumFrame of planar and cylindrical datums in precedence order: the first direction
+    (a plane's normal, a cylinder's axis) is +Z (ZDIR), the next one square to it made +X (XDIR),
+    else the given frame's X or Y axis made square to Z; Y = Z x X. Each datum then sets the
+    origin's coordinates not set before it that it can: a plane the one along its normal (the
+    origin on the plane), a cylinder the two square to its axis (the origin on the axis); the
+    others stay where the given frame's origin is nearest. ValueError for datums that cannot set
+    it (a datum that adds nothing DATSET can state; a direction or origin along no frame axis)."""
+    z, x = groups[0].direction, None
+    words: list[list[str]] = [["ZDIR"]] + [[] for _ in groups[1:]]
+    for group, said in zip(groups[1:], words[1:]):
+        across = group.direction - (group.direction @ z) * z
+        if x is None and np.linalg.norm(across) > AXIS_AGREEMENT:
+            x = across / np.linalg.norm(across)
+            said.append("XDIR")
+    if x is None:
+        across = np.eye(3)[0] if abs(z[0]) < 0.9 else np.eye(3)[1]
+        x = across - (across @ z) * z
+        x /= np.linalg.norm(x)
+    axes = {"X": x, "Y": np.cross(z, x), "Z": z}
+    rows, values = [], []
+    for group, said in zip(groups, words):
+        for name in _origin_axes(group, axes, {word[0] for words_of in words for word in words_of
+                                               if word.endswith("ORIG")}):
+            said.append(f"{name}ORIG")
+            row = group.plane[1] if group.plane is not None else axes[name]
+            anchor = group.plane[0] if group.plane is not None else group.cylinder.point
+            rows.append(row)
+            values.append(row @ anchor)
+        if not said:
+            raise ValueError(f"datum {group.label} sets nothing the datums before it leave free that DATSET can state")
     frame = np.eye(4)
-    frame[:3, :3] = np.column_stack([x, y, z])
-    frame[:3, 3] = origin
-    return frame
+    frame[:3, :3] = np.column_stack([axes["X"], axes["Y"], axes["Z"]])
+    frame[:3, 3] = np.linalg.lstsq(np.array(rows), np.array(values), rcond=None)[0]
+    return DatumFrame(frame, words)
+
+
+def _origin_axes(group: DatumGroup, axes: dict, taken: set) -> list[str]:
+    """The frame axes ('X', 'Y', 'Z') whose origin coordinate the datum sets that no datum before
+    it set (taken): a plane's normal's axis, a cylinder's two axes square to its own; ValueError
+    where the plane's normal or the cylinder's axis lies along no frame axis."""
+    direction = group.direction
+    along = [name for name, axis in axes.items() if abs(abs(direction @ axis) - 1.0) < AXIS_AGREEMENT]
+    if not along:
+        kind = "plane's normal" if group.plane is not None else "cylinder's axis"
+        raise ValueError(f"datum {group.label}'s {kind} lies along no axis of the frame the datums set")
+    names = along if group.plane is not None else [name for name in "XYZ" if name != along[0]]
+    return [name for name in names if name not in taken]
 
 
 def yaw_pitch_roll(rotation: np.ndarray) -> tuple[float, float, float]:
@@ -139,33 +224,44 @@ def placement_statements(label: str, frame: np.ndarray, statement) -> list[str]:
 
 
 def datum_feature_lines(group: DatumGroup, labels: list[str], statement) -> list[str]:
-    """The datum's DMIS feature and DATDEF where it is a plane, else a comment."""
-    if group.plane is None:
-        return [f"$$ datum {group.label} ({group.face}) is no plane: no DMIS datum feature is written for it;",
-                "$$+ its points are reported for cmmsampling.inspect, which associates it"]
-    centre, normal = group.plane
-    nominal = fixed(centre, COORDINATE_DECIMALS).tolist() + fixed(normal, VECTOR_DECIMALS).tolist()
-    return (statement([f"F({group.feature})=FEAT/PLANE", "CART", *nominal[:3]], nominal[3:])
-            + statement(["CONST/PLANE", f"F({group.feature})", "BF", *[f"FA({labels[k]})" for k in group.rows]])
-            + [f"DATDEF/FA({group.feature}),DAT({group.label})"])
+    """The datum's DMIS feature (a plane or a cylinder, least squares through its points) and
+    DATDEF, else a comment."""
+    if group.plane is None and group.cylinder is None:
+        return [f"$$ datum {group.label} ({group.face}) is no plane or cylinder: no DMIS datum feature is written",
+                "$$+ for it; its points are reported for cmmsampling.inspect, which associates it"]
+    members = [f"FA({labels[k]})" for k in group.rows]
+    if group.plane is not None:
+        centre, normal = group.plane
+        nominal = fixed(centre, COORDINATE_DECIMALS).tolist() + fixed(normal, VECTOR_DECIMALS).tolist()
+        feature = statement([f"F({group.feature})=FEAT/PLANE", "CART", *nominal[:3]], nominal[3:])
+        constructed = statement(["CONST/PLANE", f"F({group.feature})", "BF", *members])
+    else:
+        cylinder = group.cylinder
+        sizes = fixed(np.array([cylinder.diameter, cylinder.length]), COORDINATE_DECIMALS).tolist()
+        feature = statement([f"F({group.feature})=FEAT/CYLNDR", "INNER" if cylinder.inner else "OUTER", "CART",
+                             *fixed(cylinder.point, COORDINATE_DECIMALS).tolist()],
+                            fixed(cylinder.axis, VECTOR_DECIMALS).tolist() + sizes)
+        constructed = statement(["CONST/CYLNDR", f"F({group.feature})", "BF", *members])
+    return feature + constructed + [f"DATDEF/FA({group.feature}),DAT({group.label})"]
 
 
 def frame_lines(groups: list[DatumGroup], statement) -> list[str]:
-    """DATSET of the planar datums and the move to the CAD frame; comments where the datums
-    are no planes or cannot set a frame."""
-    if not groups or any(group.plane is None for group in groups):
-        return ["$$ the datums are not all planes: the part's frame stays as the operator set it;",
-                "$$+ cmmsampling.inspect aligns the reported points on the datums"] if groups else []
+    """DATSET of the planar and cylindrical datums and the move to the CAD frame; comments where
+    a datum is neither or the datums cannot set a frame."""
+    if not groups:
+        return []
+    if any(group.direction is None for group in groups):
+        return ["$$ the datums are not all planes or cylinders: the part's frame stays as the operator set it;",
+                "$$+ cmmsampling.inspect aligns the reported points on the datums"]
     try:
-        frame = datum_frame([group.plane for group in groups if group.plane is not None])
+        found = datum_frame(groups)
     except ValueError as exc:
         return [f"$$ the datums set no frame here ({exc}): the part's frame stays as the operator set it"]
-    fields = []
-    for group, (direction, origin) in zip(groups, DATSET_WORDS):
-        fields += [f"DAT({group.label})"] + ([direction] if direction else []) + [origin]
+    fields = [field for group, words in zip(groups, found.words) for field in [f"DAT({group.label})", *words]]
+    rotation, origin = found.frame[:3, :3], found.frame[:3, 3]
     back = np.eye(4)
-    back[:3, :3] = frame[:3, :3].T
-    back[:3, 3] = -frame[:3, :3].T @ frame[:3, 3]
+    back[:3, :3] = rotation.T
+    back[:3, 3] = -rotation.T @ origin
     return (["$$ the frame the datums set, then the CAD model's frame in it"]
             + statement([f"D({DRF_LABEL})=DATSET/{fields[0]}", *fields[1:]])
             + placement_statements(CAD_LABEL, back, statement))
@@ -186,7 +282,7 @@ def tolerance_lines(faces: list[str], tolerance: float, groups: list[DatumGroup]
     """T(PROF_<face>)=TOL/PROFS,-t/2,+t/2[,DAT(A),...] for each toleranced face (tolerance t mm),
     after VERDICT_COMMENT."""
     limits = fixed(np.array([-0.5 * tolerance, 0.5 * tolerance]), COORDINATE_DECIMALS).tolist()
-    datums = [f"DAT({group.label})" for group in groups if group.plane is not None]
+    datums = [f"DAT({group.label})" for group in groups if group.direction is not None]
     return VERDICT_COMMENT + [line for face in faces
                               for line in statement([f"T({tolerance_label(face)})=TOL/PROFS", *limits, *datums])]
 

@@ -83,11 +83,11 @@ def metadata_comment_lines(entries, prefix, continuation=None, width=None):
         if width is None:
             lines.append(line)
         else:
-            lines.extend(_wrapped(line, width, continuation, len(prefix) + len(key) + 2))
+            lines.extend(wrapped(line, width, continuation, len(prefix) + len(key) + 2))
     return lines
 
 
-def _wrapped(line, width, continuation, start):
+def wrapped(line, width, continuation, start):
     """Pieces of line no longer than width; no break before ``start``; later pieces after continuation."""
     pieces = []
     while len(line) > width:

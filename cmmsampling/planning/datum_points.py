@@ -6,7 +6,7 @@ the secondary what it can of the motions the primary leaves free (a plane at rig
 the tertiary the rest. A datum face is not sampled for its form: its points are chosen from its
 raster (cmmsampling.fitting.nodes) away from its edges and, with a probe, where the probe
 reaches, as far apart as they can be (farthest-point order), DATUM_POINTS_PER_MOTION for each
-motion it fixes and at least DATUM_MIN_POINTS, and checked to hold those motions (not on one
+motion it fixes and at least DATUM_MIN_POINTS (a cylinder CYLINDER_POINTS), and checked to hold those motions (not on one
 line) as :func:`cmmsampling.inspect` does before it aligns on them.
 """
 from __future__ import annotations
@@ -21,9 +21,11 @@ from ..access.probe import Probe
 from ..access.reach import reach
 from ..geometry.motions import split_motions
 from ..fitting.nodes import face_nodes
+from ..geometry.freecad_env import import_part
 from ..geometry.validation import InputError
 from ..strategies.face_setup import setup_of
 
+Part = import_part()
 DATUM_POINTS_PER_MOTION = 2
 DATUM_MIN_POINTS = 4
 # The raster nodes a datum's points are chosen from, evenly thinned to at most this many.
@@ -32,6 +34,9 @@ DATUM_CANDIDATES = 400
 DATUM_GRID = 60
 # mm a datum's points keep from the face's edges where the plan gives no edge offset.
 DATUM_EDGE_MM = 2.0
+# Points a cylindrical datum face gets at least, whatever motions it fixes: the CMM fits a
+# least-squares cylinder through them (5 unknowns), as NIST's programs measure a bore (8 points).
+CYLINDER_POINTS = 8
 
 
 @dataclass
@@ -78,7 +83,8 @@ def plan_datums(named: list, probe: Probe | None = None, part: object = None,
         if motions == 0:
             raise InputError(f"datum {label} ({name}) fixes none of the motions the datums before it leave free; "
                              "give another face as this datum or leave it out")
-        chosen = _spread_holding(points, normals, free, pivot, motions)
+        least = CYLINDER_POINTS if isinstance(getattr(face, "Surface", None), Part.Cylinder) else DATUM_MIN_POINTS
+        chosen = _spread_holding(points, normals, free, pivot, motions, least)
         found = None if reaching is None else reach(*reaching, points[chosen], normals[chosen])
         planned.append(DatumPoints(label, name, motions, uv[chosen], points[chosen], normals[chosen], found))
         free = free_after
@@ -101,11 +107,11 @@ def _candidates(face, margin: float) -> tuple[np.ndarray, np.ndarray, np.ndarray
 
 
 def _spread_holding(points: np.ndarray, normals: np.ndarray, free: np.ndarray, pivot: np.ndarray,
-                    motions: int) -> np.ndarray:
+                    motions: int, least: int = DATUM_MIN_POINTS) -> np.ndarray:
     """Indices of points (M, 3) far apart (farthest-point order from the point farthest from
-    their centroid): DATUM_POINTS_PER_MOTION per motion, at least DATUM_MIN_POINTS, more where
-    those do not yet hold the motions of free (6, K) that all the points hold."""
-    count = min(len(points), max(DATUM_MIN_POINTS, DATUM_POINTS_PER_MOTION * motions))
+    their centroid): DATUM_POINTS_PER_MOTION per motion, at least ``least``, more where those do
+    not yet hold the motions of free (6, K) that all the points hold."""
+    count = min(len(points), max(least, DATUM_POINTS_PER_MOTION * motions))
     order = _farthest_order(points, len(points))
     while count < len(points) and split_motions(points[order[:count]], normals[order[:count]], free,
                                                 pivot)[0].shape[1] < motions:

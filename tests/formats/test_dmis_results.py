@@ -94,6 +94,7 @@ SHARED_FORMS = {
     "SNSDEF": (lambda c: "=SNSDEF/PROBE,INDEX," in c, dmis_syntax.SENSOR),
     "SNSLCT": (lambda c: c.startswith("SNSLCT/"), dmis_syntax.SELECT),
     "FEAT/PLANE": (lambda c: "=FEAT/PLANE," in c, dmis_syntax.FEATURE),
+    "FEAT/CYLNDR": (lambda c: "=FEAT/CYLNDR," in c, dmis_syntax.CYLINDER),
     "DATDEF": (lambda c: c.startswith("DATDEF/"), dmis_syntax.DATDEF),
     "DATSET": (lambda c: "=DATSET/DAT(" in c, dmis_syntax.DATSET),
     "OUTPUT": (lambda c: c.startswith("OUTPUT/"), dmis_syntax.OUTPUTS["OUTPUT"]),

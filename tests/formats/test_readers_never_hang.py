@@ -132,7 +132,7 @@ def test_a_point_file_over_the_cap_is_refused_before_it_is_read(reference, tmp_p
     from cmmsampling.formats import files
 
     path = sparse(tmp_path / f"huge{extension}", POINT_CAP + 1)
-    refused = (f"is more than a {{kind}} may hold (100 MB, about a million points); split the file by face or part "
+    refused = ("is more than a {kind} may hold (100 MB, about a million points); split the file by face or part "
                "and read each piece")
     with pytest.raises(InputError) as caught:
         cmmsampling.read_points(path)

@@ -260,3 +260,70 @@ def test_a_probe_plan_with_datums_in_the_document_exports_the_consoles_path(bloc
     assert from_document.order == "probe_path" and from_document.tip_changes == from_console.tip_changes
     assert statements_of(program) == statements_of(console_program), \
         "datums first along the same collision-free path"
+
+
+@pytest.fixture(scope="module")
+def bored(block):
+    """The datum block with a 16 mm bore through it at (30, 30): base Face1, side Face3 (y = 0),
+    bore Face6, the wavy top Face7."""
+    from support.faces import FreeCAD, Part
+
+    part = block.cut(Part.makeCylinder(8, 40, FreeCAD.Vector(30, 30, -5)))
+    assert [type(part.Faces[k - 1].Surface).__name__ for k in (1, 3, 6)] == ["Plane", "Plane", "Cylinder"]
+    return part
+
+
+def test_a_bore_as_datum_b_is_a_dmis_cylinder_that_sets_the_origin(bored, tmp_path):
+    planned = cmmsampling.plan(bored, tolerance=0.05, faces=[7], datums=[1, 6, 3], processes=1,
+                               strategy="uniform_parametric")
+    assert [(face.name, face.settings.get("motions"), face.n) for face in planned.faces[:3]] == [
+        ("Face1", 3, 6), ("Face6", 2, 8), ("Face3", 1, 4)], "a bore gets points for the CMM's cylinder fit"
+    cmmsampling.export(planned, tmp_path / "bored.dmi")
+    text = (tmp_path / "bored.dmi").read_text()
+    assert check(text) == []
+    statements = [line for line in dmis_statements_of(text)]
+    feature = next(line for line in statements if line.startswith("F(DAT_B)="))
+    assert re.fullmatch(r"F\(DAT_B\)=FEAT/CYLNDR,INNER,CART,30\.0000000,30\.0000000,[\d.]+,0\.000000000,"
+                        r"0\.000000000,(-)?1\.000000000,16\.0000000,[\d.]+", feature)
+    assert "D(DRF)=DATSET/DAT(A),ZDIR,ZORIG,DAT(B),XORIG,YORIG,DAT(C),XDIR" in statements
+    assert "D(CAD)=TRANS/XORIG,30.0000000,YORIG,30.0000000,ZORIG,0.0000000" in statements, \
+        "the frame's origin on the bore's axis, in the base"
+
+    part = Misplacement(**MISPLACED).matrix(np.array([50.0, 30.0, 15.0]))
+    points = planned.point_set().points
+    cmm = DmisCMM({name: bored.Faces[int(name[4:]) - 1] for name in ("Face1", "Face3", "Face6", "Face7")}, part,
+                  form_waves(points, 0.02, 7))
+    (tmp_path / "bored.dmo").write_text(cmm.run(text))
+    read = cmmsampling.read_points(tmp_path / "bored.dmo")
+    top = np.array([label.startswith("Face7_") for label in read.labels])
+    assert np.abs(read.points - points)[top].max() < 0.05, "the top touched where planned, in the CAD frame"
+    own = cmmsampling.inspect(planned, tmp_path / "bored.dmo", part=bored)
+    typed = cmmsampling.inspect(planned, tmp_path / "bored.dmo", part=bored, tolerance=0.05,
+                                datums=["Face1", "Face6", "Face3"])
+    assert [datum.label for datum in own.datums] == ["A", "B", "C"] and own.datums[1].face == "Face6"
+    assert abs(own.profile - typed.profile) < 1e-12 and own.passed is typed.passed is True
+
+
+def dmis_statements_of(text):
+    """The statements of a DMIS program's text (continuations joined, comments left out)."""
+    from cmmsampling.formats.dmis import dmis_statements
+
+    return [statement for _, statement in dmis_statements(text)[0]]
+
+
+def test_a_datum_along_no_axis_of_the_frame_leaves_the_frame_to_the_operator(block, tmp_path):
+    corner = next(edge for edge in block.Edges
+                  if edge.BoundBox.XMax < 1e-6 and edge.BoundBox.YMax < 1e-6 and edge.BoundBox.ZLength > 1)
+    chamfered = block.makeChamfer(10, [corner])
+    slanted = next(k for k, face in enumerate(chamfered.Faces, start=1)
+                   if face.Surface.__class__.__name__ == "Plane" and abs(abs(face.Surface.Axis.x) - 0.7071) < 1e-3)
+    top = next(k for k, face in enumerate(chamfered.Faces, start=1) if face.Surface.__class__.__name__ != "Plane")
+    side = next(k for k, face in enumerate(chamfered.Faces, start=1) if abs(face.CenterOfMass.y) < 1e-6)
+    planned = cmmsampling.plan(chamfered, tolerance=0.05, faces=[top], datums=[1, side, slanted], processes=1,
+                               strategy="uniform_parametric")
+    cmmsampling.export(planned, tmp_path / "chamfered.dmi")
+    text = (tmp_path / "chamfered.dmi").read_text()
+    assert check(text) == [] and "DATSET" not in text and "DATDEF/FA(DAT_C),DAT(C)" in text
+    assert ("$$ the datums set no frame here (datum C's plane's normal lies along no axis of the frame the "
+            "datums set)") in " ".join(line.lstrip("$+ ") if line.startswith("$$+") else line
+                                       for line in text.splitlines())

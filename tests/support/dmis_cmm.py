@@ -3,13 +3,15 @@
 The part lies on the table misplaced by a rigid motion M (its CAD coordinates -> the machine's)
 with a smooth form error f along each face's normal; the operator's frame is the machine's. The
 statements it runs (DMIS 5.2 as read here, written independently of the writer):
-FEAT/POINT and FEAT/PLANE nominals in the current frame; MEAS/POINT with its PTMEAS (the probe
-comes along the nominal vector and touches the part where the nominal point's foot on the CAD
-face, plus the form error along its normal, lies on the misplaced part); CONST/PLANE BF (least
-squares plane through the actual points, its normal the nominal's side); DATDEF; DATSET with
-ZDIR/XDIR/YDIR and XORIG/YORIG/ZORIG (a direction word makes the datum's normal that axis, the
-next one's made square to the axes before it; an origin word puts that coordinate's zero on the
-datum's plane); TRANS/XORIG.. (the origin moves to that point of the current frame) and
+FEAT/POINT, FEAT/PLANE and FEAT/CYLNDR nominals in the current frame; MEAS/POINT with its PTMEAS
+(the probe comes along the nominal vector and touches the part where the nominal point's foot on
+the CAD face, plus the form error along its normal, lies on the misplaced part); CONST/PLANE BF
+(least squares plane through the actual points, its normal the nominal's side) and CONST/CYLNDR
+BF (least squares cylinder: the sum of squared radial distances, started from the nominal, its
+axis the nominal's side); DATDEF; DATSET with ZDIR/XDIR/YDIR and XORIG/YORIG/ZORIG (a direction
+word makes the datum's normal or axis that axis, the next one's made square to the axes before
+it; an origin word puts that coordinate's zero on the datum's plane, or on its cylinder's axis);
+TRANS/XORIG.. (the origin moves to that point of the current frame) and
 ROTAT/<axis>,angle (the frame turns about its current axis, right-handed, degrees); OUTPUT/FA of
 a point: its actual contact point and the face's normal there in the current frame. Everything
 else is read over."""
@@ -68,6 +70,8 @@ class DmisCMM:
             fields = rest.split(",")
             if kind == "F" and word == "FEAT" and fields[0] in ("POINT", "PLANE"):
                 self.nominal[label] = np.array([float(v) for v in fields[2:8]])
+            elif kind == "F" and word == "FEAT" and fields[0] == "CYLNDR":
+                self.nominal[label] = np.array([float(v) for v in fields[3:10]])
             elif kind == "D" and word == "DATSET":
                 self.frame = self.datum_set(fields)
             elif kind == "D" and word == "TRANS":
@@ -77,10 +81,11 @@ class DmisCMM:
                 turn[:3, :3] = rotation(_AXES[fields[0]], float(fields[1]))
                 self.frame = self.frame @ turn
             return
-        if statement.startswith("CONST/PLANE,"):
+        if statement.startswith(("CONST/PLANE,", "CONST/CYLNDR,")):
             fields = statement.split(",")
             label = fields[1][2:-1]
-            self.actual[label] = self.plane(label, [field[3:-1] for field in fields[3:]])
+            fit = self.plane if statement.startswith("CONST/PLANE,") else self.cylinder
+            self.actual[label] = fit(label, [field[3:-1] for field in fields[3:]])
         elif statement.startswith("DATDEF/FA("):
             feature, datum = re.match(r"DATDEF/FA\(([^()]*)\),DAT\(([^()]*)\)", statement).groups()
             self.datums[datum] = self.actual[feature]
@@ -110,6 +115,30 @@ class DmisCMM:
         wanted = self.frame[:3, :3] @ self.nominal[label][3:]
         return centre, normal if normal @ wanted > 0 else -normal
 
+    def cylinder(self, label, members):
+        """("cylinder", point on the axis (3,), unit axis (3,)) machine: the least-squares
+        cylinder through the actual points of members, started from the nominal (label)."""
+        from scipy.optimize import least_squares
+
+        points = np.array([self.actual[member][0] for member in members])
+        nominal = self.nominal[label]
+        start_point = self.frame[:3, :3] @ nominal[:3] + self.frame[:3, 3]
+        start_axis = self.frame[:3, :3] @ nominal[3:6]
+
+        def axis_of(angles):
+            return np.array([np.sin(angles[0]) * np.cos(angles[1]), np.sin(angles[0]) * np.sin(angles[1]),
+                             np.cos(angles[0])])
+
+        def radial(values):
+            axis = axis_of(values[3:5])
+            offset = points - values[:3]
+            return np.linalg.norm(offset - np.outer(offset @ axis, axis), axis=1) - values[5]
+
+        angles = [np.arccos(np.clip(start_axis[2], -1, 1)), np.arctan2(start_axis[1], start_axis[0])]
+        found = least_squares(radial, [*start_point, *angles, nominal[6] / 2], xtol=1e-14, ftol=1e-14).x
+        axis = axis_of(found[3:5])
+        return "cylinder", found[:3], axis if axis @ start_axis > 0 else -axis
+
     def datum_set(self, fields):
         """The frame (4, 4, current -> machine) DATSET's fields set from the datums' planes."""
         axes, origins, current = {}, [], None
@@ -118,7 +147,8 @@ class DmisCMM:
                 current = self.datums[field[4:-1]]
             elif field.endswith("DIR"):
                 axis = "XYZ".index(field[0])
-                direction = current[1] - sum((current[1] @ made) * made for made in axes.values())
+                given = current[-1]
+                direction = given - sum((given @ made) * made for made in axes.values())
                 axes[axis] = direction / np.linalg.norm(direction)
             elif field.endswith("ORIG"):
                 origins.append(("XYZ".index(field[0]), current))
@@ -132,8 +162,9 @@ class DmisCMM:
         rotation_matrix = np.column_stack([axes[k] for k in range(3)])
         if np.linalg.det(rotation_matrix) < 0:
             raise AssertionError("DATSET set a left-handed frame")
-        rows = np.array([plane[1] for _, plane in origins])
-        values = np.array([plane[1] @ plane[0] for _, plane in origins])
+        rows = np.array([rotation_matrix[:, axis] if isinstance(datum[0], str) else datum[1]
+                         for axis, datum in origins])
+        values = np.array([row @ datum[-2] for row, (_, datum) in zip(rows, origins)])
         origin = np.linalg.lstsq(rows, values, rcond=None)[0]
         frame = np.eye(4)
         frame[:3, :3], frame[:3, 3] = rotation_matrix, origin

@@ -16,8 +16,12 @@ ending in ``$`` goes on in the next one. Statements, in this order::
     OPEN/DID(label),FDATA,DMIS,OUTPUT          its DEVICE before it, before any FEAT
     F(label)=FEAT/POINT,CART,x,y,z,i,j,k      label new, after UNITS
     F(label)=FEAT/PLANE,CART,x,y,z,i,j,k      label new, after UNITS (a datum's nominal plane)
+    F(label)=FEAT/CYLNDR,(INNER|OUTER),CART,x,y,z,i,j,k,d,l   label new, after UNITS (a datum's
+                                              nominal cylinder, as NIST's IMTS program writes
+                                              one: (i, j, k) its axis, d > 0 diameter, l > 0 length)
     F(label)=FEAT/PATERN,F(a),F(b),...        label new, its members defined
     CONST/PLANE,F(label),BF,FA(a),FA(b),...   a PLANE's feature, its members measured: measured
+    CONST/CYLNDR,F(label),BF,FA(a),...        a CYLNDR's feature, at least 5 members measured
     CONST/PATERN,F(label),BUILD,FA(a),...     a PATERN's feature, its members measured: measured
     DATDEF/FA(label),DAT(x)                   a measured feature becomes datum x (new)
     D(label)=DATSET/DAT(x),[XYZ]DIR,[XYZ]ORIG,...  datums defined; each axis and origin once
@@ -49,8 +53,9 @@ SIMPLE = {
     "ENDFIL": re.compile(r"ENDFIL\Z"),
 }
 FEATURE = re.compile(r"F\(([^()]*)\)=FEAT/(POINT|PLANE),CART,(.*)\Z")
+CYLINDER = re.compile(rf"F\(([^()]*)\)=FEAT/(CYLNDR),(?:INNER|OUTER),CART,(.*),({NUMBER}),({NUMBER})\Z")
 PATTERN = re.compile(rf"F\(([^()]*)\)=FEAT/PATERN((?:,F\({LABEL}\))+)\Z")
-CONSTRUCT = re.compile(rf"CONST/(PLANE|PATERN),F\(({LABEL})\),(BF|BUILD)((?:,FA\({LABEL}\))+)\Z")
+CONSTRUCT = re.compile(rf"CONST/(PLANE|CYLNDR|PATERN),F\(({LABEL})\),(BF|BUILD)((?:,FA\({LABEL}\))+)\Z")
 DATDEF = re.compile(rf"DATDEF/FA\(({LABEL})\),DAT\(({LABEL})\)\Z")
 DATSET = re.compile(rf"D\(({LABEL})\)=DATSET/((?:DAT\({LABEL}\)(?:,[XYZ](?:DIR|ORIG))+,?)+)\Z")
 TOLERANCE = re.compile(rf"T\(({LABEL})\)=TOL/PROFS,({NUMBER}),({NUMBER})((?:,DAT\({LABEL}\))*)\Z")
@@ -251,7 +256,10 @@ class ProgramState:
             return [f"malformed CONST: {statement!r}"]
         kind, label, method, members = match.groups()
         errors = [] if self.kinds.get(label) == kind else [f"CONST/{kind} of F({label}), which is no {kind} feature"]
-        errors += [] if (kind, method) in (("PLANE", "BF"), ("PATERN", "BUILD")) else [f"CONST/{kind} by {method}"]
+        errors += [] if (kind, method) in (("PLANE", "BF"), ("CYLNDR", "BF"), ("PATERN", "BUILD")) else [
+            f"CONST/{kind} by {method}"]
+        if kind == "CYLNDR" and len(MEMBERS.findall(members)) < 5:
+            errors.append(f"CONST/CYLNDR of F({label}) through fewer than 5 points")
         errors += [f"CONST of FA({member}) before it was measured" for member in MEMBERS.findall(members)
                    if member not in self.measured]
         self.measured.add(label)
@@ -309,7 +317,8 @@ class ProgramState:
         return errors + ([] if match.group(1) in self.sensors else [f"SNSLCT of S({match.group(1)}) before its SNSDEF"])
 
     def feature(self, statement):
-        """F(label)=FEAT/POINT or PLANE,CART,x,y,z,i,j,k; F(label)=FEAT/PATERN,F(..),..."""
+        """F(label)=FEAT/POINT or PLANE,CART,x,y,z,i,j,k; FEAT/CYLNDR,INNER|OUTER,CART,x,y,z,i,j,k,d,l;
+        F(label)=FEAT/PATERN,F(..),..."""
         pattern = PATTERN.match(statement)
         if pattern is not None:
             label, members = pattern.groups()
@@ -317,11 +326,12 @@ class ProgramState:
                                             for member in MEMBERS.findall(members) if member not in self.features]
             kind = "PATERN"
         else:
-            match = FEATURE.match(statement)
+            match = FEATURE.match(statement) or CYLINDER.match(statement)
             if match is None:
                 return [f"malformed FEAT: {statement!r}"]
-            label, kind, fields = match.groups()
+            label, kind, fields = match.groups()[:3]
             errors = label_errors(label) + numbers_errors(fields)
+            errors += [f"CYLNDR size {size} is not positive" for size in match.groups()[3:] if float(size) <= 0]
         self.kinds[label] = kind
         if label in self.features:
             errors.append(f"F({label}) defined twice")
