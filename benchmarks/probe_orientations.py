@@ -9,8 +9,10 @@ then measures on the same points, in the same run:
 * before: each point on the head orientation nearest its normal that reaches it
   (cmmsampling.access.reach.reach, as the plans took before the cover) and the path ordered by
   travel alone (``moves_through(..., by_orientation=False)``);
-* after: the plan's own orientations (the set cover, cmmsampling.access.reach.fewest_orientations)
-  and its path, orientation by orientation.
+* per face: each face's own set cover (cmmsampling.access.reach.fewest_orientations, run on
+  each face's points as the plan's faces end), the path orientation by orientation;
+* after: the plan's own orientations (those covers shared across the faces where that needs
+  fewer: cmmsampling.planning.plan_points.share_orientations) and its path.
 
 Prints for each the orientations, the tip changes (changes of orientation along the path: the
 index moves, a DMIS program's SNSLCT after its first), the travel and the estimated CMM time with
@@ -34,6 +36,7 @@ from cmmsampling.access.obstacles import Obstacles  # noqa: E402
 from cmmsampling.access.probe import Motion  # noqa: E402
 from cmmsampling.access.probe_moves import moves_through  # noqa: E402
 from cmmsampling.access.reach import reach  # noqa: E402
+from cmmsampling.planning import part_plan  # noqa: E402
 
 VENTILATOR = os.path.join(HERE, "..", "..", "shared", "testdata", "Ventilator.stp")
 PLANS = {"four": [14, 57, 60, 61], "twenty": list(range(4, 305, 15))[:20]}
@@ -68,11 +71,29 @@ def dmis_selections(plan):
     return len(selected), len(set(selected))
 
 
+def planned_with_own_covers(shape, faces, probe, processes):
+    """(the plan, the axes (N, 3) of its reached points as each face's own cover left them, before
+    the plan shared them)."""
+    sharing = part_plan.share_orientations
+    own = {}
+
+    def recorded(plan):
+        own["axes"] = reached_points(plan)[2]
+        sharing(plan)
+
+    part_plan.share_orientations = recorded
+    try:
+        plan = cmmsampling.plan(shape, tolerance=TOLERANCE, faces=faces, probe=probe, processes=processes)
+    finally:
+        part_plan.share_orientations = sharing
+    return plan, own["axes"]
+
+
 def measure(shape, name, faces, processes):
-    """Plan ``faces`` and print the before and after figures."""
+    """Plan ``faces`` and print the before, per-face and after figures."""
     probe = cmmsampling.Probe()
     started = time.perf_counter()
-    plan = cmmsampling.plan(shape, tolerance=TOLERANCE, faces=faces, probe=probe, processes=processes)
+    plan, own_axes = planned_with_own_covers(shape, faces, probe, processes)
     planned = time.perf_counter() - started
     points, normals, axes = reached_points(plan)
     obstacles = Obstacles(plan.part)
@@ -85,10 +106,13 @@ def measure(shape, name, faces, processes):
     before = moves_through(probe, obstacles, points, normals, np.where(nearest.reachable[:, None], nearest.axes, axes),
                            by_orientation=False)
     middle = time.perf_counter()
+    per_face = moves_through(probe, obstacles, points, normals, own_axes)
     after = moves_through(probe, obstacles, points, normals, axes)
     ended = time.perf_counter()
     print(figures_line("before (nearest the normal, by travel)", before, len(points)) + f"; path {middle - started:.1f} s")
-    print(figures_line("after (set cover, by orientation)", after, len(points)) + f"; path {ended - middle:.1f} s")
+    print(figures_line("per face (each face's set cover, by orientation)", per_face, len(points)))
+    print(figures_line("after (the covers shared across the faces, by orientation)", after, len(points))
+          + f"; both paths {ended - middle:.1f} s")
     statements, sensors = dmis_selections(plan)
     if statements is not None:
         print(f"  the plan's DMIS program: {statements} SNSLCT, {sensors} sensors ({statements - 1} tip changes)")

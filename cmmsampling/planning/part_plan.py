@@ -39,7 +39,7 @@ from ..strategies.estimates import duration_text, time_left_text
 from ..strategies.face_setup import reused, setup_of
 from ..strategies.sampling import BEST_STRATEGY, STRATEGIES, check_arguments, evaluate, probe_edge_offset, sample
 from . import face_runs
-from .plan_points import plan_moves, plan_point_set
+from .plan_points import plan_moves, plan_point_set, share_orientations
 from .points_needed import (DEFAULT_MAX_POINTS, RISE_FACTOR, check_max_points, fewest_points, points_needed,
                             step_counts)
 
@@ -307,7 +307,9 @@ def plan(shape_or_faces: Part.Shape | list, tolerance: float | None = None, n_to
     N it runs and the best maximum so far, e.g. "; Face57: N = 36 (best so far 0.1046 mm with 16
     points)"), returning True to cancel: the
     faces under way stop within a second or two, and the faces done are kept; probe: a
-    cmmsampling.Probe whose reach on the part is judged (each face keeps to what it reaches, and
+    cmmsampling.Probe whose reach on the part is judged (each face keeps to what it reaches, an
+    indexing head's orientations are then shared across the faces where that needs fewer:
+    :func:`cmmsampling.planning.plan_points.share_orientations`, and
     ``export(plan, order="probe_path")`` writes a collision-free path); part: the shape the probe
     must keep clear of (default: shape_or_faces when it is a shape); resume: a cancelled
     tolerance plan of the same faces, tolerance and strategy, whose faces done are kept and not
@@ -353,9 +355,10 @@ def plan(shape_or_faces: Part.Shape | list, tolerance: float | None = None, n_to
         result = _plan_budget(named, check_int("n_total", n_total, 1), strategy, arguments, processes, scheduler,
                               progress, part_brep, probe)
     with_datums(result, datum_plans, dict(datum_faces))
-    result.seconds = time.perf_counter() - start
     result.shapes = {**dict(datum_faces), **dict(named)}
     result.part, result.probe = part, probe
+    share_orientations(result)
+    result.seconds = time.perf_counter() - start
     return result
 
 

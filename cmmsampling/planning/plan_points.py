@@ -1,15 +1,19 @@
-"""What a plan hands the formats and the CMM: its points as one PointSet, its probe path.
+"""What a plan hands the formats and the CMM: its points as one PointSet, its probe path, and
+the head orientations shared across its faces.
 
 PartPlan.point_set() and PartPlan.probe_moves() call these; export(), QIF plans and a live CMM
 take any source that has them, so the formats need not know a plan."""
 from __future__ import annotations
 
-from dataclasses import asdict
+import time
+from dataclasses import asdict, replace
 
 import numpy as np
 
 from ..access.obstacles import Obstacles
+from ..access.orientations import orientation_labels
 from ..access.probe_moves import moves_through
+from ..access.reach import Access, Reachability, fewest_orientations
 from ..formats.exporting import spacing_by_face
 from ..formats.pointset import PointSet
 from ..geometry.validation import InputError
@@ -72,3 +76,40 @@ def measuring_groups(placed):
     rest = np.concatenate([np.arange(starts[k], starts[k + 1]) for k, face in enumerate(placed) if not face.datum]
                           or [np.empty(0, dtype=int)])
     return datums + ([rest] if rest.size else [])
+
+
+# Seconds OCC may spend judging the poses a plan-wide cover of the orientations would take.
+SHARED_COVER_SECONDS = 20.0
+
+
+def share_orientations(plan) -> None:
+    """Re-aim a probe plan's points (every face's, the datum faces' too) so that as few of its
+    indexing head's orientations as serve the whole part do: each face's run covered its own
+    points (cmmsampling.access.reach.fewest_orientations); covered again together, faces that
+    one orientation serves share it, and the program changes tips less often. A pose the cover
+    would newly take is judged by OCC first (SHARED_COVER_SECONDS at most; one left unjudged is
+    not taken). The faces' accesses are replaced where the whole plan then needs fewer
+    orientations than the faces' own, else left. Nothing for a plan without a probe, an indexing
+    head or two faces with points."""
+    placed = [face for face in plan.placed if face.access is not None]
+    if plan.probe is None or plan.probe.index_step is None or len(placed) < 2:
+        return
+    reachability = Reachability(plan.part, plan.probe)
+    joined = Access(*(np.concatenate([getattr(face.access, name) for face in placed])
+                      for name in ("reachable", "axes", "tilts", "angles", "ranks")))
+    points = np.concatenate([face.points for face in placed])
+    normals = np.concatenate([face.normals for face in placed])
+    shared, _ = fewest_orientations(plan.probe, reachability.obstacles, points, normals, joined,
+                                    reachability.judge_until(time.perf_counter() + SHARED_COVER_SECONDS))
+    reached = joined.reachable
+    if orientation_count(shared.axes[reached]) >= orientation_count(joined.axes[reached]):
+        return
+    starts = np.cumsum([0] + [face.n for face in placed])
+    for face, start, end in zip(placed, starts[:-1], starts[1:]):
+        face.access = replace(face.access, axes=shared.axes[start:end], tilts=shared.tilts[start:end],
+                              angles=shared.angles[start:end])
+
+
+def orientation_count(axes: np.ndarray) -> int:
+    """The distinct head orientations of probe axes (N, 3) unit."""
+    return int(orientation_labels(axes).max(initial=-1)) + 1
