@@ -191,3 +191,41 @@ def test_the_four_face_ventilator_plan_changes_tips_fewer_times_than_it_has_orie
     axes = np.concatenate([face.axes for face in plan.placed])
     assert occ_clear(shape, points, normals, axes).all(), "every point reached without collision"
     assert_moves_keep_clear(shape, moves)
+
+
+@pytest.fixture(scope="module")
+def sheltered():
+    """A base (top Face5 at z = 10) under a roof (top Face2 at z = 35) that overhangs it by 10 mm
+    on a pillar: the base's points under the roof are reached only with the stylus tilted."""
+    pillar = Part.makeBox(40, 40, 20, vector((60, 0, 10)))
+    roof = Part.makeBox(50, 40, 5, vector((50, 0, 30)))
+    return Part.makeBox(100, 40, 10).fuse(pillar).fuse(roof).removeSplitter()
+
+
+def test_a_plan_shares_one_orientation_across_faces_that_each_covered_with_their_own(sheltered, monkeypatch,
+                                                                                       tmp_path):
+    from cmmsampling.planning import part_plan
+
+    sharing, own = part_plan.share_orientations, {}
+
+    def recorded(plan):
+        own.update({face.name: orientation_labels(face.axes).max() + 1 for face in plan.placed})
+        own["together"] = orientation_labels(np.concatenate([face.axes for face in plan.placed])).max() + 1
+        sharing(plan)
+
+    monkeypatch.setattr(part_plan, "share_orientations", recorded)
+    assert [k for k, face in enumerate(sheltered.Faces, start=1) if abs(face.BoundBox.ZLength) < 1e-9
+            and face.BoundBox.ZMin in (10.0, 35.0)] == [2, 5]
+    plan = cmmsampling.plan(sheltered, n_total=32, faces=[2, 5], probe=PROBE, processes=1,
+                            strategy="uniform_parametric")
+    assert own == {"Face2": 1, "Face5": 1, "together": 2}, "the roof vertical, the base tilted under the roof"
+    points = np.concatenate([face.points for face in plan.placed])
+    normals = np.concatenate([face.normals for face in plan.placed])
+    axes = np.concatenate([face.axes for face in plan.placed])
+    assert len(np.unique(np.round(head_angles(axes), 4), axis=0)) == 1, "one tilted orientation serves both"
+    assert occ_clear(sheltered, points, normals, axes).all(), "every point reached without collision"
+    moves = plan.probe_moves()
+    assert moves.orientations == 1 and moves.tip_changes == 0
+    assert_moves_keep_clear(sheltered, moves)
+    cmmsampling.export(plan, tmp_path / "sheltered.dmi")
+    assert len(set(selections((tmp_path / "sheltered.dmi").read_text()))) == 1
