@@ -165,7 +165,10 @@ class ProbePoints(TypedProxy):
              "The source face no longer passes through the points; run Re-evaluate"),
             ("App::PropertyString", "Status", "Whether the points still match their face"),
         ]
-        figures = [("App::PropertyLength", prop, doc + " (mm)") for prop, _, doc in SUMMARY_FIGURES]
+        figures = [("App::PropertyLength", prop, doc + " (mm)") for prop, _, doc in SUMMARY_FIGURES] + [
+            ("App::PropertyAngle", "MaxNormalAngle",
+             "Largest angle between the face's normal and the substitute's, over the grid's nodes (degrees): a "
+             "substitute corrugated within a small distance shows here")]
         for group, props in (("Probe points", points), ("Sampling", sampling), ("Probe reach", reach),
                              ("Source", status), ("Deviation", figures)):
             for kind, name, doc in props:

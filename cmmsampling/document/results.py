@@ -256,6 +256,7 @@ def write_result(points, result, settings, run_time_s):
     write_access(points, result.access, result.settings.get("probe"))
     for prop, attribute, _ in SUMMARY_FIGURES:
         setattr(points, prop, float(getattr(result.deviation, attribute)))
+    points.MaxNormalAngle = float(np.nan_to_num(result.deviation.normal_angle))
     if points.Substitute is not None:
         write_substitute(points.Substitute, result)
     if points.Report is not None:

@@ -7,6 +7,7 @@ expression such as ``=DeviationReport.max_mm`` gets) and display it in micrometr
 (DEVIATION_DISPLAY_UNIT: '8.41 µm', 10 nm at two decimals).
 """
 import json
+from types import SimpleNamespace
 from xml.etree import ElementTree
 
 import numpy as np
@@ -36,7 +37,7 @@ def write_deviation_report(sheet, points):
     table, in readable columns.
 
     The summary figures are numbers in column B with aliases (strategy, n, max_mm, mean_mm,
-    rms_mm, std_mm, occ_max_mm, time_s) for expressions such as ``=DeviationReport.max_mm``, the
+    rms_mm, std_mm, occ_max_mm, normal_angle_deg, time_s) for expressions such as ``=DeviationReport.max_mm``, the
     deviations in mm shown in micrometres (see the module's docstring). The per-point table is
     text at the CMM's resolution.
     """
@@ -81,6 +82,10 @@ def clear_cells(sheet):
         sheet.clear(cell.get("address"))
 
 
+# The normal angle of probe points made before it was reported.
+ZERO_ANGLE = SimpleNamespace(Value=0.0)
+
+
 def summary_rows(points):
     """The report's summary: rows (name, value[, alias])."""
     return [
@@ -93,6 +98,7 @@ def summary_rows(points):
         ("RMS deviation", points.RmsDeviation.Value, "rms_mm"),
         ("Std deviation", points.StdDeviation.Value, "std_mm"),
         ("OCC max deviation", points.OccMaxDeviation.Value, "occ_max_mm"),
+        ("Largest normal angle (deg)", getattr(points, "MaxNormalAngle", ZERO_ANGLE).Value, "normal_angle_deg"),
         ("Sampling time (s)", points.RunTime, "time_s"),
         ("Cancelled", "yes" if points.Cancelled else "no"),
     ] + reach_rows(points)

@@ -496,7 +496,9 @@ class DeviationStats:
     nodes: (g_u, g_v, 3) F(h) mm; edge_signed: (E,) d at the edge nodes; edge_nodes: (E, 3) mm;
     peak_signed: (P,) d at the peaks; peak_nodes: (P, 3) mm; spacing: mm, every point of the face
     lies within it of a node; occ_maximum: OpenCASCADE's distances, both ways, at the nodes of
-    largest deviation (see cmmsampling.fitting.crosscheck).
+    largest deviation (see cmmsampling.fitting.crosscheck); normal_angle: degrees, the largest
+    angle between the face's normal at a node and the substitute's at its nearest point (NaN
+    where not measured): a substitute corrugated within a small distance shows here.
     """
 
     maximum: float
@@ -513,6 +515,7 @@ class DeviationStats:
     occ_maximum: float = float("nan")
     peak_signed: np.ndarray | None = None
     peak_nodes: np.ndarray | None = None
+    normal_angle: float = float("nan")
 
     def max_location(self) -> np.ndarray:
         """(3,) mm: the face's point of largest deviation, a raster, edge or peak node."""
@@ -532,8 +535,9 @@ class DeviationStats:
                 "occ_max_mm": self.occ_maximum}
 
     @classmethod
-    def from_exact(cls, exact: ExactDeviation) -> DeviationStats:
-        """Statistics of an ExactDeviation (cmmsampling.fitting.exact) at its nodes and peaks."""
+    def from_exact(cls, exact: ExactDeviation, space: SubstituteSpace | None = None) -> DeviationStats:
+        """Statistics of an ExactDeviation (cmmsampling.fitting.exact) at its nodes and peaks; the
+        normal angle (:func:`normal_angle`) where the substitute's space is given."""
         values = exact.counted_signed()
         magnitude = np.abs(values)
         nodes = exact.nodes
@@ -552,4 +556,23 @@ class DeviationStats:
             spacing=nodes.spacing,
             peak_signed=exact.peak_signed(),
             peak_nodes=exact.peak_points,
+            normal_angle=float("nan") if space is None else normal_angle(space, exact),
         )
+
+
+def normal_angle(space: SubstituteSpace, exact: ExactDeviation) -> float:
+    """Degrees: the largest angle between the face's normal at a node whose deviation counts and
+    the substitute's normal at its nearest point on the substitute (either orientation: the
+    angle between the lines, 0 to 90)."""
+    from .substitute import FittedSurface
+
+    nodes = exact.nodes
+    count = len(nodes.node_weights())
+    counted = nodes.node_weights() > 0
+    derivatives = FittedSurface(space, exact.poles).derivatives(exact.forward.at[:count][counted])
+    across = np.cross(derivatives[(1, 0)], derivatives[(0, 1)])
+    lengths = np.linalg.norm(across, axis=1)
+    face = np.concatenate([nodes.normals[nodes.counted], nodes.edge_normals])[counted]
+    usable = lengths > 0
+    cosines = np.abs(np.einsum("nc,nc->n", across[usable], face[usable])) / lengths[usable]
+    return float(np.degrees(np.arccos(np.clip(cosines, 0.0, 1.0))).max(initial=0.0))

@@ -28,6 +28,12 @@ import FreeCAD  # noqa: E402  (importable once import_part() has set the path)
 # farther off (beyond a trimmed boundary, or past an edge whose parameter range is wider than
 # the face) are moved onto the face by SurfaceModel.onto_face.
 ON_FACE_MM = 1e-5
+# The most a point may lie off a tolerant face (one whose own tolerance is larger than
+# ON_FACE_MM) by OCC's distance and count as on it: OCC's distance and its classifier
+# (``isInside(p, 1e-4, True)``) agree to it, and a CMM program's nominal is on the face to it.
+# A wider band (the face's tolerance) takes points between a face's curves on the surface and
+# its 3D edges (Top.brep's Face66: 0.012 mm off, inside the curves, outside the classifier).
+TOLERANT_ON_FACE_MM = 1e-4
 # Samples per edge of a trimming loop at least; relative area difference that makes a face trimmed.
 LOOP_SAMPLES_PER_EDGE = 200
 # Edge spans: cut where an edge's curve on the surface is less than C^2 smooth.
@@ -169,10 +175,10 @@ class SurfaceModel(NurbsPatch):
     @property
     def tolerance(self) -> float:
         """mm a point may lie from the face and count as on it: ON_FACE_MM, or the face's own
-        tolerance where that is larger (OCC's distance to a valid face with a tolerant surface).
-        Not its edges' tolerance: on a plane whose edges are 0.014 mm tolerant (Ventilator Face16)
-        points 0.014-0.024 mm outside its boundary counted as on it."""
-        return max(ON_FACE_MM, float(self.face.Tolerance))
+        tolerance where that is larger (OCC's distance to a valid face with a tolerant surface),
+        up to TOLERANT_ON_FACE_MM. Not its edges' tolerance: on a plane whose edges are 0.014 mm
+        tolerant (Ventilator Face16) points 0.014-0.024 mm outside its boundary counted as on it."""
+        return max(ON_FACE_MM, min(float(self.face.Tolerance), TOLERANT_ON_FACE_MM))
 
     def _occ_placement(self, uv: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """OCC's view of the points at uv (N, 2): (distance (N,) mm, nearest face points (N, 3)
@@ -187,8 +193,10 @@ class SurfaceModel(NurbsPatch):
         An off point goes to the parameters of its nearest point on the face (OCC), and from there
         inward (away from where it was) by steps doubling from INWARD_STEP of the parameter range
         until OCC finds it on the face (an edge's 3D curve and its curve on the surface differ
-        by up to the edge's tolerance). Returns (uv (N, 2), moved (N,) bool, off (N,) mm: each
-        point's OCC distance from the face before the move).
+        by up to the edge's tolerance); where that finds none (a point inside the face's curves on
+        the surface but off its 3D boundary: the nearest point lies beyond the curves), from the
+        point itself away from that nearest point. Returns (uv (N, 2), moved (N,) bool, off (N,)
+        mm: each point's OCC distance from the face before the move).
         """
         uv = np.array(uv, dtype=float)
         off, feet, inside = self._occ_placement(uv)
@@ -205,12 +213,13 @@ class SurfaceModel(NurbsPatch):
         direction = start - outside
         if np.linalg.norm(direction / (high - low)) < INWARD_STEP:   # off by the edge's tolerance only
             direction = 0.5 * (low + high) - start
-        direction = direction / np.linalg.norm(direction / (high - low))
         steps = np.concatenate([[0.0], INWARD_STEP * 2.0 ** np.arange(INWARD_DOUBLINGS)])
-        for step in steps:
-            candidate = np.clip(start + step * direction, low, high)
-            if self.on_face(candidate[None])[0]:
-                return candidate
+        for origin, towards in ((start, direction), (outside, -direction)):
+            towards = towards / np.linalg.norm(towards / (high - low))
+            for step in steps:
+                candidate = np.clip(origin + step * towards, low, high)
+                if self.on_face(candidate[None])[0]:
+                    return candidate
         raise InputError("a point off the face could not be moved onto it; the face's boundary "
                          "may be broken: check it with Part's Check geometry")
 

@@ -144,7 +144,7 @@ class SamplingProblem:
 
     def deviation(self, poles: np.ndarray, check: bool = False) -> DeviationStats:
         """Exact deviation statistics (DeviationStats, mm) of a substitute on the grid or check grid."""
-        return DeviationStats.from_exact(self.judge(poles, check))
+        return DeviationStats.from_exact(self.judge(poles, check), self.space)
 
     def bounds(self, poles: np.ndarray | None = None) -> LocalBounds:
         """Local bounds (MinimaxBound, mm) about a substitute on the grid and on the check grid: the

@@ -137,11 +137,13 @@ class SamplingResult:
         return [f"P{i + 1}" for i in range(self.n)]
 
     def summary(self) -> dict[str, Any]:
-        """The headline figures as a dict (deviations in mm, times in s)."""
+        """The headline figures as a dict (deviations in mm, the largest normal angle in degrees,
+        times in s)."""
         return {
             "strategy": self.strategy,
             "n": self.n,
             **self.deviation.figures(),
+            "normal_angle_deg": self.deviation.normal_angle,
             "check_max_mm": self.check.maximum,
             "time_s": self.timings.get("total_s", float("nan")),
             "evaluations": self.evaluations,

@@ -432,7 +432,7 @@ def _judge(problem: SamplingProblem, outcome: StrategyOutcome, strategy: str, se
     with blas_threads(1):
         poles = problem.objective.fit(uv[None])[0]
         exact = problem.judge(poles)
-        stats = DeviationStats.from_exact(exact)
+        stats = DeviationStats.from_exact(exact, problem.space)
     evaluation_s = time.perf_counter() - start
     result = SamplingResult(
         strategy=strategy, uv=uv, points=problem.model.points(uv), normals=problem.model.normals(uv),

@@ -111,6 +111,8 @@ def test_report_has_summary_and_point_table(group, result):
     assert report.get("strategy") == "pso" and report.get("n") == 25
     assert report.get("max_mm") == pytest.approx(result.deviation.maximum, rel=1e-9)
     assert report.get("occ_max_mm") == pytest.approx(result.deviation.occ_maximum, rel=1e-9)
+    assert report.get("normal_angle_deg") == pytest.approx(result.deviation.normal_angle, rel=1e-9)
+    assert 0 < result.deviation.normal_angle < 90
     header = next((row for row in range(1, 60) if cell(report, f"A{row}") == "Label"), None)
     assert header is not None and cell(report, f"J{header}") == "Deviation (mm)"
     first = [report.get(f"{c}{header + 1}") for c in "ABCDEFGHIJ"]
