@@ -495,9 +495,10 @@ class DeviationStats:
     (NaN where a node does not count); signed: (g_u, g_v) d; grid_uv: (g_u, g_v, 2) the raster h;
     nodes: (g_u, g_v, 3) F(h) mm; edge_signed: (E,) d at the edge nodes; edge_nodes: (E, 3) mm;
     peak_signed: (P,) d at the peaks; peak_nodes: (P, 3) mm; spacing: mm, every point of the face
-    lies within it of a node; occ_maximum: OpenCASCADE's distances, both ways, at the nodes of
-    largest deviation (see cmmsampling.fitting.crosscheck); normal_angle: degrees, the largest
-    angle between the face's normal at a node and the substitute's at its nearest point (NaN
+    lies within it of a node; occ_maximum: OpenCASCADE's distances, both ways, at the places of
+    largest deviation (see cmmsampling.fitting.crosscheck), which becomes the maximum where
+    OCC checked the result, and occ_location: the face's point of it; normal_angle: degrees,
+    the largest angle between the face's normal at a node and the substitute's at its nearest point (NaN
     where not measured): a substitute corrugated within a small distance shows here.
     """
 
@@ -516,9 +517,13 @@ class DeviationStats:
     peak_signed: np.ndarray | None = None
     peak_nodes: np.ndarray | None = None
     normal_angle: float = float("nan")
+    occ_location: np.ndarray | None = None
 
     def max_location(self) -> np.ndarray:
-        """(3,) mm: the face's point of largest deviation, a raster, edge or peak node."""
+        """(3,) mm: the face's point of largest deviation: OCC's where it checked (occ_location),
+        else a raster, edge or peak node."""
+        if self.occ_location is not None:
+            return np.asarray(self.occ_location, dtype=float)
         field = np.nan_to_num(self.field, nan=-1.0)
         raster = np.unravel_index(int(np.argmax(field)), field.shape)
         places = [(field[raster], self.nodes[raster])]

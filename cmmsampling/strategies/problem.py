@@ -83,6 +83,15 @@ class SamplingProblem:
         substitute is judged over; None when no probe was asked (the whole face is judged)."""
         return None if self.domain.unreached is None else self.domain.reached
 
+    @property
+    def counts(self) -> Callable[[np.ndarray], np.ndarray] | None:
+        """uv (..., 2) -> (...) bool, where a substitute's deviation counts: on the face (its trim)
+        and where the probe reaches it; None where it counts everywhere on the rectangle."""
+        tests = [test for test in (self.domain.on_face, self.reached) if test is not None]
+        if not tests:
+            return None
+        return lambda uv: np.logical_and.reduce([np.asarray(test(uv), dtype=bool) for test in tests])
+
     def spacing_advice(self) -> str:
         """How to let more points in, in words that say whether the caller chose the spacing."""
         if self.spacing_by_default:

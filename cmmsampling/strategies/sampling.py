@@ -443,7 +443,9 @@ def _judge(problem: SamplingProblem, outcome: StrategyOutcome, strategy: str, se
     occ_s = 0.0
     if occ_check:
         start = time.perf_counter()
-        occ_cross_check(stats, exact, substitute_surface(problem.space, poles), problem.model.source_face)
+        occ_cross_check(stats, exact, substitute_surface(problem.space, poles), problem.model.source_face,
+                        problem.space, problem.counts)
+        stats.maximum = stats.occ_maximum
         occ_s = time.perf_counter() - start
     result.timings = {"strategy_s": strategy_s, "evaluation_s": evaluation_s, "occ_check_s": occ_s,
                       "total_s": strategy_s + evaluation_s + occ_s}
