@@ -497,7 +497,8 @@ class DeviationStats:
     peak_signed: (P,) d at the peaks; peak_nodes: (P, 3) mm; spacing: mm, every point of the face
     lies within it of a node; occ_maximum: OpenCASCADE's distances, both ways, at the places of
     largest deviation (see cmmsampling.fitting.crosscheck), which becomes the maximum where
-    OCC checked the result, and occ_location: the face's point of it; normal_angle: degrees,
+    OCC checked the result, and occ_location: the face's point of it; judged_maximum: the
+    maximum as the project's own measure found it, before OCC's check; normal_angle: degrees,
     the largest angle between the face's normal at a node and the substitute's at its nearest point (NaN
     where not measured): a substitute corrugated within a small distance shows here.
     """
@@ -518,6 +519,7 @@ class DeviationStats:
     peak_nodes: np.ndarray | None = None
     normal_angle: float = float("nan")
     occ_location: np.ndarray | None = None
+    judged_maximum: float = float("nan")
 
     def max_location(self) -> np.ndarray:
         """(3,) mm: the face's point of largest deviation: OCC's where it checked (occ_location),
@@ -549,6 +551,7 @@ class DeviationStats:
         grid = exact.grid_signed()
         return cls(
             maximum=exact.maximum,
+            judged_maximum=exact.maximum,
             mean=float(magnitude.mean()),
             rms=float(np.sqrt(np.mean(values ** 2))),
             std=float(magnitude.std()),

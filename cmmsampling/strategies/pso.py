@@ -273,8 +273,8 @@ def _uniform_seeds(problem: SamplingProblem) -> dict[str, tuple[np.ndarray, list
 
 def _best_exact(problem: SamplingProblem, found: np.ndarray,
                 seeds: dict[str, tuple[np.ndarray, list[str]]]) -> tuple[np.ndarray, list[str]]:
-    """The swarm's best point set, or a seed layout where that is better by the exact deviation,
-    each as it is delivered (the swarm's best with the points OCC finds off the face moved onto
+    """The swarm's best point set, or a seed layout where that is better by the exact deviation
+    (said in a note, as is a best that is a seed layout itself, unchanged), each as it is delivered (the swarm's best with the points OCC finds off the face moved onto
     it, blind.onto_face), so that the figures a note quotes are the result's.
 
     found: (N, 2); seeds: {name: (uv (N, 2), notes)} the uniform layouts it started from (or none).
@@ -282,6 +282,12 @@ def _best_exact(problem: SamplingProblem, found: np.ndarray,
     """
     names = list(seeds)
     delivered = [blind.onto_face(problem, found), *seeds.values()]
+    unmoved = [name for name, (uv, _) in seeds.items() if np.array_equal(uv, found)]
+    if unmoved:
+        uv, notes = seeds[unmoved[0]]
+        return uv, [f"the swarm found no layout its measure ranks above its {unmoved[0]} start, which is "
+                    "returned unchanged; more iterations, or the optimal strategy (a descent from that "
+                    "start), may do better", *notes]
     maxima = [problem.exact_maximum(uv) for uv, _ in delivered]
     best = int(np.argmin(maxima))
     if maxima[best] >= maxima[0] - SIGNIFICANT_MM:

@@ -137,3 +137,13 @@ def test_pso_progress_reports_the_figure_its_result_reports():
     assert [iteration for iteration, _ in reported] == list(range(1, 41))
     assert reported[-1][1] == pytest.approx(result.deviation.maximum, rel=1e-12)
     assert abs(result.history[-1] - result.deviation.maximum) > 1e-6   # the estimate is another figure
+
+
+def test_a_swarm_that_never_leaves_its_uniform_start_says_so(reference):
+    stalled = cmmsampling.sample(reference, 25, "pso", iterations=1)
+    start = cmmsampling.sample(reference, 25, "uniform_cartesian")
+    assert np.array_equal(stalled.uv, start.uv)
+    assert any(note.startswith("the swarm found no layout its measure ranks above its uniform Cartesian start, "
+                               "which is returned unchanged") for note in stalled.notes), stalled.notes
+    moved = cmmsampling.sample(reference, 25, "pso", iterations=200)
+    assert not any("returned unchanged" in note for note in moved.notes)
