@@ -16,7 +16,7 @@ import pytest
 from support import dmis_syntax
 from support.faces import holed_face, rational_patch_face, rational_saddle, strip_face
 from support.wording import LEFT
-from PySide import QtGui
+from PySide import QtCore, QtGui
 
 from cmmsampling.document.object_types import is_part_plan, probe_points_in
 from cmmsampling.gui import colormap, commands, view_providers
@@ -480,6 +480,9 @@ def test_datums_from_the_panel_are_planned_first_and_inspect_takes_them(block_do
         task_button(OK).click()
         process_events(0.2)
         assert problem in form.status.text() and not hold.plans and FreeCADGui.Control.activeDialog()
+    QtGui.QApplication.sendEvent(datums, QtGui.QKeyEvent(QtCore.QEvent.KeyPress, QtCore.Qt.Key_Comma,
+                                                         QtCore.Qt.NoModifier, ","))
+    assert form.status.text() == "", "editing the datums clears their problem"
     datums.setText("Face1, Face5, Face4")
     form.grab().save(os.path.join(artifacts, "plan_part_datums.png"))
     task_button(OK).click()

@@ -42,6 +42,8 @@ WORKING = QtCore.Qt.UserRole
 SPIN_BOXES = ("tolerance", "points", "n_max", "grid", "processes")
 # Values that belong to the part planned, not kept for the next plan (of another part, maybe).
 PART_VALUES = ("datums",)
+# Pixels the Datums field takes at least: three face names show whole, the label above it.
+DATUMS_WIDTH = 180
 
 
 def strategy_settings():
@@ -243,13 +245,20 @@ class PlanPartTaskPanel(BackgroundRunPanel):
         """The datum faces' field: names, primary first, as A, B, C on the drawing."""
         field = QtGui.QLineEdit(self.form)
         field.setObjectName("datums")
+        field.setMinimumWidth(DATUMS_WIDTH)
         field.setPlaceholderText("none (e.g. Face1, Face5, Face4)")
         field.setToolTip("The datum faces, primary first (A, B, C on the drawing): each gets points spread to hold "
                          "the motions it fixes and is measured first; the programs set the part's frame on them and "
                          "state the profile relative to them, and Inspect aligns on them. They need not be among the "
                          "selected faces; a selected one is no longer toleranced.")
         self.form.settingsGroup.layout().addRow(QtGui.QLabel("Datums", self.form), field)
+        field.textEdited.connect(self._forget_datum_problem)
         return field
+
+    def _forget_datum_problem(self, _text):
+        """Clear the status line where it names a problem of the datums the user is now editing."""
+        if self.form.status.text().startswith("Datums:"):
+            self.show_status("")
 
     def values(self):
         """The panel's values by name (see :func:`panel_defaults`)."""
