@@ -120,9 +120,9 @@ def _plane(points: np.ndarray, normals: np.ndarray) -> tuple[np.ndarray, np.ndar
 
 def _cylinder(points: np.ndarray, normals: np.ndarray) -> Cylinder | None:
     """The Cylinder points (M, 3) mm with normals (M, 3) out of the material lie on (each point
-    p = c + r n with c on the axis: r > 0 a shaft, r < 0 a bore), else None (fewer than 5 points,
-    which no least-squares cylinder is fitted through, or no cylinder)."""
-    if len(points) < 5:
+    p = c + r n with c on the axis: r > 0 a shaft, r < 0 a bore), else None (fewer than 6 points,
+    which a CMM fits no least-squares cylinder through, or no cylinder)."""
+    if len(points) < 6:
         return None
     axis = np.linalg.svd(normals)[2][-1]
     if np.abs(normals @ axis).max() > CYLINDER_AXIS_AGREEMENT:

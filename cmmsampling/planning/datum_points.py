@@ -35,7 +35,8 @@ DATUM_GRID = 60
 # mm a datum's points keep from the face's edges where the plan gives no edge offset.
 DATUM_EDGE_MM = 2.0
 # Points a cylindrical datum face gets at least, whatever motions it fixes: the CMM fits a
-# least-squares cylinder through them (5 unknowns), as NIST's programs measure a bore (8 points).
+# least-squares cylinder through them (5 unknowns; PC-DMIS asks 6 points at least), and NIST's
+# programs measure a bore with 8.
 CYLINDER_POINTS = 8
 
 

@@ -21,7 +21,8 @@ ending in ``$`` goes on in the next one. Statements, in this order::
                                               one: (i, j, k) its axis, d > 0 diameter, l > 0 length)
     F(label)=FEAT/PATERN,F(a),F(b),...        label new, its members defined
     CONST/PLANE,F(label),BF,FA(a),FA(b),...   a PLANE's feature, its members measured: measured
-    CONST/CYLNDR,F(label),BF,FA(a),...        a CYLNDR's feature, at least 5 members measured
+    CONST/CYLNDR,F(label),BF,FA(a),...        a CYLNDR's feature, at least 6 members measured (a
+                                              least-squares cylinder: PC-DMIS asks 6 at least)
     CONST/PATERN,F(label),BUILD,FA(a),...     a PATERN's feature, its members measured: measured
     DATDEF/FA(label),DAT(x)                   a measured feature becomes datum x (new)
     D(label)=DATSET/DAT(x),[XYZ]DIR,[XYZ]ORIG,...  datums defined; each axis and origin once
@@ -258,8 +259,8 @@ class ProgramState:
         errors = [] if self.kinds.get(label) == kind else [f"CONST/{kind} of F({label}), which is no {kind} feature"]
         errors += [] if (kind, method) in (("PLANE", "BF"), ("CYLNDR", "BF"), ("PATERN", "BUILD")) else [
             f"CONST/{kind} by {method}"]
-        if kind == "CYLNDR" and len(MEMBERS.findall(members)) < 5:
-            errors.append(f"CONST/CYLNDR of F({label}) through fewer than 5 points")
+        if kind == "CYLNDR" and len(MEMBERS.findall(members)) < 6:
+            errors.append(f"CONST/CYLNDR of F({label}) through fewer than 6 points")
         errors += [f"CONST of FA({member}) before it was measured" for member in MEMBERS.findall(members)
                    if member not in self.measured]
         self.measured.add(label)
