@@ -157,10 +157,11 @@ def datum_frame(groups: list[DatumGroup]) -> DatumFrame:
     origin on the plane), a cylinder the two square to its axis (the origin on the axis); the
     others stay where the given frame's origin is nearest. ValueError for datums that cannot set
     it (a datum that adds nothing DATSET can state; a direction or origin along no frame axis)."""
-    z, x = groups[0].direction, None
+    directions = [_direction(group) for group in groups]
+    z, x = directions[0], None
     words: list[list[str]] = [["ZDIR"]] + [[] for _ in groups[1:]]
-    for group, said in zip(groups[1:], words[1:]):
-        across = group.direction - (group.direction @ z) * z
+    for direction, said in zip(directions[1:], words[1:]):
+        across = direction - (direction @ z) * z
         if x is None and np.linalg.norm(across) > AXIS_AGREEMENT:
             x = across / np.linalg.norm(across)
             said.append("XDIR")
@@ -175,9 +176,8 @@ def datum_frame(groups: list[DatumGroup]) -> DatumFrame:
                                                if word.endswith("ORIG")}):
             said.append(f"{name}ORIG")
             row = group.plane[1] if group.plane is not None else axes[name]
-            anchor = group.plane[0] if group.plane is not None else group.cylinder.point
             rows.append(row)
-            values.append(row @ anchor)
+            values.append(row @ _anchor(group))
         if not said:
             raise ValueError(f"datum {group.label} sets nothing the datums before it leave free that DATSET can state")
     frame = np.eye(4)
@@ -186,11 +186,28 @@ def datum_frame(groups: list[DatumGroup]) -> DatumFrame:
     return DatumFrame(frame, words)
 
 
+def _direction(group: DatumGroup) -> np.ndarray:
+    """(3,) unit: the datum's direction; ValueError for a datum that is no plane or cylinder."""
+    direction = group.direction
+    if direction is None:
+        raise ValueError(f"datum {group.label} is no plane or cylinder")
+    return direction
+
+
+def _anchor(group: DatumGroup) -> np.ndarray:
+    """(3,) mm: a point the datum passes through (a plane's centre, a point on a cylinder's axis)."""
+    if group.plane is not None:
+        return group.plane[0]
+    if group.cylinder is not None:
+        return group.cylinder.point
+    raise ValueError(f"datum {group.label} is no plane or cylinder")
+
+
 def _origin_axes(group: DatumGroup, axes: dict, taken: set) -> list[str]:
     """The frame axes ('X', 'Y', 'Z') whose origin coordinate the datum sets that no datum before
     it set (taken): a plane's normal's axis, a cylinder's two axes square to its own; ValueError
     where the plane's normal or the cylinder's axis lies along no frame axis."""
-    direction = group.direction
+    direction = _direction(group)
     along = [name for name, axis in axes.items() if abs(abs(direction @ axis) - 1.0) < AXIS_AGREEMENT]
     if not along:
         kind = "plane's normal" if group.plane is not None else "cylinder's axis"
@@ -226,22 +243,22 @@ def placement_statements(label: str, frame: np.ndarray, statement) -> list[str]:
 def datum_feature_lines(group: DatumGroup, labels: list[str], statement) -> list[str]:
     """The datum's DMIS feature (a plane or a cylinder, least squares through its points) and
     DATDEF, else a comment."""
-    if group.plane is None and group.cylinder is None:
-        return [f"$$ datum {group.label} ({group.face}) is no plane or cylinder: no DMIS datum feature is written",
-                "$$+ for it; its points are reported for cmmsampling.inspect, which associates it"]
     members = [f"FA({labels[k]})" for k in group.rows]
+    cylinder = group.cylinder
     if group.plane is not None:
         centre, normal = group.plane
         nominal = fixed(centre, COORDINATE_DECIMALS).tolist() + fixed(normal, VECTOR_DECIMALS).tolist()
         feature = statement([f"F({group.feature})=FEAT/PLANE", "CART", *nominal[:3]], nominal[3:])
         constructed = statement(["CONST/PLANE", f"F({group.feature})", "BF", *members])
-    else:
-        cylinder = group.cylinder
+    elif cylinder is not None:
         sizes = fixed(np.array([cylinder.diameter, cylinder.length]), COORDINATE_DECIMALS).tolist()
         feature = statement([f"F({group.feature})=FEAT/CYLNDR", "INNER" if cylinder.inner else "OUTER", "CART",
                              *fixed(cylinder.point, COORDINATE_DECIMALS).tolist()],
                             fixed(cylinder.axis, VECTOR_DECIMALS).tolist() + sizes)
         constructed = statement(["CONST/CYLNDR", f"F({group.feature})", "BF", *members])
+    else:
+        return [f"$$ datum {group.label} ({group.face}) is no plane or cylinder: no DMIS datum feature is written",
+                "$$+ for it; its points are reported for cmmsampling.inspect, which associates it"]
     return feature + constructed + [f"DATDEF/FA({group.feature}),DAT({group.label})"]
 
 

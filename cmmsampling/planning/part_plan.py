@@ -308,7 +308,8 @@ def plan(shape_or_faces: Part.Shape | list, tolerance: float | None = None, n_to
     points)"), returning True to cancel: the
     faces under way stop within a second or two, and the faces done are kept; probe: a
     cmmsampling.Probe whose reach on the part is judged (each face keeps to what it reaches, an
-    indexing head's orientations are then shared across the faces where that needs fewer:
+    indexing head's orientations are then shared across the faces where that needs fewer, unless
+    the plan was cancelled:
     :func:`cmmsampling.planning.plan_points.share_orientations`, and
     ``export(plan, order="probe_path")`` writes a collision-free path); part: the shape the probe
     must keep clear of (default: shape_or_faces when it is a shape); resume: a cancelled
@@ -357,7 +358,8 @@ def plan(shape_or_faces: Part.Shape | list, tolerance: float | None = None, n_to
     with_datums(result, datum_plans, dict(datum_faces))
     result.shapes = {**dict(datum_faces), **dict(named)}
     result.part, result.probe = part, probe
-    share_orientations(result)
+    if not result.cancelled:
+        share_orientations(result)
     result.seconds = time.perf_counter() - start
     return result
 

@@ -76,7 +76,8 @@ def test_result_contents(paper_runs):
     d = r.deviation
     assert d.mean <= d.rms <= d.maximum and math.isclose(d.rms ** 2, d.mean ** 2 + d.std ** 2, rel_tol=1e-9)
     largest = max(np.nanmax(d.field), np.abs(d.edge_signed).max(), np.abs(d.peak_signed).max(initial=0.0))
-    assert largest == d.maximum and np.nanmax(d.field) <= d.maximum
+    assert largest == d.judged_maximum and np.nanmax(d.field) <= d.judged_maximum
+    assert d.maximum == d.occ_maximum == pytest.approx(d.judged_maximum, rel=1e-9), "OCC confirms the headline"
     row = r.point_table()[0]
     assert row[0] == "P1" and len(row) == 9
     summary = r.summary()
