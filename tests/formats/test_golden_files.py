@@ -127,12 +127,7 @@ def test_the_dmis_frame_statements_turn_the_cad_frame_into_the_local_one():
                          "D(Fixture_A)=ROTAT/XAXIS,5.0000"]
     assert frame_statements({"frame": "global"}) == []
 
-    def turn(axis, degrees):
-        c, s = np.cos(np.radians(degrees)), np.sin(np.radians(degrees))
-        i, j = [k for k in range(3) if k != axis]
-        matrix = np.eye(3)
-        matrix[[i, i, j, j], [i, j, i, j]] = c, -s, s, c
-        return matrix if axis != 1 else matrix.T
+    from support.dmis_cmm import rotation as turn
 
     for yaw, pitch, roll in ((30, 10, 5), (-120, 89.9999, 40), (10, 90, 0), (0, -90, 0), (170, -45, -170)):
         placement = FreeCAD.Placement(FreeCAD.Vector(), FreeCAD.Rotation(yaw, pitch, roll))

@@ -163,12 +163,7 @@ def test_the_frame_turns_recompose_the_rotation_at_any_pitch(yaw, pitch, roll):
     is the rotation, also at a pitch of +-90 deg, where only yaw -+ roll is fixed."""
     from cmmsampling.formats.dmis_datums import yaw_pitch_roll
 
-    def turn(axis, degrees):
-        c, s = np.cos(np.radians(degrees)), np.sin(np.radians(degrees))
-        i, j = [k for k in range(3) if k != axis]
-        matrix = np.eye(3)
-        matrix[[i, i, j, j], [i, j, i, j]] = c, -s, s, c
-        return matrix if axis != 1 else matrix.T
+    from support.dmis_cmm import rotation as turn
 
     rotation = turn(2, yaw) @ turn(1, pitch) @ turn(0, roll)
     a, b, c = yaw_pitch_roll(rotation)

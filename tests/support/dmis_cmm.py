@@ -31,8 +31,8 @@ def rotation(axis, degrees):
     c, s = np.cos(np.radians(degrees)), np.sin(np.radians(degrees))
     i, j = [k for k in range(3) if k != axis]
     matrix = np.eye(3)
-    matrix[i, i], matrix[i, j], matrix[j, i], matrix[j, j] = c, -s, s, c
-    return matrix
+    matrix[[i, i, j, j], [i, j, i, j]] = c, -s, s, c
+    return matrix if axis != 1 else matrix.T   # about Y the pair (x, z) turns the other way
 
 
 class DmisCMM:
