@@ -84,11 +84,8 @@ def test_the_program_sets_the_frame_from_the_datums_and_states_the_profile(plann
     assert statements.index("D(DRF)=DATSET/DAT(A),ZDIR,ZORIG,DAT(B),XDIR,XORIG,DAT(C),YORIG") < first_toleranced
     assert max(k for k, line in enumerate(statements) if line.startswith("PTMEAS")) > first_toleranced
 
-    part = Misplacement(**MISPLACED).matrix(np.array([50.0, 30.0, 15.0]))
     points = planned.point_set().points
-    cmm = DmisCMM({name: block.Faces[int(name[4:]) - 1] for name in ("Face1", "Face3", "Face4", "Face5")}, part,
-                  form_waves(points, 0.02, 7))
-    (tmp_path / "block.dmo").write_text(cmm.run(text))
+    part = run_on_simulated_cmm(text, block, ("Face1", "Face3", "Face4", "Face5"), points, tmp_path / "block.dmo")
     read = cmmsampling.read_points(tmp_path / "block.dmo")
     assert read.labels == planned.point_set().labels, "every point reported, datums first"
     nominal = planned.point_set().points
@@ -102,6 +99,16 @@ def test_the_program_sets_the_frame_from_the_datums_and_states_the_profile(plann
     assert own.tolerance == 0.05, "the plan's tolerance, as its program states it"
     assert abs(own.profile - typed.profile) < 1e-12 and own.passed is typed.passed is True
     assert own.profile < 0.05 and TOP == "Face3"
+
+
+def run_on_simulated_cmm(text, shape, faces, points, output):
+    """Run the DMIS program text on DmisCMM with the shape's named faces, misplaced by MISPLACED
+    about (50, 30, 15) with 0.02 mm form waves over the planned points (N, 3); write its output
+    file and return the misplacement (4, 4)."""
+    part = Misplacement(**MISPLACED).matrix(np.array([50.0, 30.0, 15.0]))
+    cmm = DmisCMM({name: shape.Faces[int(name[4:]) - 1] for name in faces}, part, form_waves(points, 0.02, 7))
+    output.write_text(cmm.run(text))
+    return part
 
 
 def test_the_qif_plan_carries_the_datum_features_and_the_frame(planned, tmp_path):
@@ -221,10 +228,8 @@ def test_the_plan_in_the_document_keeps_its_datums_and_tolerance_for_its_program
     cmmsampling.export(group, tmp_path / "doc.qif")   # refused unless the QIF 3.0 schemas take it
     qif = (tmp_path / "doc.qif").read_text()
     assert qif.count("<DatumDefinition ") == 3 and qif.count("<SurfaceProfileCharacteristicItem ") == 1
-    part = Misplacement(**MISPLACED).matrix(np.array([50.0, 30.0, 15.0]))
-    cmm = DmisCMM({name: block.Faces[int(name[4:]) - 1] for name in ("Face1", "Face3", "Face4", "Face5")}, part,
-                  form_waves(planned.point_set().points, 0.02, 7))
-    (tmp_path / "doc.dmo").write_text(cmm.run(program.read_text()))
+    run_on_simulated_cmm(program.read_text(), block, ("Face1", "Face3", "Face4", "Face5"), planned.point_set().points,
+                         tmp_path / "doc.dmo")
     own = cmmsampling.inspect(group, tmp_path / "doc.dmo")
     typed = cmmsampling.inspect(group, tmp_path / "doc.dmo", tolerance=0.05, datums=list(DATUM_FACES))
     console = cmmsampling.inspect(planned, tmp_path / "doc.dmo", part=block)
@@ -284,11 +289,8 @@ def test_a_bore_as_datum_b_is_a_dmis_cylinder_that_sets_the_origin(bored, tmp_pa
     assert "D(CAD)=TRANS/XORIG,30.0000000,YORIG,30.0000000,ZORIG,0.0000000" in statements, \
         "the frame's origin on the bore's axis, in the base"
 
-    part = Misplacement(**MISPLACED).matrix(np.array([50.0, 30.0, 15.0]))
     points = planned.point_set().points
-    cmm = DmisCMM({name: bored.Faces[int(name[4:]) - 1] for name in ("Face1", "Face3", "Face6", "Face7")}, part,
-                  form_waves(points, 0.02, 7))
-    (tmp_path / "bored.dmo").write_text(cmm.run(text))
+    run_on_simulated_cmm(text, bored, ("Face1", "Face3", "Face6", "Face7"), points, tmp_path / "bored.dmo")
     read = cmmsampling.read_points(tmp_path / "bored.dmo")
     top = np.array([label.startswith("Face7_") for label in read.labels])
     assert np.abs(read.points - points)[top].max() < 0.05, "the top touched where planned, in the CAD frame"
