@@ -19,7 +19,7 @@ at a collapsed edge, where the conormal is undefined, the whole offset counts.
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cached_property
 from types import SimpleNamespace
 from typing import Any
@@ -57,7 +57,9 @@ class FaceNodes:
     edge_runs: (E, 2) int, the [start, stop) index range of the run each edge node is in: samples
     of one edge span's curve on the surface at equal parameter steps; spacing: mm, the largest raster
     cell diagonal; edge_counted: (E,) bool, the edge nodes whose deviation counts (None: all; the
-    others lie where a probe cannot reach the face and stay for the edges' geometry only).
+    others lie where a probe cannot reach the face and stay for the edges' geometry only);
+    principal: the face's curvature terms at the raster nodes, once computed
+    (cmmsampling.fitting.deviation.nodes_principal_terms).
     """
 
     uv: np.ndarray
@@ -72,6 +74,7 @@ class FaceNodes:
     edge_runs: np.ndarray
     spacing: float
     edge_counted: np.ndarray | None = None
+    principal: tuple[np.ndarray, np.ndarray] | None = field(default=None, repr=False, compare=False)
 
     @property
     def size(self) -> tuple[int, ...]:

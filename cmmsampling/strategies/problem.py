@@ -2,12 +2,13 @@
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import replace
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..fitting.bound import minimax_bound, minimax_bracket
-from ..fitting.deviation import DeviationStats, EvaluationGrid, deviation_objective
+from ..fitting.deviation import DeviationObjective, DeviationStats, EvaluationGrid, deviation_objective
 from ..fitting.exact import exact_deviation
 from ..fitting.substitute import SubstituteSpace
 from ..geometry.domain import FaceDomain
@@ -18,7 +19,6 @@ from .settings import SampleSettings
 if TYPE_CHECKING:   # for the annotations only
     from ..access.reach import Reachability
     from ..fitting.bound import MinimaxBound
-    from ..fitting.deviation import DeviationObjective
     from ..fitting.exact import ExactDeviation
 
 
@@ -38,12 +38,13 @@ class SamplingProblem:
     settings' or the face's default (spacing_by_default True); measured_split: workers is the
     default, so a swarm is split only where that is measured faster; reachability: None, or
     where a probe reaches the part the face belongs to (cmmsampling.access.reach.Reachability),
-    the one the domain was built with.
+    the one the domain was built with; grid: the EvaluationGrid, when one of settings.grid is at
+    hand.
     """
 
     def __init__(self, model: SurfaceModel, settings: SampleSettings, domain: FaceDomain, *,
                  min_spacing: float, spacing_by_default: bool = False,
-                 reachability: Reachability | None = None) -> None:
+                 reachability: Reachability | None = None, grid: EvaluationGrid | None = None) -> None:
         self.model = model
         self.settings = settings
         self.reachability = reachability
@@ -51,11 +52,20 @@ class SamplingProblem:
         self.spacing_by_default = spacing_by_default
         self.domain = domain
         self.space = SubstituteSpace(settings.fit_degree, settings.fit_poles, model.bounds, settings.smoothing)
-        self.grid = EvaluationGrid(model, settings.grid)
+        self.grid = EvaluationGrid(model, settings.grid) if grid is None else grid
         self._objective: DeviationObjective | None = None
         self._check: DeviationObjective | None = None
         self._bounds: LocalBounds | None = None
         self._judged: dict[bool, list] = {}
+
+    def with_poles(self, poles: tuple[int, int]) -> SamplingProblem:
+        """The same face, N, domain, grid and spacing with a substitute of ``poles`` (n_u, n_v):
+        the grid's nodes on the face are shared, not found again."""
+        other = SamplingProblem(self.model, replace(self.settings, fit_poles=tuple(poles)), self.domain,
+                                min_spacing=self.min_spacing, spacing_by_default=self.spacing_by_default,
+                                reachability=self.reachability, grid=self.grid)
+        other._objective = DeviationObjective(self.model, other.space, self.grid, self.objective.nodes)
+        return other
 
     @property
     def n(self) -> int:
