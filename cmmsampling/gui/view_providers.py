@@ -211,8 +211,12 @@ class ViewProviderSubstituteSurface(Stateless):
     def redraw(self, vobj):
         """Rebuild the coloured grid mesh and the legend from the object's deviation field; the
         legend reaches the reported maximum (the edge nodes' included, which the raster's field
-        may not hold)."""
+        may not hold). While the document loads, once after it has loaded, however many of the
+        object's properties (and its plan's other substitutes) arrive before."""
         if not hasattr(self, "coloured"):
+            return
+        if getattr(vobj.Object.Document, "Restoring", False):
+            self._redraw_once_loaded(vobj)
             return
         self.coloured.removeAllChildren()
         obj = vobj.Object
@@ -226,7 +230,7 @@ class ViewProviderSubstituteSurface(Stateless):
         self.coloured.addChild(in_front())
         face = source_of(obj)
         if face is not None:
-            self.coloured.addChild(face_mesh(face, u, v, field, maximum))
+            self.coloured.addChild(face_mesh(self._tessellation(face), u, v, field, maximum))
         else:
             surface = obj.Shape.Faces[0].Surface
             nodes = np.array([tuple(surface.value(a, b)) for a in u for b in v], dtype=float)
@@ -235,6 +239,33 @@ class ViewProviderSubstituteSurface(Stateless):
             self.coloured.addChild(colormap.legend(maximum, legend_title(obj)))
         if getattr(obj, "MaxLocation", None) is not None and obj.MaxDeviation.Value >= NUMERICAL_ZERO_MM:
             self.coloured.addChild(maximum_mark(obj.MaxLocation, obj.MaxDeviation.Value))
+
+    def _redraw_once_loaded(self, vobj):
+        """One redraw when the event loop next runs (the document has loaded by then)."""
+        if getattr(self, "_pending", False):
+            return
+        self._pending = True
+
+        def later():
+            self._pending = False
+            try:
+                alive = vobj.Object is not None
+            except (ReferenceError, RuntimeError):   # the document was closed meanwhile
+                alive = False
+            if alive:
+                self.redraw(vobj)
+
+        QtCore.QTimer.singleShot(0, later)
+
+    def _tessellation(self, face):
+        """face_tessellation(face), kept while the face's geometry stays the same: a redraw for a
+        new scale or legend only colours the mesh again."""
+        key = (face.Area, tuple(face.ParameterRange), face.BoundBox.XMin, face.BoundBox.YMin, face.BoundBox.ZMin,
+               face.BoundBox.XMax, face.BoundBox.YMax, face.BoundBox.ZMax)
+        kept = getattr(self, "_tessellated", None)
+        if kept is None or kept[0] != key:
+            kept = self._tessellated = (key, face_tessellation(face))
+        return kept[1]
 
     def getIcon(self):
         return icon("SubstituteSurface.svg")
@@ -330,22 +361,31 @@ def source_of(surface):
     return None if points is None else source_face(points)[0]
 
 
-def face_mesh(face, u, v, field, maximum):
-    """The face's tessellation coloured per vertex by the deviation at its (u, v).
-
-    face: Part.Face; u (g_u,), v (g_v,): the grid's parameters; field: (g_u, g_v) mm, NaN off the
-    face (those nodes take the value of the nearest node on it); maximum: the deviation shown
-    red (mm). Between nodes the deviation is interpolated linearly.
-    """
+def face_tessellation(face):
+    """The face's tessellation for colouring: (points (M, 3) mm, triangles as a Coin polygon index,
+    uv (M, 2) the points' parameters), or None where OCC gives no triangles. face: Part.Face."""
     points, triangles = face.tessellate(TESSELLATION_FRACTION * face.BoundBox.DiagonalLength)
-    if not triangles or np.isnan(field).all():
+    if not triangles:
+        return None
+    uv = np.array([face.Surface.parameter(p) for p in points], dtype=float)
+    return np.array([tuple(p) for p in points], dtype=float), polygon_index(np.array(triangles)), uv
+
+
+def face_mesh(tessellation, u, v, field, maximum):
+    """A face's tessellation (:func:`face_tessellation`) coloured per vertex by the deviation at
+    its (u, v).
+
+    u (g_u,), v (g_v,): the grid's parameters; field: (g_u, g_v) mm, NaN off the face (those nodes
+    take the value of the nearest node on it); maximum: the deviation shown red (mm). Between
+    nodes the deviation is interpolated linearly.
+    """
+    if tessellation is None or np.isnan(field).all():
         return coin.SoSeparator()
+    points, index, uv = tessellation
     nearest = distance_transform_edt(np.isnan(field), return_distances=False, return_indices=True)
     filled = field[tuple(nearest)]
-    uv = np.array([face.Surface.parameter(p) for p in points], dtype=float)
     values = RegularGridInterpolator((u, v), filled, bounds_error=False, fill_value=None)(uv)
-    index = polygon_index(np.array(triangles))
-    return indexed_mesh(np.array([tuple(p) for p in points]), index, colormap.colours(values, maximum))
+    return indexed_mesh(points, index, colormap.colours(values, maximum))
 
 
 def plan_of(surface):

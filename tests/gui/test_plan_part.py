@@ -23,7 +23,7 @@ from cmmsampling.gui import colormap, commands, view_providers
 from cmmsampling.gui.panels import plan_part
 
 from .helpers import (
-    Hold, child, dock_text, document_with, main_window, process_events, task_button, wait_until, widgets,
+    Hold, child, dock_text, document_with, drawn, main_window, process_events, task_button, wait_until, widgets,
 )
 
 OK, CANCEL = QtGui.QDialogButtonBox.Ok, QtGui.QDialogButtonBox.Cancel
@@ -512,3 +512,48 @@ def test_datums_from_the_panel_are_planned_first_and_inspect_takes_them(block_do
     expected = cmmsampling.inspect(made, measured, part=block_doc.Block.Shape)
     assert inspected.Group[0].Profile.Value == pytest.approx(expected.profile, abs=1e-9)
     assert inspected.Label.endswith("(PASS)") and expected.passed
+
+
+def test_a_reopened_plan_colours_each_face_once(part_doc, monkeypatch, tmp_path, artifacts):
+    """Reopening froze FreeCAD 36-41 s for a plan of 5 coloured faces: each face was tessellated and
+    coloured 30 times as its properties and its plan's other substitutes arrived. Now each is
+    coloured once the document has loaded, and redrawn on a new scale without tessellating again."""
+    import cmmsampling
+    from cmmsampling.document.object_types import is_substitute_surface
+
+    plan = cmmsampling.plan(part_doc.Part.Shape, QUICK["tolerance"], strategy=QUICK["strategy"], grid=QUICK["grid"],
+                            n_max=QUICK["n_max"], edge_offset=QUICK["edge_offset"], processes=1)
+    cmmsampling.add_plan_to_document(plan, part_doc, part_doc.Part)
+    process_events(0.3)
+    path = str(tmp_path / "plan.FCStd")
+    part_doc.saveAs(path)
+    FreeCAD.closeDocument(part_doc.Name)
+    process_events(0.1)
+    tessellated = []
+    original = view_providers.face_tessellation
+    monkeypatch.setattr(view_providers, "face_tessellation", lambda face: tessellated.append(face) or original(face))
+    coloured = []
+    colour = view_providers.face_mesh
+    monkeypatch.setattr(view_providers, "face_mesh", lambda *args: coloured.append(args) or colour(*args))
+    started = time.perf_counter()
+    doc = FreeCAD.openDocument(path)
+    try:
+        process_events(0.3)
+        seconds = time.perf_counter() - started
+        substitutes = [obj for obj in doc.Objects if is_substitute_surface(obj)]
+        print(f"reopened a plan of {len(substitutes)} coloured faces in {seconds:.1f} s: {len(tessellated)} "
+              f"tessellations, {len(coloured)} colourings")
+        assert len(substitutes) >= 3 and len(tessellated) == len(coloured) == len(substitutes)
+        assert all(obj.ViewObject.DisplayMode == "Deviation" and drawn(obj) >= 2 for obj in substitutes), \
+            [(obj.ViewObject.DisplayMode, drawn(obj)) for obj in substitutes]
+        scale = substitutes[0].ViewObject.Proxy.maximum
+        assert all(obj.ViewObject.Proxy.maximum == scale for obj in substitutes), "one scale for the plan"
+        substitutes[0].ViewObject.ShowLegend = False
+        process_events(0.1)
+        assert len(tessellated) == len(substitutes), "a redraw colours the kept tessellation again"
+        FreeCADGui.ActiveDocument.ActiveView.viewIsometric()
+        FreeCADGui.SendMsgToActiveView("ViewFit")
+        process_events(0.2)
+        FreeCADGui.ActiveDocument.ActiveView.saveImage(os.path.join(artifacts, "plan_reopened.png"), 1000, 750, "White")
+    finally:
+        FreeCAD.closeDocument(doc.Name)
