@@ -84,7 +84,8 @@ class BackgroundSampling(BackgroundTask):
 
     def _progress(self, iteration, best_mm):
         self.iteration = iteration
-        self.best_mm = best_mm
+        if not best_mm >= self.best_mm:   # the best so far: it never rises (NaN before the first)
+            self.best_mm = best_mm
         return self.cancelled
 
     def _work(self):

@@ -281,7 +281,7 @@ def _run_in_spaces(problem: SamplingProblem, strategy: str, progress: Progress |
     coarser = chosen_space(problem, problem, STRATEGIES[name].run(problem, None, **STRATEGIES[name].options).uv)[0]
     if coarser is problem:
         return problem, outcome
-    other = STRATEGIES[strategy].run(coarser, progress, **options)
+    other = STRATEGIES[strategy].run(coarser, _never_above(progress, outcome.history), **options)
     runs = sorted([(problem.exact_maximum(outcome.uv), 0, problem, outcome),
                    (coarser.exact_maximum(other.uv), 1, coarser, other)], key=lambda run: run[:2])
     (kept, _, chosen, best), (lost, _, loser, _) = runs
@@ -289,6 +289,15 @@ def _run_in_spaces(problem: SamplingProblem, strategy: str, progress: Progress |
     best.notes.append(f"also placed for a {loser.space.poles[0]} x {loser.space.poles[1]} substitute: its maximum "
                       f"deviation on the evaluation grid was {lost:.4g} mm, this one's {kept:.4g} mm")
     return chosen, best
+
+
+def _never_above(progress: Progress | None, history: np.ndarray | None) -> Progress | None:
+    """``progress`` for a second run, the best it is told never above the first run's best
+    (``history``: its best maximum per iteration, mm), so that the best shown never rises."""
+    if progress is None or history is None or not len(history):
+        return progress
+    told, floor = progress, float(np.min(history))
+    return lambda iteration, best: told(iteration, min(best, floor))
 
 
 def _exact_outcome(problem: SamplingProblem, strategy: str) -> StrategyOutcome | None:

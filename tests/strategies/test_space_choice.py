@@ -63,3 +63,11 @@ def test_an_optimiser_keeps_the_default_space_where_its_optimum_there_is_better(
     other = float(placed[0].split("grid was ")[1].split(" mm")[0])
     kept = float(placed[0].split("this one's ")[1].split(" mm")[0])
     assert kept < other and kept == pytest.approx(result.problem.exact_maximum(result.uv), rel=1e-3)
+
+
+def test_the_best_told_never_rises_across_the_two_runs():
+    told = []
+    result = cmmsampling.sample(strip_face(), 49, "pso", population=10, iterations=150,
+                                progress=lambda iteration, best: told.append(best) and None)
+    assert any(note.startswith("also placed for a ") for note in result.notes), "both spaces were run"
+    assert len(told) > 150 and all(later <= earlier for earlier, later in zip(told, told[1:]))
