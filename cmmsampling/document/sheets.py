@@ -39,7 +39,7 @@ def write_deviation_report(sheet, points):
     The summary figures are numbers in column B with aliases (strategy, n, max_mm, mean_mm,
     rms_mm, std_mm, occ_max_mm, normal_angle_deg, time_s) for expressions such as ``=DeviationReport.max_mm``, the
     deviations in mm shown in micrometres (see the module's docstring). The per-point table is
-    text at the CMM's resolution.
+    text at the CMM's resolution, but for its deviations: numbers in mm shown in micrometres.
     """
     clear_cells(sheet)
     summary = summary_rows(points)
@@ -51,6 +51,8 @@ def write_deviation_report(sheet, points):
     sheet.setStyle("A1", "bold")
     sheet.setStyle(f"A{header}:J{header}", "bold")
     sheet.setAlignment(f"B{header}:J{len(rows)}", "right")
+    for row in range(header + 1, len(rows) + 1):
+        sheet.setDisplayUnit(f"J{row}", DEVIATION_DISPLAY_UNIT)
     fit_columns(sheet, [row for row in rows if row not in notes])
 
 
@@ -140,11 +142,11 @@ def note_rows(points):
 
 def table_rows(points):
     """The per-point table: a header and rows (label, x, y, z, i, j, k, u, v, deviation), the
-    values as text: coordinates to 0.1 um, approach vectors to 6 decimals, parameters and
-    deviations to 6 significant digits."""
-    header = ("Label", "X (mm)", "Y (mm)", "Z (mm)", "I", "J", "K", "U", "V", "Deviation (mm)")
+    coordinates as text to 0.1 um, approach vectors to 6 decimals, parameters to 6 significant
+    digits; the deviation a number in mm (shown in micrometres by write_deviation_report)."""
+    header = ("Label", "X (mm)", "Y (mm)", "Z (mm)", "I", "J", "K", "U", "V", "Deviation")
     return [header] + [
-        (label, *(f"{c:.4f}" for c in p), *(f"{c:.6f}" for c in n), f"{u:.6g}", f"{v:.6g}", f"{d:.6g}")
+        (label, *(f"{c:.4f}" for c in p), *(f"{c:.6f}" for c in n), f"{u:.6g}", f"{v:.6g}", _figure(d))
         for label, p, n, u, v, d in zip(points.Labels, points.Points, points.Normals,
                                         points.U, points.V, points.Deviation)
     ]
@@ -181,7 +183,7 @@ def write_plan_report(sheet, plan, moves=None):
 
 INSPECTION_COLUMNS = ("Label", "Face", "Nominal X (mm)", "Nominal Y (mm)", "Nominal Z (mm)", "Measured X (mm)",
                       "Measured Y (mm)", "Measured Z (mm)", "Aligned X (mm)", "Aligned Y (mm)", "Aligned Z (mm)",
-                      "Deviation (mm)", "Band")
+                      "Deviation", "Band")
 BAND_TEXTS = {-2: "OUT below", -1: "near below", 0: "in", 1: "near above", 2: "OUT above"}
 
 
@@ -193,7 +195,8 @@ def write_inspection_report(sheet, points):
     outside, moved_mm), the motions the points do not hold, the datums, each face's profile where
     there are several,
     then one row per point: label, face, nominal, measured (as read from the file), aligned, the
-    deviation as text to 0.1 um, and its band. The figures in mm are numbers shown in micrometres, as in the deviation report."""
+    signed deviation, and its band. The figures in mm (the deviations included) are numbers shown
+    in micrometres, as in the deviation report."""
     clear_cells(sheet)
     bands = np.array(points.Bands, dtype=int)
     matrix = points.AlignmentPlacement.toMatrix()
@@ -220,7 +223,7 @@ def write_inspection_report(sheet, points):
     notes += [("Note", note) for note in points.Notes]
     table = [INSPECTION_COLUMNS] + [
         (label, face, *(f"{c:.4f}" for c in nominal), *(f"{c:.4f}" for c in measured),
-         *(f"{c:.4f}" for c in aligned), f"{d:+.4f}", BAND_TEXTS[band])
+         *(f"{c:.4f}" for c in aligned), _figure(d), BAND_TEXTS[band])
         for label, face, nominal, measured, aligned, d, band in zip(
             points.Labels, points.Faces, points.Nominal, points.Measured, points.Points, points.Deviation, bands)]
     rows = [row[:5] if len(row) == 5 else row[:2] for row in summary] + notes + [()] + table
@@ -231,6 +234,8 @@ def write_inspection_report(sheet, points):
     sheet.setStyle("A1", "bold")
     sheet.setStyle(f"A{header}:M{header}", "bold")
     sheet.setAlignment(f"C{header}:L{len(rows)}", "right")
+    for row in range(header + 1, len(rows) + 1):
+        sheet.setDisplayUnit(f"L{row}", DEVIATION_DISPLAY_UNIT)
     fit_columns(sheet, [row for row in rows if row not in notes])
 
 

@@ -114,13 +114,15 @@ def test_report_has_summary_and_point_table(group, result):
     assert report.get("normal_angle_deg") == pytest.approx(result.deviation.normal_angle, rel=1e-9)
     assert 0 < result.deviation.normal_angle < 90
     header = next((row for row in range(1, 60) if cell(report, f"A{row}") == "Label"), None)
-    assert header is not None and cell(report, f"J{header}") == "Deviation (mm)"
+    assert header is not None and cell(report, f"J{header}") == "Deviation"
     first = [report.get(f"{c}{header + 1}") for c in "ABCDEFGHIJ"]
     assert first[0] == "P1"
     assert np.allclose([float(x) for x in first[1:4]], result.points[0], atol=5e-5)
     assert np.allclose([float(x) for x in first[7:9]], result.uv[0], rtol=1e-5)
     deviation = cmmsampling.PointSet.from_result(result).deviation[0]
-    assert float(first[9]) == pytest.approx(deviation, rel=1e-5, abs=1e-12)
+    assert isinstance(first[9], float) and first[9] == pytest.approx(deviation, rel=1e-9, abs=1e-15), \
+        "a number in mm, not text"
+    assert report.getDisplayUnit(f"J{header + 1}") == "µm" and report.getDisplayUnit(f"J{header + 25}") == "µm"
     rows = {cell(report, f"A{row}"): row for row in range(1, header)}
     maximum = rows["Max deviation"]   # a number in mm, shown in micrometres (two decimals: 10 nm)
     assert report.get(f"B{maximum}") == pytest.approx(result.deviation.maximum, rel=1e-9)

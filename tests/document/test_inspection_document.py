@@ -49,6 +49,9 @@ def test_an_inspection_goes_in_as_one_step_and_undoes(doc, points, tmp_path):
     assert [sheet.get(f"{c}21") for c in "FGH"] == [f"{v:.4f}" for v in found.measured[0]], "as read"
     assert [sheet.get(f"{c}21") for c in "IJK"] == [f"{v:.4f}" for v in found.points[0]], "aligned"
     assert sheet.get(f"M{20 + 25}") in ("in", "near above", "near below", "OUT above", "OUT below")
+    assert sheet.get("L20") == "Deviation" and sheet.get("L21") == pytest.approx(found.deviations[0], abs=1e-12)
+    assert isinstance(sheet.get("L21"), float) and sheet.getDisplayUnit(f"L{20 + 25}") == "µm", \
+        "a signed number in mm, shown in micrometres"
     doc.undo()
     assert [o.Name for o in doc.Objects] == before and points.Visibility
 
