@@ -443,8 +443,52 @@ class OpenComparisonReport(GuardedCommand):
             open_report(path, f"Compare strategies: {os.path.basename(os.path.dirname(path))}")
 
 
+class UserGuide(GuardedCommand):
+    """*User guide*: the workbench's guide (docs/user-guide.md of the installed add-on) in a tab
+    of FreeCAD, its Markdown shown as formatted text."""
+
+    NAME = "CMMSampling_UserGuide"
+    TITLE = Qt.QT_TRANSLATE_NOOP("CMMSampling_UserGuide", "User guide")
+    MENU = Qt.QT_TRANSLATE_NOOP("CMMSampling_UserGuide", "User guide")
+    ICON = "Workbench.svg"
+    TIP = Qt.QT_TRANSLATE_NOOP("CMMSampling_UserGuide",
+                               "How to sample a face, plan a part, measure on a CMM and inspect the points")
+
+    def reason(self):
+        if not os.path.isfile(user_guide_path()):
+            return f"The user guide is not installed with the workbench (looked for {user_guide_path()})."
+        return None
+
+    def act(self):
+        show_user_guide()
+
+
+def user_guide_path():
+    """docs/user-guide.md beside the cmmsampling package (the add-on's folder)."""
+    package = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    return os.path.join(os.path.dirname(package), "docs", "user-guide.md")
+
+
+def show_user_guide():
+    """Show the user guide in a tab of FreeCAD's main area (a QTextBrowser reading its Markdown,
+    links to the web opened in the system's browser) and return that browser."""
+    path = user_guide_path()
+    view = QtGui.QTextBrowser()
+    view.setObjectName("CMMSamplingUserGuide")
+    view.setOpenExternalLinks(True)
+    view.setSearchPaths([os.path.dirname(path)])
+    with open(path, encoding="utf-8") as guide:
+        view.setMarkdown(guide.read())
+    area = FreeCADGui.getMainWindow().findChild(QtGui.QMdiArea)
+    window = area.addSubWindow(view)
+    window.setWindowTitle("CMM Sampling: user guide")
+    window.show()
+    area.setActiveSubWindow(window)
+    return view
+
+
 COMMANDS = (SampleFace, ExportProbePoints, Reevaluate, CompareStrategies, PlanPart, MeasureOnCMM, InspectMeasured)
-MENU_ONLY = (OpenComparisonReport,)
+MENU_ONLY = (OpenComparisonReport, UserGuide)
 
 
 def register():

@@ -48,6 +48,26 @@ def test_workbench_has_its_toolbar_menu_and_icons(workbench):
     assert "cmmsampling.document" in FreeCAD.getExportType("dmi")
 
 
+def test_the_menu_opens_the_user_guide_in_a_tab(workbench, artifacts):
+    assert commands.UserGuide.NAME in commands.register()[1], "in the CMM Sampling menu"
+    assert FreeCADGui.Command.get(commands.UserGuide.NAME).getInfo()["menuText"] == "User guide"
+    assert commands.UserGuide().reason() is None
+    FreeCADGui.runCommand(commands.UserGuide.NAME)
+    process_events(0.2)
+    guide = main_window().findChild(QtGui.QTextBrowser, "CMMSamplingUserGuide")
+    try:
+        assert guide is not None
+        text = guide.toPlainText()
+        assert text.startswith("The workbench") and "Sample face..." in text and "##" not in text, text[:200]
+        grab = guide.grab()
+        grab.save(os.path.join(artifacts, "user_guide_tab.png"))
+    finally:
+        if guide is not None:
+            window = guide.parentWidget()
+            window.close()
+            process_events(0.1)
+
+
 def test_colour_map_runs_blue_to_red_with_grey_off_the_face():
     rgb = colormap.colours([0.0, 0.5, 1.0, float("nan"), 2.0], maximum=1.0)
     assert np.allclose(rgb[[0, 1, 2, 4]], [[0, 0, 1], [0, 1, 0], [1, 0, 0], [1, 0, 0]])
