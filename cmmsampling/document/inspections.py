@@ -15,7 +15,7 @@ from ..geometry.freecad_env import import_part
 from ..geometry.validation import InputError, InputTypeError
 from ..inspection.align import Alignment
 from ..inspection.datums import DatumFit
-from ..inspection.judge import Inspection, verdict_text
+from ..inspection.judge import Inspection, verdict_text, verdict_word
 from ..inspection.uncertainty import NO_UNCERTAINTY, ProfileUncertainty
 from .object_types import MEASURED_POINTS, in_document, is_measured_points
 from .objects import TypedProxy
@@ -33,7 +33,8 @@ def add_inspection_to_document(inspection: Inspection, doc: FreeCAD.Document,
     """Add an Inspection (cmmsampling.inspect) to ``doc`` in one transaction.
 
     source: the probe points or part plan's group the points were planned as (linked from the
-    measured points), or None. Creates a group "Inspection <source> (<verdict>)" holding the
+    measured points), or None. Creates a group "Inspection <source> (<verdict>)" (ISO 14253-1's
+    decision where an uncertainty was given, else PASS or FAIL) holding the
     "Measured points" (the aligned points as vertices, with their deviations, bands and the
     alignment) and the "Inspection report" spreadsheet; hides the earlier results' points,
     substitutes and measured points (Undo shows them again). Returns the group.
@@ -56,7 +57,7 @@ def add_inspection_to_document(inspection: Inspection, doc: FreeCAD.Document,
         group.addObjects([points, report])
         points.Source, points.Report = source, report
         write_inspection(points, inspection)
-        group.Label = f"Inspection {source.Label if source is not None else 'face'} ({points.Verdict})"
+        group.Label = f"Inspection {source.Label if source is not None else 'face'} ({verdict_word(inspection)})"
         write_inspection_report(report, points)
         recompute(doc, [points, report])
     return group

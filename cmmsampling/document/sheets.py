@@ -23,7 +23,8 @@ COLUMN_WIDTHS = (60, 260)
 NOTES_WIDTH = 400
 PARAMETER_NAMES = {
     "fit_degree": "Fit degree (u x v)", "fit_poles": "Fit poles (u x v)", "smoothing": "Fit smoothing",
-    "grid": "Evaluation grid (u x v)", "seed": "Seed", "workers": "Processes",
+    "grid": "Evaluation grid (u x v)", "seed": "Seed", "workers": "Processes asked",
+    "processes": "Processes the swarm used",
     "edge_offset": "Edge offset (mm)", "min_spacing": "Minimum spacing (mm)",
     "population": "PSO population", "iterations": "PSO iterations", "w1": "PSO inertia w1",
     "w2": "PSO inertia w2", "c1": "PSO c1", "c2": "PSO c2", "velocity_limit": "PSO velocity limit",

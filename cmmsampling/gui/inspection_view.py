@@ -63,7 +63,8 @@ class ViewProviderMeasuredPoints(Annotated):
             zone = f" (offset {offset:+g} mm)" if offset else ""
             title = f"Profile {mm_text(obj.Profile.Value)}, tolerance {tolerance:g} mm{zone}: {obj.Verdict}"
             if getattr(obj, "Uncertainty", None) is not None and obj.Uncertainty.Value > 0:
-                title += f"; U {mm_text(obj.Uncertainty.Value)}: {obj.Decision}"
+                title = (f"{obj.Decision} (ISO 14253-1, U {mm_text(obj.Uncertainty.Value)}): profile "
+                         f"{mm_text(obj.Profile.Value)}, tolerance {tolerance:g} mm{zone}, alone {obj.Verdict}")
             legend = colormap.band_legend(band_rows(tolerance, offset), title)
         else:
             largest = colormap.shown_maximum(np.abs(deviations).max())

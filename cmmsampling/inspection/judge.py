@@ -293,12 +293,25 @@ def verdict_text(passed: bool | None) -> str:
 
 
 def verdict_words(inspection: Inspection) -> str:
-    """', U 0.0061 mm, tolerance 0.05 mm: FAIL, ISO 14253-1: undecided' (the parts it has)."""
-    spread = "" if inspection.uncertainty is None else f", U {inspection.profile_uncertainty:.4f} mm (k = 2)"
+    """The verdict after a profile, the decision first where an uncertainty gives one:
+    ', tolerance 0.05 mm: undecided by ISO 14253-1 (U 0.0061 mm, k = 2; the profile alone: PASS)';
+    else ', tolerance 0.05 mm: PASS', ', U 0.0061 mm (k = 2)' without a tolerance, or ''."""
+    spread = "" if inspection.uncertainty is None else f"U {inspection.profile_uncertainty:.4f} mm"
     if inspection.passed is None:
-        return spread
-    decided = "" if inspection.decision is None else f", ISO 14253-1: {inspection.decision}"
-    return f"{spread}, tolerance {inspection.tolerance:g} mm: {verdict_text(inspection.passed)}{decided}"
+        return f", {spread} (k = 2)" if spread else ""
+    tolerance = f", tolerance {inspection.tolerance:g} mm: "
+    if inspection.decision is None:
+        return f"{tolerance}{verdict_text(inspection.passed)}"
+    return (f"{tolerance}{inspection.decision} by ISO 14253-1 ({spread}, k = 2; the profile alone: "
+            f"{verdict_text(inspection.passed)})")
+
+
+def verdict_word(inspection: Inspection) -> str:
+    """The one word (or words) a verdict shows first: ISO 14253-1's decision ('conforms', 'does not
+    conform', 'undecided') where an uncertainty gives one, else 'PASS' or 'FAIL', or 'no tolerance'."""
+    if inspection.passed is None:
+        return "no tolerance"
+    return inspection.decision if inspection.decision is not None else verdict_text(inspection.passed)
 
 
 def tolerance_bands(deviations: np.ndarray, tolerance: float, offset: float = 0.0) -> np.ndarray:

@@ -123,6 +123,10 @@ def test_report_has_summary_and_point_table(group, result):
     assert isinstance(first[9], float) and first[9] == pytest.approx(deviation, rel=1e-9, abs=1e-15), \
         "a number in mm, not text"
     assert report.getDisplayUnit(f"J{header + 1}") == "µm" and report.getDisplayUnit(f"J{header + 25}") == "µm"
+    names = [cell(report, f"A{row}") for row in range(1, header)]
+    named = [name for name in names if name and name != "Note"]
+    assert len(set(named)) == len(named), "no name twice"
+    assert {"Processes asked", "Processes the swarm used"} <= set(named)
     rows = {cell(report, f"A{row}"): row for row in range(1, header)}
     maximum = rows["Max deviation"]   # a number in mm, shown in micrometres (two decimals: 10 nm)
     assert report.get(f"B{maximum}") == pytest.approx(result.deviation.maximum, rel=1e-9)

@@ -228,9 +228,11 @@ def test_a_profile_relative_to_datums_shows_its_uncertainty_and_decision(block_p
     measured_points, report = inspected.Group
     assert measured_points.Decision == expected.decision and report.get("decision") == expected.decision
     assert measured_points.Uncertainty.Value == pytest.approx(expected.profile_uncertainty)
-    assert f"ISO 14253-1: {expected.decision}" in main_window().statusBar().currentMessage()
+    assert f"tolerance 0.05 mm: {expected.decision} by ISO 14253-1 (U " in main_window().statusBar().currentMessage()
+    assert inspected.Label.endswith(f"({expected.decision})"), "the decision first, in the tree too"
     legend = texts(measured_points.ViewObject.Proxy.annotation)[-1]
-    assert legend.endswith(f"; U {mm_text(expected.profile_uncertainty)}: {expected.decision}")
+    assert legend.startswith(f"{expected.decision} (ISO 14253-1, U {mm_text(expected.profile_uncertainty)}): "
+                             f"profile {mm_text(expected.profile)}, tolerance 0.05 mm"), legend
     view = FreeCADGui.ActiveDocument.ActiveView
     view.viewIsometric()
     FreeCADGui.SendMsgToActiveView("ViewFit")
