@@ -726,6 +726,7 @@ def test_save_and_reopen_here_and_in_a_fresh_session(doc, tmp_path, artifacts):
     doc.saveAs(path)
     FreeCAD.closeDocument(doc.Name)
     reopened = FreeCAD.openDocument(path)
+    process_events(0.2)   # a substitute is coloured once the document has loaded, at the event loop's next turn
     try:
         points, surface, report = reopened.getObject(name).Group
         assert isinstance(points.ViewObject.Proxy, view_providers.ViewProviderProbePoints)
