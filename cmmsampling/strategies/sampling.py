@@ -251,9 +251,10 @@ def sample(face: Part.Face, n: int = 81, strategy: str = DEFAULT_STRATEGY, *, fi
     start = time.perf_counter()
     default = problem
     with blas_threads(1):
-        outcome = _exact_outcome(problem, strategy)
+        start_uv = _baseline_uv(problem) if STRATEGIES[strategy].optimiser else None
+        outcome = None if start_uv is None else _exact_outcome(problem, strategy, start_uv)
         if outcome is None:
-            problem, outcome = _run_in_spaces(problem, strategy, progress, options)
+            problem, outcome = _run_in_spaces(problem, strategy, progress, options, start_uv)
         _move_onto_face(problem, outcome)
         if not settings.poles_given:
             problem, note = chosen_space(default, problem, outcome.uv)
@@ -265,27 +266,32 @@ def sample(face: Part.Face, n: int = 81, strategy: str = DEFAULT_STRATEGY, *, fi
     return _judge(problem, outcome, strategy, recorded, strategy_s, occ_check)
 
 
-def _run_in_spaces(problem: SamplingProblem, strategy: str, progress: Progress | None,
-                   options: dict[str, Any]) -> tuple[SamplingProblem, StrategyOutcome]:
+def _baseline_uv(problem: SamplingProblem) -> np.ndarray:
+    """The baseline blind layout (registry.baseline) on the problem's face: (N, 2) uv."""
+    name = baseline()
+    return STRATEGIES[name].run(problem, None, **STRATEGIES[name].options).uv
+
+
+def _run_in_spaces(problem: SamplingProblem, strategy: str, progress: Progress | None, options: dict[str, Any],
+                   start_uv: np.ndarray | None) -> tuple[SamplingProblem, StrategyOutcome]:
     """The strategy's outcome and the problem it was placed for. An optimiser with the default
-    poles runs in the default space and, where its baseline layout holds a coarser space better
-    (space_choice.chosen_space: points that cannot spread over the face), there too, unless the
-    first run was cancelled; the run whose points' substitute is nearer the face (exactly, on the
+    poles runs in the default space and, where its baseline layout (``start_uv``, (N, 2), given
+    for an optimiser) holds a coarser space better (space_choice.chosen_space: points that cannot
+    spread over the face), there too, unless the first run was cancelled; the run whose points' substitute is nearer the face (exactly, on the
     grid) is kept, with a note on the other. Either space can win: on the Ventilator's Face61 the
     optimum in the default 5 x 5 space is 4x better than in the 5 x 4 one uniform points prefer,
     on its Face58 with the probe the coarser space's is 6x better."""
     outcome = STRATEGIES[strategy].run(problem, progress, **options)
-    if problem.settings.poles_given or not STRATEGIES[strategy].optimiser or outcome.cancelled:
+    if start_uv is None or problem.settings.poles_given or outcome.cancelled:
         return problem, outcome
-    name = baseline()
-    coarser = chosen_space(problem, problem, STRATEGIES[name].run(problem, None, **STRATEGIES[name].options).uv)[0]
+    coarser = chosen_space(problem, problem, start_uv)[0]
     if coarser is problem:
         return problem, outcome
     other = STRATEGIES[strategy].run(coarser, _never_above(progress, outcome.history), **options)
     runs = sorted([(problem.exact_maximum(outcome.uv), 0, problem, outcome),
                    (coarser.exact_maximum(other.uv), 1, coarser, other)], key=lambda run: run[:2])
-    (kept, _, chosen, best), (lost, _, loser, _) = runs
-    best.evaluations += runs[1][3].evaluations
+    (kept, _, chosen, best), (lost, _, loser, beaten) = runs
+    best.evaluations += beaten.evaluations
     best.notes.append(f"also placed for a {loser.space.poles[0]} x {loser.space.poles[1]} substitute: its maximum "
                       f"deviation on the evaluation grid was {lost:.4g} mm, this one's {kept:.4g} mm")
     return chosen, best
@@ -300,19 +306,14 @@ def _never_above(progress: Progress | None, history: np.ndarray | None) -> Progr
     return lambda iteration, best: told(iteration, min(best, floor))
 
 
-def _exact_outcome(problem: SamplingProblem, strategy: str) -> StrategyOutcome | None:
+def _exact_outcome(problem: SamplingProblem, strategy: str, start_uv: np.ndarray) -> StrategyOutcome | None:
     """For an optimiser on a face the substitute reproduces exactly (a plane, a face of the fit's
-    own space): the uniform parametric layout with a note, since no point set can do better;
-    otherwise (or for a blind strategy) None, and the strategy runs."""
-    if not STRATEGIES[strategy].optimiser:
+    own space): its baseline layout ``start_uv`` (N, 2) with a note, since no point set can do
+    better; otherwise None, and the optimiser runs."""
+    if problem.exact_maximum(start_uv) > EXACT_FIT * problem.model.diagonal:
         return None
-    name = baseline()
-    uv = STRATEGIES[name].run(problem, None, **STRATEGIES[name].options).uv
-    maximum = problem.exact_maximum(uv)
-    if maximum > EXACT_FIT * problem.model.diagonal:
-        return None
-    return StrategyOutcome(uv, notes=[f"{strategy} was not run: the {STRATEGIES[name].label} layout "
-                                      "already fits this face exactly"])
+    return StrategyOutcome(start_uv, notes=[f"{strategy} was not run: the {STRATEGIES[baseline()].label} layout "
+                                            "already fits this face exactly"])
 
 
 def probe_edge_offset(face: Part.Face, cap: float | None = None) -> float:

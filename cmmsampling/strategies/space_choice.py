@@ -7,9 +7,9 @@ points is set by the smoothing alone and the substitute swings there, by more th
 has: on the Ventilator's Face58 with the probe, the default gave 0.156 mm at N = 16, 0.65 mm at
 46 and 2.4 mm at 96. So the space is chosen by the figure the strategies minimise: every
 coarser pole count per direction, from degree + 1 up to the default's, is fitted to the same
-points and judged exactly on the grid, and the one with the smallest maximum deviation is kept
-where it beats the default's by SPACE_GAIN (a clear gain, never a rounding tie). Each
-candidate costs one fit and one exact deviation on the grid's nodes.
+points and screened by the optimisers' fast figure on the grid; the best one is judged exactly
+and kept where its maximum beats the current space's by SPACE_GAIN (a clear gain, never a
+rounding tie). Each candidate costs one fit and one fast figure on the grid's nodes.
 """
 from __future__ import annotations
 
