@@ -52,8 +52,7 @@ def write_deviation_report(sheet, points):
     sheet.setStyle("A1", "bold")
     sheet.setStyle(f"A{header}:J{header}", "bold")
     sheet.setAlignment(f"B{header}:J{len(rows)}", "right")
-    for row in range(header + 1, len(rows) + 1):
-        sheet.setDisplayUnit(f"J{row}", DEVIATION_DISPLAY_UNIT)
+    in_micrometres(sheet, "J", range(header + 1, len(rows) + 1))
     fit_columns(sheet, [row for row in rows if row not in notes])
 
 
@@ -73,6 +72,14 @@ def name_figures(sheet, summary, in_micrometres):
             sheet.setAlias(f"B{row}", entry[2])
             if entry[2] in in_micrometres:
                 sheet.setDisplayUnit(f"B{row}", DEVIATION_DISPLAY_UNIT)
+
+
+def in_micrometres(sheet, columns, rows):
+    """Show the cells of ``columns`` (letters, e.g. "DE") in ``rows`` (numbers), deviations in mm,
+    in DEVIATION_DISPLAY_UNIT."""
+    for row in rows:
+        for column in columns:
+            sheet.setDisplayUnit(f"{column}{row}", DEVIATION_DISPLAY_UNIT)
 
 
 def clear_cells(sheet):
@@ -173,9 +180,7 @@ def write_plan_report(sheet, plan, moves=None):
     table = range(len(head) + 1, len(rows) + 1)
     rows += _probe_rows(plan.probe, moves)
     write_rows(sheet, rows)
-    for row in table:
-        for column in "DE":
-            sheet.setDisplayUnit(f"{column}{row}", DEVIATION_DISPLAY_UNIT)
+    in_micrometres(sheet, "DE", table)
     sheet.setStyle("A1", "bold")
     sheet.setStyle("A5:G5", "bold")
     fit_columns(sheet, [row[:6] for row in rows])
@@ -235,8 +240,7 @@ def write_inspection_report(sheet, points):
     sheet.setStyle("A1", "bold")
     sheet.setStyle(f"A{header}:M{header}", "bold")
     sheet.setAlignment(f"C{header}:L{len(rows)}", "right")
-    for row in range(header + 1, len(rows) + 1):
-        sheet.setDisplayUnit(f"L{row}", DEVIATION_DISPLAY_UNIT)
+    in_micrometres(sheet, "L", range(header + 1, len(rows) + 1))
     fit_columns(sheet, [row for row in rows if row not in notes])
 
 
