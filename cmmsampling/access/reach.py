@@ -53,7 +53,10 @@ class Access:
     nearest, -1: none; the axis taken may be another that serves more points, see
     :func:`fewest_orientations`); unreached: (K, 4) parameter rectangles (u0, u1, v0, v1) of the face where the
     probe reaches no point, so none was placed there (cmmsampling.geometry.domain), None when
-    not judged; unreached_area: their area, mm^2."""
+    not judged; unreached_area: their area, mm^2; out_of_reach: (K', 4) rectangles of the face's
+    raster cells the probe was found not to reach, on the face or just off it, which a judge of
+    the same points leaves out again (:func:`cmmsampling.geometry.domain.face_domain`), None when
+    not judged."""
 
     reachable: np.ndarray
     axes: np.ndarray
@@ -62,6 +65,7 @@ class Access:
     ranks: np.ndarray
     unreached: np.ndarray | None = None
     unreached_area: float = 0.0
+    out_of_reach: np.ndarray | None = None
 
     @property
     def tilted(self) -> np.ndarray:

@@ -116,7 +116,8 @@ def summary_rows(points):
 
 def reach_rows(points):
     """The report's rows on the probe's reach, for points sampled with the part: the points
-    reached with the stylus tilted, those it cannot reach, and the face's area out of reach."""
+    reached with the stylus tilted, those it cannot reach, the face's area out of reach and, where
+    there is some, that the deviations are judged over the rest."""
     if not getattr(points, "Probe", ""):
         return []
     reached = np.isfinite(np.array([tuple(a) for a in points.Axes], dtype=float)).all(axis=1)
@@ -125,7 +126,7 @@ def reach_rows(points):
         ("Points reached tilted", int(sum(points.Tilted)), "tilted"),
         ("Points the probe cannot reach", int(np.count_nonzero(~reached)), "unreached"),
         ("Area out of reach (mm^2)", points.UnreachedArea.Value, "unreached_mm2"),
-    ]
+    ] + ([("Deviations judged over", "the part of the face the probe reaches")] if points.UnreachedArea.Value > 0 else [])
 
 
 def probe_text(probe):

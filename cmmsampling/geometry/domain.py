@@ -196,21 +196,35 @@ class FaceDomain:
             return np.zeros((0, 4))
         return cell_rectangles(self.bounds, self.unreached)
 
+    def out_of_reach_rectangles(self) -> np.ndarray | None:
+        """(K, 4) rectangles (u0, u1, v0, v1) covering the cells a probe was found not to reach,
+        on the face or off it (what :meth:`judged` leaves out besides the trim), for
+        :func:`face_domain`'s out_of_reach; None without a probe."""
+        if self._out_of_reach is None:
+            return None
+        return cell_rectangles(self.bounds, self._out_of_reach)
+
     def from_unit(self, unit: np.ndarray) -> np.ndarray:
         """Map points of the unit square, (..., 2) in [0, 1]^2, onto the feasible box."""
         return self.lower + np.asarray(unit, dtype=float) * (self.upper - self.lower)
 
 
 def face_domain(model: SurfaceModel, edge_offset: float = 0.0,
-                reachable: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None) -> FaceDomain:
+                reachable: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None,
+                out_of_reach: np.ndarray | None = None) -> FaceDomain:
     """The FaceDomain of a SurfaceModel's face, keeping ``edge_offset`` mm from its edges.
 
     reachable: None, or callable(points (M, 3) mm, normals (M, 3) unit) -> (M,) bool, where a
     probe can touch the face (cmmsampling.access.reach.Reachability): the cells it cannot reach
-    are infeasible too, judged once on a coarser raster (:func:`reachable_cells`).
+    are infeasible too, judged once on a coarser raster (:func:`reachable_cells`). out_of_reach:
+    instead of reachable, what a probe was found not to reach before: (K, 4) parameter
+    rectangles (u0, u1, v0, v1), an earlier domain's :meth:`FaceDomain.out_of_reach_rectangles`,
+    whose cells are out of reach again (the same cells: the raster is the face's own).
     """
     trimmed = model.trimmed
-    if not trimmed and edge_offset <= 0 and reachable is None:
+    if out_of_reach is not None and reachable is not None:
+        raise ValueError("give reachable or out_of_reach, not both")
+    if not trimmed and edge_offset <= 0 and reachable is None and out_of_reach is None:
         return FaceDomain(model.bounds, area=model.area)
     shape = raster_shape(model)
     centres = _cell_centres(model.bounds, shape)
@@ -225,17 +239,31 @@ def face_domain(model: SurfaceModel, edge_offset: float = 0.0,
     clearance = distance - 0.5 * gap - half_diagonals
     feasible = on_face & (clearance >= edge_offset)
     cell_areas = _cell_areas(points)
-    unreached = out_of_reach = None
     if reachable is not None:
         placeable, judged = reachable_cells(model, on_face, reachable, centres)
         out_of_reach = ~judged
-        unreached = on_face & out_of_reach
         feasible &= placeable
+    elif out_of_reach is not None:
+        out_of_reach = rectangle_cells(model.bounds, shape, out_of_reach)
+        feasible &= ~out_of_reach
+    unreached = None if out_of_reach is None else on_face & out_of_reach
     reach = float(clearance[on_face].max(initial=0.0))
     margin = 0.5 * gap + 2.0 * float(half_diagonals[on_face].max(initial=0.0))
     return FaceDomain(model.bounds, trimmed, edge_offset, on_face, feasible,
                       float(cell_areas[feasible].sum()), loops, reach, margin, unreached,
                       0.0 if unreached is None else float(cell_areas[unreached].sum()), out_of_reach)
+
+
+def rectangle_cells(bounds: Sequence[float], shape: Sequence[int], rectangles: np.ndarray) -> np.ndarray:
+    """The raster (shape: (R_u, R_v) cells over bounds (u0, u1, v0, v1)) whose True cells the
+    rectangles (K, 4) of :func:`cell_rectangles` on that raster cover: (R_u, R_v) bool."""
+    cells = np.zeros(tuple(shape), dtype=bool)
+    u0, u1, v0, v1 = bounds
+    scale = np.array([shape[0] / (u1 - u0), shape[0] / (u1 - u0), shape[1] / (v1 - v0), shape[1] / (v1 - v0)])
+    edges = np.rint((np.asarray(rectangles, dtype=float).reshape(-1, 4) - [u0, u0, v0, v0]) * scale).astype(int)
+    for a, b, c, d in edges:
+        cells[a:b, c:d] = True
+    return cells
 
 
 def cell_rectangles(bounds: Sequence[float], cells: np.ndarray) -> np.ndarray:

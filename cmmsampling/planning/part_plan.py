@@ -73,6 +73,10 @@ RETRIES = 1
 # otherwise: a face's search runs it at several N, so the plan's time stays bounded (the Plan part
 # panel starts with the same).
 PLAN_TIME_LIMIT_S = 10.0
+# A toleranced face is called met only where the probe reaches at least this share of its area:
+# its substitute is judged over the reached part alone, and a verdict on less than half of a face
+# would speak for the rest, which no point touched. Below it the face is flagged instead.
+REACHED_SHARE_MIN = 0.5
 # The strategy a datum face's FacePlan names: its points are spread to hold the frame, not sampled.
 DATUM_STRATEGY = "datum"
 
@@ -162,9 +166,38 @@ class FacePlan:
         return self.n > 0
 
     @property
+    def reached_share(self):
+        """The share of the face's area the probe reaches, 0..1 (1 where the plan did not judge
+        the probe's reach): the part its maximum deviation is judged over."""
+        if self.access is None or self.area <= 0:
+            return 1.0
+        return min(1.0, max(0.0, 1.0 - self.unreached_area / self.area))
+
+    @property
+    def flagged(self):
+        """True for a toleranced face with points whose reached share is below
+        REACHED_SHARE_MIN: it is not called met, whatever its maximum over that share."""
+        return self.placed and not self.datum and self.reached_share < REACHED_SHARE_MIN
+
+    @property
     def met_text(self):
-        """'yes' or 'no' for the tolerance met, '' without a tolerance."""
-        return "" if self.met is None else ("yes" if self.met else "no")
+        """'yes' or 'no' for the tolerance met, 'flagged' where too little of the face is reached
+        to say (:attr:`flagged`), '' without a tolerance."""
+        if self.met is None:
+            return ""
+        return "flagged" if self.flagged else ("yes" if self.met else "no")
+
+    @property
+    def reach_text(self):
+        """Where the probe reaches part of the face: the area out of reach, the share reached and
+        for a flagged face that it is not called met, e.g. '44.7 mm^2 out of the probe's reach:
+        it reaches 10 % of the face, not called met (a verdict needs 50 %)'; '' where it reaches
+        all of it."""
+        if self.unreached_area <= 0:
+            return ""
+        text = (f"{self.unreached_area:.4g} mm^2 out of the probe's reach: it reaches "
+                f"{percent(self.reached_share)} of the face")
+        return text + (f", not called met (a verdict needs {percent(REACHED_SHARE_MIN)})" if self.flagged else "")
 
     @property
     def notes(self):
@@ -174,9 +207,9 @@ class FacePlan:
         when there is nothing to say)."""
         parts = [f"datum {self.datum}: points spread to fix {self.settings['motions']} motions"] if self.datum else []
         parts += [self.reason] if self.reason else []
-        parts += [f"{self.tilted} points tilted"] if self.tilted else []
-        parts += [f"{self.unreached} points the probe cannot reach"] if self.unreached else []
-        parts += [f"{self.unreached_area:.4g} mm^2 out of the probe's reach"] if self.unreached_area else []
+        parts += [f"{self.tilted} point{'s' if self.tilted > 1 else ''} tilted"] if self.tilted else []
+        parts += [f"{self.unreached} point{'s' if self.unreached > 1 else ''} the probe cannot reach"] if self.unreached else []
+        parts += [self.reach_text] if self.reach_text else []
         rise = larger_with_more(self.tried)
         parts += [rise] if rise else []
         parts += [f"a rigid copy of {self.copy_of}: its points and search, judged on this face"] if self.copy_of else []
@@ -191,9 +224,12 @@ class FacePlan:
         if self.datum:
             return f"{self.name}: datum {self.datum}, {self.n} points spread to fix {self.settings['motions']} motions"
         met = {None: "", True: ", tolerance met", False: ", tolerance not met"}[self.met]
+        over = f" over the {percent(self.reached_share)} of the face the probe reaches" if self.unreached_area else ""
+        if self.flagged and self.met is not None:
+            met = f", flagged: not called met, a verdict needs {percent(REACHED_SHARE_MIN)} of the face"
         reach = f", {self.tilted} tilted" if self.tilted else ""
         reach += f", {self.unreached} unreachable" if self.unreached else ""
-        return f"{self.name}: {self.n} points, max {self.maximum:.4f} mm{met}{reach}"
+        return f"{self.name}: {self.n} points, max {self.maximum:.4f} mm{over}{met}{reach}"
 
 
 @dataclass
@@ -251,11 +287,13 @@ class PartPlan:
 
     def result(self, name: str) -> SamplingResult:
         """The SamplingResult of a face of the plan (computed again from its points: the fit,
-        the deviation and OCC's check), for the document; its settings are the face's run's (the
-        edge offset and spacing it used among them)."""
+        the deviation over the part of the face the probe reaches, as the plan judged it, and
+        OCC's check), for the document; its settings are the face's run's (the edge offset and
+        spacing it used among them)."""
         face = self.faces[[f.name for f in self.faces].index(name)]
         fit = {key: face.settings[key] for key in FIT_KEYS if key in face.settings}
-        result = evaluate(self.shapes[name], face.uv, strategy=face.strategy, **fit)
+        out_of_reach = None if face.access is None else face.access.out_of_reach
+        result = evaluate(self.shapes[name], face.uv, strategy=face.strategy, out_of_reach=out_of_reach, **fit)
         result.access = face.access
         result.settings = {**result.settings, **face.settings}
         return result
@@ -273,16 +311,25 @@ class PartPlan:
     def table(self) -> str:
         """The per-part table as text: face, area, N, deviation, bound, tolerance met, notes;
         then the plan's own notes, a line each."""
-        lines = [f"{'face':<10} {'area mm^2':>10} {'N':>5} {'max mm':>9} {'bound mm':>9} {'met':>4}  notes"]
+        lines = [f"{'face':<10} {'area mm^2':>10} {'N':>5} {'max mm':>9} {'bound mm':>9} {'met':>7}  notes"]
         for face in self.faces:
             if face.datum:
-                lines.append(f"{face.name:<10} {face.area:>10.1f} {face.n:>5} {'':>9} {'':>9} {'':>4}  {face.notes}")
+                lines.append(f"{face.name:<10} {face.area:>10.1f} {face.n:>5} {'':>9} {'':>9} {'':>7}  {face.notes}")
                 continue
             lines.append(f"{face.name:<10} {face.area:>10.1f} {face.n:>5} {face.maximum:>9.4f} {face.bound:>9.4f} "
-                         f"{face.met_text:>4}  {face.notes}")
+                         f"{face.met_text:>7}  {face.notes}")
         lines.append(f"{'part':<10} {self.area:>10.1f} {self.n_total:>5} {self.worst:>9.4f}")
         lines += [f"Note: {note}" for note in self.notes]
         return "\n".join(lines)
+
+
+def percent(share):
+    """A share 0..1 as a whole percentage, '10 %' (below 1 % with one significant digit, '0.4 %',
+    above 99 % to 0.1 % rounded down, '99.6 %': a share that is not all never reads 0 or 100 %)."""
+    value = 100.0 * share
+    if 0 < value < 1:
+        return f"{value:.1g} %"
+    return f"{np.floor(value * 10) / 10:.1f} %" if 99 < value < 100 else f"{value:.0f} %"
 
 
 def plan(shape_or_faces: Part.Shape | list, tolerance: float | None = None, n_total: int | None = None,

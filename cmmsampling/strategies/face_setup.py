@@ -14,6 +14,8 @@ import contextvars
 from collections.abc import Iterator
 from typing import TYPE_CHECKING
 
+import numpy as np
+
 from ..geometry.domain import face_domain
 from ..geometry.surface import SurfaceModel, as_face
 
@@ -36,15 +38,17 @@ class FaceSetup:
     def __init__(self, face: Part.Face) -> None:
         self.face = as_face(face)
         self.model = SurfaceModel.from_face(self.face)
-        self._domains: dict[tuple[float, int], tuple[Reachability | None, FaceDomain]] = {}
+        self._domains: dict[tuple[float, int, bytes | None], tuple[Reachability | None, FaceDomain]] = {}
 
-    def domain(self, edge_offset: float = 0.0, reachable: Reachability | None = None) -> FaceDomain:
+    def domain(self, edge_offset: float = 0.0, reachable: Reachability | None = None,
+               out_of_reach: np.ndarray | None = None) -> FaceDomain:
         """The FaceDomain keeping ``edge_offset`` mm from the edges, and (reachable: None or a
-        Reachability) out of what the probe cannot reach; see
-        :func:`cmmsampling.geometry.domain.face_domain`."""
-        key = (float(edge_offset), id(reachable))
+        Reachability; or out_of_reach: (K, 4) rectangles an earlier domain found out of reach)
+        out of what the probe cannot reach; see :func:`cmmsampling.geometry.domain.face_domain`."""
+        rectangles = None if out_of_reach is None else np.asarray(out_of_reach, dtype=float).reshape(-1, 4)
+        key = (float(edge_offset), id(reachable), None if rectangles is None else rectangles.tobytes())
         if key not in self._domains:
-            self._domains[key] = (reachable, face_domain(self.model, edge_offset, reachable))
+            self._domains[key] = (reachable, face_domain(self.model, edge_offset, reachable, rectangles))
         return self._domains[key][1]
 
 

@@ -65,7 +65,8 @@ PROBE_EDGE_OFFSET_MM = 1.5
 
 
 def make_problem(face: Part.Face, n: int, *, strategy: str | None = None, options: dict | None = None,
-                 part: Part.Shape | None = None, probe: Probe | None = None, **settings: Any) -> SamplingProblem:
+                 part: Part.Shape | None = None, probe: Probe | None = None, out_of_reach: np.ndarray | None = None,
+                 **settings: Any) -> SamplingProblem:
     """Validate the common inputs and build a SamplingProblem (see :func:`sample`).
 
     settings: sample()'s common settings by name (fit_degree, fit_poles, smoothing, grid, seed,
@@ -75,25 +76,28 @@ def make_problem(face: Part.Face, n: int, *, strategy: str | None = None, option
     """
     settings.setdefault("min_spacing", 0.0)
     checked = SampleSettings.checked(n, **settings)
-    return problem_for(face, checked, strategy=strategy, options=options, part=part, probe=probe)
+    return problem_for(face, checked, strategy=strategy, options=options, part=part, probe=probe,
+                       out_of_reach=out_of_reach)
 
 
 def problem_for(face: Part.Face, settings: SampleSettings, *, strategy: str | None = None,
                 options: dict | None = None, part: Part.Shape | None = None,
-                probe: Probe | None = None) -> SamplingProblem:
+                probe: Probe | None = None, out_of_reach: np.ndarray | None = None) -> SamplingProblem:
     """The SamplingProblem of checked settings on a face.
 
     min_spacing None: the default (cmmsampling.strategies.optimal.default_min_spacing), lowered where the
     face's feasible part cannot hold N points that far apart. strategy, options (checked): the
     run it is for, whose memory is checked (:func:`memory_needed`) before anything is built;
-    None checks every run's base. part, probe: as in :func:`sample`.
+    None checks every run's base. part, probe: as in :func:`sample`; out_of_reach: instead,
+    where a probe was found not to reach the face before (Access.out_of_reach, (K, 4) parameter
+    rectangles), left out of the judged part of the face again.
     """
     _check_memory(settings, strategy, options or {})
     setup = setup_of(face)
     model = setup.model
     _check_area(model)
     reachability = _reachability(part, probe, model.source_face)
-    domain = setup.domain(settings.edge_offset, reachability)
+    domain = setup.domain(settings.edge_offset, reachability, out_of_reach)
     by_default = settings.min_spacing is None
     min_spacing = (default_min_spacing(model.area, settings.n, domain.feasible_area) if by_default
                    else cast(float, settings.min_spacing))
@@ -382,16 +386,19 @@ def lower_bound(face: Part.Face, n: int = 81, *, fit_degree: Pair = DEFAULT_DEGR
 
 def evaluate(face: Part.Face, uv: np.ndarray, *, strategy: str = "given", fit_degree: Pair = DEFAULT_DEGREE,
              fit_poles: Pair | None = None, smoothing: float = DEFAULT_SMOOTHING, grid: Pair = DEFAULT_GRID,
-             occ_check: bool = True, part: Part.Shape | None = None, probe: Probe | None = None) -> SamplingResult:
+             occ_check: bool = True, part: Part.Shape | None = None, probe: Probe | None = None,
+             out_of_reach: np.ndarray | None = None) -> SamplingResult:
     """Judge a given point set: fit the substitute to the face's points at uv and measure it.
 
     uv: (N, 2) parameters on the face (as in SamplingResult.uv); part and probe: the probe's
-    pose at each point judged on the part (``result.access``); the other arguments as in
-    :func:`sample`. Returns a SamplingResult labelled with ``strategy``.
+    pose at each point judged on the part (``result.access``); out_of_reach: instead of part
+    and probe, where a run found the probe cannot reach (its result's access.out_of_reach):
+    the deviation is measured over the rest of the face, as that run's was; the other arguments
+    as in :func:`sample`. Returns a SamplingResult labelled with ``strategy``.
     """
     uv = check_uv(uv)
     problem = make_problem(face, len(uv), fit_degree=fit_degree, fit_poles=fit_poles, smoothing=smoothing, grid=grid,
-                           part=part, probe=probe)
+                           part=part, probe=probe, out_of_reach=out_of_reach)
     settings = {"strategy": strategy, "n": problem.n, **_common_settings(problem)}
     return _judge(problem, StrategyOutcome(uv), strategy, settings, 0.0, occ_check, given=True)
 
@@ -409,6 +416,7 @@ def measure_reach(result: SamplingResult, given: bool = False) -> None:
     assert result.access is not None   # final() returns an Access
     result.access.unreached = problem.domain.unreached_rectangles()
     result.access.unreached_area = problem.domain.unreached_area
+    result.access.out_of_reach = problem.domain.out_of_reach_rectangles()
     result.settings["probe"] = asdict(problem.reachability.probe)
     obstacles = problem.reachability.obstacles
     if obstacles.coarsened:

@@ -105,3 +105,58 @@ def test_a_search_stops_climbing_where_more_points_keep_giving_larger_maxima():
     assert needed.reason.startswith(f"no N meets 0.05 mm (the search stopped at N = {tried[-1]}: two larger N in a "
                                     f"row gave larger maxima): the best reached is {maxima[best]:.4g} mm with "
                                     f"{tried[best]} points")
+
+
+def test_a_plan_tells_one_story_over_what_the_probe_reaches(shelf_part):
+    """The plan's table, its face's line, the document's substitute (legend, max marker, report
+    sheet) all give the maximum over the part the probe reaches, and say what share that is."""
+    from support.faces import closed
+
+    from cmmsampling.planning.part_plan import percent
+
+    part, top = shelf_part
+    number = next(k for k, face in enumerate(part.Faces, start=1) if face.isSame(top))
+    plan = cmmsampling.plan(part, tolerance=0.3, strategy="uniform_parametric", faces=[number],
+                            probe=cmmsampling.Probe(), processes=1, grid=30, n_max=100)
+    face = plan.placed[0]
+    share = 1 - face.unreached_area / top.Area
+    assert 0.5 < share < 0.7 and face.reached_share == pytest.approx(share) and not face.flagged
+    result = plan.result(face.name)
+    assert result.deviation.maximum == pytest.approx(face.maximum, rel=1e-9)
+    whole = cmmsampling.evaluate(top, face.uv, grid=30)
+    assert whole.deviation.maximum > 5 * face.maximum, "over the whole face the free part counts"
+    said = f"over the {percent(share)} of the face the probe reaches, tolerance met"
+    assert said in face.line and f"it reaches {percent(share)} of the face" in face.notes
+    doc = FreeCAD.newDocument("OneStory")
+    try:
+        holder = doc.addObject("Part::Feature", "Part")
+        holder.Shape = part
+        doc.recompute()
+        group = cmmsampling.add_plan_to_document(plan, doc, holder)
+        points = cmmsampling.document.probe_points_in([group])[0]
+        assert points.Substitute.MaxDeviation.Value == pytest.approx(face.maximum, rel=1e-9)
+        assert points.MaxDeviation.Value == pytest.approx(face.maximum, rel=1e-9)
+        assert np.nanmax(points.Substitute.DeviationField) <= face.maximum * (1 + 1e-9)
+        sheet = next(obj for obj in group.Group if obj.TypeId == "Spreadsheet::Sheet")
+        assert sheet.get("F6") == "yes" and f"it reaches {percent(share)}" in sheet.get("G6")
+        assert points.Report.get("B17") == "the part of the face the probe reaches"
+    finally:
+        closed(doc.Name)
+
+
+def test_a_face_the_probe_reaches_too_little_of_is_flagged_not_called_met():
+    from cmmsampling.access.reach import Access
+    from cmmsampling.planning.part_plan import REACHED_SHARE_MIN, FacePlan
+
+    def face(unreached_area):
+        access = Access(np.ones(4, bool), np.zeros((4, 3)), np.zeros(4), np.zeros((4, 2)), np.zeros(4, int),
+                        np.zeros((1, 4)), unreached_area)
+        return FacePlan("Face61", 49.8, n=4, maximum=0.0015, met=True, access=access)
+
+    little, enough = face(44.7), face(49.8 * (1 - REACHED_SHARE_MIN) - 0.01)
+    assert little.flagged and little.met_text == "flagged" and "tolerance met" not in little.line
+    assert little.line == ("Face61: 4 points, max 0.0015 mm over the 10 % of the face the probe reaches, flagged: "
+                           "not called met, a verdict needs 50 % of the face")
+    assert little.notes == ("44.7 mm^2 out of the probe's reach: it reaches 10 % of the face, not called met "
+                            "(a verdict needs 50 %)")
+    assert not enough.flagged and enough.met_text == "yes" and "tolerance met" in enough.line
