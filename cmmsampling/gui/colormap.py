@@ -1,12 +1,15 @@
 """Deviation colours (blue, cyan, green, yellow, red from 0 to the maximum) and their legend.
 
-The legend is a coin3d overlay drawn in the 3D view's corner, like the Inspection workbench's
-colour bar: a column of colour bands with tick labels in mm, on a light backdrop that keeps it
-readable over the part. Keys (a swatch and its meaning, e.g. the shade of what a probe cannot
+The legend is a coin3d overlay drawn at the 3D view's side, like the Inspection workbench's
+colour bar: a column of colour bands with tick labels in mm, each text on a light box that keeps
+it readable over the part; a substitute's at the left, an inspection's at the right, so the two
+never overlap. Keys (a swatch and its meaning, e.g. the shade of what a probe cannot
 reach) are overlays of the same kind below it.
 """
+import FreeCADGui
 import numpy as np
 from pivy import coin
+from PySide import QtGui
 
 STOPS = np.array([
     [0.0, 0.0, 1.0],
@@ -22,17 +25,29 @@ LEGEND_TICKS = 5
 # (bottom right); x and y in the view's [-1, 1] square.
 LEGEND_X = (-0.97, -0.93)
 LEGEND_Y = (-0.7, 0.4)
+# A legend at the right (an inspection's, apart from a substitute's at the left) ends here, below
+# the navigation cube and above the axis cross; a title's lines are TITLE_LINE apart (view units).
+RIGHT_EDGE = 0.97
+TITLE_LINE = 0.06
 # Deviations below this (mm) are shown in one colour: finer than any CMM measures, so a
 # spread of colours there would be rounding noise.
 SMALLEST_SHOWN_MM = 1e-4
 TEXT_COLOUR = (0.0, 0.0, 0.0)
 FONT_SIZE = 14
-# The backdrop behind the legend and the keys: colour, transparency, margin (view units) and the
-# width a character of FONT_SIZE takes in view units (for a view about 1000 pixels across).
+# The backdrop behind the legend's and keys' texts: colour and transparency; a swatch's height
+# (view units). A text box is as wide as its text in Qt's metrics of the font, TEXT_ALLOWANCE
+# wider (Coin draws the font with its own renderer), over the 3D view's width (DEFAULT_VIEW_PX
+# where there is no view).
 BACKDROP_COLOUR = (1.0, 1.0, 1.0)
 BACKDROP_TRANSPARENCY = 0.25
-BACKDROP_MARGIN = 0.02
-CHARACTER_WIDTH = 0.017
+SWATCH_HEIGHT = 0.03
+TEXT_ALLOWANCE = 1.1
+DEFAULT_VIEW_PX = 1000
+# A text's box reaches this far below and above its position, and beyond its ends (view units:
+# less than the gap between a colour bar or swatch and its text).
+TEXT_BELOW = 0.015
+TEXT_ABOVE = 0.045
+TEXT_MARGIN = 0.008
 # Keys sit below the legend, one KEY_HEIGHT apart (view units).
 KEY_Y = -0.8
 KEY_HEIGHT = 0.07
@@ -65,48 +80,86 @@ def tick_labels(maximum, count=LEGEND_TICKS):
     return [f"{value:.{digits}f} mm" for value in np.linspace(0, maximum, count)]
 
 
-def legend(maximum, title="Deviation"):
-    """A screen overlay (see :func:`overlay`) with the colour bar from 0 to ``maximum`` mm at the
-    left, its tick labels and title on a light backdrop."""
-    labels = tick_labels(maximum)
-    width = LEGEND_X[1] - LEGEND_X[0] + 0.01 + CHARACTER_WIDTH * max(len(text) for text in labels)
-    width = max(width, CHARACTER_WIDTH * len(title))
-    corner = (LEGEND_X[0] - BACKDROP_MARGIN, LEGEND_Y[0] - 0.05)
-    top = LEGEND_Y[1] + 0.05 + KEY_HEIGHT
-    backdrop = _backdrop(corner, (corner[0] + width + 2 * BACKDROP_MARGIN, top))
-    return overlay([backdrop, _bar(maximum), _labels(labels, title)])
+def legend(maximum, title="Deviation", right=False):
+    """A screen overlay (see :func:`overlay`) with the colour bar from 0 to ``maximum`` mm, its
+    tick labels and title, each text on a light box of its own: at the left, or (right) at the
+    view's right edge, where an inspection's legend goes, apart from a substitute's."""
+    heights = np.linspace(*LEGEND_Y, LEGEND_TICKS)
+    texts = [(text, (LEGEND_X[1] + 0.01, float(y) - 0.015)) for text, y in zip(tick_labels(maximum), heights)]
+    texts.append((title, (LEGEND_X[0], LEGEND_Y[1] + 0.05)))
+    return overlay(_placed([_bar(maximum), *_written(texts)], right))
 
 
-def band_legend(rows, title):
-    """A screen overlay (see :func:`overlay`) listing colour bands at the legend's place: rows
-    [(rgb, text)] from the top down, each a swatch and its text, the title above, on a light
-    backdrop (e.g. the bands of a tolerance zone)."""
+def band_legend(rows, title, right=False):
+    """A screen overlay (see :func:`overlay`) listing colour bands: rows [(rgb, text)] from the
+    top down, each a swatch and its text, the title's lines (a text, or a list of them, the
+    first on top) above, each on a light box of its own (e.g. the bands of a tolerance zone); at
+    the legend's place at the left, or (right) at the view's right edge."""
+    lines = [title] if isinstance(title, str) else list(title)
     x0, x1 = LEGEND_X
-    top = LEGEND_Y[1]
-    width = max([x1 - x0 + 0.01 + CHARACTER_WIDTH * len(text) for _, text in rows] + [CHARACTER_WIDTH * len(title)])
-    bottom = top - KEY_HEIGHT * len(rows)
-    corner = (x0 - BACKDROP_MARGIN, bottom - BACKDROP_MARGIN)
-    children = [_backdrop(corner, (x0 + width + BACKDROP_MARGIN, top + 0.05 + KEY_HEIGHT))]
-    labels = text_node(TEXT_COLOUR, FONT_SIZE)
+    top = LEGEND_Y[1] - TITLE_LINE * (len(lines) - 1)
+    children, texts = [], []
     for row, (rgb, text) in enumerate(rows):
         y = top - KEY_HEIGHT * (row + 1)
-        children.append(_rectangle((x0, y), (x1, y + KEY_HEIGHT - 2 * BACKDROP_MARGIN), rgb, 0.0))
-        labels.addChild(text_at(text, (x1 + 0.01, y + 0.005, 0.0)))
-    labels.addChild(text_at(title, (x0, top + 0.05, 0.0)))
-    return overlay(children + [labels])
+        children.append(_rectangle((x0, y), (x1, y + SWATCH_HEIGHT), rgb, 0.0))
+        texts.append((text, (x1 + 0.01, y + 0.005)))
+    texts += [(line, (x0, top + 0.05 + TITLE_LINE * (len(lines) - 1 - row))) for row, line in enumerate(lines)]
+    return overlay(_placed(children + _written(texts), right))
 
 
 def key(rgb, text, row=0):
     """A screen overlay (see :func:`overlay`) below the legend: a swatch of colour ``rgb`` and
-    ``text`` beside it on a light backdrop; row 0, 1, ... stacks keys downwards."""
+    ``text`` beside it on a light box; row 0, 1, ... stacks keys downwards."""
     y = KEY_Y - row * KEY_HEIGHT
     x0, x1 = LEGEND_X
-    corner = (x0 - BACKDROP_MARGIN, y - BACKDROP_MARGIN)
-    far = (x1 + 0.01 + CHARACTER_WIDTH * len(text) + BACKDROP_MARGIN, y + KEY_HEIGHT - BACKDROP_MARGIN)
-    swatch = _rectangle((x0, y), (x1, y + KEY_HEIGHT - 2 * BACKDROP_MARGIN), rgb, 0.0)
-    label = text_node(TEXT_COLOUR, FONT_SIZE)
-    label.addChild(text_at(text, (x1 + 0.01, y + 0.005, 0.0)))
-    return overlay([_backdrop(corner, far), swatch, label])
+    swatch = _rectangle((x0, y), (x1, y + SWATCH_HEIGHT), rgb, 0.0)
+    return overlay([swatch, *_written([(text, (x1 + 0.01, y + 0.005))])])
+
+
+def _written(texts):
+    """Texts [(text, (x, y))] at their places (view units), each on a light box (the backdrop)
+    that keeps it readable over the part and covers no more of it than the text."""
+    boxes = [_backdrop((x - TEXT_MARGIN, y - TEXT_BELOW), (x + text_width(text) + TEXT_MARGIN, y + TEXT_ABOVE))
+             for text, (x, y) in texts]
+    labels = text_node(TEXT_COLOUR, FONT_SIZE)
+    for text, (x, y) in texts:
+        labels.addChild(text_at(text, (x, y, 0.0)))
+    return [*boxes, labels]
+
+
+def _placed(children, right):
+    """A legend's children (drawn from the left edge), moved so that their widest text box ends
+    at the view's right edge (RIGHT_EDGE) when ``right``."""
+    if not right:
+        return children
+    far = max(_far_x(child) for child in children)
+    move = coin.SoTranslation()
+    move.translation = (RIGHT_EDGE - far, 0.0, 0.0)
+    return [move, *children]
+
+
+def _far_x(node):
+    """The largest x (view units) of a rectangle of :func:`_rectangle`, -inf for another node."""
+    if node.getNumChildren() < 2 or not isinstance(node.getChild(1), coin.SoCoordinate3):
+        return -np.inf
+    return max(point[0] for point in node.getChild(1).point.getValues())
+
+
+def text_width(text):
+    """The width of ``text`` at FONT_SIZE in the view's units (2 across the view)."""
+    font = QtGui.QFont("Sans")
+    font.setPixelSize(FONT_SIZE)
+    pixels = QtGui.QFontMetrics(font).horizontalAdvance(text)
+    return 2.0 * TEXT_ALLOWANCE * pixels / view_width()
+
+
+def view_width():
+    """The active 3D view's width in pixels (DEFAULT_VIEW_PX without one)."""
+    window = FreeCADGui.getMainWindow()
+    area = window.findChild(QtGui.QMdiArea) if window is not None else None
+    active = area.activeSubWindow() if area is not None else None
+    width = active.widget().width() if active is not None and active.widget() is not None else 0
+    return width if width > 0 else DEFAULT_VIEW_PX
 
 
 def overlay(children):
@@ -190,17 +243,6 @@ def text_node(rgb, size):
     font.size = size
     node.addChild(colour)
     node.addChild(font)
-    return node
-
-
-def _labels(labels, title):
-    """Tick labels (LEGEND_TICKS texts, bottom up) right of the bar and the title above it, as
-    screen-aligned text."""
-    node = text_node(TEXT_COLOUR, FONT_SIZE)
-    heights = np.linspace(*LEGEND_Y, LEGEND_TICKS)
-    for text, y in zip(labels, heights):
-        node.addChild(text_at(text, (LEGEND_X[1] + 0.01, float(y) - 0.015, 0.0)))
-    node.addChild(text_at(title, (LEGEND_X[0], LEGEND_Y[1] + 0.05, 0.0)))
     return node
 
 

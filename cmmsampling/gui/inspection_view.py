@@ -24,7 +24,9 @@ class ViewProviderMeasuredPoints(Annotated):
     """Draws the measured points as dots over the part, coloured by their band in the tolerance
     zone (out below, near below, in, near above, out above, with their limits in mm in the
     legend) or, without a tolerance, by |deviation| from 0 to the largest (mm); their labels when
-    ShowLabels (off from MANY_LABELS points)."""
+    ShowLabels (off from MANY_LABELS points). The legend sits at the view's right edge, apart from
+    a substitute's at the left, and the dots are drawn over it; one inspection's legend shows at
+    a time (the newest's, or the one switched on with ShowLegend)."""
 
     def __init__(self, vobj):
         vobj.addProperty("App::PropertyBool", "ShowLabels", "Measured points", "Show the point labels")
@@ -33,6 +35,7 @@ class ViewProviderMeasuredPoints(Annotated):
         vobj.ShowLegend = True
         vobj.PointSize = 4
         vobj.Proxy = self
+        hide_other_legends(vobj.Object)
 
     def updateData(self, obj, prop):
         if prop in ("Points", "Bands", "Deviation", "Tolerance", "ZoneOffset", "Profile", "Verdict", "Uncertainty",
@@ -44,6 +47,8 @@ class ViewProviderMeasuredPoints(Annotated):
         if prop == "Visibility":
             self.follow_visibility(vobj)
         elif prop in ("ShowLabels", "ShowLegend"):
+            if prop == "ShowLegend" and vobj.ShowLegend and not vobj.Object.Document.Restoring:
+                hide_other_legends(vobj.Object)
             self.redraw(vobj)
 
     def redraw(self, vobj):
@@ -59,25 +64,33 @@ class ViewProviderMeasuredPoints(Annotated):
         tolerance = float(obj.Tolerance.Value)
         if tolerance > 0:
             rgb = np.array(BAND_COLOURS)[np.array(obj.Bands, dtype=int) + 2]
-            offset = float(obj.ZoneOffset.Value)
-            zone = f" (offset {offset:+g} mm)" if offset else ""
-            title = f"Profile {mm_text(obj.Profile.Value)}, tolerance {tolerance:g} mm{zone}: {obj.Verdict}"
-            if getattr(obj, "Uncertainty", None) is not None and obj.Uncertainty.Value > 0:
-                title = (f"{obj.Decision} (ISO 14253-1, U {mm_text(obj.Uncertainty.Value)}): profile "
-                         f"{mm_text(obj.Profile.Value)}, tolerance {tolerance:g} mm{zone}, alone {obj.Verdict}")
-            legend = colormap.band_legend(band_rows(tolerance, offset), title)
+            legend = colormap.band_legend(band_rows(tolerance, float(obj.ZoneOffset.Value)), legend_lines(obj),
+                                          right=True)
         else:
             largest = colormap.shown_maximum(np.abs(deviations).max())
             rgb = colormap.colours(np.abs(deviations), largest)
-            legend = colormap.legend(largest, f"|Deviation| of {obj.Label}")
+            legend = colormap.legend(largest, f"|Deviation| of {obj.Label}", right=True)
+        if vobj.ShowLegend:
+            self.annotation.addChild(legend)
         self.annotation.addChild(dots(points, rgb))
         if vobj.ShowLabels:
             self.annotation.addChild(point_labels(list(obj.Labels), points, 12))
-        if vobj.ShowLegend:
-            self.annotation.addChild(legend)
 
     def getIcon(self):
         return icon("Inspect.svg")
+
+
+def legend_lines(obj):
+    """The title of a judged inspection's legend, the decision first: [ISO 14253-1's decision
+    with U, the profile and tolerance, the profile's own verdict] where an uncertainty was given,
+    else [the verdict, the profile and tolerance]. obj: measured points."""
+    offset = float(obj.ZoneOffset.Value)
+    zone = f" (offset {offset:+g} mm)" if offset else ""
+    profile = f"profile {mm_text(obj.Profile.Value)}, tolerance {float(obj.Tolerance.Value):g} mm{zone}"
+    if getattr(obj, "Uncertainty", None) is not None and obj.Uncertainty.Value > 0:
+        return [f"{obj.Decision} (ISO 14253-1, U {mm_text(obj.Uncertainty.Value)})", profile,
+                f"the profile alone: {obj.Verdict}"]
+    return [obj.Verdict, profile]
 
 
 def band_rows(tolerance, offset=0.0):
@@ -87,6 +100,14 @@ def band_rows(tolerance, offset=0.0):
     texts = (f"out below: < {low} mm", f"near: {low} .. {near_low} mm", f"in: {near_low} .. {near_high} mm",
              f"near: {near_high} .. {high} mm", f"out above: > {high} mm")
     return list(zip(BAND_COLOURS, texts))[::-1]
+
+
+def hide_other_legends(obj):
+    """Switch off ShowLegend on every other inspection's measured points in obj's document."""
+    for other in obj.Document.Objects:
+        view = other.ViewObject if other is not obj and is_measured_points(other) else None
+        if view is not None and getattr(view, "ShowLegend", False):
+            view.ShowLegend = False
 
 
 def dots(points, rgb):

@@ -238,7 +238,9 @@ class ViewProviderSubstituteSurface(Stateless):
         if getattr(vobj, "ShowLegend", True):
             self.coloured.addChild(colormap.legend(maximum, legend_title(obj)))
         if getattr(obj, "MaxLocation", None) is not None and obj.MaxDeviation.Value >= NUMERICAL_ZERO_MM:
-            self.coloured.addChild(maximum_mark(obj.MaxLocation, obj.MaxDeviation.Value))
+            worst = max(float(getattr(other, "MaxDeviation", 0.0)) for other in sharing)
+            self.coloured.addChild(maximum_mark(obj.MaxLocation, obj.MaxDeviation.Value,
+                                                labelled=obj.MaxDeviation.Value >= worst))
 
     def _redraw_once_loaded(self, vobj):
         """One redraw when the event loop next runs (the document has loaded by then)."""
@@ -331,9 +333,11 @@ def unreached_key(points):
     return colormap.key(UNREACHED_COLOUR, f"Out of the probe's reach: {area:.4g} mm^2")
 
 
-def maximum_mark(location, maximum):
-    """A filled circle at location (FreeCAD.Vector, mm) and 'max <maximum> mm' beside it, drawn
-    over the scene (an annotation)."""
+def maximum_mark(location, maximum, labelled=True):
+    """A filled circle at location (FreeCAD.Vector, mm) and, when labelled, 'max <maximum> mm'
+    beside it, drawn over the scene (an annotation). A plan's faces label only the worst one's
+    (the others' figures are in the plan's report): one text, which no zoom makes overlap
+    another."""
     node = coin.SoAnnotation()
     colour = coin.SoBaseColor()
     colour.rgb = MAXIMUM_COLOUR
@@ -342,11 +346,13 @@ def maximum_mark(location, maximum):
     marker = coin.SoMarkerSet()
     marker.markerIndex = coin.SoMarkerSet.CIRCLE_FILLED_9_9
     marker.numPoints = 1
-    label = colormap.text_node(MAXIMUM_COLOUR, colormap.FONT_SIZE)
-    label.addChild(colormap.text_at(f"  max {mm_text(maximum)}", (float(location.x), float(location.y),
-                                                                 float(location.z))))
-    for child in (colour, coordinates, marker, label):
+    for child in (colour, coordinates, marker):
         node.addChild(child)
+    if labelled:
+        label = colormap.text_node(MAXIMUM_COLOUR, colormap.FONT_SIZE)
+        label.addChild(colormap.text_at(f"  max {mm_text(maximum)}", (float(location.x), float(location.y),
+                                                                     float(location.z))))
+        node.addChild(label)
     return node
 
 

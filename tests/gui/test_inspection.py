@@ -15,9 +15,10 @@ import cmmsampling
 from cmmsampling.document.object_types import is_measured_points
 from cmmsampling.fitting.deviation import mm_text
 from cmmsampling.formats.qif.schema import schema_errors
-from cmmsampling.gui import commands, inspect_dialog, inspection_view
+from cmmsampling.gui import colormap, commands, inspect_dialog, inspection_view
 from cmmsampling.inspection.judge import tolerance_bands
 
+from pivy import coin
 from PySide import QtGui
 
 from .helpers import (dock_text, document_with, handle_dialog, main_window, modal_message, process_events, texts,
@@ -95,9 +96,9 @@ def test_inspect_measured_points_on_a_ventilator_blade(blade_points, tmp_path, a
 
     proxy = measured_points.ViewObject.Proxy
     assert isinstance(proxy, inspection_view.ViewProviderMeasuredPoints)
-    assert proxy.annotation.getNumChildren() == 3, "dots, labels and legend"
-    assert texts(proxy.annotation)[-1] == (f"Profile {mm_text(expected.profile)}, tolerance 0.013 mm: "
-                                           f"{measured_points.Verdict}")
+    assert proxy.annotation.getNumChildren() == 3, "legend, dots over it and labels"
+    assert texts(proxy.annotation.getChild(0))[-2:] == [measured_points.Verdict,
+                                                        f"profile {mm_text(expected.profile)}, tolerance 0.013 mm"]
     view = FreeCADGui.ActiveDocument.ActiveView
     view.setViewDirection(tuple(-points.Proxy.point_set(points).normals.mean(axis=0)))
     FreeCADGui.Selection.clearSelection()
@@ -175,7 +176,32 @@ def test_without_a_tolerance_the_points_take_the_deviation_colours(blade_points,
     assert measured_points.Verdict == "no tolerance" and group.Label == "Inspection Probe points (no tolerance)"
     assert set(measured_points.Bands) == {0}
     measured_points.ViewObject.ShowLabels = False
-    assert measured_points.ViewObject.Proxy.annotation.getNumChildren() == 2, "dots and legend"
+    assert measured_points.ViewObject.Proxy.annotation.getNumChildren() == 2, "legend and dots"
+
+    again = cmmsampling.add_inspection_to_document(inspection, doc, source=points).Group[0]
+    assert again.ViewObject.ShowLegend and not measured_points.ViewObject.ShowLegend, "the newest's legend alone"
+    substitute = points.Substitute.ViewObject
+    assert substitute.Visibility is False or substitute.ShowLegend
+    deviation = next(substitute.Proxy.coloured.getChild(k) for k in range(substitute.Proxy.coloured.getNumChildren())
+                     if isinstance(substitute.Proxy.coloured.getChild(k), coin.SoAnnotation))
+    left, right = legend_span(deviation), legend_span(again.ViewObject.Proxy.annotation.getChild(0))
+    assert left[0] < -0.9 and right[1] == pytest.approx(colormap.RIGHT_EDGE) and left[1] < right[0], \
+        "a substitute's legend at the left, an inspection's at the right: apart"
+    measured_points.ViewObject.ShowLegend = True
+    assert not again.ViewObject.ShowLegend, "switching one on hides the other"
+
+
+def legend_span(overlay):
+    """The x range (view units) of a colormap overlay's rectangles (swatches, text boxes), its
+    translation applied."""
+    group, shift, xs = overlay.getChild(0), 0.0, []
+    for k in range(group.getNumChildren()):
+        node = group.getChild(k)
+        if isinstance(node, coin.SoTranslation):
+            shift = node.translation.getValue()[0]
+        elif isinstance(node, coin.SoSeparator) and isinstance(node.getChild(1), coin.SoCoordinate3):
+            xs += [point[0] + shift for point in node.getChild(1).point.getValues()]
+    return min(xs), max(xs)
 
 
 def test_the_command_says_what_to_select_and_echoes_every_choice(blade_points):
@@ -230,9 +256,10 @@ def test_a_profile_relative_to_datums_shows_its_uncertainty_and_decision(block_p
     assert measured_points.Uncertainty.Value == pytest.approx(expected.profile_uncertainty)
     assert f"tolerance 0.05 mm: {expected.decision} by ISO 14253-1 (U " in main_window().statusBar().currentMessage()
     assert inspected.Label.endswith(f"({expected.decision})"), "the decision first, in the tree too"
-    legend = texts(measured_points.ViewObject.Proxy.annotation)[-1]
-    assert legend.startswith(f"{expected.decision} (ISO 14253-1, U {mm_text(expected.profile_uncertainty)}): "
-                             f"profile {mm_text(expected.profile)}, tolerance 0.05 mm"), legend
+    legend = texts(measured_points.ViewObject.Proxy.annotation.getChild(0))[-3:]
+    assert legend == [f"{expected.decision} (ISO 14253-1, U {mm_text(expected.profile_uncertainty)})",
+                      f"profile {mm_text(expected.profile)}, tolerance 0.05 mm",
+                      f"the profile alone: {measured_points.Verdict}"], legend
     view = FreeCADGui.ActiveDocument.ActiveView
     view.viewIsometric()
     FreeCADGui.SendMsgToActiveView("ViewFit")

@@ -19,11 +19,13 @@ from support.wording import LEFT
 from PySide import QtCore, QtGui
 
 from cmmsampling.document.object_types import is_part_plan, probe_points_in
+from cmmsampling.fitting.deviation import mm_text
 from cmmsampling.gui import colormap, commands, view_providers
 from cmmsampling.gui.panels import plan_part
 
 from .helpers import (
-    Hold, child, dock_text, document_with, drawn, main_window, process_events, task_button, wait_until, widgets,
+    Hold, child, dock_text, document_with, drawn, main_window, process_events, task_button, texts, wait_until,
+    widgets,
 )
 
 OK, CANCEL = QtGui.QDialogButtonBox.Ok, QtGui.QDialogButtonBox.Cancel
@@ -197,6 +199,10 @@ def test_a_plan_runs_face_by_face_and_adds_a_group_per_face(part_doc, monkeypatc
         "the plan's faces share one colour scale"
     assert {view_providers.legend_title(surface) for surface in surfaces} == {f"Deviation, {group.Label}"}
     assert sum(surface.ViewObject.ShowLegend for surface in surfaces) == 1
+    marks = [[text for text in texts(surface.ViewObject.Proxy.coloured) if text.startswith("  max ")]
+             for surface in surfaces]
+    assert marks == [[f"  max {mm_text(largest)}"] if surface.MaxDeviation.Value == largest else []
+                     for surface in surfaces], "one max label, the worst face's: none to overlap"
     tips = np.concatenate([points.ViewObject.Proxy.shown_tips for points in probe_points_in([group])])
     gaps = np.linalg.norm(tips[:, None] - tips[None], axis=-1) + np.diag(np.full(len(tips), np.inf))
     spacing = view_providers.PLAN_LABEL_FRACTION * part_doc.Part.Shape.BoundBox.DiagonalLength
