@@ -289,6 +289,7 @@ class PartPlanGroup(TypedProxy):
 
     def onDocumentRestored(self, obj):
         self.add_properties(obj)
+        _view_provider_when_missing(obj)
 
     def stated(self, obj):
         """(the datum faces' names, primary first; the tolerance in mm or None): what the plan

@@ -103,6 +103,10 @@ def add_plan_to_document(plan: PartPlan, doc: FreeCAD.Document, part: FreeCAD.Do
             doc.removeObject(obj.Name)
         group = doc.addObject("App::DocumentObjectGroupPython", "Plan")
         PartPlanGroup(group)
+        if FreeCAD.GuiUp:
+            from ..gui import view_providers
+
+            view_providers.ViewProviderPartPlan(group.ViewObject)
         group.Datums = list(plan.datums)
         group.Tolerance = plan.tolerance or 0.0
         if hide_others:

@@ -17,3 +17,11 @@ def resource(name):
     """Full path of a file in the addon's resources folder, e.g. resource('sample_face.ui')."""
     return os.path.join(ADDON_DIR, "resources", name)
 
+
+
+def counted(count, noun):
+    """'1 face', '3 faces', '2 processes': a count and its noun (English plural: + 'es' after s,
+    x, ch or sh, else + 's')."""
+    if count == 1:
+        return f"{count} {noun}"
+    return f"{count} {noun}{'es' if noun.endswith(('s', 'x', 'ch', 'sh')) else 's'}"

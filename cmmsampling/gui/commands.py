@@ -12,11 +12,16 @@ from FreeCAD import Qt
 from PySide import QtCore, QtGui
 
 from .. import document
+from ..document import settings
 from ..document.export_defaults import export_call
 from ..document.object_types import is_part_plan, source_face
 from . import icon
 from .export_options import ask_export_options, say, show_export_report
 from .selection import SelectionError, selected_face, selected_part_faces
+
+# The workbench's setting that keeps the folder the last export wrote to (where the next export
+# of an unsaved document starts).
+EXPORT_FOLDER = "ExportFolder"
 
 
 def show_reason(name, reason, tip):
@@ -287,8 +292,6 @@ class MeasureOnCMM(GuardedCommand):
         FreeCAD.Console.PrintMessage(f"cmmsampling: {run}\n")
         status.showMessage(str(run), 20000)
         if run.labels and not run.cancelled:
-            from ..document import settings
-
             settings.save({"InspectFile": run.path})
             FreeCADGui.runCommand(InspectMeasured.NAME)
 
@@ -359,12 +362,13 @@ def default_export_name(points):
 
 
 def default_export_folder(doc):
-    """Where an export starts: beside the saved document, else the folder FreeCAD's own file
-    dialogs used last, else the home folder."""
+    """Where an export starts: beside the saved document, else the folder the last export wrote
+    to, else the folder FreeCAD's own file dialogs used last, else the home folder."""
     if doc.FileName:
         return os.path.dirname(doc.FileName)
-    last = FreeCAD.ParamGet("User parameter:BaseApp/Preferences/General").GetString("FileOpenSavePath", "")
-    return last if last and os.path.isdir(last) else os.path.expanduser("~")
+    ours = settings.load({EXPORT_FOLDER: ""})[EXPORT_FOLDER]
+    theirs = FreeCAD.ParamGet("User parameter:BaseApp/Preferences/General").GetString("FileOpenSavePath", "")
+    return next((folder for folder in (ours, theirs) if folder and os.path.isdir(folder)), os.path.expanduser("~"))
 
 
 def unused_path(stem, extension):
@@ -391,6 +395,7 @@ def choose_export_path(points):
     known = [e for _, extensions in filters for e in extensions]
     if os.path.splitext(path)[1].lower() not in known:
         path += next((extensions[0] for text, extensions in filters if text == chosen), filters[0][1][0])
+    settings.save({EXPORT_FOLDER: os.path.dirname(path)})
     return path
 
 

@@ -11,6 +11,7 @@ import FreeCADGui
 from ..access.probe import PROBES
 from ..fitting.deviation import mm_text
 from ..strategies import sampling
+from . import counted
 from .handover import handed
 
 
@@ -101,7 +102,7 @@ def echo_study(face, run, alive=True):
     """
     note = "ran in the task panel"
     if run.study.cancelled:
-        note += f", cancelled after {len(run.study.rows)} runs (a replay runs it whole)"
+        note += f", cancelled after {counted(len(run.study.rows), 'run')} (a replay runs it whole)"
     call = call_text(run.arguments)
     FreeCADGui.doCommand("import cmmsampling")
     if alive:
@@ -130,7 +131,7 @@ def add_plan(part, run, result, replace=None):
                                                for key, value in run.arguments.items()])
     note = "ran in the task panel"
     if result.cancelled:
-        note += f", cancelled after {len(result.placed)} faces (a replay runs it whole)"
+        note += f", cancelled after {counted(len(result.placed), 'face')} (a replay runs it whole)"
     FreeCADGui.doCommand("import cmmsampling")
     with handed("plan", run.shape, run.arguments, result):
         FreeCADGui.doCommand(f"plan = cmmsampling.plan({call})  # {note}")

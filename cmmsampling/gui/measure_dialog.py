@@ -50,12 +50,25 @@ class MeasureDialog(QtGui.QDialog):
         self.path = QtGui.QLineEdit(path, self)
         self.path.setObjectName("path")
         self.path.setToolTip("The measured contact points are written here (CSV), then inspected")
-        layout.addRow("Measured file", self.path)
+        browse = QtGui.QPushButton("Browse...", self)
+        browse.setObjectName("browse")
+        browse.setToolTip("Choose the folder and name of the measured file")
+        browse.clicked.connect(self.browse)
+        row = QtGui.QHBoxLayout()
+        row.addWidget(self.path)
+        row.addWidget(browse)
+        layout.addRow("Measured file", row)
         self.buttons = QtGui.QDialogButtonBox(QtGui.QDialogButtonBox.Ok | QtGui.QDialogButtonBox.Cancel, parent=self)
         self.buttons.accepted.connect(self.accept)
         self.buttons.rejected.connect(self.reject)
         layout.addRow(self.buttons)
         self.resize(520, self.sizeHint().height())
+
+    def browse(self):
+        """Choose the measured file to write (CSV); the extension is added where it is missing."""
+        path = QtGui.QFileDialog.getSaveFileName(self, "Measured points", self.path.text(), "CSV (*.csv)")[0]
+        if path:
+            self.path.setText(path if path.lower().endswith(".csv") else path + ".csv")
 
     def arguments(self):
         """{"server": 'host:port', "out": path, "tool": name or None}: keyword arguments of

@@ -25,6 +25,10 @@ APPROACH_FRACTION = 0.05
 DEFAULT_APPROACH_MM = 5.0
 # Tessellation tolerance of the coloured face, as a fraction of its diagonal.
 TESSELLATION_FRACTION = 2e-3
+# A tessellation point and its triangulation node are matched when they lie this share of the
+# face's diagonal apart at most: the points on the edges come from the edges' polygons, off the
+# surface by up to the edges' tolerance (on the Ventilator up to 4 um, 0.27 % of a 1 mm face).
+UV_MATCH_FRACTION = 1e-2
 # Labels closer than this fraction of the face's diagonal to a shown one are left out.
 LABEL_SPACING_FRACTION = 0.04
 # Labels of a part plan's points closer than this fraction of the part's diagonal to a label shown
@@ -273,6 +277,20 @@ class ViewProviderSubstituteSurface(Stateless):
         return icon("SubstituteSurface.svg")
 
 
+class ViewProviderPartPlan(Stateless):
+    """The view provider of a part plan's group: its icon, and a Python proxy, without which
+    FreeCAD 1.1 brings a Python group (and everything in it) back visible however it was saved."""
+
+    def __init__(self, vobj):
+        vobj.Proxy = self
+
+    def attach(self, vobj):
+        self.Object = vobj.Object
+
+    def getIcon(self):
+        return icon("PlanPart.svg")
+
+
 def in_front():
     """A polygon offset that draws the substitute over the CAD face it lies on (the two
     coincide to within the deviation), so the part can stay visible beside it."""
@@ -373,8 +391,22 @@ def face_tessellation(face):
     points, triangles = face.tessellate(TESSELLATION_FRACTION * face.BoundBox.DiagonalLength)
     if not triangles:
         return None
-    uv = np.array([face.Surface.parameter(p) for p in points], dtype=float)
-    return np.array([tuple(p) for p in points], dtype=float), polygon_index(np.array(triangles)), uv
+    points = np.array([tuple(p) for p in points], dtype=float)
+    return points, polygon_index(np.array(triangles)), tessellation_uv(face, points)
+
+
+def tessellation_uv(face, points):
+    """The parameters (M, 2) of a face's tessellation points (M, 3) mm: OCC's own, the
+    triangulation's nodes (Part.Face.getUVNodes), matched to the points by position; each point
+    projected on the surface (Surface.parameter, about 0.7 ms a point) where they do not match
+    one to one within UV_MATCH_FRACTION of the face's diagonal."""
+    nodes = np.array(face.getUVNodes() if hasattr(face, "getUVNodes") else [], dtype=float).reshape(-1, 2)
+    if len(nodes) == len(points):
+        at = np.array([tuple(face.valueAt(float(u), float(v))) for u, v in nodes], dtype=float)
+        distances, index = cKDTree(at).query(points)
+        if distances.max() <= UV_MATCH_FRACTION * face.BoundBox.DiagonalLength and len(np.unique(index)) == len(points):
+            return nodes[index]
+    return np.array([face.Surface.parameter(FreeCAD.Vector(*p)) for p in points], dtype=float)
 
 
 def face_mesh(tessellation, u, v, field, maximum):
@@ -454,13 +486,15 @@ def _attach_if_missing(obj):
         vobj = obj.ViewObject
     except ReferenceError:
         return
-    own = (ViewProviderProbePoints, ViewProviderSubstituteSurface)
+    own = (ViewProviderProbePoints, ViewProviderSubstituteSurface, ViewProviderPartPlan)
     if vobj is None or isinstance(getattr(vobj, "Proxy", None), own):
         return
     if is_probe_points(obj):
         provider = ViewProviderProbePoints(vobj)
     elif is_substitute_surface(obj):
         provider = ViewProviderSubstituteSurface(vobj)
+    elif is_part_plan(obj):
+        provider = ViewProviderPartPlan(vobj)
     else:
         return
     if not hasattr(provider, "Object"):

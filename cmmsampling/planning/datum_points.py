@@ -76,8 +76,7 @@ def plan_datums(named: list, probe: Probe | None = None, part: object = None,
             keep = reach(*reaching, points, normals).reachable
             uv, points, normals = uv[keep], points[keep], normals[keep]
         if len(points) < DATUM_MIN_POINTS:
-            raise InputError(f"datum {label} ({name}): the {'probe reaches' if probe else 'face offers'} only "
-                             f"{len(points)} points on it away from its edges; choose another face as datum {label}")
+            raise InputError(_too_few(label, name, len(points), probe is not None))
         pivot = points.mean(axis=0)
         held, free_after = split_motions(points, normals, free, pivot)
         motions = held.shape[1]
@@ -90,6 +89,19 @@ def plan_datums(named: list, probe: Probe | None = None, part: object = None,
         planned.append(DatumPoints(label, name, motions, uv[chosen], points[chosen], normals[chosen], found))
         free = free_after
     return planned
+
+
+def _too_few(label: str, name: str, count: int, probe: bool) -> str:
+    """Why datum ``label`` (face ``name``) cannot be planned: it offers ``count`` (fewer than
+    DATUM_MIN_POINTS) points away from its edges, or the probe (probe: one was given) reaches no
+    more of them; what to change, in the words of the panel and of the API."""
+    if probe and count == 0:
+        return (f"datum {label} ({name}): the probe reaches no point of it on the part (a face the part rests on, "
+                "or one its own material hides); measure the datums in a second set-up with the part turned, or "
+                f"choose a face the probe reaches as datum {label} (the Datums field; datums=)")
+    offers = "the probe reaches" if probe else "the face offers"
+    return (f"datum {label} ({name}): {offers} only {count} point{'s' * (count != 1)} on it away from its edges, "
+            f"{DATUM_MIN_POINTS} are needed; choose another face as datum {label} (the Datums field; datums=)")
 
 
 def _candidates(face, margin: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -254,6 +254,7 @@ class PartPlan:
     probe: object = None
     notes: list = field(default_factory=list)
     datums: list = field(default_factory=list)
+    _results: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     @property
     def placed(self) -> list[FacePlan]:
@@ -289,14 +290,29 @@ class PartPlan:
         """The SamplingResult of a face of the plan (computed again from its points: the fit,
         the deviation over the part of the face the probe reaches, as the plan judged it, and
         OCC's check), for the document; its settings are the face's run's (the edge offset and
-        spacing it used among them)."""
+        spacing it used among them). Computed once per face and kept (:meth:`prepare_results`)."""
+        if name in self._results:
+            return self._results[name]
         face = self.faces[[f.name for f in self.faces].index(name)]
         fit = {key: face.settings[key] for key in FIT_KEYS if key in face.settings}
         out_of_reach = None if face.access is None else face.access.out_of_reach
         result = evaluate(self.shapes[name], face.uv, strategy=face.strategy, out_of_reach=out_of_reach, **fit)
         result.access = face.access
         result.settings = {**result.settings, **face.settings}
+        self._results[name] = result
         return result
+
+    def prepare_results(self, progress: Callable | None = None) -> None:
+        """Compute the document's result of every toleranced face with points (:meth:`result`),
+        so that adding the plan to a document only writes them (the Plan part panel does this in
+        its worker thread: judging the faces took seconds in the GUI's). progress:
+        callable(done, total) after each face, returning True to stop (the rest are computed
+        when asked)."""
+        names = [face.name for face in self.toleranced]
+        for done, name in enumerate(names, start=1):
+            self.result(name)
+            if progress is not None and progress(done, len(names)):
+                return
 
     def point_set(self) -> PointSet:
         """The plan's points as one PointSet (cmmsampling.formats.pointset): labels '<face>_P<i>',

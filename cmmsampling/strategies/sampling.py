@@ -180,14 +180,19 @@ def _check_memory(settings: SampleSettings, strategy: str | None, options: dict)
     memory.check_fits(needed, settings.n, largest_n, what)
 
 
+UNREACHABLE_FACE = ("the probe reaches no point of this face on the part (a face the part rests on, or one its "
+                    "own material hides): to measure it choose a probe with a longer or thinner stylus or a head "
+                    "that tilts further (max_tilt), or measure it in a second set-up with the part turned; to plan "
+                    "it anyway, plan without the probe (Probe: none; part= left out)")
+
+
 def _check_room(problem: SamplingProblem) -> None:
     """ValueError when the face cannot hold N points with the edge offset and spacing asked for,
     or the probe reaches none of them."""
     domain = problem.domain
     if domain.empty and problem.reachability is not None and not face_domain(problem.model,
                                                                               domain.edge_offset).empty:
-        raise InputError("the probe reaches no point of this face on the part: choose a smaller stylus or a "
-                         "larger max_tilt, or leave part= out to sample without the probe's reach")
+        raise InputError(UNREACHABLE_FACE)
     if domain.empty:
         raise InputError(
             f"the face is too narrow for edge_offset {domain.edge_offset:g} mm: none of its points "

@@ -1,6 +1,7 @@
 """GUI tests run only inside the FreeCAD GUI (scripts/run-gui-tests.sh); a plain pytest skips
 collecting them. Fixtures: the workbench, documents with the reference face, the screenshot folder."""
 import os
+import re
 
 try:
     import FreeCAD
@@ -16,7 +17,7 @@ else:
     import cmmsampling
     from cmmsampling.document import settings
 
-    from .helpers import document_with, process_events
+    from .helpers import dock_text, document_with, process_events
 
     ARTIFACTS = os.environ.get(
         "CMMSAMPLING_ARTIFACTS",
@@ -46,3 +47,20 @@ else:
     def doc(workbench):
         """A new active document holding the reference face as Part::Feature 'Body'."""
         yield from document_with("GuiTest", {"Body": cmmsampling.reference_face()})
+
+    @pytest.fixture(autouse=True)
+    def no_qt_warnings():
+        """No test's work writes a Qt warning ('QPainter::begin: ...', 'QObject::...') to the
+        Report view, where FreeCAD routes Qt's messages; FreeCAD 1.x raises each one as a
+        notification too (1.1 users saw dozens a command, over the 3D view)."""
+        report = len(dock_text("Report view"))
+        yield
+        process_events(0.1)
+        written = qt_warnings(dock_text("Report view")[report:].splitlines())
+        assert not written, f"Qt warnings in the Report view: {written[:3]}"
+
+    QT_WARNING = re.compile(r"\bQ[A-Z]\w*::\w+|QPainter|QPixmap|QWidget::|QLayout|QObject::")
+
+    def qt_warnings(lines):
+        """The lines that hold a Qt warning."""
+        return [line for line in lines if QT_WARNING.search(line)]

@@ -52,7 +52,14 @@ def test_measure_on_cmm_measures_echoes_and_ends_in_the_inspection(points, tmp_p
             seen["title"] = dialog.windowTitle()
             dialog.host.setText("127.0.0.1")
             dialog.port.setValue(port)
-            dialog.path.setText(out)
+            browse = dialog.findChild(QtGui.QPushButton, "browse")
+
+            def pick(chooser):
+                chooser.findChild(QtGui.QLineEdit, "fileNameEdit").setText(out[:-len(".csv")])   # as typed
+                chooser.accept()
+
+            handle_dialog(QtGui.QFileDialog, browse.click, pick)
+            assert dialog.path.text() == out, "Browse... chose the file, its extension added"
             dialog.grab().save(os.path.join(artifacts, "measure_dialog.png"))
             dialog.accept()
 

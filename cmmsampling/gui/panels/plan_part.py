@@ -22,6 +22,7 @@ from ...fitting.deviation import DEFAULT_GRID
 from ...planning.part_plan import CANCELLED_REASON, PLAN_TIME_LIMIT_S, plan
 from ...planning.points_needed import DEFAULT_MAX_POINTS
 from ...strategies.sampling import BEST_STRATEGY, STRATEGIES, self_contained
+from .. import counted
 from ..background import BackgroundTask
 from ..echo import add_plan
 from ..view_providers import redraw_plan_points
@@ -131,9 +132,10 @@ class BackgroundPlan(BackgroundTask):
     The GUI thread polls ``done``/``total`` (faces), ``lines`` (one per face done, see
     FacePlan.line), ``tally`` (faces done, points so far, time left, renewed about every second),
     ``working`` (a line per face under way: the N its search runs and the best so far),
-    ``running``, then ``plan`` or ``error``/``details``; ``cancel()`` makes the progress callback
-    stop the plan within a second or two (the faces under way are stopped, the faces done
-    kept). The thread never touches the document.
+    ``running``, then ``plan`` (its faces' results for the document computed, here rather than in
+    the GUI thread) or ``error``/``details``; ``cancel()`` makes the progress callback stop the plan
+    within a second or two (the faces under way are stopped, the faces done kept). The thread
+    never touches the document.
     """
 
     def __init__(self, shape, arguments):
@@ -160,7 +162,16 @@ class BackgroundPlan(BackgroundTask):
         return self.cancelled
 
     def _work(self):
-        self.plan = plan(self.shape, progress=self._progress, **self.arguments)
+        made = plan(self.shape, progress=self._progress, **self.arguments)
+        self.working = []
+        made.prepare_results(self._preparing)
+        self.plan = made
+
+    def _preparing(self, done, total):
+        """The tally while the faces' results for the document are computed (here, not in the
+        GUI thread, which only writes them)."""
+        self.tally = f"Judging the faces for the document: {done} of {total}"
+        return False
 
 
 class PlanPartTaskPanel(BackgroundRunPanel):
@@ -318,14 +329,14 @@ class PlanPartTaskPanel(BackgroundRunPanel):
         arguments = plan_arguments(values, self.source[1])
         self.form.faceLines.clear()
         if self.resumable is None:
-            self.begin(BackgroundPlan(shape, arguments), faces, f"Planning {faces} faces on {values['processes']} "
-                                                                 "processes...")
+            self.begin(BackgroundPlan(shape, arguments), faces,
+                       f"Planning {counted(faces, 'face')} on {counted(values['processes'], 'process')}...")
             return
         cancelled = self.resumable[0]
         run = BackgroundPlan(shape, {**arguments, "resume": cancelled})
         run.lines = [face.line for face in cancelled.faces if face.reason != CANCELLED_REASON]
-        self.begin(run, faces, f"Resuming: planning the {faces - len(run.lines)} faces not run on "
-                               f"{values['processes']} processes...")
+        self.begin(run, faces, f"Resuming: planning the {counted(faces - len(run.lines), 'face')} not run on "
+                               f"{counted(values['processes'], 'process')}...")
 
     def show_progress(self, run):
         """A line per face done, then one per face under way (in grey: the N its search runs and
@@ -368,8 +379,8 @@ class PlanPartTaskPanel(BackgroundRunPanel):
                                                        else ": see the reasons above.") + " Nothing was added.",
                              error=not result.cancelled)
             return
-        self.show_status(("Stopped: adding" if result.cancelled else "Adding") + f" the {len(result.placed)} faces "
-                         f"done ({result.n_total} points) to the document...")
+        self.show_status(("Stopped: adding" if result.cancelled else "Adding") + f" the {counted(len(result.placed), 'face')} "
+                         f"done ({counted(result.n_total, 'point')}) to the document...")
         self.form.status.repaint()
         try:
             group = add_plan(self.source[0], run, result, self.cancelled_group())
@@ -383,8 +394,10 @@ class PlanPartTaskPanel(BackgroundRunPanel):
         self.resumable = (result, group)
         self.update_enabled()
         left = sum(1 for face in result.faces if face.reason == CANCELLED_REASON)
-        self.show_status(f"Cancelled: the {len(result.placed)} faces done were added ({result.n_total} points); "
-                         f"the plan's report names the faces not run. Resume plans those {left}.")
+        self.show_status(f"Cancelled: the {counted(len(result.placed), 'face')} done "
+                         f"{'was' if len(result.placed) == 1 else 'were'} added ({counted(result.n_total, 'point')}); "
+                         f"the plan's report names the faces not run. Resume plans "
+                         f"{'that one' if left == 1 else f'those {left}'}.")
 
     def cancelled_group(self):
         """The group of the cancelled plan being resumed while it is still in the document, else None."""
