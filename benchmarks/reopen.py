@@ -101,9 +101,11 @@ def main():
         script, out = os.path.join(folder, "reopen_gui.py"), os.path.join(folder, "figures.json")
         with open(script, "w") as handle:
             handle.write(GUI_SCRIPT)
-        env = dict(os.environ, CMM_ROOT=ROOT, CMM_OUT=out, HOME=folder)
-        subprocess.run(["xvfb-run", "-a", "-s", "-screen 0 1280x1024x24", "freecad", script], env=env,
-                       capture_output=True, timeout=900, check=False, cwd=folder)
+        env = dict(os.environ, CMM_ROOT=ROOT, CMM_OUT=out, HOME=folder, QTWEBENGINE_DISABLE_SANDBOX="1")
+        ran = subprocess.run(["xvfb-run", "-a", "-s", "-screen 0 1280x1024x24", "freecad", script], env=env,
+                             capture_output=True, text=True, timeout=900, check=False, cwd=folder)
+        if not os.path.isfile(out):
+            sys.exit(f"FreeCAD wrote no figures (exit {ran.returncode}):\n{ran.stdout[-2000:]}\n{ran.stderr[-2000:]}")
         with open(out) as handle:
             figures = json.load(handle)
     if "error" in figures:

@@ -55,10 +55,13 @@ run_one() {
     series-error) page series-error "Sampling aimed at a series' error: points a next part needs, with and without the model" \
                     "$PY" benchmarks/series_error.py ;;
     memory) page memory "Peak memory against sample()'s estimate" "$PY" benchmarks/memory.py --quick ;;
+    first-run-estimate) page first-run-estimate "The time estimate against a first run, in a fresh process" \
+                          "$PY" benchmarks/first_run_estimate.py ;;
+    reopen) page reopen "Reopening a document of results in the GUI: time and freeze" "$PY" benchmarks/reopen.py ;;
     *) echo "unknown benchmark '$1'; choose from: $ALL" >&2; return 2 ;;
   esac
 }
-ALL="inspection-speed inspection-speed-busy speed part-plan-speed part-plan-ventilator part-plan-ventilator-optimal speed-busy long-runs memory near-optimal probe-plans probe-plans-busy probe-path probe-orientations part-plan-points delivered-deviation paper-run-spread series-error"
+ALL="inspection-speed inspection-speed-busy speed part-plan-speed part-plan-ventilator part-plan-ventilator-optimal speed-busy long-runs memory near-optimal probe-plans probe-plans-busy probe-path probe-orientations part-plan-points delivered-deviation paper-run-spread series-error first-run-estimate reopen"
 status=0
 for name in ${@:-$ALL}; do
   echo "== $name"

@@ -13,9 +13,11 @@ from ..fitting.substitute import DEFAULT_DEGREE
 from ..geometry.freecad_env import import_part
 from ..geometry.validation import check_choice
 from ..runtime.threads import blas_threads
-from .registry import STRATEGIES, strategy_options
-from .sampling import DEFAULT_STRATEGY, baseline, make_problem, memory_bytes
+from .registry import STRATEGIES, StrategyOutcome, strategy_options
+from .result import EXACT_FIT
+from .sampling import DEFAULT_STRATEGY, _judge, baseline, make_problem, memory_bytes
 from .settings import Pair, SampleSettings
+from .space_choice import chosen_space
 
 if TYPE_CHECKING:   # FreeCAD ships no type stubs: to the type checker Part's classes are Any
     import Part
@@ -47,18 +49,23 @@ def memory_needed(n: int, strategy: str | None = DEFAULT_STRATEGY, *, fit_degree
 def time_needed(face: Part.Face, n: int = 81, strategy: str = DEFAULT_STRATEGY, *, fit_degree: Pair = DEFAULT_DEGREE,
                 fit_poles: Pair | None = None, grid: Pair = DEFAULT_GRID, edge_offset: float = 0.0,
                 min_spacing: float | None = None, workers: int | None = None, part: Part.Shape | None = None,
-                probe: Probe | None = None, **options: Any) -> float | None:
+                probe: Probe | None = None, occ_check: bool = True, **options: Any) -> float | None:
     """Estimated seconds of :func:`sample` with these arguments on this face, before the run.
 
     The problem is built (as sample() builds it, the probe's reach on ``part`` included: that
-    time counts) and the objective the
-    strategy iterates is timed on a few random swarms; its cost times the strategy's progress
-    steps (PSO: iterations over the processes that will share them, see
-    :func:`sharing_processes`) is added, and for an optimiser the exact judging of its result
-    (JUDGINGS exact deviations, one timed). None when the number of steps is not known in
-    advance (the optimal strategy without max_evaluations or time_limit: until it converges).
-    Raises what sample() would raise for these arguments. On a machine that gets busier during
-    the run it takes longer: the panels' progress gives the time left from the run's own pace.
+    time counts) and what follows the placing of the points is timed once on the baseline
+    layout: the choice of the substitute's space, the judging (the fit, the exact deviation,
+    OCC's cross-check where occ_check, the probe's pose at each point). For an optimiser the
+    objective it iterates is timed on a few random swarms; its cost times the strategy's
+    progress steps (PSO: iterations over the processes that will share them, see
+    :func:`sharing_processes`) is added, twice where sample() runs it in a coarser space too
+    (:func:`cmmsampling.strategies.space_choice.chosen_space` prefers one for the baseline
+    layout), with the exact judgings of its runs (JUDGINGS, one timed); nothing where the baseline
+    layout fits the face exactly (the optimiser is not run). None when the number of steps is
+    not known in advance (the optimal strategy without max_evaluations or time_limit: until it
+    converges). Raises what sample() would raise for these arguments. On a machine that gets
+    busier during the run it takes longer: the panels' progress gives the time left from the
+    run's own pace. benchmarks/first_run_estimate.py measures how it holds on a first run.
     """
     check_choice("strategy", strategy, list(STRATEGIES))
     entry = STRATEGIES[strategy]
@@ -67,12 +74,16 @@ def time_needed(face: Part.Face, n: int = 81, strategy: str = DEFAULT_STRATEGY, 
     problem = make_problem(face, n, fit_degree=fit_degree, fit_poles=fit_poles, grid=grid, workers=workers,
                            edge_offset=edge_offset, min_spacing=min_spacing, strategy=strategy,
                            options=options, part=part, probe=probe)
+    uv = _baseline_layout(problem)
+    spaces = 1 if problem.settings.poles_given or chosen_space(problem, problem, uv)[0] is problem else 2
+    with blas_threads(1):
+        _judge(problem, StrategyOutcome(uv), strategy, {}, 0.0, occ_check)
     built_s = time.perf_counter() - start
-    if not entry.optimiser:
+    if not entry.optimiser or problem.exact_maximum(uv) <= EXACT_FIT * problem.model.diagonal:
         return built_s
-    built_s += JUDGINGS * _judging_seconds(problem)
+    built_s += spaces * JUDGINGS * _judging_seconds(problem, uv)
     if options.get("time_limit") is not None:
-        return built_s + options["time_limit"]
+        return built_s + spaces * options["time_limit"]
     steps = entry.progress_steps(options)
     if steps is None:
         return None
@@ -85,7 +96,7 @@ def time_needed(face: Part.Face, n: int = 81, strategy: str = DEFAULT_STRATEGY, 
         for positions in swarm[1:]:
             _one_step(problem, positions)
     per_step = (time.perf_counter() - start) / (TIMED_SWARMS - 1) / sharing_processes(problem.workers)
-    return built_s + steps * per_step
+    return built_s + spaces * steps * per_step
 
 
 def sharing_processes(workers: int, load: float | None = None, cores: int | None = None) -> int:
@@ -98,11 +109,15 @@ def sharing_processes(workers: int, load: float | None = None, cores: int | None
     return workers if load + workers <= cores + 0.5 else 1
 
 
-def _judging_seconds(problem: SamplingProblem) -> float:
-    """Seconds of one exact deviation (the judging of a result) on this problem, timed on the
-    substitute of the baseline strategy's layout."""
+def _baseline_layout(problem: SamplingProblem) -> np.ndarray:
+    """The baseline strategy's layout on the problem: (N, 2) uv."""
     name = baseline()
-    uv = STRATEGIES[name].run(problem, None, **STRATEGIES[name].options).uv
+    return STRATEGIES[name].run(problem, None, **STRATEGIES[name].options).uv
+
+
+def _judging_seconds(problem: SamplingProblem, uv: np.ndarray) -> float:
+    """Seconds of one exact deviation (the judging of a result) on this problem, timed on the
+    substitute of the layout uv (N, 2)."""
     start = time.perf_counter()
     with blas_threads(1):
         problem.exact_maximum(uv)
