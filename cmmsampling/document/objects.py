@@ -64,6 +64,18 @@ def make_substitute_surface(doc):
     return obj
 
 
+def make_plan_group(doc):
+    """A part plan's group (App::DocumentObjectGroupPython with a PartPlanGroup), empty; in the
+    GUI with its view provider (cmmsampling.gui.view_providers.ViewProviderPartPlan)."""
+    group = doc.addObject("App::DocumentObjectGroupPython", "Plan")
+    PartPlanGroup(group)
+    if FreeCAD.GuiUp:
+        from ..gui import view_providers
+
+        view_providers.ViewProviderPartPlan(group.ViewObject)
+    return group
+
+
 # Colours of a probe path: the moves between points and the touches (approach and retract).
 PATH_COLOURS = {"moves": (0.15, 0.35, 0.85), "touches": (0.85, 0.15, 0.1)}
 

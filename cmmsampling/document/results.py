@@ -17,7 +17,7 @@ from ..access.probe_moves import probe_moves
 from ..strategies.result import SamplingResult
 from ..strategies.sampling import evaluate
 from .object_types import in_document, source_face
-from .objects import (POINT_TOLERANCE_MM, SUMMARY_FIGURES, PartPlanGroup, ProbePoints, make_probe_path,
+from .objects import (POINT_TOLERANCE_MM, SUMMARY_FIGURES, ProbePoints, make_plan_group, make_probe_path,
                       make_probe_points, make_substitute_surface, passes_through)
 from .sheets import write_deviation_report, write_plan_report
 from .transaction import hide_results, recompute, transaction
@@ -101,12 +101,7 @@ def add_plan_to_document(plan: PartPlan, doc: FreeCAD.Document, part: FreeCAD.Do
     with transaction(doc, "Add part plan"):
         for obj in replaced:
             doc.removeObject(obj.Name)
-        group = doc.addObject("App::DocumentObjectGroupPython", "Plan")
-        PartPlanGroup(group)
-        if FreeCAD.GuiUp:
-            from ..gui import view_providers
-
-            view_providers.ViewProviderPartPlan(group.ViewObject)
+        group = make_plan_group(doc)
         group.Datums = list(plan.datums)
         group.Tolerance = plan.tolerance or 0.0
         if hide_others:
