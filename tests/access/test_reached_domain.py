@@ -102,6 +102,8 @@ def test_a_search_stops_climbing_where_more_points_keep_giving_larger_maxima():
     assert all(maxima[k] <= RISE_FACTOR * min(maxima[:k]) for k in range(1, len(maxima) - 2)), maxima
     best = int(np.argmin(maxima))
     assert maxima[best] < maxima[0], "more points than the fewest gave a better substitute"
+    assert needed.result.deviation.maximum == maxima[best] and needed.n == tried[best], \
+        "the search delivers its best N: never a larger maximum than a smaller N reached"
     assert needed.reason.startswith(f"no N meets 0.05 mm (the search stopped at N = {tried[-1]}: two larger N in a "
                                     f"row gave larger maxima): the best reached is {maxima[best]:.4g} mm with "
                                     f"{tried[best]} points")
