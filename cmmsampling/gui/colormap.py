@@ -154,11 +154,13 @@ def text_width(text):
 
 
 def view_width():
-    """The active 3D view's width in pixels (DEFAULT_VIEW_PX without one)."""
+    """The width in pixels of FreeCAD's central area, where its 3D views are (DEFAULT_VIEW_PX
+    without one). The area lives as long as the main window: a Python wrapper of a view, which
+    closes with its document, could be handed out again by PySide for another widget made at the
+    same address (see cmmsampling.gui.qt_compat.forget_when_destroyed)."""
     window = FreeCADGui.getMainWindow()
     area = window.findChild(QtGui.QMdiArea) if window is not None else None
-    active = area.activeSubWindow() if area is not None else None
-    width = active.widget().width() if active is not None and active.widget() is not None else 0
+    width = area.width() if area is not None else 0
     return width if width > 0 else DEFAULT_VIEW_PX
 
 
