@@ -372,7 +372,7 @@ class PlanPartTaskPanel(BackgroundRunPanel):
         cancelled."""
         result = run.plan
         FreeCAD.Console.PrintMessage(f"cmmsampling: plan of {self.form.partLabel.text()}, {result.strategy}: "
-                                     f"{result.n_total} points on {len(result.placed)} faces in "
+                                     f"{counted(result.n_total, 'point')} on {counted(len(result.placed), 'face')} in "
                                      f"{result.seconds:.0f} s\n{result.table()}\n")
         if not result.placed:
             self.show_status("No face holds points" + (" yet: the plan was cancelled." if result.cancelled
