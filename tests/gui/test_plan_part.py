@@ -74,10 +74,11 @@ def fill(form, strategy, **values):
 
 def hold_plan_at(monkeypatch, faces_done):
     """Hold the plan's worker thread when ``faces_done`` faces have ended, before it reads
-    whether Cancel was pressed; keeps every plan made in the panel (``hold.plans``)."""
+    whether Cancel was pressed; keeps every plan made in the panel (``hold.plans``) and when each
+    plan() call returned (``hold.ended``: the worker judges the faces for the document after it)."""
     hold = Hold(limit_s=60)
     hold.plans, hold.ended = [], []
-    work, progress = plan_part.BackgroundPlan._work, plan_part.BackgroundPlan._progress
+    work, progress, planned = plan_part.BackgroundPlan._work, plan_part.BackgroundPlan._progress, plan_part.plan
 
     def held(self, done, total, message):
         progress(self, done, total, message)
@@ -85,12 +86,17 @@ def hold_plan_at(monkeypatch, faces_done):
             hold()
         return self.cancelled
 
+    def timed(*args, **kwargs):
+        made = planned(*args, **kwargs)
+        hold.ended.append(time.perf_counter())
+        return made
+
     def kept(self):
         work(self)
         hold.plans.append(self.plan)
-        hold.ended.append(time.perf_counter())
 
     monkeypatch.setattr(plan_part.BackgroundPlan, "_progress", held)
+    monkeypatch.setattr(plan_part, "plan", timed)
     monkeypatch.setattr(plan_part.BackgroundPlan, "_work", kept)
     return hold
 
