@@ -18,7 +18,6 @@ def resource(name):
     return os.path.join(ADDON_DIR, "resources", name)
 
 
-
 def counted(count, noun):
     """'1 face', '3 faces', '2 processes': a count and its noun (English plural: + 'es' after s,
     x, ch or sh, else + 's')."""

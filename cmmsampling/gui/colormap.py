@@ -87,7 +87,8 @@ def legend(maximum, title="Deviation", right=False):
     heights = np.linspace(*LEGEND_Y, LEGEND_TICKS)
     texts = [(text, (LEGEND_X[1] + 0.01, float(y) - 0.015)) for text, y in zip(tick_labels(maximum), heights)]
     texts.append((title, (LEGEND_X[0], LEGEND_Y[1] + 0.05)))
-    return overlay(_placed([_bar(maximum), *_written(texts)], right))
+    written, far = _written(texts)
+    return overlay(_placed([_bar(maximum), *written], far, right))
 
 
 def band_legend(rows, title, right=False):
@@ -104,7 +105,8 @@ def band_legend(rows, title, right=False):
         children.append(_rectangle((x0, y), (x1, y + SWATCH_HEIGHT), rgb, 0.0))
         texts.append((text, (x1 + 0.01, y + 0.005)))
     texts += [(line, (x0, top + 0.05 + TITLE_LINE * (len(lines) - 1 - row))) for row, line in enumerate(lines)]
-    return overlay(_placed(children + _written(texts), right))
+    written, far = _written(texts)
+    return overlay(_placed(children + written, far, right))
 
 
 def key(rgb, text, row=0):
@@ -113,36 +115,30 @@ def key(rgb, text, row=0):
     y = KEY_Y - row * KEY_HEIGHT
     x0, x1 = LEGEND_X
     swatch = _rectangle((x0, y), (x1, y + SWATCH_HEIGHT), rgb, 0.0)
-    return overlay([swatch, *_written([(text, (x1 + 0.01, y + 0.005))])])
+    return overlay([swatch, *_written([(text, (x1 + 0.01, y + 0.005))])[0]])
 
 
 def _written(texts):
     """Texts [(text, (x, y))] at their places (view units), each on a light box (the backdrop)
-    that keeps it readable over the part and covers no more of it than the text."""
-    boxes = [_backdrop((x - TEXT_MARGIN, y - TEXT_BELOW), (x + text_width(text) + TEXT_MARGIN, y + TEXT_ABOVE))
-             for text, (x, y) in texts]
+    that keeps it readable over the part and covers no more of it than the text: (the nodes,
+    the x where the farthest box ends)."""
+    ends = [x + text_width(text) + TEXT_MARGIN for text, (x, _) in texts]
+    boxes = [_backdrop((x - TEXT_MARGIN, y - TEXT_BELOW), (end, y + TEXT_ABOVE))
+             for (_, (x, y)), end in zip(texts, ends)]
     labels = text_node(TEXT_COLOUR, FONT_SIZE)
     for text, (x, y) in texts:
         labels.addChild(text_at(text, (x, y, 0.0)))
-    return [*boxes, labels]
+    return [*boxes, labels], max(ends)
 
 
-def _placed(children, right):
-    """A legend's children (drawn from the left edge), moved so that their widest text box ends
+def _placed(children, far, right):
+    """A legend's children (drawn from the left edge, reaching x = far), moved so that they end
     at the view's right edge (RIGHT_EDGE) when ``right``."""
     if not right:
         return children
-    far = max(_far_x(child) for child in children)
     move = coin.SoTranslation()
     move.translation = (RIGHT_EDGE - far, 0.0, 0.0)
     return [move, *children]
-
-
-def _far_x(node):
-    """The largest x (view units) of a rectangle of :func:`_rectangle`, -inf for another node."""
-    if node.getNumChildren() < 2 or not isinstance(node.getChild(1), coin.SoCoordinate3):
-        return -np.inf
-    return max(point[0] for point in node.getChild(1).point.getValues())
 
 
 def text_width(text):

@@ -18,7 +18,7 @@ from ..inspection.align import ALIGNMENTS, DEGREES_OF_FREEDOM
 from ..inspection.judge import InspectionCancelled, inspect, stated, verdict_words
 from . import icon
 from .background import BackgroundTask, behind_progress
-from .qt_compat import asked
+from .qt_compat import asked, browse_row
 
 ALIGNMENT_TEXTS = {
     "min_max": ("Minimum zone (min-max, ISO 1101)", "The rigid motion that makes the largest |deviation| "
@@ -59,13 +59,7 @@ class InspectDialog(QtGui.QDialog):
         self.path.setToolTip("The CMM's measured points: DMIS output (FA(label) actuals), the CSV or XYZIJK this "
                              "workbench writes, or labelled x, y, z text (comma, semicolon or spaces). They pair "
                              "with the planned points by label.")
-        browse = QtGui.QPushButton("Browse...", self)
-        browse.setObjectName("browse")
-        browse.clicked.connect(self.browse)
-        row = QtGui.QHBoxLayout()
-        row.addWidget(self.path)
-        row.addWidget(browse)
-        layout.addRow("Measured file", row)
+        layout.addRow("Measured file", browse_row(self, self.path))
         self.alignment = QtGui.QComboBox(self)
         self.alignment.setObjectName("alignment")
         for name in ALIGNMENTS:

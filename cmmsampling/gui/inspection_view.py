@@ -13,7 +13,7 @@ from ..document.object_types import is_measured_points
 from ..fitting.deviation import mm_text
 from ..inspection.judge import band_limits
 from . import colormap, icon
-from .view_providers import LABEL_COLOUR, Annotated, point_labels
+from .view_providers import LABEL_COLOUR, Annotated, hide_other_legends, point_labels
 
 # Band colours, -2 .. 2: out below, near below, in, near above, out above.
 BAND_COLOURS = ((0.0, 0.2, 1.0), (0.0, 0.8, 1.0), (0.0, 0.75, 0.0), (1.0, 0.7, 0.0), (1.0, 0.0, 0.0))
@@ -35,7 +35,7 @@ class ViewProviderMeasuredPoints(Annotated):
         vobj.ShowLegend = True
         vobj.PointSize = 4
         vobj.Proxy = self
-        hide_other_legends(vobj.Object)
+        hide_other_legends(vobj.Object, is_measured_points)
 
     def updateData(self, obj, prop):
         if prop in ("Points", "Bands", "Deviation", "Tolerance", "ZoneOffset", "Profile", "Verdict", "Uncertainty",
@@ -48,7 +48,7 @@ class ViewProviderMeasuredPoints(Annotated):
             self.follow_visibility(vobj)
         elif prop in ("ShowLabels", "ShowLegend"):
             if prop == "ShowLegend" and vobj.ShowLegend and not vobj.Object.Document.Restoring:
-                hide_other_legends(vobj.Object)
+                hide_other_legends(vobj.Object, is_measured_points)
             self.redraw(vobj)
 
     def redraw(self, vobj):
@@ -100,14 +100,6 @@ def band_rows(tolerance, offset=0.0):
     texts = (f"out below: < {low} mm", f"near: {low} .. {near_low} mm", f"in: {near_low} .. {near_high} mm",
              f"near: {near_high} .. {high} mm", f"out above: > {high} mm")
     return list(zip(BAND_COLOURS, texts))[::-1]
-
-
-def hide_other_legends(obj):
-    """Switch off ShowLegend on every other inspection's measured points in obj's document."""
-    for other in obj.Document.Objects:
-        view = other.ViewObject if other is not obj and is_measured_points(other) else None
-        if view is not None and getattr(view, "ShowLegend", False):
-            view.ShowLegend = False
 
 
 def dots(points, rgb):

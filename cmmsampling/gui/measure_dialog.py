@@ -16,7 +16,7 @@ from ..document import settings
 from ..formats.exporting import along_moves, as_point_set
 from . import icon
 from .background import BackgroundTask, behind_progress
-from .qt_compat import asked
+from .qt_compat import asked, browse_row
 
 DEFAULTS = {"MeasureHost": "127.0.0.1", "MeasurePort": DEFAULT_PORT, "MeasureTool": ""}
 
@@ -50,14 +50,7 @@ class MeasureDialog(QtGui.QDialog):
         self.path = QtGui.QLineEdit(path, self)
         self.path.setObjectName("path")
         self.path.setToolTip("The measured contact points are written here (CSV), then inspected")
-        browse = QtGui.QPushButton("Browse...", self)
-        browse.setObjectName("browse")
-        browse.setToolTip("Choose the folder and name of the measured file")
-        browse.clicked.connect(self.browse)
-        row = QtGui.QHBoxLayout()
-        row.addWidget(self.path)
-        row.addWidget(browse)
-        layout.addRow("Measured file", row)
+        layout.addRow("Measured file", browse_row(self, self.path, "Choose the folder and name of the measured file"))
         self.buttons = QtGui.QDialogButtonBox(QtGui.QDialogButtonBox.Ok | QtGui.QDialogButtonBox.Cancel, parent=self)
         self.buttons.accepted.connect(self.accept)
         self.buttons.rejected.connect(self.reject)

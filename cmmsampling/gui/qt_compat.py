@@ -1,5 +1,6 @@
 """What differs between the Qt bindings of the FreeCAD versions the workbench runs on, and a
-guard against PySide handing out the wrapper of a deleted widget.
+guard against PySide handing out the wrapper of a deleted widget; and what the dialogs share (asked,
+browse_row).
 
 FreeCAD 0.20 and 1.0 use PySide2, FreeCAD 1.1 PySide6 (both through FreeCAD's ``PySide``
 module). PySide6 turns Qt's enums and flags into Python enums, which ``int()`` refuses, and
@@ -36,6 +37,20 @@ def asked(dialog, answer):
         return answer(dialog)
     finally:
         dialog.deleteLater()
+
+
+def browse_row(dialog, field, tip=""):
+    """A row of a dialog's form: the path ``field`` (a QLineEdit) and a *Browse...* button (object
+    name "browse", tooltip ``tip``) that calls ``dialog.browse()``. Returns the row's layout."""
+    browse = QtGui.QPushButton("Browse...", dialog)
+    browse.setObjectName("browse")
+    if tip:
+        browse.setToolTip(tip)
+    browse.clicked.connect(dialog.browse)
+    row = QtGui.QHBoxLayout()
+    row.addWidget(field)
+    row.addWidget(browse)
+    return row
 
 
 def shiboken():

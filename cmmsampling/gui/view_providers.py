@@ -228,8 +228,8 @@ class ViewProviderSubstituteSurface(Stateless):
             return
         u, v, field = obj.Proxy.deviation_grid(obj)
         sharing = scale_sharers(obj)
-        largest = max([float(np.nanmax(field))] + [float(getattr(other, "MaxDeviation", 0.0)) for other in sharing])
-        maximum = self.maximum = colormap.shown_maximum(largest)
+        worst = max(float(getattr(other, "MaxDeviation", 0.0)) for other in sharing)
+        maximum = self.maximum = colormap.shown_maximum(max(float(np.nanmax(field)), worst))
         redraw_others(obj, sharing, maximum)
         self.coloured.addChild(in_front())
         face = source_of(obj)
@@ -242,7 +242,6 @@ class ViewProviderSubstituteSurface(Stateless):
         if getattr(vobj, "ShowLegend", True):
             self.coloured.addChild(colormap.legend(maximum, legend_title(obj)))
         if getattr(obj, "MaxLocation", None) is not None and obj.MaxDeviation.Value >= NUMERICAL_ZERO_MM:
-            worst = max(float(getattr(other, "MaxDeviation", 0.0)) for other in sharing)
             self.coloured.addChild(maximum_mark(obj.MaxLocation, obj.MaxDeviation.Value,
                                                 labelled=obj.MaxDeviation.Value >= worst))
 
@@ -463,10 +462,11 @@ def legend_title(surface):
     return f"Deviation, {surface.Label}"
 
 
-def hide_other_legends(obj):
-    """Switch off ShowLegend on every other substitute surface in obj's document."""
+def hide_other_legends(obj, same_kind=is_substitute_surface):
+    """Switch off ShowLegend on every other object of obj's kind (``same_kind(object)``: a
+    substitute surface, or an inspection's measured points) in obj's document."""
     for other in obj.Document.Objects:
-        if other is obj or not is_substitute_surface(other):
+        if other is obj or not same_kind(other):
             continue
         view = other.ViewObject
         if view is not None and getattr(view, "ShowLegend", False):

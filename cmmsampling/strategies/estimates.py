@@ -14,8 +14,7 @@ from ..geometry.freecad_env import import_part
 from ..geometry.validation import check_choice
 from ..runtime.threads import blas_threads
 from .registry import STRATEGIES, StrategyOutcome, strategy_options
-from .result import EXACT_FIT
-from .sampling import DEFAULT_STRATEGY, _judge, baseline, make_problem, memory_bytes
+from .sampling import DEFAULT_STRATEGY, _baseline_uv, _exact_outcome, _judge, make_problem, memory_bytes
 from .settings import Pair, SampleSettings
 from .space_choice import chosen_space
 
@@ -74,12 +73,12 @@ def time_needed(face: Part.Face, n: int = 81, strategy: str = DEFAULT_STRATEGY, 
     problem = make_problem(face, n, fit_degree=fit_degree, fit_poles=fit_poles, grid=grid, workers=workers,
                            edge_offset=edge_offset, min_spacing=min_spacing, strategy=strategy,
                            options=options, part=part, probe=probe)
-    uv = _baseline_layout(problem)
+    uv = _baseline_uv(problem)
     spaces = 1 if problem.settings.poles_given or chosen_space(problem, problem, uv)[0] is problem else 2
     with blas_threads(1):
         _judge(problem, StrategyOutcome(uv), strategy, {}, 0.0, occ_check)
     built_s = time.perf_counter() - start
-    if not entry.optimiser or problem.exact_maximum(uv) <= EXACT_FIT * problem.model.diagonal:
+    if not entry.optimiser or _exact_outcome(problem, strategy, uv) is not None:
         return built_s
     built_s += spaces * JUDGINGS * _judging_seconds(problem, uv)
     if options.get("time_limit") is not None:
@@ -107,12 +106,6 @@ def sharing_processes(workers: int, load: float | None = None, cores: int | None
     load = os.getloadavg()[0] if load is None else load
     cores = (os.cpu_count() or 1) if cores is None else cores
     return workers if load + workers <= cores + 0.5 else 1
-
-
-def _baseline_layout(problem: SamplingProblem) -> np.ndarray:
-    """The baseline strategy's layout on the problem: (N, 2) uv."""
-    name = baseline()
-    return STRATEGIES[name].run(problem, None, **STRATEGIES[name].options).uv
 
 
 def _judging_seconds(problem: SamplingProblem, uv: np.ndarray) -> float:
