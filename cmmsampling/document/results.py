@@ -121,7 +121,7 @@ def add_plan_to_document(plan: PartPlan, doc: FreeCAD.Document, part: FreeCAD.Do
         sheet.Label = "Plan report"
         group.addObject(sheet)
         moves = None
-        if plan.probe is not None and plan.placed and not any(face.unreached for face in plan.placed):
+        if plan.has_path:
             moves = probe_moves(plan)
             paths = make_probe_path(doc, moves)
             group.addObjects(paths)

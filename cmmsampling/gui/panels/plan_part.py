@@ -148,6 +148,7 @@ class BackgroundPlan(BackgroundTask):
         self.tally = ""
         self.working = []
         self.plan = None
+        self.preparing = None
 
     def cancel(self):
         """Ask the plan to stop (at its next progress report, within about a second)."""
@@ -164,13 +165,14 @@ class BackgroundPlan(BackgroundTask):
     def _work(self):
         made = plan(self.shape, progress=self._progress, **self.arguments)
         self.working = []
+        self.preparing = made
         made.prepare_results(self._preparing)
         self.plan = made
 
     def _preparing(self, done, total):
-        """The tally while the faces' results for the document are computed (here, not in the
-        GUI thread, which only writes them)."""
-        self.tally = f"Judging the faces for the document: {done} of {total}"
+        """The tally while the faces' results and the probe's path for the document are computed
+        (here, not in the GUI thread, which only writes them)."""
+        self.tally = f"Preparing the document (the faces' results, the probe's path): {done} of {total}"
         return False
 
 
@@ -341,10 +343,14 @@ class PlanPartTaskPanel(BackgroundRunPanel):
     def show_progress(self, run):
         """A line per face done, then one per face under way (in grey: the N its search runs and
         the best so far), the count of faces done, and the plan's tally in the status line (faces
-        done, points so far, time left) until Cancel is pressed."""
+        done, points so far, time left) until Cancel is pressed; once the cancelled plan has
+        stopped, that it prepares the faces done for the document."""
         self.show_lines(run.lines, [] if run.cancelled else run.working)
         if run.tally and not run.cancelled:
             self.show_status(run.tally)
+        elif run.cancelled and run.preparing is not None and not self.form.status.text().startswith("Stopped"):
+            self.show_status(f"Stopped: preparing the {counted(len(run.preparing.placed), 'face')} done for the "
+                             "document (their results, the probe's path)...")
         if run.total:
             self.form.progress.setRange(0, run.total)
             self.form.progress.setValue(run.done)
