@@ -12,8 +12,8 @@ from PySide import QtCore
 from ..document.object_types import is_measured_points
 from ..fitting.deviation import mm_text
 from ..inspection.judge import band_limits
-from . import colormap, icon
-from .view_providers import LABEL_COLOUR, Annotated, hide_other_legends, point_labels
+from . import colormap, icon, labels
+from .view_providers import LABEL_COLOUR, Annotated, hide_other_legends
 
 # Band colours, -2 .. 2: out below, near below, in, near above, out above.
 BAND_COLOURS = ((0.0, 0.2, 1.0), (0.0, 0.8, 1.0), (0.0, 0.75, 0.0), (1.0, 0.7, 0.0), (1.0, 0.0, 0.0))
@@ -74,7 +74,7 @@ class ViewProviderMeasuredPoints(Annotated):
             self.annotation.addChild(legend)
         self.annotation.addChild(dots(points, rgb))
         if vobj.ShowLabels:
-            self.annotation.addChild(point_labels(list(obj.Labels), points, 12))
+            self.annotation.addChild(labels.decluttered(list(obj.Labels), points, 12, LABEL_COLOUR)[0])
 
     def getIcon(self):
         return icon("Inspect.svg")

@@ -15,8 +15,7 @@ from ..fitting.deviation import NUMERICAL_ZERO_MM, mm_text
 from ..geometry.domain import inside_loops
 from ..geometry.surface import SurfaceModel
 from ..document.object_types import is_part_plan, is_probe_points, is_substitute_surface, plan_probe_points, source_face
-from ..strategies.blind import spaced
-from . import colormap, icon
+from . import colormap, icon, labels
 
 LABEL_COLOUR = (0.0, 0.0, 0.0)
 APPROACH_COLOUR = (0.75, 0.05, 0.05)
@@ -29,11 +28,6 @@ TESSELLATION_FRACTION = 2e-3
 # face's diagonal apart at most: the points on the edges come from the edges' polygons, off the
 # surface by up to the edges' tolerance (on the Ventilator up to 4 um, 0.27 % of a 1 mm face).
 UV_MATCH_FRACTION = 1e-2
-# Labels closer than this fraction of the face's diagonal to a shown one are left out.
-LABEL_SPACING_FRACTION = 0.04
-# Labels of a part plan's points closer than this fraction of the part's diagonal to a label shown
-# for any face of the plan are left out (about a label's width when the view fits the part).
-PLAN_LABEL_FRACTION = 0.08
 POINT_VIEW_PROPERTIES = ("ShowLabels", "ShowApproach", "ApproachLength", "LabelSize")
 # The shade over the regions a probe cannot reach: colour, transparency, and the quads across the
 # face's parameter range that follow its curvature.
@@ -87,8 +81,9 @@ class Annotated(Stateless):
 class ViewProviderProbePoints(Annotated):
     """Draws the probe points as vertices (the Part view), each with its approach vector (a line
     along the outward normal, ``ApproachLength`` mm long) and labels P1..PN. Labels are drawn
-    over the surface (never hidden behind it) and thinned so that they do not collide: a label
-    closer than ``LabelSpacing`` mm to a shown one is left out (0 shows all); hovering a point
+    over the surface (never hidden behind it) and thinned so that they keep apart on screen at any
+    zoom (:mod:`cmmsampling.gui.labels`; ``LabelSpacing`` mm: none closer however far the view
+    zooms in, 0: all of them once it zooms in far enough); hovering a point
     names it in the status bar. Points sampled with the part shade the regions of the face the
     probe cannot reach in grey (``ShowUnreached``)."""
 
@@ -100,7 +95,8 @@ class ViewProviderProbePoints(Annotated):
                          "Length of the drawn approach vectors (mm)")
         vobj.addProperty("App::PropertyInteger", "LabelSize", "Probe points", "Label font size (pixels)")
         vobj.addProperty("App::PropertyLength", "LabelSpacing", "Probe points",
-                         "Labels closer than this (mm) to a shown label are left out; 0 shows all")
+                         "No labels closer than this (mm), however far the view zooms in; 0: all of them, zoomed in "
+                         "far enough (fewer are drawn as the view zooms out, so that they keep apart)")
         vobj.addProperty("App::PropertyBool", "ShowUnreached", "Probe points",
                          "Shade the regions of the face the probe cannot reach (points sampled with the part)")
         vobj.ShowUnreached = True
@@ -108,7 +104,7 @@ class ViewProviderProbePoints(Annotated):
         vobj.ShowApproach = True
         vobj.ApproachLength = approach_length(vobj.Object)
         vobj.LabelSize = 13
-        vobj.LabelSpacing = LABEL_SPACING_FRACTION / APPROACH_FRACTION * vobj.ApproachLength.Value
+        vobj.LabelSpacing = 0.0
         vobj.PointSize = 6
         vobj.PointColor = POINT_COLOUR
         vobj.Proxy = self
@@ -140,16 +136,37 @@ class ViewProviderProbePoints(Annotated):
         if vobj.ShowApproach:
             self.annotation.addChild(approach_lines(points, tips))
         if vobj.ShowLabels:
-            shown = shown_labels(obj, tips, label_spacing(vobj))
-            self.shown_labels, self.shown_tips = shown, tips[shown]
-            labels = [obj.Labels[i] for i in shown]
-            self.annotation.addChild(point_labels(labels, tips[shown], vobj.LabelSize))
+            self.annotation.addChild(self.label_levels(vobj, tips))
         rectangles = np.reshape(getattr(obj, "Unreached", []), (-1, 4))
         if getattr(vobj, "ShowUnreached", True) and len(rectangles):
             face = source_face(obj)[0]
             if face is not None:
                 self.annotation.addChild(unreached_shade(face, rectangles))
                 self.annotation.addChild(unreached_key(obj))
+
+    def label_levels(self, vobj, tips):
+        """The labels at tips (N, 3) mm as levels that keep apart on screen at any zoom
+        (:mod:`cmmsampling.gui.labels`): over the part's box for a plan's points (all its
+        faces then pick the same level, and keep apart from the labels the plan's other faces
+        draw at it), else of the points; away from the max label drawn near them. Keeps the
+        ladder of spacings (mm, finest first) and each level's indices (``levels``)."""
+        obj = vobj.Object
+        plan = plan_holding(obj)
+        corners = part_box(obj) if plan is not None else None
+        box = labels.points_box(tips if corners is None else corners)
+        ladder = labels.spacings(float(np.linalg.norm(box[1] - box[0])), label_spacing(vobj))
+        taken = None
+        if plan is not None:
+            others = [getattr(other.ViewObject.Proxy, "level_tips", None) for other in plan_probe_points(plan)
+                      if other is not obj and other.ViewObject is not None
+                      and getattr(other.ViewObject.Proxy, "ladder", None) == ladder]
+            others = [levels for levels in others if levels]
+            taken = [np.concatenate([levels[k] for levels in others]) for k in range(len(ladder))] if others else None
+        node, self.ladder, self.levels = labels.decluttered(list(obj.Labels), tips, vobj.LabelSize, LABEL_COLOUR,
+                                                            label_spacing(vobj), box, taken,
+                                                            labelled_maximum(obj, plan))
+        self.level_tips = [tips[shown] for shown in self.levels]
+        return node
 
     def doubleClicked(self, vobj):
         """Open Sample face again on the points' face with the values of their run."""
@@ -531,49 +548,43 @@ def approach_lines(points, tips):
 
 def redraw_plan_points(group):
     """Draw the labels and approach lines of a part plan's probe points again, now that they are
-    in its group (their labels are then spaced over the whole part: :func:`shown_labels`)."""
+    in its group (their labels then keep apart over the whole part: :meth:`ViewProviderProbePoints.label_levels`)."""
     for points in plan_probe_points(group):
         view = points.ViewObject
         if view is not None and hasattr(view.Proxy, "redraw"):
             view.Proxy.redraw(view)
 
 
-def shown_labels(points, tips, spacing):
-    """Indices of the labels of probe points ``points`` drawn at ``tips`` (N, 3) mm: a greedy
-    subset at least ``spacing`` mm apart (0: all). Points of a part plan, whose faces' labels
-    crowd the view of the whole part, keep at least PLAN_LABEL_FRACTION of the part's diagonal
-    apart, also from the labels drawn for the plan's other faces."""
-    plan = next((parent for parent in points.InListRecursive if is_part_plan(parent)), None)
-    if plan is None or spacing <= 0:
-        return spaced(tips, spacing)
-    part = points.Source[0] if points.Source is not None else None
-    if part is not None and hasattr(part, "Shape") and part.Shape.BoundBox.isValid():
-        spacing = max(spacing, PLAN_LABEL_FRACTION * part.Shape.BoundBox.DiagonalLength)
-    drawn = [getattr(other.ViewObject.Proxy, "shown_tips", None) for other in plan_probe_points(plan)
-             if other is not points and other.ViewObject is not None]
-    drawn = [tips_ for tips_ in drawn if tips_ is not None and len(tips_)]
-    free = np.arange(len(tips))
-    if drawn:
-        gaps = cKDTree(np.concatenate(drawn)).query(tips, distance_upper_bound=spacing)[0]
-        free = np.flatnonzero(gaps >= spacing)
-    return free[spaced(tips[free], spacing)]
+def plan_holding(points):
+    """The part plan's group that holds these probe points, or None."""
+    return next((parent for parent in points.InListRecursive if is_part_plan(parent)), None)
+
+
+def part_box(points):
+    """The box (2, 3) mm of the part the probe points were sampled on, None where it is gone."""
+    part = None if points.Source is None else points.Source[0]
+    if part is None or not hasattr(part, "Shape") or not part.Shape.BoundBox.isValid():
+        return None
+    bound = part.Shape.BoundBox
+    return np.array([[bound.XMin, bound.YMin, bound.ZMin], [bound.XMax, bound.YMax, bound.ZMax]])
+
+
+def labelled_maximum(points, plan):
+    """(K, 3) mm: where the max label drawn near these probe points lies (their substitute's,
+    or their plan's worst face's, which alone is labelled), none (0, 3) when not drawn."""
+    surfaces = [other.Substitute for other in plan_probe_points(plan)] if plan is not None else [points.Substitute]
+    surfaces = [s for s in surfaces if s is not None and getattr(s, "MaxLocation", None) is not None
+                and s.ViewObject is not None and s.ViewObject.Visibility]
+    if not surfaces:
+        return np.empty((0, 3))
+    worst = max(surfaces, key=lambda surface: surface.MaxDeviation.Value)
+    return np.array([tuple(worst.MaxLocation)], dtype=float)
 
 
 def label_spacing(vobj):
     """The view's LabelSpacing (mm); 0 (all labels) for a view saved before it existed."""
     spacing = getattr(vobj, "LabelSpacing", None)
     return 0.0 if spacing is None else float(spacing.Value)
-
-
-def point_labels(labels, positions, size):
-    """Screen-aligned labels at (N, 3) positions (mm), font ``size`` pixels, drawn over the
-    scene (an annotation: never hidden behind the surface)."""
-    node = coin.SoAnnotation()
-    text = colormap.text_node(LABEL_COLOUR, size)
-    for label, position in zip(labels, positions):
-        text.addChild(colormap.text_at(label, tuple(map(float, position))))
-    node.addChild(text)
-    return node
 
 
 def coloured_mesh(nodes, field, maximum):

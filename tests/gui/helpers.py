@@ -3,6 +3,7 @@ fill the Sample face panel, interrupt its background run."""
 import threading
 import time
 
+import FreeCAD
 import FreeCADGui
 from PySide import QtCore, QtGui
 
@@ -195,6 +196,59 @@ def texts(node):
     search.apply(node)
     paths = search.getPaths()
     return [paths[i].getTail().string.getValues()[0] for i in range(paths.getLength())]
+
+
+def labels_on_screen(prefix=""):
+    """The labels (SoText2) the active 3D view draws at its present zoom whose text starts with
+    ``prefix``: [(text, (x, y) pixels)], found by a callback action over the view's scene as
+    Coin renders it (a level-of-detail node traverses only the level it picks)."""
+    from pivy import coin
+
+    view = FreeCADGui.ActiveDocument.ActiveView
+    manager = view.getViewer().getSoRenderManager()
+    found = []
+
+    def seen(_data, action, node):
+        text = node.string.getValues()[0]
+        if text.startswith(prefix):
+            at = FreeCAD.Vector(*action.getModelMatrix().getValue()[3][:3])
+            found.append((text, tuple(view.getPointOnScreen(at))))
+        return coin.SoCallbackAction.CONTINUE
+
+    action = coin.SoCallbackAction(manager.getViewportRegion())
+    action.addPreCallback(coin.SoText2.getClassTypeId(), seen, None)
+    action.apply(manager.getSceneGraph())
+    return found
+
+
+def overlapping_labels(found, size):
+    """Pairs of labels ``found`` (labels_on_screen) whose text boxes overlap on screen: a text
+    starts at its point and is as wide as Sans at ``size`` pixels writes it, and ``size`` high."""
+    font = QtGui.QFont("Sans")
+    font.setPixelSize(size)
+    metrics = QtGui.QFontMetrics(font)
+    pairs = []
+    for i, (text, (x, y)) in enumerate(found):
+        for other, (x2, y2) in found[i + 1:]:
+            width = metrics.horizontalAdvance(text if x <= x2 else other)
+            if abs(x2 - x) < width and abs(y2 - y) < size:
+                pairs.append((text, other))
+    return pairs
+
+
+def zoomed(factor, obj=None):
+    """Fit the active view to the scene (to ``obj`` where given), then zoom it by ``factor``
+    (> 1 in) and let it draw."""
+    view = FreeCADGui.ActiveDocument.ActiveView
+    if obj is None:
+        view.fitAll()
+    else:
+        FreeCADGui.Selection.clearSelection()
+        FreeCADGui.Selection.addSelection(obj)
+        FreeCADGui.SendMsgToActiveView("ViewSelection")
+        FreeCADGui.Selection.clearSelection()
+    view.getCameraNode().scaleHeight(1.0 / factor)
+    process_events(0.3)
 
 
 def open_panel(doc, face="Face1"):

@@ -21,8 +21,8 @@ from cmmsampling.inspection.judge import tolerance_bands
 from pivy import coin
 from PySide import QtGui
 
-from .helpers import (dock_text, document_with, handle_dialog, main_window, modal_message, process_events, texts,
-                      wait_until)
+from .helpers import (dock_text, document_with, handle_dialog, labels_on_screen, main_window, modal_message,
+                      overlapping_labels, process_events, texts, wait_until)
 
 BLADE = "Face176"
 MISPLACED = {"rx": 0.5, "ry": -0.4, "rz": 0.8, "x": 1.2, "y": -1.5, "z": 0.6}
@@ -108,7 +108,10 @@ def test_inspect_measured_points_on_a_ventilator_blade(blade_points, tmp_path, a
     process_events(0.5)
     FreeCADGui.ActiveDocument.ActiveView.saveImage(os.path.join(artifacts, "inspection_ventilator_blade.png"),
                                                    1200, 900, "White")
-    print(f"Ventilator {BLADE}: {expected.summary()}")
+    drawn_labels = [(text, at) for text, at in labels_on_screen() if text in set(measured_points.Labels)]
+    print(f"Ventilator {BLADE}: {expected.summary()}; {len(drawn_labels)} of the 36 labels drawn")
+    assert 0 < len(drawn_labels) <= 36 and overlapping_labels(drawn_labels, 12) == [], \
+        "the measured points' labels keep apart"
 
     exporter = importlib.import_module(FreeCAD.getExportType("qif")[0])
     results = str(tmp_path / "blade_results.qif")

@@ -24,8 +24,8 @@ from cmmsampling.gui import colormap, commands, view_providers
 from cmmsampling.gui.panels import plan_part
 
 from .helpers import (
-    Hold, child, dock_text, document_with, drawn, main_window, process_events, task_button, texts, wait_until,
-    widgets,
+    Hold, child, dock_text, document_with, drawn, labels_on_screen, main_window, overlapping_labels, process_events,
+    task_button, texts, wait_until, widgets, zoomed,
 )
 
 OK, CANCEL = QtGui.QDialogButtonBox.Ok, QtGui.QDialogButtonBox.Cancel
@@ -211,14 +211,17 @@ def test_a_plan_runs_face_by_face_and_adds_a_group_per_face(part_doc, monkeypatc
              for surface in surfaces]
     assert marks == [[f"  max {mm_text(largest)}"] if surface.MaxDeviation.Value == largest else []
                      for surface in surfaces], "one max label, the worst face's: none to overlap"
-    tips = np.concatenate([points.ViewObject.Proxy.shown_tips for points in probe_points_in([group])])
-    gaps = np.linalg.norm(tips[:, None] - tips[None], axis=-1) + np.diag(np.full(len(tips), np.inf))
-    spacing = view_providers.PLAN_LABEL_FRACTION * part_doc.Part.Shape.BoundBox.DiagonalLength
-    print(f"{len(tips)} of the plan's {made.n_total} labels shown, at least {gaps.min():.1f} mm apart")
-    assert gaps.min() >= spacing, "the labels of all the plan's faces keep apart"
+    views = [points.ViewObject.Proxy for points in probe_points_in([group])]
+    assert all(view.ladder == views[0].ladder for view in views), "all the plan's faces share one ladder"
+    for k, spacing in enumerate(views[0].ladder[1:], start=1):
+        tips = np.concatenate([view.level_tips[k] for view in views])
+        gaps = np.linalg.norm(tips[:, None] - tips[None], axis=-1) + np.diag(np.full(len(tips), np.inf))
+        assert gaps.min(initial=np.inf) >= spacing - 1e-9, "the labels of all the plan's faces keep apart at each level"
     FreeCADGui.Selection.clearSelection()
-    FreeCADGui.SendMsgToActiveView("ViewFit")
-    process_events(0.5)
+    zoomed(1)
+    found = labels_on_screen("Face")
+    print(f"{len(found)} of the plan's {made.n_total} labels drawn when the view fits the part")
+    assert 0 < len(found) < made.n_total and overlapping_labels(found, 13) == []
     main_window().grab().save(os.path.join(artifacts, "plan_part_done.png"))
     FreeCADGui.ActiveDocument.ActiveView.saveImage(os.path.join(artifacts, "plan_part_view.png"), 1200, 900,
                                                    "White")

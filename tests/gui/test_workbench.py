@@ -304,14 +304,19 @@ def test_short_pso_through_the_panel_then_one_undo(doc, artifacts):
     assert surface.ViewObject.DisplayMode == "Deviation"
     assert drawn(points) == 3 and drawn(surface) == 4
     assert list(points.Labels) == [f"P{i}" for i in range(1, 26)]
-    # every label is drawn but those the view leaves out near a drawn one (LabelSpacing)
-    shown = points.ViewObject.Proxy.shown_labels
-    assert texts(points.ViewObject.Proxy.annotation) == [points.Labels[i] for i in shown]
+    # the labels at each level of spacing: every label at the finest (LabelSpacing 0), and at
+    # each coarser one all but those the view leaves out near a drawn one or near the max label
+    proxy = points.ViewObject.Proxy
+    assert texts(proxy.annotation) == [points.Labels[i] for shown in proxy.levels for i in shown]
+    assert sorted(proxy.levels[0]) == list(range(25)) and proxy.ladder == sorted(proxy.ladder)
     tips = np.array([tuple(p) for p in points.Points]) + points.ViewObject.ApproachLength.Value * np.array(
         [tuple(n) for n in points.Normals])
-    hidden = np.setdiff1d(np.arange(25), shown)
-    near = np.linalg.norm(tips[hidden][:, None] - tips[shown][None], axis=-1).min(axis=1, initial=np.inf)
-    assert len(shown) > 0 and (near < points.ViewObject.LabelSpacing.Value).all()
+    mark = np.array(tuple(surface.MaxLocation))
+    for spacing, shown in zip(proxy.ladder[1:], proxy.levels[1:]):
+        hidden = np.setdiff1d(np.arange(25), shown)
+        near = np.linalg.norm(tips[hidden][:, None] - tips[shown][None], axis=-1).min(axis=1, initial=np.inf)
+        by_mark = np.linalg.norm(tips - mark, axis=1) < 2.0 * spacing
+        assert ((near < spacing) | by_mark[hidden]).all() and not by_mark[shown].any()
     assert texts(surface.ViewObject.Proxy.coloured) == colormap.tick_labels(surface.MaxDeviation.Value) + [
         "Deviation, Body.Face1", f"  max {surface.MaxDeviation.Value:.4g} mm"]
     assert doc.Body.Shape.Faces[0].distToShape(Part.Vertex(surface.MaxLocation))[0] < 1e-6
