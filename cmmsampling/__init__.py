@@ -51,6 +51,8 @@ _API = {
     "inspect": "inspection.judge",
     "Inspection": "inspection.judge",
     "read_record": "inspection.record",
+    "read_mbd": "formats.qif.model",
+    "MbdModel": "formats.qif.model",
     "InspectionRecord": "inspection.record",
     "Datum": "inspection.datums",
     "points_for_verdict": "inspection.verdict_points",

@@ -255,7 +255,7 @@ class PartPlan:
     notes: list = field(default_factory=list)
     datums: list = field(default_factory=list)
     _results: dict = field(default_factory=dict, init=False, repr=False, compare=False)
-    _moves: object = field(default=None, init=False, repr=False, compare=False)
+    _moves: ProbeMoves | None = field(default=None, init=False, repr=False, compare=False)
 
     @property
     def placed(self) -> list[FacePlan]:
