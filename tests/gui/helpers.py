@@ -77,19 +77,35 @@ def task_form():
     return next((w for w in widgets() if w.objectName() == "SampleFace"), None)
 
 
+# How long an open dialog's buttons may take to show (FreeCAD 1.1's Tasks overlay).
+TASK_SHOWN_S = 5.0
+
+
 def task_button(which):
     """The open task dialog's standard button: which = QtGui.QDialogButtonBox.Ok or .Cancel.
 
     The wrapper of a widget can be a stale one of another class (see :func:`widgets`); calling
     QDialogButtonBox.button() through it on a widget that is no button box reads that widget as
     one and can crash FreeCAD. Qt itself (``inherits``: the real object's meta-object) says
-    which widgets are button boxes."""
-    for box in widgets():
-        if isinstance(box, QtGui.QDialogButtonBox) and box.inherits("QDialogButtonBox") and box.isVisible():
-            button = box.button(which)
-            if button is not None:
-                return button
-    return None
+    which widgets are button boxes. FreeCAD 1.1 shows its Tasks dock (an overlay) a moment after
+    a dialog opens: while a dialog is open and no button box is visible yet, this waits for one
+    (up to TASK_SHOWN_S)."""
+    found = []
+
+    def shown():
+        for box in widgets():
+            if isinstance(box, QtGui.QDialogButtonBox) and box.inherits("QDialogButtonBox") and box.isVisible():
+                button = box.button(which)
+                if button is not None:
+                    found.append(button)
+                    return True
+        return False
+
+    if not shown() and FreeCADGui.Control.activeDialog():
+        end = time.monotonic() + TASK_SHOWN_S
+        while not shown() and time.monotonic() < end:
+            process_events(0.02)
+    return found[0] if found else None
 
 
 def dock_text(name):
@@ -200,12 +216,17 @@ def texts(node):
 
 def labels_on_screen(prefix=""):
     """The labels (SoText2) the active 3D view draws at its present zoom whose text starts with
-    ``prefix``: [(text, (x, y) pixels)], found by a callback action over the view's scene as
-    Coin renders it (a level-of-detail node traverses only the level it picks)."""
+    ``prefix``: [(text, (x, y) pixels)], found by a callback action over the view's camera and
+    scene as Coin renders them (a level-of-detail node traverses only the level it picks). (The
+    view's viewer is not asked for: on FreeCAD 1.1 a document whose viewer Python took closed
+    with a crash.)"""
     from pivy import coin
 
     view = FreeCADGui.ActiveDocument.ActiveView
-    manager = view.getViewer().getSoRenderManager()
+    scene = coin.SoSeparator()
+    scene.addChild(view.getCameraNode())
+    scene.addChild(view.getSceneGraph())
+    width, height = view.getSize()
     found = []
 
     def seen(_data, action, node):
@@ -215,9 +236,10 @@ def labels_on_screen(prefix=""):
             found.append((text, tuple(view.getPointOnScreen(at))))
         return coin.SoCallbackAction.CONTINUE
 
-    action = coin.SoCallbackAction(manager.getViewportRegion())
+    action = coin.SoCallbackAction(coin.SbViewportRegion(width, height))
     action.addPreCallback(coin.SoText2.getClassTypeId(), seen, None)
-    action.apply(manager.getSceneGraph())
+    action.apply(scene)
+    scene.removeAllChildren()
     return found
 
 
