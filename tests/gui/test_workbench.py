@@ -46,6 +46,7 @@ def test_workbench_has_its_toolbar_menu_and_icons(workbench):
                  "CMMSampling_Inspect"):
         assert os.path.isfile(FreeCADGui.Command.get(name).getInfo()["pixmap"])
     assert "cmmsampling.document" in FreeCAD.getExportType("dmi")
+    assert "cmmsampling.document.mbd_import" in FreeCAD.getImportType("qif"), "File > Open reads QIF MBD models"
 
 
 def test_the_menu_opens_the_user_guide_in_a_tab(workbench, artifacts):

@@ -1,0 +1,69 @@
+"""File > Open and File > Import of a QIF 3.0 MBD model (cmmsampling.document.mbd_import, the
+hook Init.py registers for .qif), headless on NIST's ctc_01 (skipped where the shared models
+are absent): a new document with the part (the file's B-rep, a valid solid) and its
+Characteristics sheet, one row per characteristic; Import adds them to a document as one Undo
+step; a file that is no MBD model is refused in one line and no document is made."""
+import os
+
+import pytest
+from support.faces import FreeCAD
+from support.paths import ROOT
+
+from cmmsampling.document import mbd_import
+from cmmsampling.geometry.validation import InputError
+
+CTC_01 = os.path.join(os.path.dirname(ROOT), "shared", "reference", "qif3", "mbd", "nist_ctc_01_asme1_ap242.qif")
+
+
+@pytest.fixture
+def ctc_01():
+    if not os.path.isfile(CTC_01):
+        pytest.skip(f"{CTC_01} is not beside the checkout")
+    return CTC_01
+
+
+def test_open_makes_a_document_with_the_part_and_its_characteristics(ctc_01):
+    doc = mbd_import.open(ctc_01)
+    try:
+        part = doc.getObject("nist_ctc_01_asme1_ap242")
+        assert part.Shape.ShapeType == "Solid" and part.Shape.isValid() and len(part.Shape.Faces) == 117
+        sheet = doc.getObject("Characteristics")
+        assert sheet.get("A1").startswith("nist_ctc_01_asme1_ap242.qif: 14 characteristics (4 judged by this tool)")
+        assert [sheet.get(f"{column}2") for column in "ABCDEFGHI"] == list(mbd_import.HEADER)
+        rows = {sheet.get(f"A{row}"): row for row in range(3, 17)}
+        profile = rows["1457"]
+        assert (sheet.get(f"C{profile}"), sheet.get(f"D{profile}"), sheet.get(f"F{profile}"), sheet.get(f"H{profile}")) \
+            == ("SurfaceProfile", 1.25, "A | B | C", "yes")
+        faces = sheet.get(f"G{profile}").split()
+        assert len(faces) == 2 and all(part.Shape.getElement(face).Area > 0 for face in faces)
+        size = rows["1485"]
+        assert sheet.get(f"H{size}") == "no" and "feature's own fit" in sheet.get(f"I{size}")
+        assert sheet.get("A18") == "datum" and [sheet.get(f"A{row}") for row in (19, 20, 21)] == ["A", "B", "C"]
+    finally:
+        FreeCAD.closeDocument(doc.Name)
+
+
+def test_import_adds_the_model_to_a_document_in_one_undo_step(ctc_01):
+    doc = FreeCAD.newDocument("MbdImport")
+    try:
+        doc.UndoMode = 1
+        box = doc.addObject("Part::Box", "Box")
+        doc.recompute()
+        undo = doc.UndoCount
+        part = mbd_import.insert(ctc_01, doc.Name)
+        assert part.Document is doc and doc.getObject("Characteristics") is not None
+        assert doc.UndoCount == undo + 1
+        doc.undo()
+        assert [obj.Name for obj in doc.Objects] == [box.Name]
+    finally:
+        FreeCAD.closeDocument(doc.Name)
+
+
+def test_a_file_that_is_no_mbd_model_is_refused_before_a_document_is_made(tmp_path):
+    path = tmp_path / "points.qif"
+    path.write_text("x,y,z\n1,2,3\n", encoding="utf-8")
+    documents = set(FreeCAD.listDocuments())
+    with pytest.raises(InputError) as refused:
+        mbd_import.open(str(path))
+    assert str(refused.value).startswith(str(path)) and "\n" not in str(refused.value)
+    assert set(FreeCAD.listDocuments()) == documents
