@@ -129,17 +129,21 @@ ensure_debootstrap() {
 
 in_root() {
   # in_root SUITE COMMAND: run a shell command in the checkout inside the suite's root, with a clean
-  # environment and a fresh /tmp; the checkout is bind-mounted at /work/cmmsampling (and
-  # ../shared/testdata, where it exists, at /work/shared/testdata).
-  local suite="$1" command="$2" dir="$cache/$1"
+  # environment and a fresh /tmp; the checkout is bind-mounted at /work/cmmsampling (and, where
+  # they exist, ../shared/testdata and ../shared/reference/qif3/mbd under /work/shared).
+  local suite="$1" command="$2" dir="$cache/$1" shared
   unmount_leftovers "$dir"
-  rmdir "$dir/work/shared/testdata" "$dir/work/shared" 2>/dev/null || true   # an earlier mount point
+  rmdir "$dir/work/shared/testdata" "$dir/work/shared/reference/qif3/mbd" "$dir/work/shared/reference/qif3" \
+    "$dir/work/shared/reference" "$dir/work/shared" 2>/dev/null || true   # earlier mount points
   mkdir -p "$dir/work/cmmsampling"
   mount --bind "$repo" "$dir/work/cmmsampling" && mounted+=("$dir/work/cmmsampling")
-  if [ -d "$repo/../shared/testdata" ]; then   # the CAD files tests/package/test_real_parts.py reads
-    mkdir -p "$dir/work/shared/testdata"
-    mount --bind "$repo/../shared/testdata" "$dir/work/shared/testdata" && mounted+=("$dir/work/shared/testdata")
-  fi
+  # The CAD files tests/package/test_real_parts.py reads, the QIF MBD models OCC builds (tests/formats).
+  for shared in testdata reference/qif3/mbd; do
+    if [ -d "$repo/../shared/$shared" ]; then
+      mkdir -p "$dir/work/shared/$shared"
+      mount --bind "$repo/../shared/$shared" "$dir/work/shared/$shared" && mounted+=("$dir/work/shared/$shared")
+    fi
+  done
   mount -t tmpfs tmpfs "$dir/tmp" && mounted+=("$dir/tmp")
   mount_into "$dir"
   local code=0

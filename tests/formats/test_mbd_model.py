@@ -108,7 +108,7 @@ def test_ftc_06_s_other_revision_names_the_faces_with_no_counterpart():
     assert len(model.matches) == 187 and len(step.Faces) == 144
     assert all(m.distance <= MATCH_MM for m in model.matches if m.faces)
     assert all(m.distance > MATCH_MM for m in model.matches if not m.faces)
-    assert 0 < len(model.unmatched) < 187 // 4
+    assert 0 < len(model.unmatched) <= 4, "a face on a torus built as its loop's other side matches no STEP face"
     named = re.findall(r"QIF face (\w+): no counterpart", report)
     assert named == model.unmatched
     matched = [m for m in model.matches if m.faces]

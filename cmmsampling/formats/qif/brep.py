@@ -129,14 +129,22 @@ class _Builder:
         """A Part.Face of a QIF Face element: its surface trimmed by its loops (outer first)."""
         import Part
 
-        surface = _surface(self.core(element, "Surface"))
+        core = self.core(element, "Surface")
+        surface = _surface(core)
         loops = [self.items[_text(ident)] for ident in _child(element, "LoopIds").iter(tag("Id"))]
         loops.sort(key=lambda loop: loop.get("form") != "OUTER")
         wires = [Part.Wire(self.loop_edges(loop)) for loop in loops]
-        face = Part.Face(surface, wires[0])   # (with a list of wires OCC makes no face on a cylinder)
-        if len(wires) > 1:
-            face.cutHoles(wires[1:])
-        face.fix(1e-7, 1e-7, SEWING_MM)   # the inner wires' orientation, the edges' curves on the surface
+        bound = _patch_area(core)
+        if bound is None:
+            face = _trimmed(surface, wires)
+        else:
+            # On a closed surface (a torus, a sphere) a loop bounds two regions and OCC's fix
+            # picks either (OCC 7.6 the one, 7.8 the other): the face is the region within the
+            # file's patch of the surface, tried on copies of the loops.
+            tried = [_trimmed(surface, [wire.copy() for wire in wires]),
+                     _trimmed(surface, [wires[0].copy().reversed()] + [wire.copy() for wire in wires[1:]])]
+            fits = [candidate for candidate in tried if candidate.Area <= bound]
+            face = min(fits or tried, key=lambda candidate: candidate.Area)
         if element.get("turned") == "true":
             face.reverse()
         return face
@@ -171,6 +179,36 @@ class _Builder:
         vertex = self.items[_text(_child(_child(edge, name), "Id"))]
         point = self.items[_text(_child(_child(vertex, "Point"), "Id"))]
         return _numbers(_child(point, "XYZ"))
+
+
+def _trimmed(surface, wires):
+    """A Part.Face on surface bounded by wires (the outer first), fixed: the inner wires'
+    orientation, the edges' curves on the surface."""
+    import Part
+
+    face = Part.Face(surface, wires[0])   # (with a list of wires OCC makes no face on a cylinder)
+    if len(wires) > 1:
+        face.cutHoles(wires[1:])
+    face.fix(1e-7, 1e-7, SEWING_MM)
+    return face
+
+
+def _patch_area(core: ET.Element) -> float | None:
+    """The most area a face on a closed surface core can have (mm^2 in the file's units): its
+    torus or sphere patch's (LatitudeLongitudeSweep), whatever latitude its zero is at; None
+    for the other surfaces, on which a loop bounds one region."""
+    kind = core.tag.split("}")[-1]
+    sweep = core.find(tag("LatitudeLongitudeSweep"))
+    if kind not in ("Torus23Core", "Sphere23Core") or sweep is None:
+        return None
+    latitude = np.ptp(_numbers(_child(sweep, "DomainLatitude")))
+    longitude = np.ptp(_numbers(_child(sweep, "DomainLongitude")))
+    slack = 1.0 + 1e-6
+    if kind == "Torus23Core":
+        major, minor = _number(core, "DiameterMajor") / 2.0, _number(core, "DiameterMinor") / 2.0
+        return slack * minor * longitude * (major * latitude + 2.0 * minor)
+    radius = _number(core, "Diameter") / 2.0
+    return slack * radius ** 2 * longitude * min(2.0, latitude)
 
 
 def _curve_edges(core: ET.Element, start: np.ndarray, end: np.ndarray) -> list:
@@ -369,17 +407,20 @@ def _core(item: ET.Element) -> ET.Element:
 
 
 def inner_points(face, count: int = INNER_POINTS) -> np.ndarray:
-    """(<= count, 3) mm: points inside a face (on a grid over its parameter range, those the face
-    holds; its centre of mass's projection where none)."""
-    u0, u1, v0, v1 = face.ParameterRange
-    side = int(np.ceil(np.sqrt(count))) + 2
-    found = []
-    for u in np.linspace(u0, u1, side)[1:-1]:
-        for v in np.linspace(v0, v1, side)[1:-1]:
-            point = face.valueAt(float(u), float(v))
-            if face.isPartOfDomain(float(u), float(v)):
-                found.append(tuple(point))
-    if not found:
-        u, v = face.Surface.parameter(face.CenterOfMass)
-        found.append(tuple(face.valueAt(u, v)))
-    return np.array(found[:count], dtype=float)
+    """(<= count, 3) mm: points inside a face, none on its boundary (shared with its neighbours):
+    the centres of triangles of its tessellation spread over it, moved onto its surface."""
+    vertices, triangles = face.tessellate(max(face.BoundBox.DiagonalLength, 1e-6) / 50.0)
+    corners = np.array([tuple(v) for v in vertices], dtype=float)[np.array(triangles, dtype=int).reshape(-1, 3)]
+    if not len(corners):
+        centres = np.array([tuple(face.CenterOfMass)])
+    else:
+        centres = corners.mean(axis=1)[np.linspace(0, len(corners) - 1, min(count, len(corners))).astype(int)]
+    surface = face.Surface
+    return np.array([tuple(surface.value(*surface.parameter(_vector(centre)))) for centre in centres], dtype=float)
+
+
+def _vector(point: np.ndarray):
+    """A FreeCAD.Vector of a (3,) point."""
+    from FreeCAD import Vector
+
+    return Vector(*map(float, point))
