@@ -9,4 +9,4 @@ import FreeCAD
 from cmmsampling.formats.pointfiles import export_filter
 
 FreeCAD.addExportType(export_filter(), "cmmsampling.document")
-FreeCAD.addImportType("QIF 3.0 MBD model (*.qif *.QIF)", "cmmsampling.document.mbd_import")
+FreeCAD.addImportType("QIF 3.0 MBD model (*.qif)", "cmmsampling.document.mbd_import")

@@ -1,5 +1,6 @@
 """The workbench in the real FreeCAD GUI: commands, task panel runs, undo, cancel, save/reopen."""
 import __main__
+import importlib
 import json
 from xml.etree import ElementTree
 import os
@@ -892,3 +893,29 @@ def test_part_error_through_the_panel_learns_from_the_checked_inspections(doc, a
     fill(form, "pso")
     assert not form.priorGroup.isEnabled()
     task_button(CANCEL).click()
+
+
+@pytest.mark.parametrize("model, faces", [("nist_ctc_01_asme1_ap242", 117), ("nist_ftc_06_asme1_ap242", 187)])
+def test_file_open_of_a_qif_mbd_model_shows_the_part_and_its_characteristics(workbench, artifacts, model, faces):
+    """File > Open of NIST's ctc_01 and ftc_06 (its tori and spheres) as QIF MBD (skipped where
+    the shared models are absent): a new document with the part drawn and its Characteristics sheet."""
+    path = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "..", "shared",
+                                         "reference", "qif3", "mbd", f"{model}.qif"))
+    if not os.path.isfile(path):
+        pytest.skip(f"{path} is not beside the checkout")
+    before = set(FreeCAD.listDocuments())
+    [module] = FreeCAD.getImportType("qif")
+    importlib.import_module(module).open(path)   # what File > Open runs after its file dialog
+    [name] = set(FreeCAD.listDocuments()) - before
+    doc = FreeCAD.getDocument(name)
+    try:
+        part, sheet = doc.getObject(model), doc.getObject("Characteristics")
+        assert part.ViewObject.Visibility and len(part.Shape.Faces) == faces and part.Shape.isValid()
+        assert sheet.get("B2") == "characteristic" and sheet.get("A1").startswith(f"{model}.qif: ")
+        FreeCADGui.getDocument(name).ActiveView.viewIsometric()
+        FreeCADGui.SendMsgToActiveView("ViewFit")
+        process_events(0.5)
+        FreeCADGui.getDocument(name).ActiveView.saveImage(os.path.join(artifacts, f"mbd_{model[5:11]}_opened.png"),
+                                                          1200, 900, "White")
+    finally:
+        FreeCAD.closeDocument(name)
