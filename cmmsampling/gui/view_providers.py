@@ -154,7 +154,8 @@ class ViewProviderProbePoints(Annotated):
         plan = plan_holding(obj)
         corners = part_box(obj) if plan is not None else None
         box = labels.points_box(tips if corners is None else corners)
-        ladder = labels.spacings(float(np.linalg.norm(box[1] - box[0])), label_spacing(vobj))
+        floor = label_spacing(vobj)
+        ladder = labels.spacings(float(np.linalg.norm(box[1] - box[0])), floor)
         taken = None
         if plan is not None:
             others = [getattr(other.ViewObject.Proxy, "level_tips", None) for other in plan_probe_points(plan)
@@ -163,8 +164,7 @@ class ViewProviderProbePoints(Annotated):
             others = [levels for levels in others if levels]
             taken = [np.concatenate([levels[k] for levels in others]) for k in range(len(ladder))] if others else None
         node, self.ladder, self.levels = labels.decluttered(list(obj.Labels), tips, vobj.LabelSize, LABEL_COLOUR,
-                                                            label_spacing(vobj), box, taken,
-                                                            labelled_maximum(obj, plan))
+                                                            floor, box, taken, labelled_maximum(obj, plan))
         self.level_tips = [tips[shown] for shown in self.levels]
         return node
 

@@ -3,23 +3,17 @@ hook Init.py registers for .qif), headless on NIST's ctc_01 (skipped where the s
 are absent): a new document with the part (the file's B-rep, a valid solid) and its
 Characteristics sheet, one row per characteristic; Import adds them to a document as one Undo
 step; a file that is no MBD model is refused in one line and no document is made."""
-import os
 
 import pytest
 from support.faces import FreeCAD
-from support.paths import ROOT
+from support.mbd import shared_mbd
 
 from cmmsampling.document import mbd_import
 from cmmsampling.geometry.validation import InputError
 
-CTC_01 = os.path.join(os.path.dirname(ROOT), "shared", "reference", "qif3", "mbd", "nist_ctc_01_asme1_ap242.qif")
-
-
 @pytest.fixture
 def ctc_01():
-    if not os.path.isfile(CTC_01):
-        pytest.skip(f"{CTC_01} is not beside the checkout")
-    return CTC_01
+    return shared_mbd("nist_ctc_01_asme1_ap242.qif")
 
 
 def test_open_makes_a_document_with_the_part_and_its_characteristics(ctc_01):

@@ -10,7 +10,7 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 import pytest
-from support.paths import ROOT
+from support.mbd import MODELS, shared_mbd
 
 import cmmsampling
 import Part  # after cmmsampling, which makes FreeCAD importable
@@ -18,23 +18,13 @@ from cmmsampling.formats.qif.model import MATCH_MM
 from cmmsampling.formats.qif.xml import QIF_NS
 from cmmsampling.geometry.validation import InputError
 
-MBD = os.path.join(os.path.dirname(ROOT), "shared", "reference", "qif3", "mbd")
-MODELS = ["nist_ctc_01_asme1_ap242", "nist_ctc_03_asme1_ap242", "nist_ftc_06_asme1_ap242", "nist_ftc_09_asme1_ap242"]
 NS = {"q": QIF_NS}
-
-
-def shared(name):
-    """The path of a shared MBD file (skipped where the shared folder is absent)."""
-    path = os.path.join(MBD, name)
-    if not os.path.isfile(path):
-        pytest.skip(f"{path} is not beside the checkout")
-    return path
 
 
 @pytest.fixture(scope="module", params=MODELS)
 def opened(request):
     """(the file's parsed root, its model as read_mbd builds it) for each shared model."""
-    path = shared(request.param + ".qif")
+    path = shared_mbd(request.param + ".qif")
     return ET.parse(path).getroot(), cmmsampling.read_mbd(path)
 
 
@@ -78,8 +68,8 @@ def test_the_characteristics_name_the_faces_their_features_lie_on(opened):
 
 
 def test_ctc_01_built_from_its_qif_is_nist_s_step_to_1e_6():
-    step = Part.read(shared("nist_ctc_01_asme1_ap242.stp"))
-    model = cmmsampling.read_mbd(shared("nist_ctc_01_asme1_ap242.qif"))
+    step = Part.read(shared_mbd("nist_ctc_01_asme1_ap242.stp"))
+    model = cmmsampling.read_mbd(shared_mbd("nist_ctc_01_asme1_ap242.qif"))
     built = model.shape
     assert len(built.Faces) == len(step.Faces) == 117
     assert built.Area == pytest.approx(step.Area, rel=1e-6) and built.Volume == pytest.approx(step.Volume, rel=1e-6)
@@ -87,8 +77,8 @@ def test_ctc_01_built_from_its_qif_is_nist_s_step_to_1e_6():
 
 
 def test_ctc_01_s_faces_are_matched_to_its_step_one_to_one():
-    step = Part.read(shared("nist_ctc_01_asme1_ap242.stp"))
-    model = cmmsampling.read_mbd(shared("nist_ctc_01_asme1_ap242.qif"), shape=step)
+    step = Part.read(shared_mbd("nist_ctc_01_asme1_ap242.stp"))
+    model = cmmsampling.read_mbd(shared_mbd("nist_ctc_01_asme1_ap242.qif"), shape=step)
     assert model.shape is step and not model.built_from_file and model.unmatched == []
     assert all(len(m.faces) == 1 for m in model.matches) and len({m.faces for m in model.matches}) == 117
     assert max(m.distance for m in model.matches) < 1e-6
@@ -101,8 +91,8 @@ def test_ctc_01_s_faces_are_matched_to_its_step_one_to_one():
 
 
 def test_ftc_06_s_other_revision_names_the_faces_with_no_counterpart():
-    step = Part.read(shared("nist_ftc_06_asme1_rd.stp"))
-    model = cmmsampling.read_mbd(shared("nist_ftc_06_asme1_ap242.qif"), shape=step)
+    step = Part.read(shared_mbd("nist_ftc_06_asme1_rd.stp"))
+    model = cmmsampling.read_mbd(shared_mbd("nist_ftc_06_asme1_ap242.qif"), shape=step)
     report = model.match_report()
     print(report)
     assert len(model.matches) == 187 and len(step.Faces) == 144
@@ -117,4 +107,4 @@ def test_ftc_06_s_other_revision_names_the_faces_with_no_counterpart():
 
 def test_a_shape_that_is_no_shape_is_refused_before_any_work():
     with pytest.raises(InputError, match="give the model as a Part.Shape"):
-        cmmsampling.read_mbd(shared("nist_ctc_01_asme1_ap242.qif"), shape="part.stp")
+        cmmsampling.read_mbd(shared_mbd("nist_ctc_01_asme1_ap242.qif"), shape="part.stp")

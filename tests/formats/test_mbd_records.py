@@ -8,28 +8,15 @@ import re
 from collections import Counter
 
 import pytest
-from support.paths import ROOT
+from support.mbd import MBD, MODELS, shared_mbd
 
 from cmmsampling.formats.qif.mbd import JUDGED, read_mbd_records
 from cmmsampling.geometry.validation import InputError
 
-MBD = os.path.join(os.path.dirname(ROOT), "shared", "reference", "qif3", "mbd")
-MODELS = ["nist_ctc_01_asme1_ap242.qif", "nist_ctc_03_asme1_ap242.qif", "nist_ftc_06_asme1_ap242.qif",
-          "nist_ftc_09_asme1_ap242.qif"]
-
-
-def model(name):
-    """The path of a shared MBD model (skipped where the shared folder is absent)."""
-    path = os.path.join(MBD, name)
-    if not os.path.isfile(path):
-        pytest.skip(f"{path} is not beside the checkout")
-    return path
-
-
-@pytest.fixture(scope="module", params=MODELS)
+@pytest.fixture(scope="module", params=[f"{name}.qif" for name in MODELS])
 def read(request):
     """(the file's text, its records) for each shared model."""
-    path = model(request.param)
+    path = shared_mbd(request.param)
     with open(path, encoding="utf-8") as handle:
         return handle.read(), read_mbd_records(path)
 
@@ -55,7 +42,7 @@ def test_every_characteristic_is_judged_or_says_why_not(read):
 
 
 def test_ctc_01_in_mm_reads_its_profile_with_its_frame_and_faces():
-    records = read_mbd_records(model("nist_ctc_01_asme1_ap242.qif"))
+    records = read_mbd_records(shared_mbd("nist_ctc_01_asme1_ap242.qif"))
     assert (records.linear, records.pmi, len(records.face_ids)) == ("mm", "mm", 117)
     profile = next(c for c in records.characteristics if c.id == "1457")
     assert (profile.kind, profile.tolerance, profile.tolerance_text, profile.datums) == \
@@ -69,7 +56,7 @@ def test_ctc_01_in_mm_reads_its_profile_with_its_frame_and_faces():
 
 
 def test_ftc_06_in_inches_gives_mm_and_says_both():
-    records = read_mbd_records(model("nist_ftc_06_asme1_ap242.qif"))
+    records = read_mbd_records(shared_mbd("nist_ftc_06_asme1_ap242.qif"))
     assert records.pmi == "inch" and records.mm_per_unit["inch"] == pytest.approx(25.4)
     flatness = next(c for c in records.characteristics if c.name == "Flatness.1")
     assert flatness.tolerance == pytest.approx(0.254, rel=1e-12) and flatness.tolerance_text == "0.01 inch (0.254 mm)"
@@ -81,7 +68,7 @@ def test_ftc_06_in_inches_gives_mm_and_says_both():
 
 
 def test_a_per_area_flatness_and_an_axis_orientation_are_not_judged():
-    records = read_mbd_records(model("nist_ctc_03_asme1_ap242.qif"))
+    records = read_mbd_records(shared_mbd("nist_ctc_03_asme1_ap242.qif"))
     flatness = next(c for c in records.characteristics if c.kind == "Flatness")
     assert not flatness.judged and "per unit area" in flatness.why_not
     assert flatness.tolerance_text == "0.005 mm per unit area"
@@ -104,7 +91,7 @@ def test_a_qif_document_without_characteristics_is_refused_in_one_line():
      "not a QIF 3.0 document"),
 ])
 def test_a_document_that_is_no_mbd_or_misreads_is_refused_in_one_line(tmp_path, change, problem):
-    with open(model("nist_ctc_01_asme1_ap242.qif"), encoding="utf-8") as handle:
+    with open(shared_mbd("nist_ctc_01_asme1_ap242.qif"), encoding="utf-8") as handle:
         text = handle.read()
     path = tmp_path / "changed.qif"
     path.write_text(change(text), encoding="utf-8")

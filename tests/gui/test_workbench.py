@@ -23,6 +23,7 @@ from cmmsampling.geometry.surface import make_bspline_surface, reference_poles
 from cmmsampling.gui import colormap, commands, export_options, qt_compat, view_providers
 from cmmsampling.gui.panels import fields
 from cmmsampling.gui.panels import sample_face
+from support.mbd import shared_mbd
 from support.toy_format import TOY_FORMAT
 
 from .helpers import (
@@ -899,10 +900,7 @@ def test_part_error_through_the_panel_learns_from_the_checked_inspections(doc, a
 def test_file_open_of_a_qif_mbd_model_shows_the_part_and_its_characteristics(workbench, artifacts, model, faces):
     """File > Open of NIST's ctc_01 and ftc_06 (its tori and spheres) as QIF MBD (skipped where
     the shared models are absent): a new document with the part drawn and its Characteristics sheet."""
-    path = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "..", "shared",
-                                         "reference", "qif3", "mbd", f"{model}.qif"))
-    if not os.path.isfile(path):
-        pytest.skip(f"{path} is not beside the checkout")
+    path = shared_mbd(f"{model}.qif")
     before = set(FreeCAD.listDocuments())
     [module] = FreeCAD.getImportType("qif")
     importlib.import_module(module).open(path)   # what File > Open runs after its file dialog

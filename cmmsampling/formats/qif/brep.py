@@ -7,8 +7,8 @@ of oriented edges, faces on a surface with their loops, shells, bodies). Each fa
 here from its surface and its loops' 3D edges (OCC makes the edges' curves on the surface),
 the edges of a loop meeting exactly at the file's vertices (each curve's ends are set on
 them: the file writes points to 7-10 digits, which would leave gaps OCC does not bridge).
-The faces are sewn into a shell and, where the file says the body is a solid and the shell
-closes, a solid. Lengths are converted to mm.
+The faces are sewn into a shell and, where the shell closes into a valid solid, a solid.
+Lengths are converted to mm.
 """
 from __future__ import annotations
 
@@ -62,7 +62,7 @@ def build_model(root: ET.Element, mm_per_unit: float, path: str = "") -> BuiltMo
             failed.append((ident, str(exc) or type(exc).__name__))
     if not faces:
         raise InputError(f"{path}: none of its {len(face_ids)} faces could be built ({failed[0][1]})")
-    shape = _joined(faces, built)
+    shape = _joined(faces)
     order = _face_order(shape, faces, built)
     if mm_per_unit != 1.0:
         shape = shape.copy()
@@ -79,9 +79,9 @@ def _body_faces(root: ET.Element) -> list[str]:
     return [face.get("id", "") for face in root.iter(tag("Face")) if face.get("id") is not None]
 
 
-def _joined(faces, ids):
+def _joined(faces):
     """The faces sewn into one shell, then a solid where the shell closes and the solid is
-    valid; else the sewn shape (OCC keeps the faces' order)."""
+    valid; else the sewn shape (whose faces :func:`_face_order` names)."""
     import Part
 
     sewn = Part.Compound(faces)
@@ -101,14 +101,12 @@ def _face_order(shape, faces, ids):
     lie on and whose area it has (sewing keeps the faces but may renumber them)."""
     import Part
 
-    boxes = np.array([[f.BoundBox.XMin, f.BoundBox.YMin, f.BoundBox.ZMin, f.BoundBox.XMax, f.BoundBox.YMax,
-                       f.BoundBox.ZMax] for f in faces])
+    boxes = face_boxes(faces)
     order = []
     for face in shape.Faces:
         points = inner_points(face, 5)
         vertices = [Part.Vertex(*point) for point in points]
-        near = np.flatnonzero(np.all((points.min(axis=0) >= boxes[:, :3] - SEWING_MM)
-                                     & (points.max(axis=0) <= boxes[:, 3:] + SEWING_MM), axis=1))
+        near = boxes_holding(boxes, points, SEWING_MM)
         near = near if near.size else np.arange(len(faces))
 
         def misfit(k):
@@ -116,6 +114,20 @@ def _face_order(shape, faces, ids):
 
         order.append(ids[min(near, key=misfit)])
     return order
+
+
+def face_boxes(faces) -> np.ndarray:
+    """(F, 6) mm: each face's bounding box, its minimum corner then its maximum."""
+    return np.array([[f.BoundBox.XMin, f.BoundBox.YMin, f.BoundBox.ZMin, f.BoundBox.XMax, f.BoundBox.YMax,
+                      f.BoundBox.ZMax] for f in faces]).reshape(-1, 6)
+
+
+def boxes_holding(boxes: np.ndarray, points: np.ndarray, margin: float) -> np.ndarray:
+    """Indices of the boxes ((F, 6), :func:`face_boxes`) that hold every one of points (N, 3) mm
+    (or one point (3,)) within ``margin`` mm."""
+    points = np.reshape(points, (-1, 3))
+    return np.flatnonzero(np.all((points.min(axis=0) >= boxes[:, :3] - margin)
+                                 & (points.max(axis=0) <= boxes[:, 3:] + margin), axis=1))
 
 
 class _Builder:

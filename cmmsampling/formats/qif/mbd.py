@@ -108,8 +108,26 @@ class DatumRecord:
     faces: tuple[str, ...] = ()
 
 
+class CharacteristicList:
+    """What the records of an MBD document and its model say of their ``characteristics``."""
+
+    characteristics: list[Characteristic]
+
+    def counts(self) -> Counter:
+        """Characteristics by kind."""
+        return Counter(c.kind for c in self.characteristics)
+
+    def judged(self) -> list[Characteristic]:
+        """The characteristics this tool judges."""
+        return [c for c in self.characteristics if c.judged]
+
+    def not_judged(self) -> list[str]:
+        """One line per characteristic this tool does not judge: name, kind and why not."""
+        return [f"{c.name or c.id} ({c.kind}): not judged: {c.why_not}" for c in self.characteristics if not c.judged]
+
+
 @dataclass
-class MbdRecords:
+class MbdRecords(CharacteristicList):
     """What an MBD document states: characteristics (one per nominal, in the file's order),
     datums (by label), the faces of its B-rep (QIF ids, in the file's order, with their labels),
     the file's length units (``linear``: its geometry's, ``pmi``: its tolerances' default) and
@@ -124,17 +142,6 @@ class MbdRecords:
     pmi: str
     mm_per_unit: dict[str, float] = field(default_factory=dict)
 
-    def counts(self) -> Counter:
-        """Characteristics by kind."""
-        return Counter(c.kind for c in self.characteristics)
-
-    def judged(self) -> list[Characteristic]:
-        """The characteristics this tool judges."""
-        return [c for c in self.characteristics if c.judged]
-
-    def not_judged(self) -> list[str]:
-        """One line per characteristic this tool does not judge: name, kind and why not."""
-        return [f"{c.name or c.id} ({c.kind}): not judged: {c.why_not}" for c in self.characteristics if not c.judged]
 
 
 def read_mbd_records(path: str) -> MbdRecords:

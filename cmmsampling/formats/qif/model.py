@@ -15,11 +15,10 @@ import dataclasses
 from dataclasses import dataclass, field
 from typing import Any
 
-import numpy as np
 
 from ...geometry.validation import InputError
-from .brep import build_model, inner_points
-from .mbd import Characteristic, DatumRecord, parsed_file, records_of
+from .brep import boxes_holding, build_model, face_boxes, inner_points
+from .mbd import Characteristic, CharacteristicList, DatumRecord, parsed_file, records_of
 
 # A QIF face lies on a shape face when its points are this close to it, mm (and within
 # MATCH_SHARE of the QIF face's diagonal).
@@ -38,7 +37,7 @@ class FaceMatch:
 
 
 @dataclass
-class MbdModel:
+class MbdModel(CharacteristicList):
     """A QIF MBD model (:func:`read_mbd`): ``shape`` (a Part.Shape), ``characteristics`` (one
     Characteristic per nominal, its ``faces`` the shape's FaceN), ``datums`` (DatumRecord by
     label, with ``faces``), the file's units (``linear``, ``pmi``, ``mm_per_unit``), the QIF id
@@ -61,14 +60,6 @@ class MbdModel:
     def unmatched(self) -> list[str]:
         """QIF ids of the faces with no counterpart on the shape."""
         return [match.face_id for match in self.matches if not match.faces]
-
-    def judged(self) -> list[Characteristic]:
-        """The characteristics this tool judges."""
-        return [c for c in self.characteristics if c.judged]
-
-    def not_judged(self) -> list[str]:
-        """One line per characteristic this tool does not judge: name, kind and why not."""
-        return [f"{c.name or c.id} ({c.kind}): not judged: {c.why_not}" for c in self.characteristics if not c.judged]
 
     def match_report(self) -> str:
         """The face match as lines: the shape's source, faces matched, the largest distance,
@@ -105,10 +96,8 @@ def read_mbd(path: str, shape: Any = None) -> MbdModel:
     built = build_model(root, records.mm_per_unit[records.linear], path)
     if shape is None:
         matches = [FaceMatch(ident, (f"Face{k + 1}",), 0.0) for k, ident in enumerate(built.face_ids)]
-        model_shape, failed = built.shape, built.failed
     else:
         matches = match_faces(built.shape, built.face_ids, shape)
-        model_shape, failed = shape, built.failed
     on_shape = {match.face_id: match.faces for match in matches}
 
     def faces_of(face_ids):
@@ -119,8 +108,8 @@ def read_mbd(path: str, shape: Any = None) -> MbdModel:
 
     characteristics = [dataclasses.replace(c, faces=faces_of(c.face_ids)) for c in records.characteristics]
     datums = {label: dataclasses.replace(d, faces=faces_of(d.face_ids)) for label, d in records.datums.items()}
-    return MbdModel(path, model_shape, characteristics, datums, matches, records.linear, records.pmi,
-                    records.mm_per_unit, failed, shape is None)
+    return MbdModel(path, built.shape if shape is None else shape, characteristics, datums, matches, records.linear,
+                    records.pmi, records.mm_per_unit, built.failed, shape is None)
 
 
 def match_faces(built, face_ids, shape) -> list[FaceMatch]:
@@ -130,8 +119,7 @@ def match_faces(built, face_ids, shape) -> list[FaceMatch]:
     import Part
 
     targets = shape.Faces
-    boxes = np.array([[f.BoundBox.XMin, f.BoundBox.YMin, f.BoundBox.ZMin, f.BoundBox.XMax, f.BoundBox.YMax,
-                       f.BoundBox.ZMax] for f in targets])
+    boxes = face_boxes(targets)
     matches = []
     for ident, face in zip(face_ids, built.Faces):
         limit = min(MATCH_MM, MATCH_SHARE * face.BoundBox.DiagonalLength)
@@ -153,8 +141,7 @@ def _distances(targets, boxes, point) -> dict[int, float]:
     import Part
 
     vertex = Part.Vertex(*point)
-    near = np.flatnonzero(np.all((point >= boxes[:, :3] - MATCH_MM) & (point <= boxes[:, 3:] + MATCH_MM), axis=1))
-    return {int(k): targets[k].distToShape(vertex)[0] for k in near}
+    return {int(k): targets[k].distToShape(vertex)[0] for k in boxes_holding(boxes, point, MATCH_MM)}
 
 
 def _fewest_faces(holding: list[set[int]]) -> tuple[str, ...]:
