@@ -15,10 +15,12 @@ from ..geometry.freecad_env import import_part
 from ..geometry.validation import InputError, InputTypeError
 from ..inspection.align import Alignment
 from ..inspection.datums import DatumFit
+from ..formats.exporting import is_mbd_inspection
 from ..inspection.judge import Inspection, verdict_text, verdict_word
 from ..inspection.uncertainty import NO_UNCERTAINTY, ProfileUncertainty
 from .object_types import MEASURED_POINTS, in_document, is_measured_points
 from .objects import TypedProxy
+from .first_article import add_first_article_to_document
 from .sheets import write_inspection_report
 from .transaction import hide_results, recompute, transaction
 
@@ -37,8 +39,12 @@ def add_inspection_to_document(inspection: Inspection, doc: FreeCAD.Document,
     decision where an uncertainty was given, else PASS or FAIL) holding the
     "Measured points" (the aligned points as vertices, with their deviations, bands and the
     alignment) and the "Inspection report" spreadsheet; hides the earlier results' points,
-    substitutes and measured points (Undo shows them again). Returns the group.
+    substitutes and measured points (Undo shows them again). Returns the group. A QIF MBD model's
+    characteristics judged (an MbdInspection) become its first-article table instead
+    (:func:`cmmsampling.document.first_article.add_first_article_to_document`: the sheet).
     """
+    if is_mbd_inspection(inspection):
+        return add_first_article_to_document(inspection, doc)
     if not isinstance(inspection, Inspection):
         raise InputTypeError(f"add_inspection_to_document takes an Inspection (cmmsampling.inspect), got a "
                              f"{type(inspection).__name__}")

@@ -90,24 +90,33 @@ class ExportReport:
 @dataclass(frozen=True)
 class ResultsReport:
     """What :func:`export` wrote of an inspection: path (absolute), format, count (points),
-    profile (mm) and passed (True, False, or None without a tolerance)."""
+    profile (mm; None for a model's characteristics, each with its own value) and passed (True,
+    False, or None without a tolerance or a verdict)."""
 
     path: str
     format: str
     count: int
-    profile: float
+    profile: float | None
     passed: bool | None = None
 
     def __str__(self):
         verdict = "" if self.passed is None else f", {'PASS' if self.passed else 'FAIL'}"
-        return (f"Wrote the results of {self.count} measured points to {self.path} ({FORMATS[self.format].title}): "
-                f"profile {self.profile:.4f} mm{verdict}.")
+        figure = "" if self.profile is None else f": profile {self.profile:.4f} mm"
+        return (f"Wrote the results of {self.count} measured points to {self.path} ({FORMATS[self.format].title})"
+                f"{figure}{verdict}.")
 
 
 def is_inspection(source):
     """True for an inspection's results (cmmsampling.inspection.judge.Inspection: measured points,
     their deviations and the alignment's transform)."""
-    return all(hasattr(source, name) for name in ("deviations", "transform", "face_profiles", "measured"))
+    return (all(hasattr(source, name) for name in ("deviations", "transform", "face_profiles", "measured"))
+            or is_mbd_inspection(source))
+
+
+def is_mbd_inspection(source):
+    """True for a QIF MBD model's characteristics judged (cmmsampling.inspection.characteristics.
+    MbdInspection), whose results go into the model's own document."""
+    return all(hasattr(source, name) for name in ("characteristics", "plan", "rows", "labels"))
 
 
 def export_results(inspection, path, fmt, label=None, **asked):

@@ -48,13 +48,15 @@ class Datum:
     """A datum feature of a datum reference frame, given in precedence order (primary first).
 
     label: its letter on the drawing ('A'); face: the name of a face of the plan's part
-    ('Face3') or a Part.Face; points: where its measured contact points come from: None (the
+    ('Face3'), a tuple of such names for a datum feature of several faces (('Face43', 'Face44'):
+    a bore's two halves, a pattern of holes, coplanar faces; associated as one feature), or a
+    Part.Face; points: where its measured contact points come from: None (the
     measured file's points planned on that face, by label), a measured-points path, a PointSet
     or an (M, 3) array, mm, in the measured frame; criterion: one of DATUM_CRITERIA.
     """
 
     label: str
-    face: str | object
+    face: str | tuple[str, ...] | object
     points: str | os.PathLike | PointSet | np.ndarray | None = None
     criterion: str = "tangent"
 
@@ -191,11 +193,13 @@ def motion_names(twists: np.ndarray, length: float) -> tuple[str, ...]:
 
 
 def align_on_datums(datums: Sequence[Stage], toleranced: Stage, start: np.ndarray, locked: Sequence[str] = (),
-                    offset: float = 0.0) -> Frame:
+                    offset: float = 0.0, location_free: bool = False) -> Frame:
     """The Frame of the Stages ``datums`` (precedence order) and of ``toleranced`` (the
     toleranced surface's Stage, its criterion the inspection's alignment method), from the
     motion start (4, 4) measured -> CAD; locked: degrees of freedom no step moves; offset: mm,
-    the toleranced zone's centre from its face (+ out of the material).
+    the toleranced zone's centre from its face (+ out of the material); location_free: the
+    datums fix orientation only (ISO 1101's orientation tolerances): the toleranced surface's
+    fit floats every shift not locked as well as the turns the datums leave free.
     InputError for a datum that fixes nothing the ones before it left free, or has fewer points
     than the motions it fixes."""
     matrix = np.asarray(start, dtype=float)
@@ -216,6 +220,8 @@ def align_on_datums(datums: Sequence[Stage], toleranced: Stage, start: np.ndarra
                              link.deviations, rocking))
         links.append(link)
         first, allowed = first + len(stage.points), weak
+    if location_free:
+        allowed = with_shifts(allowed, locked)
     zone = _offset_by(toleranced.closest, offset)
     moved = transform(matrix, toleranced.points)
     held, weak = (split_motions(moved, zone(moved)[1], allowed, pivot) if toleranced.criterion != "none"
@@ -233,6 +239,14 @@ def align_on_datums(datums: Sequence[Stage], toleranced: Stage, start: np.ndarra
                           float(np.linalg.norm(moved - toleranced.points, axis=1).max()),
                           last.deviations + offset, motion_names(weak, length), False)
     return Frame(alignment, fits, links + [last])
+
+
+def with_shifts(twists: np.ndarray, locked: Sequence[str] = ()) -> np.ndarray:
+    """(6, K') an orthonormal basis of the span of twists (6, K) and the shifts not locked."""
+    shifts = free_twists(locked)[:, [name in DEGREES_OF_FREEDOM[3:] for name in DEGREES_OF_FREEDOM
+                                     if name not in locked]]
+    basis, weights, _ = np.linalg.svd(np.hstack([twists, shifts]), full_matrices=False)
+    return basis[:, weights > 1e-9]
 
 
 def _tangent_chosen(stage: Stage, matrix: np.ndarray, held: np.ndarray,

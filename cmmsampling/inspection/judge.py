@@ -76,7 +76,8 @@ class Inspection:
     labels of the points beyond an edge of their face, judged by their distance to the edge;
     datums: a DatumFit per datum of the frame the points were judged in (cmmsampling.inspection.
     datums; empty: the form profile, floated); uncertainty: the ProfileUncertainty of the
-    profile (cmmsampling.inspection.uncertainty) or None where none was given.
+    profile (cmmsampling.inspection.uncertainty) or None where none was given; location_free:
+    the datums fixed the zone's orientation only (an orientation tolerance).
     """
 
     labels: list
@@ -100,6 +101,7 @@ class Inspection:
     uncertainty: ProfileUncertainty | None = None
     planned_faces: dict = field(default_factory=dict)
     beyond_edges: list = field(default_factory=list)
+    location_free: bool = False
 
     def deviation_map(self, uv: np.ndarray, prior: Sequence[Inspection] | SeriesModel | None = None,
                       face: str | None = None) -> np.ndarray:
@@ -211,6 +213,8 @@ class Inspection:
         if not self.datums:
             return PROFILE_KINDS[self.alignment.method]
         frame = "|".join(datum.label for datum in self.datums)
+        if self.location_free:
+            return f"oriented by datums {frame}, location free: orientation and form, ISO 1101"
         return f"relative to datums {frame}: location and form, ISO 1101"
 
     def decision_text(self) -> str:
@@ -339,7 +343,7 @@ def inspect(source: object, measured: str | os.PathLike | PointSet, alignment: s
             probe_radius: float | None = None, zone_offset: float = 0.0,
             progress: Progress | None = None,
             datums: Datum | str | Sequence[Datum | str] | None = (), uncertainty: float | None = None,
-            seed: int = 0) -> Inspection:
+            seed: int = 0, location_free: bool = False) -> Inspection:
     """Judge measured points against the CAD model they were planned on.
 
     source: a Part.Face (the measured points are taken as they come), a SamplingResult, a
@@ -368,6 +372,8 @@ def inspect(source: object, measured: str | os.PathLike | PointSet, alignment: s
     uncertainty: u, mm, the CMM's probing standard uncertainty per point (MPE_P / sqrt(3)):
     the profile's expanded uncertainty by Monte Carlo (cmmsampling.inspection.uncertainty,
     seeded by ``seed``) and ISO 14253-1's decision (``Inspection.decision``).
+    location_free: the datums fix the zone's orientation only (ISO 1101's orientation
+    tolerances: perpendicularity, parallelism, angularity), its location floats.
     One alignment for all the points (a plan: the whole part). progress: callable(message) before
     each phase and after each step of the alignment (message None), returning True to cancel
     (InspectionCancelled). Returns an Inspection.
@@ -413,7 +419,7 @@ def inspect(source: object, measured: str | os.PathLike | PointSet, alignment: s
     start = None if locked else _start([source.points for source in sources] + [points],
                                        [source.nominal for source in sources] + [nominal])
     found, frame = _aligned(points, closest, alignment, locked, start, zone_offset, stages, progress,
-                            uncertainty is not None)
+                            uncertainty is not None, location_free)
     check_datum_forms([] if frame is None else frame.datums, tolerance)
     told("confirming the decisive points with OCC")
     aligned = found.apply(points)
@@ -428,14 +434,14 @@ def inspect(source: object, measured: str | os.PathLike | PointSet, alignment: s
                             zone_offset=zone_offset, normals=normals,
                             datums=[] if frame is None else _measured_datums(frame.datums, sources, stages, found),
                             planned_faces=dict(zip(planned.names, planned.faces)),
-                            beyond_edges=[read.labels[i] for i in order[0][on_edge]])
+                            beyond_edges=[read.labels[i] for i in order[0][on_edge]], location_free=location_free)
     if len(set(owner.tolist())) > 1 and alignment != "none":
         told("aligning each face alone")
         inspection.face_forms = _face_forms(points, owner, closers, planned.names, found, locked, zone_offset, notes)
     if uncertainty is not None:
         assert frame is not None   # _aligned gives the Frame where an uncertainty is asked for (linear)
         again = Again(points, closest, alignment, locked, start, zone_offset, stages, owner, len(planned.names),
-                      found.matrix)
+                      found.matrix, location_free)
         inspection.uncertainty = profile_uncertainty(
             frame, owner, planned.names, uncertainty, seed,
             lambda trials: told(f"propagating the probing uncertainty (Monte Carlo): {trials} trials"), again)
@@ -465,16 +471,18 @@ def _start(points: list[np.ndarray], nominals: list[np.ndarray]) -> np.ndarray |
 
 @dataclass
 class DatumSource:
-    """Where a datum's points come from: datum (a Datum), name: its face's name, face: the
-    Part.Face, points: (M, 3) mm contact points (measured frame), nominal: (M, 3) mm planned
-    (NaN where it brings its own points), labels: M, the points' labels."""
+    """Where a datum's points come from: datum (a Datum), name: its face's name (its faces'
+    joined by '+'), faces: its Part.Faces, points: (M, 3) mm contact points (measured frame),
+    nominal: (M, 3) mm planned (NaN where it brings its own points), labels: M, the points'
+    labels, owner: (M,) the index in faces of each point's face."""
 
     datum: Datum
     name: str
-    face: object
+    faces: list
     points: np.ndarray
     nominal: np.ndarray
     labels: list
+    owner: np.ndarray
 
 
 def datum_points(datums: Sequence[Datum], planned: Planned, order: tuple[np.ndarray, np.ndarray], owner: np.ndarray,
@@ -486,28 +494,49 @@ def datum_points(datums: Sequence[Datum], planned: Planned, order: tuple[np.ndar
     points of its own go to the datum)."""
     kept, sources = np.ones(len(order[0]), dtype=bool), []
     for datum in datums:
+        several = isinstance(datum.face, tuple)
         name = datum.face if isinstance(datum.face, str) else f"datum {datum.label}"
         if datum.points is not None:
+            if several:
+                raise InputError(f"datum {datum.label}: a datum of several faces takes its points from the plan; "
+                                 "give it without points=, or one face with its points")
             face = _datum_face(datum, planned, part)
             given = _datum_point_set(datum)
             own = _contact_points(given, probe_radius)
-            sources.append(DatumSource(datum, name, face, own, np.full_like(own, np.nan), list(given.labels)))
+            sources.append(DatumSource(datum, name, [face], own, np.full_like(own, np.nan), list(given.labels),
+                                       np.zeros(len(own), dtype=int)))
             continue
-        index = planned_face(planned, name)
-        if index is None:
-            raise InputError(f"datum {datum.label}: {name} has no planned points here; plan it with the toleranced "
-                             f"faces (plan(part, faces=[...])) or give Datum({datum.label!r}, face, points=...)")
-        name = planned.names[index]
-        rows = owner == index
+        faces = datum.face if isinstance(datum.face, tuple) else (name,)
+        indices = [_planned_datum_face(datum, planned, face) for face in faces]
+        names = [planned.names[index] for index in indices]
+        rows = np.isin(owner, indices)
         if not rows.any():
-            raise InputError(f"datum {datum.label}: none of the measured points lies on {name}; measure it or give "
-                             f"Datum({datum.label!r}, face, points=...)")
+            raise InputError(f"datum {datum.label}: none of the measured points lies on {' or '.join(names)}; "
+                             f"measure it or give Datum({datum.label!r}, face, points=...)")
         kept &= ~rows
         nominal = planned.points[order[1][rows]] if planned.points is not None else None
-        sources.append(DatumSource(datum, name, planned.faces[index], contact[order[0][rows]],
+        sources.append(DatumSource(datum, "+".join(names), [planned.faces[index] for index in indices],
+                                   contact[order[0][rows]],
                                    np.full((int(rows.sum()), 3), np.nan) if nominal is None else nominal,
-                                   [labels[row] for row in order[0][rows]]))
+                                   [labels[row] for row in order[0][rows]], _positions(indices)[owner[rows]]))
     return sources, kept
+
+
+def _positions(indices: list[int]) -> np.ndarray:
+    """(max + 1,) int: at each of the face indices its position in the list (-1 elsewhere)."""
+    positions = np.full(max(indices) + 1, -1)
+    positions[indices] = np.arange(len(indices))
+    return positions
+
+
+def _planned_datum_face(datum: Datum, planned: Planned, name: str) -> int:
+    """The index among the planned faces of datum's face ``name``; InputError where it has no
+    planned points."""
+    index = planned_face(planned, name)
+    if index is None:
+        raise InputError(f"datum {datum.label}: {name} has no planned points here; plan it with the toleranced "
+                         f"faces (plan(part, faces=[...])) or give Datum({datum.label!r}, face, points=...)")
+    return index
 
 
 def _measured_datums(fits: Sequence[DatumFit], sources: Sequence[DatumSource], stages: Sequence[Stage],
@@ -538,6 +567,7 @@ class Again:
     owner: np.ndarray
     faces: int
     matrix: np.ndarray
+    location_free: bool = False
 
     def __call__(self, errors: np.ndarray) -> np.ndarray:
         """(F,) mm: each face's profile 2 max |d - o| (0 for a face without toleranced points) of
@@ -547,28 +577,44 @@ class Again:
             stages.append(replace(stage, points=stage.points + moved[first:first + len(stage.points)]))
             first += len(stage.points)
         found, _ = _aligned(self.points + moved[first:], self.closest, self.alignment, self.locked, self.start,
-                            self.offset, stages, None, False)
+                            self.offset, stages, None, False, self.location_free)
         off = np.abs(found.deviations - self.offset)
         return np.array([2.0 * float(off[self.owner == face].max()) if np.any(self.owner == face) else 0.0
                          for face in range(self.faces)])
 
 
 def _datum_stage(source: DatumSource) -> Stage:
-    """The Stage of a datum: its points on its face's surface extended past the edges (ISO
-    5459's unlimited ideal feature), the face's raster standing for what its geometry could fix."""
-    closer = FaceCloser(source.face, bounded=False)
-    return Stage(source.datum.label, source.name, source.datum.criterion, source.points, closer, dense_nodes(closer))
+    """The Stage of a datum: its points on their faces' surfaces extended past the edges (ISO
+    5459's unlimited ideal feature; a datum of several faces associated as one), the faces'
+    rasters standing for what its geometry could fix."""
+    closers = [FaceCloser(face, bounded=False) for face in source.faces]
+    nodes = [dense_nodes(closer) for closer in closers]
+    surface = (np.concatenate([points for points, _ in nodes]), np.concatenate([normals for _, normals in nodes]))
+    if len(closers) == 1:
+        return Stage(source.datum.label, source.name, source.datum.criterion, source.points, closers[0], surface)
+
+    def closest(where: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        feet, normals = np.empty_like(where), np.empty_like(where)
+        for index, closer in enumerate(closers):
+            rows = source.owner == index
+            if rows.any():
+                feet[rows], normals[rows] = closer(where[rows])
+        return feet, normals
+
+    return Stage(source.datum.label, source.name, source.datum.criterion, source.points, closest, surface)
 
 
 def _aligned(points: np.ndarray, closest: Closest, alignment: str, locked: tuple[str, ...], start: np.ndarray | None,
              offset: float, stages: list[Stage], progress: Progress | None,
-             linear: bool) -> tuple[Alignment, Frame | None]:
-    """(Alignment, Frame) of the toleranced points: on the datum stages where there are any,
-    else the floating fit of :func:`align` (its Frame, the one link of its solution, only where
-    ``linear``: the Monte Carlo needs it; else None)."""
+             linear: bool, location_free: bool = False) -> tuple[Alignment, Frame | None]:
+    """(Alignment, Frame) of the toleranced points: on the datum stages where there are any
+    (location_free: they fix orientation only), else the floating fit of :func:`align` (its
+    Frame, the one link of its solution, only where ``linear``: the Monte Carlo needs it; else
+    None)."""
     toleranced = Stage("", "toleranced", alignment, points, closest)
     if stages:
-        frame = align_on_datums(stages, toleranced, np.eye(4) if start is None else start, locked, offset)
+        frame = align_on_datums(stages, toleranced, np.eye(4) if start is None else start, locked, offset,
+                                location_free)
         return frame.alignment, frame
     try:
         found = align(points, closest, alignment, locked, start, offset,

@@ -61,16 +61,19 @@ def datum_labels(count: int) -> list[str]:
 
 
 def plan_datums(named: list, probe: Probe | None = None, part: object = None,
-                edge_offset: float | None = None) -> list[DatumPoints]:
+                edge_offset: float | None = None, labels: list[str] | None = None) -> list[DatumPoints]:
     """The DatumPoints of the datum faces named (list of (name, Part.Face), primary first).
     probe and part: the points are kept to those the probe reaches on the part; edge_offset:
-    mm from the edges (None: DATUM_EDGE_MM). InputError naming a datum that fixes none of the
-    motions the datums before it leave free, or whose face offers too few reachable points."""
+    mm from the edges (None: DATUM_EDGE_MM); labels: each face's datum label where the faces
+    serve several frames (a model's datums: a datum of several faces names each of them), each
+    face then spread to hold every motion it can fix on its own (None: the faces are one frame,
+    A, B, C ... in order, each holding what the ones before it leave free). InputError naming a
+    datum that fixes none of the motions left free, or whose face offers too few reachable points."""
     reaching = None if probe is None else (probe, Obstacles(part))
     free = np.eye(6)
     planned = []
     margin = DATUM_EDGE_MM if edge_offset is None else float(edge_offset)
-    for label, (name, face) in zip(datum_labels(len(named)), named):
+    for label, (name, face) in zip(datum_labels(len(named)) if labels is None else labels, named):
         uv, points, normals = _candidates(face, margin)
         if reaching is not None:
             keep = reach(*reaching, points, normals).reachable
@@ -87,7 +90,7 @@ def plan_datums(named: list, probe: Probe | None = None, part: object = None,
         chosen = _spread_holding(points, normals, free, pivot, motions, least)
         found = None if reaching is None else reach(*reaching, points[chosen], normals[chosen])
         planned.append(DatumPoints(label, name, motions, uv[chosen], points[chosen], normals[chosen], found))
-        free = free_after
+        free = free_after if labels is None else free
     return planned
 
 

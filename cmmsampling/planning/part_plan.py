@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import functools
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING
 
@@ -240,7 +240,8 @@ class PartPlan:
     planned and probe: the Probe whose reach was judged (None when not); notes: sentences on how
     the faces ran where that differs from what was asked (fewer processes, failed workers);
     datums: the datum faces' names, primary first (datums A, B, C ...), whose faces come first
-    in ``faces`` and are measured first ([] for none)."""
+    in ``faces`` and are measured first ([] for none); face_tolerances: {name: mm} where each
+    face had its own tolerance (``tolerance`` is then the smallest; {} for one tolerance)."""
 
     faces: list
     mode: str
@@ -254,6 +255,7 @@ class PartPlan:
     probe: object = None
     notes: list = field(default_factory=list)
     datums: list = field(default_factory=list)
+    face_tolerances: dict = field(default_factory=dict)
     _results: dict = field(default_factory=dict, init=False, repr=False, compare=False)
     _moves: ProbeMoves | None = field(default=None, init=False, repr=False, compare=False)
 
@@ -366,7 +368,8 @@ def percent(share):
     return f"{np.floor(value * 10) / 10:.1f} %" if 99 < value < 100 else f"{value:.0f} %"
 
 
-def plan(shape_or_faces: Part.Shape | list, tolerance: float | None = None, n_total: int | None = None,
+def plan(shape_or_faces: Part.Shape | list, tolerance: float | Mapping[str, float] | None = None,
+         n_total: int | None = None,
          strategy: str = BEST_STRATEGY, *, faces: list | None = None, n_max: int = DEFAULT_MAX_POINTS,
          edge_offset: float | None = None, processes: int | None = None, scheduler: object = None,
          progress: Callable | None = None, probe: Probe | None = None, part: Part.Shape | None = None,
@@ -375,8 +378,9 @@ def plan(shape_or_faces: Part.Shape | list, tolerance: float | None = None, n_to
 
     shape_or_faces: a Part.Shape (its faces, or those numbered from 1 in ``faces``, e.g.
     [1, 3, 5]) or a list of Part.Face (named Face1.. by position) or of (name, Part.Face);
-    tolerance: mm, each face gets the fewest N that meets it (up to n_max); n_total: the points
-    of the whole part, spent to make the worst face's deviation smallest; exactly one of the two.
+    tolerance: mm, each face gets the fewest N that meets it (up to n_max), or {face name: mm}
+    a tolerance for each face planned; n_total: the points of the whole part, spent to make the
+    worst face's deviation smallest; exactly one of the two.
     strategy and ``arguments``: as in :func:`cmmsampling.sample` (workers default 1: the faces
     are the parallel part; time_limit, for the optimal strategy, default PLAN_TIME_LIMIT_S = 10 s
     per run, None: each run until it converges); edge_offset: mm, None for each face's probe edge offset;
@@ -420,17 +424,18 @@ def plan(shape_or_faces: Part.Shape | list, tolerance: float | None = None, n_to
         arguments.setdefault("time_limit", PLAN_TIME_LIMIT_S)
     start = time.perf_counter()
     if tolerance is not None:
-        tolerance = check_real("tolerance", tolerance, above=0.0)
+        tolerances = face_tolerances(tolerance, named)
         n_max = check_max_points(n_max, degree)
-        kept = kept_faces(resume, named, tolerance, strategy)
+        kept = kept_faces(resume, named, tolerances, strategy)
 
         def job(name, face):
-            return FaceJob(name, face.exportBrepToString(), "tolerance", strategy, tolerance=tolerance, n_max=n_max,
-                           arguments=arguments, part_brep=part_brep, probe=probe)
+            return FaceJob(name, face.exportBrepToString(), "tolerance", strategy, tolerance=tolerances[name],
+                           n_max=n_max, arguments=arguments, part_brep=part_brep, probe=probe)
 
         outcomes, cancelled, notes = _tolerance_runs(named, kept, job, processes, scheduler, progress)
-        result = PartPlan(_completed(outcomes, named), "tolerance", strategy, tolerance=tolerance,
-                          cancelled=cancelled, notes=notes)
+        result = PartPlan(_completed(outcomes, named), "tolerance", strategy, tolerance=min(tolerances.values()),
+                          cancelled=cancelled, notes=notes,
+                          face_tolerances=tolerances if isinstance(tolerance, Mapping) else {})
     else:
         if resume is not None:
             raise InputError("resume= continues a plan to a tolerance; plan a total of points (n_total=) anew")
@@ -443,6 +448,19 @@ def plan(shape_or_faces: Part.Shape | list, tolerance: float | None = None, n_to
         share_orientations(result)
     result.seconds = time.perf_counter() - start
     return result
+
+
+def face_tolerances(tolerance: float | Mapping[str, float], named: list) -> dict[str, float]:
+    """{name: mm} the tolerance of each named face ((name, Part.Face) pairs): one for all, or
+    a mapping that names every face; InputError for a face it leaves out or a tolerance <= 0."""
+    if not isinstance(tolerance, Mapping):
+        value = check_real("tolerance", tolerance, above=0.0)
+        return {name: value for name, _ in named}
+    missing = [name for name, _ in named if name not in tolerance]
+    if missing:
+        raise InputError(f"tolerance= names no tolerance for {missing[0]}; give one for every face planned "
+                         "({'Face3': 0.05, ...}) or one for all")
+    return {name: check_real(f"tolerance of {name}", tolerance[name], above=0.0) for name, _ in named}
 
 
 def _datum_faces(shape_or_faces, named, datums):
@@ -832,14 +850,16 @@ class PlanTally:
         return f"running for {duration_text(time.perf_counter() - self._start)}"
 
 
-def kept_faces(resume, named, tolerance, strategy):
+def kept_faces(resume, named, tolerances, strategy):
     """{name: FacePlan} of a resumed plan's faces that ran (none without one); InputError when it
-    is not a tolerance plan of these faces with this tolerance and strategy."""
+    is not a tolerance plan of these faces with these tolerances ({name: mm}) and strategy."""
     if resume is None:
         return {}
     if not isinstance(resume, PartPlan):
         raise InputTypeError(f"resume must be the PartPlan of a cancelled plan, got {type(resume).__name__}")
-    if (resume.mode, resume.tolerance, resume.strategy) != ("tolerance", tolerance, strategy):
+    tolerance = min(tolerances.values())
+    earlier = resume.face_tolerances or {name: resume.tolerance for name, _ in named}
+    if (resume.mode, resume.strategy) != ("tolerance", strategy) or earlier != tolerances:
         raise InputError(f"the plan to resume is a {resume.mode} plan with {resume.strategy} (tolerance "
                          f"{resume.tolerance} mm), not to {tolerance:g} mm with {strategy}: give the same "
                          "tolerance and strategy, or plan anew without resume=")

@@ -35,7 +35,9 @@ def plan_point_set(plan):
                 **spacing_by_face({face.name: face.settings for face in toleranced})}
     if plan.datums:
         metadata["datums"] = {face.datum: face.name for face in placed if face.datum}
-    if plan.tolerance is not None:
+    if plan.face_tolerances:
+        metadata["tolerance_mm_by_face"] = {face.name: plan.face_tolerances[face.name] for face in toleranced}
+    elif plan.tolerance is not None:
         metadata["tolerance_mm"] = plan.tolerance
     if plan.budget is not None:
         metadata["budget"] = plan.budget

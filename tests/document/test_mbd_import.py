@@ -61,3 +61,29 @@ def test_a_file_that_is_no_mbd_model_is_refused_before_a_document_is_made(tmp_pa
         mbd_import.open(str(path))
     assert str(refused.value).startswith(str(path)) and "\n" not in str(refused.value)
     assert set(FreeCAD.listDocuments()) == documents
+
+
+def test_a_models_characteristics_judged_become_a_first_article_sheet(ctc_01, tmp_path):
+    import cmmsampling
+
+    model = cmmsampling.read_mbd(ctc_01)
+    found = cmmsampling.inspect(plan := cmmsampling.plan(model, strategy="hammersley"),
+                                cmmsampling.simulate_measurement(plan, tmp_path / "m.csv", form_error=0.05).path)
+    doc = FreeCAD.newDocument("FirstArticle")
+    try:
+        doc.UndoMode = 1
+        sheet = cmmsampling.add_inspection_to_document(found, doc)
+        assert sheet.TypeId == "Spreadsheet::Sheet" and sheet.Label.startswith("First article nist_ctc_01")
+        assert sheet.get("A1").startswith("nist_ctc_01_asme1_ap242.qif: 4 of 14 characteristics judged")
+        assert sheet.get("A2") == "Characteristic" and sheet.get("K2") == "Conforms"
+        rows = {sheet.get(f"A{row}"): row for row in range(3, 3 + len(model.characteristics))}
+        assert set(rows) == {c.id for c in model.characteristics}
+        for result in found.characteristics:
+            row = rows[result.id]
+            assert sheet.get(f"H{row}") == pytest.approx(result.value, abs=5e-5)
+            assert sheet.get(f"K{row}") == ("yes" if result.passed else "no")
+        assert sheet.get(f"K{rows['1485']}") == "not judged" and "own fit" in sheet.get(f"J{rows['1485']}")
+        doc.undo()
+        assert doc.getObject("FirstArticle") is None
+    finally:
+        FreeCAD.closeDocument(doc.Name)

@@ -30,7 +30,13 @@ def write(point_set, facts, options):
 
 
 def write_results(inspection, part):
-    """The results of an Inspection (:func:`.results.write_results`), checked."""
+    """The results of an Inspection (:func:`.results.write_results`), or of a QIF MBD model's
+    characteristics (an MbdInspection: :func:`.mbd_results.write_mbd_results`, into the model's
+    own document), checked."""
+    if hasattr(inspection, "characteristics") and hasattr(inspection, "plan"):
+        from .mbd_results import write_mbd_results
+
+        return checked(write_mbd_results(inspection))
     return checked(results.write_results(inspection, part))
 
 
