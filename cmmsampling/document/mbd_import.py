@@ -24,6 +24,9 @@ def add_mbd_to_document(model, doc, name):
     with transaction(doc, "Import QIF MBD model"):
         part = doc.addObject("Part::Feature", name)
         part.Shape = model.shape
+        part.addProperty("App::PropertyFile", "MbdFile", "QIF MBD",
+                         "The QIF MBD model the part was read from: Plan part plans its characteristics")
+        part.MbdFile = model.path
         sheet = doc.addObject("Spreadsheet::Sheet", "Characteristics")
         sheet.Label = f"Characteristics {part.Label}"
         rows = characteristic_rows(model)

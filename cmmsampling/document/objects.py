@@ -289,12 +289,17 @@ class PartPlanGroup(TypedProxy):
     @staticmethod
     def add_properties(obj):
         """Create the plan's stated properties it lacks (a group made by an earlier version has none):
-        Datums, the datum faces primary first, and Tolerance, the profile tolerance planned to."""
+        Datums, the datum faces primary first, Tolerance, the profile tolerance planned to, and for
+        a plan from a QIF MBD model its file (MbdFile) and the characteristics planned."""
         for kind, name, doc in (
                 ("App::PropertyStringList", "Datums",
                  "The datum faces, primary first (datums A, B, C): measured first, the part's frame set on them"),
                 ("App::PropertyLength", "Tolerance",
-                 "The profile tolerance the plan was made to (mm); 0 for a plan to a total of points")):
+                 "The profile tolerance the plan was made to (mm); 0 for a plan to a total of points"),
+                ("App::PropertyFile", "MbdFile", "The QIF MBD model whose characteristics the plan was made from "
+                 "('' for a plan of faces)"),
+                ("App::PropertyStringList", "Characteristics",
+                 "The model's characteristics planned: id, kind, tolerance, datums, faces")):
             if name not in obj.PropertiesList:
                 obj.addProperty(kind, name, "Plan", doc)
                 obj.setEditorMode(name, 1)

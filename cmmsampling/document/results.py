@@ -12,6 +12,7 @@ from ..formats.pointset import PointSet
 from ..geometry.freecad_env import import_part
 from ..geometry.surface import lies_on
 from ..geometry.validation import InputError, InputTypeError
+from ..planning.mbd_plan import MbdPlan
 from ..planning.part_plan import DATUM_STRATEGY, PartPlan
 from ..access.probe_moves import probe_moves
 from ..strategies.result import SamplingResult
@@ -104,6 +105,7 @@ def add_plan_to_document(plan: PartPlan, doc: FreeCAD.Document, part: FreeCAD.Do
         group = make_plan_group(doc)
         group.Datums = list(plan.datums)
         group.Tolerance = plan.tolerance or 0.0
+        _state_model(group, plan)
         if hide_others:
             hide_results(doc)
         group.Label = f"Plan {part.Label} ({plan.strategy})"
@@ -326,3 +328,12 @@ def _json_value(value):
     if isinstance(value, np.generic):
         return value.item()
     raise TypeError(f"{type(value).__name__} is not JSON-serialisable")
+
+
+def _state_model(group: FreeCAD.DocumentObject, plan: PartPlan) -> None:
+    """A plan from a QIF MBD model (an MbdPlan) states the model's file and the characteristics
+    planned on its group (MbdFile, Characteristics); a plan of faces states none."""
+    if not isinstance(plan, MbdPlan):
+        return
+    group.MbdFile = plan.model.path
+    group.Characteristics = [f"{key} {text}" for key, text in plan.stated().items()]

@@ -121,19 +121,27 @@ def echo_study(face, run, alive=True):
 
 def add_plan(part, run, result, replace=None):
     """Write a finished plan into the part's document through the console API, echoed so that it
-    replays as a macro: ``plan = cmmsampling.plan(<part>.Shape, ...)`` (handed the plan made in
+    replays as a macro: ``plan = cmmsampling.plan(<part>.Shape, ...)`` (for a QIF MBD model's
+    plan, ``mbd = cmmsampling.read_mbd(<file>, shape=<part>.Shape)`` first, then
+    ``cmmsampling.plan(mbd, ...)``; handed the model and the plan made in
     the worker thread, so it does not run again here; ``resume=plan`` where it resumed the
     cancelled plan the console's ``plan`` holds) and ``add_plan_to_document`` (replacing the
     group ``replace`` of that cancelled plan). Returns the plan's group."""
     doc = f"App.getDocument({part.Document.Name!r})"
     part_expr = f"{doc}.getObject({part.Name!r})"
-    call = ", ".join([f"{part_expr}.Shape"] + [f"{key}={'plan' if key == 'resume' else argument_text(value)}"
-                                               for key, value in run.arguments.items()])
+    source, handed_source = f"{part_expr}.Shape", run.shape
     note = "ran in the task panel"
     if result.cancelled:
         note += f", cancelled after {counted(len(result.placed), 'face')} (a replay runs it whole)"
     FreeCADGui.doCommand("import cmmsampling")
-    with handed("plan", run.shape, run.arguments, result):
+    if run.model_file:
+        with handed("read_mbd", run.model_file, {"shape": run.shape}, run.model):
+            FreeCADGui.doCommand(f"mbd = cmmsampling.read_mbd({run.model_file!r}, shape={part_expr}.Shape)"
+                                 "  # the part's QIF MBD model")
+        source, handed_source = "mbd", run.model
+    call = ", ".join([source] + [f"{key}={'plan' if key == 'resume' else argument_text(value)}"
+                                 for key, value in run.arguments.items()])
+    with handed("plan", handed_source, run.arguments, result):
         FreeCADGui.doCommand(f"plan = cmmsampling.plan({call})  # {note}")
     replacing = "" if replace is None else f", replace={doc}.getObject({replace.Name!r})"
     FreeCADGui.doCommand(f"group = cmmsampling.add_plan_to_document(plan, {doc}, {part_expr}{replacing})")

@@ -15,6 +15,7 @@ from PySide import QtCore, QtGui
 from ..document import settings
 from ..formats.registry import measured_filter
 from ..inspection.align import ALIGNMENTS, DEGREES_OF_FREEDOM
+from ..inspection.characteristics import MbdInspection, inspect_model_file
 from ..inspection.judge import InspectionCancelled, inspect, stated, verdict_words
 from . import icon
 from .background import BackgroundTask, behind_progress
@@ -42,7 +43,7 @@ class InspectDialog(QtGui.QDialog):
     where the file dialog starts without a stored file; states: (datum faces, tolerance mm or
     None) a plan states, shown instead of the stored ones."""
 
-    def __init__(self, title, folder, parent=None, states=((), None)):
+    def __init__(self, title, folder, parent=None, states=((), None), model=""):
         super().__init__(parent)
         self.setObjectName("InspectMeasured")
         self.setWindowTitle(f"Inspect measured points: {title}")
@@ -113,7 +114,22 @@ class InspectDialog(QtGui.QDialog):
         layout.addRow(self.buttons)
         self.path.textChanged.connect(self.check)
         self.check()
+        if model:
+            self.model_states(model)
         self.resize(560, self.sizeHint().height())
+
+    def model_states(self, model):
+        """A plan of a QIF MBD model (its file ``model``) states each characteristic's tolerance,
+        datums and zone: those fields are off and say so; the file and u are asked."""
+        why = (f"{os.path.basename(model)} states each characteristic's tolerance, datums and zone: each is judged "
+               "with its own (Inspect measured points of a model's plan)")
+        for widget in (self.alignment, *self.locked.values(), self.tolerance, self.zone_offset, self.datums):
+            widget.setEnabled(False)
+            widget.setToolTip(why)
+        self.datums.setText("")
+        self.datums.setPlaceholderText(f"each characteristic's own, from {os.path.basename(model)}")
+        self.tolerance.setValue(0.0)
+        self.tolerance.setSpecialValueText("each characteristic's own")
 
     def browse(self):
         """Pick the measured file."""
@@ -162,12 +178,21 @@ def mm_box(parent, name, limits, value, tip):
 def ask_inspection(points):
     """Ask what to inspect a probe-points object or a part plan's group with (a plan's datums and
     tolerance shown as it states them); None when the user cancels, else the keyword arguments
-    of cmmsampling.inspect (see InspectDialog.arguments)."""
+    of cmmsampling.inspect (see InspectDialog.arguments; for a QIF MBD model's plan, the file and
+    u only: the model states the rest)."""
     doc = points.Document
     folder = os.path.dirname(doc.FileName) if doc.FileName else os.path.expanduser("~")
     groups = [o.Label for o in points.InList if o.isDerivedFrom("App::DocumentObjectGroup")]
-    dialog = InspectDialog((groups or [points.Label])[0], folder, FreeCADGui.getMainWindow(), stated(points))
-    return asked(dialog, InspectDialog.arguments)
+    model = getattr(points, "MbdFile", "")
+    dialog = InspectDialog((groups or [points.Label])[0], folder, FreeCADGui.getMainWindow(),
+                           ((), None) if model else stated(points), model)
+    if not model:
+        return asked(dialog, InspectDialog.arguments)
+    chosen = asked(dialog, InspectDialog.arguments)
+    if chosen is None:
+        return None
+    return {"measured": chosen["measured"],
+            **({"uncertainty": chosen["uncertainty"]} if chosen["uncertainty"] is not None else {})}
 
 
 def inspection_call(points, arguments):
@@ -176,13 +201,13 @@ def inspection_call(points, arguments):
     doc = f"App.getDocument({points.Document.Name!r})"
     source = f"{doc}.getObject({points.Name!r})"
     words = [source, repr(arguments["measured"])]
-    if arguments["alignment"] != "min_max":
+    if arguments.get("alignment", "min_max") != "min_max":
         words.append(f"alignment={arguments['alignment']!r}")
-    if arguments["locked"]:
+    if arguments.get("locked"):
         words.append(f"locked={arguments['locked']!r}")
-    if arguments["tolerance"] is not None:
+    if arguments.get("tolerance") is not None:
         words.append(f"tolerance={arguments['tolerance']!r}")
-    if arguments["zone_offset"]:
+    if arguments.get("zone_offset"):
         words.append(f"zone_offset={arguments['zone_offset']!r}")
     if arguments.get("datums"):
         words.append(f"datums={tuple(arguments['datums'])!r}")
@@ -194,7 +219,14 @@ def inspection_call(points, arguments):
 
 def report_inspection(inspection):
     """The inspection's summary and its alignment in the Report view, its profile, verdict and the
-    motions its points do not hold in the status bar."""
+    motions its points do not hold in the status bar (a model's characteristics judged: the
+    first-article table in the Report view, its last line in the status bar)."""
+    if isinstance(inspection, MbdInspection):
+        table = inspection.table()
+        for line in table.splitlines() + [f"not judged: {line}" for line in inspection.not_judged()]:
+            FreeCAD.Console.PrintMessage(f"cmmsampling: {line}\n")
+        FreeCADGui.getMainWindow().statusBar().showMessage(f"First article: {table.splitlines()[-1]}", 20000)
+        return
     for line in inspection.summary().splitlines():
         FreeCAD.Console.PrintMessage(f"cmmsampling: {line}\n")
     FreeCAD.Console.PrintMessage(f"cmmsampling: alignment (measured -> CAD, applied to the points; the part is "
@@ -216,12 +248,13 @@ def placement_text(placement):
 
 class BackgroundInspection(BackgroundTask):
     """cmmsampling.inspect of what was planned (a Planned, read from the document by the GUI
-    thread) with the dialog's arguments, in a daemon thread; ``message`` the phase under way,
+    thread) with the dialog's arguments, in a daemon thread (model: (file, characteristic ids) of
+    a QIF MBD model's plan, each characteristic judged); ``message`` the phase under way,
     ``steps`` the alignment's steps so far; ``cancel()`` stops it at its next phase or step."""
 
-    def __init__(self, planned, arguments):
+    def __init__(self, planned, arguments, model=None):
         super().__init__("cmmsampling-inspection")
-        self.planned, self.arguments = planned, dict(arguments)
+        self.planned, self.arguments, self.model = planned, dict(arguments), model
         self.message, self.steps, self.inspection = "starting", 0, None
 
     def cancel(self):
@@ -235,6 +268,10 @@ class BackgroundInspection(BackgroundTask):
         return self.cancelled
 
     def _work(self):
+        if self.model is not None:
+            path, ids = self.model
+            self.inspection = inspect_model_file(path, ids, self.planned, progress=self._progress, **self.arguments)
+            return
         self.inspection = inspect(self.planned, progress=self._progress, **self.arguments)
 
 
@@ -242,7 +279,9 @@ def run_with_progress(points, arguments):
     """Inspect the points' measurement in the background behind a progress dialog with Cancel:
     the Inspection, None when the user cancelled (nothing judged), or the run's exception raised
     here."""
-    run = BackgroundInspection(points.Proxy.planned(points), arguments)
+    model = getattr(points, "MbdFile", "")
+    stated_model = (model, [line.split()[0] for line in points.Characteristics]) if model else None
+    run = BackgroundInspection(points.Proxy.planned(points), arguments, stated_model)
     cancelled = behind_progress(run, "Inspect measured points", "InspectionProgress", lambda: (
         f"Inspecting the measured points of {points.Label}: {run.message}"
         + (f", step {run.steps}" if run.steps else "") + "..."))

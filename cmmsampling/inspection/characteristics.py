@@ -33,10 +33,12 @@ import numpy as np
 
 from ..formats.files import write_atomically
 from ..formats.pointset import PointSet
+from ..formats.qif.model import read_mbd
 from ..geometry.freecad_env import import_part
 from ..geometry.validation import InputError
+from ..planning.mbd_plan import ModelCharacteristics
 from .datums import Datum
-from .judge import Inspection, Planned, _measured_point_set, _planned, inspect, pair, planned_face
+from .judge import Inspection, InspectionCancelled, Planned, _measured_point_set, _planned, inspect, pair, planned_face
 
 Part = import_part()
 
@@ -106,7 +108,8 @@ class CharacteristicResult:
 
 @dataclass
 class MbdInspection:
-    """A QIF MBD model's characteristics judged (:func:`inspect_mbd`): plan (the MbdPlan),
+    """A QIF MBD model's characteristics judged (:func:`inspect_mbd`): plan (the MbdPlan, or the
+    ModelCharacteristics of a plan in a document),
     characteristics (a CharacteristicResult per characteristic planned, in the model's order),
     measured_file ('' for a PointSet), probing uncertainty u mm (None where none was given)."""
 
@@ -208,9 +211,44 @@ def inspect_mbd(mbd_plan: Any, measured: str | os.PathLike | PointSet, *, uncert
     standard uncertainty per point (each value's U and ISO 14253-1 decision); probe_radius, seed
     and progress as inspect() takes them (progress's messages name the characteristic).
     Returns an MbdInspection."""
+    return judge_model(mbd_plan, _planned(mbd_plan, mbd_plan.model.shape), measured, uncertainty, probe_radius,
+                       seed, progress)
+
+
+def inspect_model_group(group: Any, measured: str | os.PathLike | PointSet, *, uncertainty: float | None = None,
+                        probe_radius: float | None = None, seed: int = 0,
+                        progress: Callable[[str | None], bool | None] | None = None) -> MbdInspection:
+    """:func:`inspect_mbd` of a plan of a QIF MBD model in a document (its group, whose MbdFile
+    and Characteristics state the model and what was planned; its points, the planned ones),
+    the model read again from its file (its faces named as the part read from it)."""
+    if progress is not None and progress("reading the model's tolerances"):
+        raise InspectionCancelled
+    return inspect_model_file(group.MbdFile, [line.split()[0] for line in group.Characteristics],
+                              group.Proxy.planned(group), measured, uncertainty=uncertainty, probe_radius=probe_radius,
+                              seed=seed, progress=progress)
+
+
+def inspect_model_file(path: str, ids: Sequence[str], planned: Planned, measured: str | os.PathLike | PointSet, *,
+                       uncertainty: float | None = None, probe_radius: float | None = None, seed: int = 0,
+                       progress: Callable[[str | None], bool | None] | None = None) -> MbdInspection:
+    """:func:`inspect_model_group` of its pieces (read from the document by the GUI thread): the
+    model's file (path), the ids of the characteristics planned, and the planned points."""
+    model = read_mbd(path)
+    judged = model.judged()
+    wanted = [c for c in judged if c.id in ids]
+    record = ModelCharacteristics(model, wanted, [(c, "not in the document's plan") for c in judged if c.id not in ids],
+                                  {label: tuple(model.datums[label].faces) for c in wanted for label in c.datums})
+    return judge_model(record, planned, measured, uncertainty, probe_radius, seed, progress)
+
+
+def judge_model(record: Any, planned: Planned, measured: str | os.PathLike | PointSet, uncertainty: float | None,
+                probe_radius: float | None, seed: int,
+                progress: Callable[[str | None], bool | None] | None) -> MbdInspection:
+    """The MbdInspection of a model's characteristics (record: ModelCharacteristics, an MbdPlan
+    among them) from the measured points of what was planned (planned: its Planned)."""
     read = _measured_point_set(measured)
-    planned = _planned(mbd_plan, mbd_plan.model.shape)
     labelled, notes = _labelled(planned, read)
+    mbd_plan = record
     results = []
     for k, c in enumerate(mbd_plan.characteristics, start=1):
         def told(message: str | None, c: Any = c, k: int = k) -> bool | None:
@@ -236,7 +274,7 @@ def judge_characteristic(c: Any, mbd_plan: Any, planned: Planned, measured: Poin
     wanted = {label.casefold() for label in part.labels}
     rows = np.array([label.casefold() in wanted for label in measured.labels], dtype=bool)
     own = {label.casefold() for label, face in zip(part.labels, np.array(part.names)[part.owner])
-           if face in c.faces}
+           if face.split(":")[-1] in c.faces}
     count = sum(label.casefold() in own for label in measured.labels)
     if not count:
         return CharacteristicResult(c, None, None, why="none of the points on its faces was measured")

@@ -11,7 +11,7 @@ from typing import Any
 from ..formats.pointset import PointSet
 from ..geometry.validation import InputError
 from ..planning.mbd_plan import MbdPlan
-from .characteristics import MbdInspection, inspect_mbd
+from .characteristics import MbdInspection, inspect_mbd, inspect_model_group
 from .judge import Inspection
 from .judge import inspect as inspect_points
 
@@ -25,15 +25,19 @@ def inspect(source: object, measured: str | os.PathLike | PointSet, *arguments: 
 
     source, measured, arguments and options as :func:`cmmsampling.inspection.judge.inspect`
     takes them (an Inspection); or source the plan of a QIF MBD model (``plan(read_mbd(path))``,
-    an MbdPlan): each of its characteristics judged with its own tolerance and datums (an
-    MbdInspection, :mod:`cmmsampling.inspection.characteristics`), taking uncertainty,
+    an MbdPlan, or its group in a document: its MbdFile set): each of its characteristics judged
+    with its own tolerance and datums (an MbdInspection,
+    :mod:`cmmsampling.inspection.characteristics`), taking uncertainty,
     probe_radius, seed and progress; InputError for any other option (the model states them).
     """
-    if not isinstance(source, MbdPlan):
+    model_group = bool(getattr(source, "MbdFile", "")) and hasattr(source, "Proxy")
+    if not isinstance(source, MbdPlan) and not model_group:
         return inspect_points(source, measured, *arguments, **options)
     other = sorted(set(options) - set(MODEL_OPTIONS))
     if arguments or other:
         named = ", ".join(f"{name}=" for name in other) or "the positional options"
         raise InputError(f"a QIF MBD model's plan is judged by each characteristic's own tolerance and datums; "
                          f"leave {named} out (it takes {', '.join(MODEL_OPTIONS)})")
+    if model_group:
+        return inspect_model_group(source, measured, **options)
     return inspect_mbd(source, measured, **options)

@@ -25,32 +25,42 @@ from .plan_points import share_orientations
 
 
 @dataclass
-class MbdPlan(PartPlan):
-    """The plan of a QIF MBD model: a PartPlan of its faces (the datum-only faces first, each
-    with its datum's label; ``face_tolerances`` each face's) that knows the model: model
-    (cmmsampling.formats.qif.model.MbdModel); characteristics: the judged characteristics
-    planned; unplanned: (Characteristic, why) for judged ones that could not be; datum_faces:
-    {label: its faces (FaceN)} of the datums the planned characteristics name."""
+class ModelCharacteristics:
+    """What a plan of a QIF MBD model judges: model (cmmsampling.formats.qif.model.MbdModel);
+    characteristics: the judged characteristics planned; unplanned: (Characteristic, why) for
+    judged ones that could not be; datum_faces: {label: its faces (FaceN)} of the datums the
+    planned characteristics name."""
 
     model: Any = None
     characteristics: list = field(default_factory=list)
     unplanned: list = field(default_factory=list)
     datum_faces: dict = field(default_factory=dict)
 
-    def point_set(self) -> PointSet:
-        """The plan's points (PartPlan.point_set), the model's file and each planned
-        characteristic (its id, kind, tolerance, datums and faces) in its metadata."""
-        points = super().point_set()
-        stated = {c.id: f"{c.kind} {c.tolerance:.6g} mm" + (f" to {'|'.join(c.datums)}" if c.datums else "")
-                  + f" on {' '.join(c.faces)}" for c in self.characteristics}
-        metadata = {**points.metadata, "mbd": self.model.path, "characteristics": stated,
-                    "datum_faces": {label: list(faces) for label, faces in self.datum_faces.items()}}
-        return replace(points, metadata=metadata)
+    def stated(self) -> dict[str, str]:
+        """{id: 'Flatness 0.2 mm on Face36'} each characteristic planned: kind, tolerance, datums
+        and faces."""
+        return {c.id: f"{c.kind} {c.tolerance:.6g} mm" + (f" to {'|'.join(c.datums)}" if c.datums else "")
+                + f" on {' '.join(c.faces)}" for c in self.characteristics}
 
     def not_planned(self) -> list[str]:
         """One line per characteristic of the model this plan does not judge, and why: the
         kinds this tool does not judge, then the judged ones that could not be planned."""
         return self.model.not_judged() + [f"{c.id} {c.name or c.kind} ({c.kind}): {why}" for c, why in self.unplanned]
+
+
+@dataclass
+class MbdPlan(ModelCharacteristics, PartPlan):
+    """The plan of a QIF MBD model: a PartPlan of its faces (the datum-only faces first, each
+    with its datum's label; ``face_tolerances`` each face's) with what it judges
+    (ModelCharacteristics: the model, the characteristics planned and not, the datums' faces)."""
+
+    def point_set(self) -> PointSet:
+        """The plan's points (PartPlan.point_set), the model's file and each planned
+        characteristic (its id, kind, tolerance, datums and faces) in its metadata."""
+        points = super().point_set()
+        metadata = {**points.metadata, "mbd": self.model.path, "characteristics": self.stated(),
+                    "datum_faces": {label: list(faces) for label, faces in self.datum_faces.items()}}
+        return replace(points, metadata=metadata)
 
     def table(self) -> str:
         """The characteristics planned (id, kind, tolerance, datums, faces, points), then those not

@@ -87,3 +87,25 @@ def test_a_models_characteristics_judged_become_a_first_article_sheet(ctc_01, tm
         assert doc.getObject("FirstArticle") is None
     finally:
         FreeCAD.closeDocument(doc.Name)
+
+
+def test_a_models_plan_in_the_document_states_the_model_and_is_judged_as_the_plan_is(ctc_01, tmp_path):
+    import cmmsampling
+
+    doc = mbd_import.open(ctc_01)
+    try:
+        part = doc.getObject("nist_ctc_01_asme1_ap242")
+        plan = cmmsampling.plan(cmmsampling.read_mbd(part.MbdFile, shape=part.Shape), strategy="hammersley",
+                                n_max=25)
+        group = cmmsampling.add_plan_to_document(plan, doc, part)
+        assert group.MbdFile == ctc_01 and [line.split()[0] for line in group.Characteristics] == \
+            [c.id for c in plan.characteristics]
+        measured = cmmsampling.simulate_measurement(group, tmp_path / "m.csv", form_error=0.05, seed=3).path
+        in_document = cmmsampling.inspect(group, measured)
+        in_hand = cmmsampling.inspect(plan, measured)
+        assert [(r.id, r.passed) for r in in_document.characteristics] == \
+            [(r.id, r.passed) for r in in_hand.characteristics]
+        for there, here in zip(in_document.characteristics, in_hand.characteristics):
+            assert there.value == pytest.approx(here.value, abs=1e-9) and there.points == here.points
+    finally:
+        FreeCAD.closeDocument(doc.Name)

@@ -645,3 +645,106 @@ def test_a_plan_hidden_before_saving_stays_hidden_when_reopened(part_doc, tmp_pa
         assert {obj.Name: bool(obj.ViewObject.Visibility) for obj in doc.Objects} == saved
     finally:
         FreeCAD.closeDocument(doc.Name)
+
+
+def test_a_part_read_from_a_qif_mbd_model_plans_its_characteristics(workbench, monkeypatch, artifacts):
+    """Plan part on NIST's ctc_01 opened from its QIF MBD file: the goal is the model's own
+    tolerances (the Datums field and the selection not used); the worker reads the model and
+    plans each characteristic it judges; the group states the model and its characteristics; the
+    echo reads the model and plans from it, handed what the panel made."""
+    from support.mbd import shared_mbd
+
+    from cmmsampling.document import mbd_import
+    from cmmsampling.planning.mbd_plan import MbdPlan
+
+    path = shared_mbd("nist_ctc_01_asme1_ap242.qif")
+    doc = mbd_import.open(path)
+    try:
+        part = doc.getObject("nist_ctc_01_asme1_ap242")
+        assert part.MbdFile == path
+        hold = hold_plan_at(monkeypatch, 999)
+        FreeCADGui.Selection.clearSelection()
+        FreeCADGui.Selection.addSelection(part)
+        FreeCADGui.runCommand(commands.PlanPart.NAME)
+        assert wait_until(lambda: plan_form() is not None, 5), commands.PlanPart().reason()
+        form = plan_form()
+        by_model = child(form, "byModel")
+        assert by_model.isChecked() and by_model.isVisible() and "nist_ctc_01" in by_model.toolTip()
+        assert not child(form, "datums").isEnabled() and not form.tolerance.isEnabled()
+        assert not form.points.isEnabled()
+        fill(form, "hammersley", grid=20, n_max=25, processes=1)
+        form.grab().save(os.path.join(artifacts, "plan_part_from_model.png"))
+        task_button(OK).click()
+        assert wait_until(lambda: not FreeCADGui.Control.activeDialog(), 240), form.status.text()
+        [made] = hold.plans
+        assert isinstance(made, MbdPlan) and len(hold.ended) == 1, "planned once, in the worker"
+        judged = {c.id for c in made.model.judged()}
+        assert {c.id for c in made.characteristics} | {c.id for c, _ in made.unplanned} == judged
+        group = next(o for o in doc.Objects if is_part_plan(o))
+        assert group.MbdFile == path and len(group.Characteristics) == len(made.characteristics)
+        console = dock_text("Python console")
+        assert f"mbd = cmmsampling.read_mbd({path!r}, shape=" in console
+        assert "plan = cmmsampling.plan(mbd, strategy='hammersley'" in console
+        assert __main__.plan is made and __main__.mbd is made.model
+    finally:
+        FreeCAD.closeDocument(doc.Name)
+
+
+def test_inspect_of_a_models_plan_judges_each_characteristic_into_a_first_article_sheet(workbench, tmp_path,
+                                                                                       artifacts):
+    """Inspect measured points on the plan group of NIST's ctc_01 read from its QIF MBD file: the
+    dialog asks the file and u only (the model states the rest); each characteristic is judged as
+    cmmsampling.inspect of the plan judges it, into a First article sheet; the echo is handed the
+    inspection made in the background."""
+    import cmmsampling
+    from support.mbd import shared_mbd
+
+    from cmmsampling.document import mbd_import
+    from cmmsampling.gui import inspect_dialog
+
+    from .helpers import handle_dialog
+
+    path = shared_mbd("nist_ctc_01_asme1_ap242.qif")
+    doc = mbd_import.open(path)
+    try:
+        part = doc.getObject("nist_ctc_01_asme1_ap242")
+        plan = cmmsampling.plan(cmmsampling.read_mbd(path, shape=part.Shape), strategy="hammersley", n_max=25)
+        group = cmmsampling.add_plan_to_document(plan, doc, part)
+        measured = str(tmp_path / "ctc_01.csv")
+        cmmsampling.simulate_measurement(group, measured, form_error=0.1, seed=5, misplacement={"rz": 0.3, "x": 0.5})
+        seen = {}
+
+        def choose(dialog):
+            seen["off"] = [not dialog.tolerance.isEnabled(), not dialog.datums.isEnabled(),
+                           not dialog.alignment.isEnabled()]
+            dialog.path.setText(measured)
+            dialog.uncertainty.setValue(0.002)
+            dialog.grab().save(os.path.join(artifacts, "inspect_model_plan.png"))
+            dialog.accept()
+
+        calls = []
+        judged = inspect_dialog.inspect_model_file
+
+        def counted_run(*args, **kwargs):
+            calls.append(args[0])
+            return judged(*args, **kwargs)
+
+        inspect_dialog.inspect_model_file = counted_run
+        try:
+            FreeCADGui.Selection.clearSelection()
+            FreeCADGui.Selection.addSelection(group)
+            handle_dialog(inspect_dialog.InspectDialog, lambda: FreeCADGui.runCommand(commands.InspectMeasured.NAME),
+                          choose, 120)
+        finally:
+            inspect_dialog.inspect_model_file = judged
+        assert seen["off"] == [True, True, True] and calls == [path]
+        [sheet] = [o for o in doc.Objects if o.Label.startswith("First article nist_ctc_01")]
+        expected = cmmsampling.inspect(plan, measured, uncertainty=0.002)
+        rows = {sheet.get(f"A{row}"): row for row in range(3, 3 + len(plan.model.characteristics))}
+        for result in expected.characteristics:
+            assert sheet.get(f"H{rows[result.id]}") == pytest.approx(result.value, abs=5e-5)
+            assert sheet.get(f"K{rows[result.id]}") == result.conforms
+        assert __main__.inspection.characteristics[0].value == pytest.approx(expected.characteristics[0].value)
+        assert "inspection = cmmsampling.inspect(" in dock_text("Python console")
+    finally:
+        FreeCAD.closeDocument(doc.Name)

@@ -1,7 +1,7 @@
 """The README's example from a QIF MBD model's tolerances to its results runs as written (the
-model's path put in), on NIST's ftc_06: no tolerance or datum typed, a results document the
-schemas accept with a measurement of every characteristic planned, and the first-article page.
-The same chain on all four shared models, with known errors: tests/inspection/test_mbd_inspect.py."""
+model's path put in) on each of NIST's four models: no tolerance or datum typed, a results
+document the schemas accept with a measurement of every characteristic planned, and the
+first-article page. The same chain with known errors: tests/inspection/test_mbd_inspect.py."""
 import os
 import re
 
@@ -10,7 +10,7 @@ import pytest
 import cmmsampling
 from cmmsampling.formats.qif.mbd_results import read_mbd_results
 from cmmsampling.formats.qif.schema import schema_errors
-from support.mbd import shared_mbd
+from support.mbd import MODELS, shared_mbd
 from support.paths import ROOT
 
 pytestmark = pytest.mark.once
@@ -25,8 +25,9 @@ def readme_mbd_example():
     return found[0]
 
 
-def test_the_readme_example_runs_from_the_model_to_its_results(tmp_path, monkeypatch):
-    path = shared_mbd("nist_ftc_06_asme1_ap242.qif")
+@pytest.mark.parametrize("model", MODELS)
+def test_the_readme_example_runs_from_the_model_to_its_results(tmp_path, monkeypatch, model):
+    path = shared_mbd(f"{model}.qif")
     code = readme_mbd_example().replace('"nist_ftc_06_asme1_ap242.qif"', repr(path))
     assert repr(path) in code and "tolerance=" not in code and "datums=" not in code
     monkeypatch.chdir(tmp_path)

@@ -1,7 +1,10 @@
 """*Plan part*: probe points on many faces of one part, to a tolerance or a total of points.
 
 The task panel composes a ``cmmsampling.plan(shape, faces=[...], ...)`` call for the selected
-faces (or every face of a part selected whole); the plan runs in a worker thread
+faces (or every face of a part selected whole), or, for a part read from a QIF MBD model (File >
+Open of a .qif: its MbdFile), offers the model's own tolerances as the goal:
+``cmmsampling.plan(cmmsampling.read_mbd(file, shape=part.Shape), ...)`` plans each characteristic
+the model states with its tolerance and datums (the model read in the worker); the plan runs in a worker thread
 (:class:`BackgroundPlan`) polled by a QTimer, the faces on local processes, with a progress bar
 of faces done and a line per face as it ends. Cancel stops the faces under way and keeps those
 done; the panel then offers Resume, which plans the faces not run with the same values and puts
@@ -19,7 +22,8 @@ from ...access.probe import PROBES
 from ...document import settings
 from ...document.object_types import in_document
 from ...fitting.deviation import DEFAULT_GRID
-from ...planning.part_plan import CANCELLED_REASON, PLAN_TIME_LIMIT_S, plan
+from ...planning.part_plan import CANCELLED_REASON, PLAN_TIME_LIMIT_S
+from ...planning.plans import plan
 from ...planning.points_needed import DEFAULT_MAX_POINTS
 from ...strategies.sampling import BEST_STRATEGY, STRATEGIES, self_contained
 from .. import counted
@@ -117,6 +121,21 @@ def plan_arguments(values, numbers):
     return arguments
 
 
+def model_plan_arguments(values):
+    """plan()'s keyword arguments for a QIF MBD model's plan: the panel's values but the goal, the
+    faces and the datums, which the model states."""
+    arguments = plan_arguments({**values, "by_tolerance": True, "datums": ""}, [])
+    for stated in ("faces", "tolerance"):
+        arguments.pop(stated)
+    return arguments
+
+
+def model_file(obj):
+    """The QIF MBD file a part was read from (its MbdFile, where the file is still there), else ''."""
+    path = getattr(obj, "MbdFile", "") or ""
+    return path if path and os.path.isfile(path) else ""
+
+
 def part_text(obj, numbers):
     """'Body: 3 of 12 faces (Face1, Face4, Face7)' or 'Body: all 12 faces'."""
     count = len(obj.Shape.Faces)
@@ -127,7 +146,8 @@ def part_text(obj, numbers):
 
 
 class BackgroundPlan(BackgroundTask):
-    """Runs ``plan(shape, progress=..., **arguments)`` in a daemon thread.
+    """Runs ``plan(shape, progress=..., **arguments)`` in a daemon thread (with model_file, a
+    QIF MBD file: ``plan(read_mbd(model_file, shape=shape), ...)``, the model kept in ``model``).
 
     The GUI thread polls ``done``/``total`` (faces), ``lines`` (one per face done, see
     FacePlan.line), ``tally`` (faces done, points so far, time left, renewed about every second),
@@ -138,10 +158,12 @@ class BackgroundPlan(BackgroundTask):
     never touches the document.
     """
 
-    def __init__(self, shape, arguments):
+    def __init__(self, shape, arguments, model_file=""):
         super().__init__("cmmsampling-plan")
         self.shape = shape
         self.arguments = dict(arguments)
+        self.model_file = model_file
+        self.model = None
         self.done = 0
         self.total = 0
         self.lines = []
@@ -163,7 +185,13 @@ class BackgroundPlan(BackgroundTask):
         return self.cancelled
 
     def _work(self):
-        made = plan(self.shape, progress=self._progress, **self.arguments)
+        source = self.shape
+        if self.model_file:
+            from ...formats.qif.model import read_mbd
+
+            self.tally = f"Reading the model's tolerances from {os.path.basename(self.model_file)}..."
+            source = self.model = read_mbd(self.model_file, shape=self.shape)
+        made = plan(source, progress=self._progress, **self.arguments)
         self.working = []
         self.preparing = made
         made.prepare_results(self._preparing)
@@ -195,6 +223,7 @@ class PlanPartTaskPanel(BackgroundRunPanel):
         self.edge_offset = self._add_edge_offset()
         self.probe = self._add_probe_choice()
         self.datums = self._add_datums()
+        self.by_model = self._add_model_goal(obj)
         self.fields = Fields({"by_tolerance": (self.form.byTolerance, self.form.byPoints),
                               "strategy": self.form.strategy,
                               **{name: getattr(self.form, name) for name in SPIN_BOXES},
@@ -203,8 +232,12 @@ class PlanPartTaskPanel(BackgroundRunPanel):
         values = load_values()
         values["points"] = values["points"] or POINTS_PER_FACE * len(numbers)
         self.set_values(values)
+        if self.by_model is not None:
+            self.by_model.setChecked(True)   # a model's part: its own tolerances first
         self.form.strategy.currentIndexChanged.connect(self.update_enabled)
         self.form.byTolerance.toggled.connect(self.update_enabled)
+        if self.by_model is not None:
+            self.by_model.toggled.connect(self.update_enabled)
         self.form.progress.setTextVisible(False)
         # (plan, group) of the cancelled plan that OK resumes, else None.
         self.resumable = None
@@ -268,6 +301,26 @@ class PlanPartTaskPanel(BackgroundRunPanel):
         field.textEdited.connect(self._forget_datum_problem)
         return field
 
+    def _add_model_goal(self, obj):
+        """The goal "the model's tolerances" for a part read from a QIF MBD model (its MbdFile; the
+        panel checks it), else None."""
+        path = model_file(obj)
+        if not path:
+            return None
+        button = QtGui.QRadioButton("Model's tolerances", self.form)
+        button.setObjectName("byModel")
+        button.setToolTip(f"Plan every characteristic {os.path.basename(path)} states that this tool judges, each "
+                          "with its own tolerance and datums (the datum faces measured first); the model names the "
+                          "faces, so the selection and the Datums field are not used")
+        label = QtGui.QLabel(os.path.basename(path), self.form)
+        label.setToolTip(path)
+        self.form.goalGroup.layout().addRow(button, label)
+        return button
+
+    def from_model(self):
+        """True where the goal is the model's own tolerances."""
+        return self.by_model is not None and self.by_model.isChecked()
+
     def _forget_datum_problem(self, _text):
         """Clear the status line where it names a problem of the datums the user is now editing."""
         if self.form.status.text().startswith("Datums:"):
@@ -289,12 +342,15 @@ class PlanPartTaskPanel(BackgroundRunPanel):
         strategy = self.form.strategy.itemData(self.form.strategy.currentIndex())
         offered = {setting.option for setting in STRATEGIES[strategy].settings} if strategy in STRATEGIES else set()
         by_tolerance = self.form.byTolerance.isChecked()
+        model = self.from_model()
         for widget in (self.form.byTolerance, self.form.byPoints, self.form.strategy, self.form.n_max,
-                       self.form.grid, self.form.processes, self.edge_offset, self.probe, self.datums):
-            widget.setEnabled(idle)
+                       self.form.grid, self.form.processes, self.edge_offset, self.probe, self.datums, self.by_model):
+            if widget is not None:
+                widget.setEnabled(idle)
+        self.datums.setEnabled(idle and not model)
         self.form.tolerance.setEnabled(idle and by_tolerance)
-        self.form.points.setEnabled(idle and not by_tolerance)
-        self.form.n_max.setEnabled(idle and by_tolerance)
+        self.form.points.setEnabled(idle and not by_tolerance and not model)
+        self.form.n_max.setEnabled(idle and (by_tolerance or model))
         for option, box in self.setting_boxes.items():
             box.setEnabled(idle and option in offered)
         if self.buttons is not None:
@@ -321,6 +377,9 @@ class PlanPartTaskPanel(BackgroundRunPanel):
                              "has fewer faces now.", error=True)
             return
         values = self.values()
+        if self.from_model():
+            self.start_from_model(shape, values)
+            return
         problem = datum_problem(values, self.source[1], len(shape.Faces))
         if problem:
             self.show_status(problem, error=True)
@@ -339,6 +398,17 @@ class PlanPartTaskPanel(BackgroundRunPanel):
         run.lines = [face.line for face in cancelled.faces if face.reason != CANCELLED_REASON]
         self.begin(run, faces, f"Resuming: planning the {counted(faces - len(run.lines), 'face')} not run on "
                                f"{counted(values['processes'], 'process')}...")
+
+    def start_from_model(self, shape, values):
+        """Start the plan of the part's QIF MBD model (its characteristics, read in the worker)."""
+        save_values(values)
+        self.form.progress.setTextVisible(True)
+        self.form.faceLines.clear()
+        arguments = model_plan_arguments(values)
+        path = model_file(self.source[0])
+        self.begin(BackgroundPlan(shape, arguments, path), 1,
+                   f"Planning the characteristics of {os.path.basename(path)} on "
+                   f"{counted(values['processes'], 'process')}...")
 
     def show_progress(self, run):
         """A line per face done, then one per face under way (in grey: the N its search runs and
@@ -394,7 +464,7 @@ class PlanPartTaskPanel(BackgroundRunPanel):
             self.show_status(f"The plan could not be added to the document: {exc}", error=True)
             return
         redraw_plan_points(group)
-        if not result.cancelled:
+        if not result.cancelled or run.model_file:
             FreeCADGui.Control.closeDialog()
             return
         self.resumable = (result, group)
