@@ -41,4 +41,9 @@ def add_first_article_to_document(found: Any, doc: Any) -> Any:
 
 def _cell(key: str, text: str) -> str | float:
     """A table cell as the sheet holds it: a figure's column as a number (where it has one)."""
-    return float(text) if key in FIGURES and text else text
+    if key not in FIGURES or not text:
+        return text
+    try:
+        return float(text)
+    except ValueError:   # a figure with its words, e.g. '0.5000 (UZ +0.1000)'
+        return text

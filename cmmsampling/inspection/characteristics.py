@@ -99,7 +99,8 @@ class CharacteristicResult:
     def row(self) -> dict[str, str]:
         """The first-article table's row (COLUMNS' keys), figures as text."""
         c = self.characteristic
-        return {"id": c.id, "name": c.name, "kind": c.kind, "tolerance": f"{c.tolerance:.4f}",
+        zone = f" (UZ {c.zone_offset:+.4f})" if c.zone_offset else ""
+        return {"id": c.id, "name": c.name, "kind": c.kind, "tolerance": f"{c.tolerance:.4f}{zone}",
                 "datums": "|".join(c.datums), "faces": " ".join(c.faces), "points": str(self.points),
                 "value": "" if self.value is None else f"{self.value:.4f}",
                 "uncertainty": "" if self.uncertainty is None else f"{self.uncertainty:.4f}",
@@ -278,10 +279,18 @@ def judge_characteristic(c: Any, mbd_plan: Any, planned: Planned, measured: Poin
     count = sum(label.casefold() in own for label in measured.labels)
     if not count:
         return CharacteristicResult(c, None, None, why="none of the points on its faces was measured")
+    taken = {label.casefold() for label in measured.labels}
+    touched = {face.split(":")[-1] for label, face in zip(part.labels, np.array(part.names)[part.owner])
+               if label.casefold() in taken}
+    unmeasured = [name for name in c.faces if name not in touched]
+    if unmeasured:
+        return CharacteristicResult(c, None, None, points=count,
+                                    why=f"{unmeasured[0]} has no measured point: a verdict on the other faces would "
+                                        "speak for it; measure it")
     try:
         found = inspect(part, _rows(measured, rows), "min_max", tolerance=c.tolerance, datums=datums,
                         probe_radius=probe_radius, uncertainty=uncertainty, seed=seed, progress=progress,
-                        location_free=c.kind in ORIENTATIONS)
+                        location_free=c.kind in ORIENTATIONS, zone_offset=c.zone_offset)
     except InputError as exc:
         return CharacteristicResult(c, None, None, points=count, why=str(exc))
     return CharacteristicResult(c, found.profile, found.passed, found.profile_uncertainty, found.decision,

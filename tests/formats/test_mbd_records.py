@@ -99,3 +99,26 @@ def test_a_document_that_is_no_mbd_or_misreads_is_refused_in_one_line(tmp_path, 
         read_mbd_records(str(path))
     message = str(refused.value)
     assert problem in message and "\n" not in message and message.startswith(str(path))
+
+
+@pytest.mark.parametrize("disposition, offset", [("<UnequallyDisposedZone>0.1</UnequallyDisposedZone>", 0.1),
+                                                 ("<OuterDisposition>0.5</OuterDisposition>", 0.5 - 0.5 * 1.25)])
+def test_an_unequally_disposed_profile_zone_is_read_as_its_centre(tmp_path, disposition, offset):
+    text = open(shared_mbd("nist_ctc_01_asme1_ap242.qif"), encoding="utf-8").read()
+    changed, count = re.subn(r"(<SurfaceProfileCharacteristicDefinition id=\"\d+\">.*?</ToleranceValue>)",
+                             lambda found: found.group(1) + disposition, text, flags=re.S)
+    assert count == 2
+    path = tmp_path / "uz.qif"
+    path.write_text(changed, encoding="utf-8")
+    profile = next(c for c in read_mbd_records(str(path)).characteristics if c.id == "1457")
+    assert profile.tolerance == 1.25 and profile.zone_offset == pytest.approx(offset) and profile.judged
+
+
+def test_an_offset_profile_zone_is_not_judged(tmp_path):
+    text = open(shared_mbd("nist_ctc_01_asme1_ap242.qif"), encoding="utf-8").read()
+    changed = re.sub(r"(<SurfaceProfileCharacteristicDefinition id=\"\d+\">.*?</ToleranceValue>)",
+                     lambda found: found.group(1) + "<OffsetZone>true</OffsetZone>", text, count=2, flags=re.S)
+    path = tmp_path / "offset.qif"
+    path.write_text(changed, encoding="utf-8")
+    profile = next(c for c in read_mbd_records(str(path)).characteristics if c.id == "1457")
+    assert not profile.judged and "OffsetZone" in profile.why_not

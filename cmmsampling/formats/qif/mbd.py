@@ -74,7 +74,9 @@ class Characteristic:
     material condition ("NONE", "MAXIMUM", "LEAST" or ""); judged: whether this tool judges
     it; why_not: why not ("" when judged); unit: of target and limits ("mm", "degree");
     faces: the faces of the model's shape it applies to, FaceN as FreeCAD names them (set by
-    :func:`cmmsampling.formats.qif.model.read_mbd`).
+    :func:`cmmsampling.formats.qif.model.read_mbd`); zone_offset: mm, a profile zone's centre from
+    the nominal, + out of the material (ISO 1101's UZ; from an ``UnequallyDisposedZone`` or an
+    ``OuterDisposition`` d: d - t/2), 0 for a zone centred on it.
     """
 
     id: str
@@ -94,6 +96,7 @@ class Characteristic:
     why_not: str = ""
     unit: str = "mm"
     faces: tuple[str, ...] = ()
+    zone_offset: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -233,9 +236,23 @@ def _characteristic(nominal, lookup, feature_faces, labels_by_id, units) -> Char
     faces = feature_faces(features, what)
     record = Characteristic(nominal.get("id", ""), kind, name, _text(nominal, "CharacteristicDesignator/Designator"),
                             tolerance, limits, target, text, datums, features, faces, zone,
-                            _text(definition, "MaterialCondition"), unit=sized.base)
+                            _text(definition, "MaterialCondition"), unit=sized.base,
+                            zone_offset=_zone_offset(definition, tolerance, units))
     why_not = _why_not(record, definition)
     return dataclasses.replace(record, judged=not why_not, why_not=why_not)
+
+
+def _zone_offset(definition: ET.Element, tolerance: float | None, units: _Units) -> float:
+    """A profile zone's centre from the nominal, mm, + out of the material: ISO's
+    UnequallyDisposedZone as it is, ASME's OuterDisposition d (the zone's outer limit) as d - t/2;
+    0 for a zone centred on the nominal."""
+    centre = definition.find(tag("UnequallyDisposedZone"))
+    if centre is not None:
+        return units.length(centre)
+    outer = definition.find(tag("OuterDisposition"))
+    if outer is not None and tolerance is not None:
+        return units.length(outer) - 0.5 * tolerance
+    return 0.0
 
 
 def _size_limits(tolerance: ET.Element | None, target: float | None,
@@ -266,6 +283,8 @@ def _why_not(record: Characteristic, definition: ET.Element) -> str:
         return "a tolerance per unit area is not judged (only over the whole face)"
     if record.tolerance is None or record.tolerance <= 0:
         return "it states no tolerance value"
+    if _text(definition, "OffsetZone") == "true":
+        return "an offset profile zone (ASME's OffsetZone) is not judged here"
     if not record.face_ids:
         return "its features lie on no face of the file's B-rep"
     if record.kind in ORIENTATIONS:
