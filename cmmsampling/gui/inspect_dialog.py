@@ -15,7 +15,7 @@ from PySide import QtCore, QtGui
 from ..document import settings
 from ..formats.registry import measured_filter
 from ..inspection.align import ALIGNMENTS, DEGREES_OF_FREEDOM
-from ..inspection.characteristics import MbdInspection, inspect_model_file
+from ..inspection.characteristics import MbdInspection, inspect_model_file, planned_ids
 from ..inspection.judge import InspectionCancelled, inspect, stated, verdict_words
 from . import icon
 from .background import BackgroundTask, behind_progress
@@ -186,11 +186,9 @@ def ask_inspection(points):
     model = getattr(points, "MbdFile", "")
     dialog = InspectDialog((groups or [points.Label])[0], folder, FreeCADGui.getMainWindow(),
                            ((), None) if model else stated(points), model)
-    if not model:
-        return asked(dialog, InspectDialog.arguments)
     chosen = asked(dialog, InspectDialog.arguments)
-    if chosen is None:
-        return None
+    if not model or chosen is None:
+        return chosen
     return {"measured": chosen["measured"],
             **({"uncertainty": chosen["uncertainty"]} if chosen["uncertainty"] is not None else {})}
 
@@ -280,7 +278,7 @@ def run_with_progress(points, arguments):
     the Inspection, None when the user cancelled (nothing judged), or the run's exception raised
     here."""
     model = getattr(points, "MbdFile", "")
-    stated_model = (model, [line.split()[0] for line in points.Characteristics]) if model else None
+    stated_model = (model, planned_ids(points)) if model else None
     run = BackgroundInspection(points.Proxy.planned(points), arguments, stated_model)
     cancelled = behind_progress(run, "Inspect measured points", "InspectionProgress", lambda: (
         f"Inspecting the measured points of {points.Label}: {run.message}"

@@ -31,6 +31,7 @@ from typing import Any
 
 import numpy as np
 
+from ..formats.exporting import reordered
 from ..formats.files import write_atomically
 from ..formats.pointset import PointSet
 from ..formats.qif.model import read_mbd
@@ -38,7 +39,8 @@ from ..geometry.freecad_env import import_part
 from ..geometry.validation import InputError
 from ..planning.mbd_plan import ModelCharacteristics
 from .datums import Datum
-from .judge import Inspection, InspectionCancelled, Planned, _measured_point_set, _planned, inspect, pair, planned_face
+from .judge import (Inspection, InspectionCancelled, Planned, _measured_point_set, _planned, _positions, inspect, pair,
+                    planned_face)
 
 Part = import_part()
 
@@ -224,9 +226,13 @@ def inspect_model_group(group: Any, measured: str | os.PathLike | PointSet, *, u
     the model read again from its file (its faces named as the part read from it)."""
     if progress is not None and progress("reading the model's tolerances"):
         raise InspectionCancelled
-    return inspect_model_file(group.MbdFile, [line.split()[0] for line in group.Characteristics],
-                              group.Proxy.planned(group), measured, uncertainty=uncertainty, probe_radius=probe_radius,
+    return inspect_model_file(group.MbdFile, planned_ids(group), group.Proxy.planned(group), measured, uncertainty=uncertainty, probe_radius=probe_radius,
                               seed=seed, progress=progress)
+
+
+def planned_ids(group: Any) -> list[str]:
+    """The ids of the characteristics a model's plan group states (its Characteristics lines)."""
+    return [line.split()[0] for line in group.Characteristics]
 
 
 def inspect_model_file(path: str, ids: Sequence[str], planned: Planned, measured: str | os.PathLike | PointSet, *,
@@ -249,17 +255,16 @@ def judge_model(record: Any, planned: Planned, measured: str | os.PathLike | Poi
     among them) from the measured points of what was planned (planned: its Planned)."""
     read = _measured_point_set(measured)
     labelled, notes = _labelled(planned, read)
-    mbd_plan = record
     results = []
-    for k, c in enumerate(mbd_plan.characteristics, start=1):
+    for k, c in enumerate(record.characteristics, start=1):
         def told(message: str | None, c: Any = c, k: int = k) -> bool | None:
             if progress is None:
                 return None
             return progress(None if message is None else
-                            f"characteristic {k} of {len(mbd_plan.characteristics)} ({c.id} {c.kind}): {message}")
+                            f"characteristic {k} of {len(record.characteristics)} ({c.id} {c.kind}): {message}")
 
-        results.append(judge_characteristic(c, mbd_plan, planned, labelled, uncertainty, probe_radius, seed, told))
-    return MbdInspection(mbd_plan, results, os.fspath(measured) if isinstance(measured, (str, os.PathLike)) else "",
+        results.append(judge_characteristic(c, record, planned, labelled, uncertainty, probe_radius, seed, told))
+    return MbdInspection(record, results, os.fspath(measured) if isinstance(measured, (str, os.PathLike)) else "",
                          uncertainty, notes)
 
 
@@ -272,23 +277,19 @@ def judge_characteristic(c: Any, mbd_plan: Any, planned: Planned, measured: Poin
     names = list(dict.fromkeys([*c.faces, *[name for datum in datums for name in _names(datum)]]))
     part = _subset(planned, names)
     assert part.labels is not None and part.owner is not None   # a plan's points have labels and faces
-    wanted = {label.casefold() for label in part.labels}
-    rows = np.array([label.casefold() in wanted for label in measured.labels], dtype=bool)
-    own = {label.casefold() for label, face in zip(part.labels, np.array(part.names)[part.owner])
-           if face.split(":")[-1] in c.faces}
-    count = sum(label.casefold() in own for label in measured.labels)
+    face_of = {label.casefold(): part.names[owner].split(":")[-1] for label, owner in zip(part.labels, part.owner)}
+    rows = np.flatnonzero([label.casefold() in face_of for label in measured.labels])
+    touched = [face_of[measured.labels[row].casefold()] for row in rows]
+    count = sum(face in c.faces for face in touched)
     if not count:
         return CharacteristicResult(c, None, None, why="none of the points on its faces was measured")
-    taken = {label.casefold() for label in measured.labels}
-    touched = {face.split(":")[-1] for label, face in zip(part.labels, np.array(part.names)[part.owner])
-               if label.casefold() in taken}
     unmeasured = [name for name in c.faces if name not in touched]
     if unmeasured:
         return CharacteristicResult(c, None, None, points=count,
                                     why=f"{unmeasured[0]} has no measured point: a verdict on the other faces would "
                                         "speak for it; measure it")
     try:
-        found = inspect(part, _rows(measured, rows), "min_max", tolerance=c.tolerance, datums=datums,
+        found = inspect(part, reordered(measured, rows), "min_max", tolerance=c.tolerance, datums=datums,
                         probe_radius=probe_radius, uncertainty=uncertainty, seed=seed, progress=progress,
                         location_free=c.kind in ORIENTATIONS, zone_offset=c.zone_offset)
     except InputError as exc:
@@ -302,21 +303,7 @@ def _labelled(planned: Planned, measured: PointSet) -> tuple[PointSet, list[str]
     (by label, or by order where the file has none)."""
     order, notes = pair(planned, measured)
     assert planned.labels is not None   # a plan's points have labels
-    labels = [planned.labels[row] for row in order[1]]
-    return _rows(measured, order[0], labels), notes
-
-
-def _rows(points: PointSet, rows: np.ndarray, labels: Sequence[str] | None = None) -> PointSet:
-    """The PointSet of points at rows (a bool mask or indices), relabelled where labels are given."""
-    index = np.flatnonzero(rows) if np.asarray(rows).dtype == bool else np.asarray(rows, dtype=int)
-
-    def taken(values: Any) -> Any:
-        return None if values is None else np.asarray(values)[index]
-
-    return replace(points, labels=list(labels) if labels is not None else [points.labels[k] for k in index],
-                   points=points.points[index], normals=points.normals[index], uv=taken(points.uv),
-                   deviation=taken(points.deviation), axes=taken(points.axes),
-                   faces=None if points.faces is None else [points.faces[k] for k in index], travel=None)
+    return replace(reordered(measured, order[0]), labels=[planned.labels[row] for row in order[1]]), notes
 
 
 def _subset(planned: Planned, names: Sequence[str]) -> Planned:
@@ -324,11 +311,9 @@ def _subset(planned: Planned, names: Sequence[str]) -> Planned:
     indices = [index for index in (planned_face(planned, name) for name in names) if index is not None]
     assert planned.owner is not None and planned.points is not None and planned.labels is not None
     rows = np.isin(planned.owner, indices)
-    positions = np.full(len(planned.names), -1)
-    positions[indices] = np.arange(len(indices))
     return Planned([planned.labels[k] for k in np.flatnonzero(rows)], planned.points[rows],
                    [planned.faces[k] for k in indices], [planned.names[k] for k in indices],
-                   positions[planned.owner[rows]])
+                   _positions(indices)[planned.owner[rows]])
 
 
 def _datum(label: str, mbd_plan: Any) -> Datum:

@@ -524,7 +524,7 @@ def datum_points(datums: Sequence[Datum], planned: Planned, order: tuple[np.ndar
 
 def _positions(indices: list[int]) -> np.ndarray:
     """(max + 1,) int: at each of the face indices its position in the list (-1 elsewhere)."""
-    positions = np.full(max(indices) + 1, -1)
+    positions = np.full(max(indices, default=-1) + 1, -1)
     positions[indices] = np.arange(len(indices))
     return positions
 

@@ -29,10 +29,7 @@ def known_errors(mbd_plan):
     """{face name: amplitude mm} for every planned face that is no datum face, and the form
     error at points (M, 3) on those faces (0 on the datum faces)."""
     datum_faces = {name for faces in mbd_plan.datum_faces.values() for name in faces}
-    tolerances = {}
-    for c in mbd_plan.characteristics:
-        for name in c.faces:
-            tolerances[name] = min(tolerances.get(name, c.tolerance), c.tolerance)
+    tolerances = mbd_plan.face_tolerances
     names = [name for name in tolerances if name not in datum_faces]
     return {name: SHARES[k % len(SHARES)] * tolerances[name] for k, name in enumerate(names)}
 

@@ -23,54 +23,21 @@ from typing import Any
 
 from .mbd import parsed_file
 from .results import DECISION_STATUS, PART_DECISION_STATUS, status_of
-from .xml import decimal, tag
+from .xml import QIFWriter, decimal, tag
 
 # The document's top-level elements after which Results may stand (the schema's order).
 BEFORE_RESULTS = ("Characteristics", "Plan")
 
 
-class Ids:
-    """Fresh ids above a document's idMax."""
-
-    def __init__(self, root: ET.Element) -> None:
-        self.root = root
-        self.last = int(root.get("idMax", "0"))
-
-    def new(self) -> str:
-        """The next free id (idMax follows)."""
-        self.last += 1
-        self.root.set("idMax", str(self.last))
-        return str(self.last)
-
-
 def write_mbd_results(found: Any) -> str:
     """The QIF 3.0 text of found's model document with its results (see the module's doc)."""
     model = found.plan.model
-    root = parsed_file(model.path)
-    ids = Ids(root)
-    nominals = _feature_nominals(root)
-    results = [result for result in found.characteristics]
-    feature_items = _feature_items(root, ids, nominals, [result.characteristic for result in results])
-    items = _characteristic_items(root, ids, results, feature_items)
-    per_unit = model.mm_per_unit.get(model.linear, 1.0)
-    _results(root, ids, found, items, per_unit)
-    ET.indent(root)
-    return '<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(root, encoding="unicode") + "\n"
-
-
-def _child(parent: ET.Element, name: str, text: str | None = None, **attributes: Any) -> ET.Element:
-    """A new child element (QIF namespace) with text and attributes."""
-    element = ET.SubElement(parent, tag(name), {key: str(value) for key, value in attributes.items()})
-    if text is not None:
-        element.text = text
-    return element
-
-
-def _id_list(parent: ET.Element, name: str, values: list[str]) -> None:
-    """A QIF id list (n and an Id per value)."""
-    holder = _child(parent, name, n=len(values))
-    for value in values:
-        _child(holder, "Id", value)
+    doc = QIFWriter(parsed_file(model.path))
+    nominals = _feature_nominals(doc.root)
+    feature_items = _feature_items(doc, nominals, [result.characteristic for result in found.characteristics])
+    items = _characteristic_items(doc, found.characteristics, feature_items)
+    _results(doc, found, items, model.mm_per_unit.get(model.linear, 1.0))
+    return doc.text()
 
 
 def _placed_after(parent: ET.Element, name: str, after: tuple[str, ...]) -> ET.Element:
@@ -92,66 +59,62 @@ def _feature_nominals(root: ET.Element) -> dict[str, ET.Element]:
     return {} if holder is None else {element.get("id", ""): element for element in holder}
 
 
-def _feature_items(root: ET.Element, ids: Ids, nominals: dict[str, ET.Element], characteristics: list) -> dict:
+def _feature_items(doc: QIFWriter, nominals: dict[str, ET.Element], characteristics: list) -> dict[str, str]:
     """{feature nominal id: its new item's id} for the features the characteristics apply to."""
     wanted = list(dict.fromkeys(f for c in characteristics for f in c.features if f in nominals))
     if not wanted:
         return {}
-    features = root.find(tag("Features"))
+    features = doc.root.find(tag("Features"))
     assert features is not None   # the nominals found lie in it
     holder = _placed_after(features, "FeatureItems", ("FeatureDefinitions", "FeatureNominals"))
     made = {}
     for nominal_id in wanted:
         nominal = nominals[nominal_id]
         kind = nominal.tag.split("}")[-1].replace("FeatureNominal", "FeatureItem")
-        item = _child(holder, kind, id=ids.new())
-        _child(item, "FeatureNominalId", nominal_id)
-        _child(item, "FeatureName", (nominal.findtext(tag("Name")) or f"feature {nominal_id}").strip())
+        item, made[nominal_id] = doc.with_id(holder, kind)
+        doc.add(item, "FeatureNominalId", nominal_id)
+        doc.add(item, "FeatureName", (nominal.findtext(tag("Name")) or f"feature {nominal_id}").strip())
         if "NonShape" not in kind:
-            checked = _child(_child(item, "DeterminationMode"), "Checked")
-            _child(_child(checked, "CheckDetails"), "Measured")
-        made[nominal_id] = item.get("id")
+            doc.add(doc.add(doc.add(doc.add(item, "DeterminationMode"), "Checked"), "CheckDetails"), "Measured")
     holder.set("n", str(len(holder)))
     return made
 
 
-def _characteristic_items(root: ET.Element, ids: Ids, results: list, feature_items: dict) -> dict[str, str]:
+def _characteristic_items(doc: QIFWriter, results: list, feature_items: dict[str, str]) -> dict[str, str]:
     """{characteristic nominal id: its new item's id}, one per result."""
-    characteristics = root.find(tag("Characteristics"))
+    characteristics = doc.root.find(tag("Characteristics"))
     assert characteristics is not None   # the model's characteristics come from it
     holder = _placed_after(characteristics, "CharacteristicItems",
                            ("FormalStandardId", "CharacteristicDefinitions", "CharacteristicNominals"))
     made = {}
     for result in results:
         c = result.characteristic
-        item = _child(holder, f"{c.kind}CharacteristicItem", id=ids.new())
-        _child(item, "Name", c.name or f"{c.kind} {c.id}")
+        item, made[c.id] = doc.with_id(holder, f"{c.kind}CharacteristicItem")
+        doc.add(item, "Name", c.name or f"{c.kind} {c.id}")
         features = [feature_items[f] for f in c.features if f in feature_items]
         if features:
-            _id_list(item, "FeatureItemIds", features)
-        _child(item, "CharacteristicNominalId", c.id)
-        made[c.id] = item.get("id", "")
+            doc.id_list(item, "FeatureItemIds", features)
+        doc.add(item, "CharacteristicNominalId", c.id)
     holder.set("n", str(len(holder)))
     return made
 
 
-def _results(root: ET.Element, ids: Ids, found: Any, items: dict[str, str], per_unit: float) -> None:
+def _results(doc: QIFWriter, found: Any, items: dict[str, str], per_unit: float) -> None:
     """Results: the characteristics' measurements (values in the file's length unit: per_unit
     mm each) and the part's status."""
-    top = _placed_after(root, "Results", BEFORE_RESULTS)
-    sets = _child(top, "MeasurementResultsSet", n=1)
-    results = _child(sets, "MeasurementResults", id=ids.new())
-    holder = _child(_child(results, "MeasuredCharacteristics"), "CharacteristicMeasurements",
-                    n=len(found.characteristics))
+    top = _placed_after(doc.root, "Results", BEFORE_RESULTS)
+    results = doc.with_id(doc.add(top, "MeasurementResultsSet", n=1), "MeasurementResults")[0]
+    holder = doc.add(doc.add(results, "MeasuredCharacteristics"), "CharacteristicMeasurements",
+                     n=len(found.characteristics))
     for result in found.characteristics:
-        element = _child(holder, f"{result.kind}CharacteristicMeasurement", id=ids.new())
+        element = doc.with_id(holder, f"{result.kind}CharacteristicMeasurement")[0]
         status = status_of(result.passed)
         if result.decision is not None:
             status = DECISION_STATUS[result.decision]
-        _child(_child(element, "Status"), "CharacteristicStatusEnum", status)
-        _child(element, "CharacteristicItemId", items[result.id])
+        doc.add(doc.add(element, "Status"), "CharacteristicStatusEnum", status)
+        doc.add(element, "CharacteristicItemId", items[result.id])
         if result.value is not None:
-            value = _child(element, "Value", decimal(result.value / per_unit))
+            value = doc.add(element, "Value", decimal(result.value / per_unit))
             if result.inspection is not None and result.inspection.uncertainty is not None:
                 found_u = result.inspection.uncertainty
                 value.set("combinedUncertainty", decimal(found_u.expanded / found_u.coverage / per_unit))
@@ -159,11 +122,11 @@ def _results(root: ET.Element, ids: Ids, found: Any, items: dict[str, str], per_
     decisions = {result.decision for result in found.characteristics}
     if found.passed is None and None not in decisions:
         part = PART_DECISION_STATUS["undecided"]
-    _child(_child(results, "InspectionStatus"), "InspectionStatusEnum", part)
-    component_set = _child(_child(top, "ActualComponentSets", n=1), "ActualComponentSet", n=1)
-    component = _child(component_set, "ActualComponent", id=ids.new())
-    _child(_child(component, "Status"), "InspectionStatusEnum", part)
-    _id_list(results, "ActualComponentIds", [component.get("id", "")])
+    doc.add(doc.add(results, "InspectionStatus"), "InspectionStatusEnum", part)
+    component, component_id = doc.with_id(doc.add(doc.add(top, "ActualComponentSets", n=1), "ActualComponentSet",
+                                                   n=1), "ActualComponent")
+    doc.add(doc.add(component, "Status"), "InspectionStatusEnum", part)
+    doc.id_list(results, "ActualComponentIds", [component_id])
 
 
 def read_mbd_results(path: str) -> dict[str, tuple[str, float | None]]:

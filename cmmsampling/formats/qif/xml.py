@@ -47,7 +47,12 @@ class QIFWriter:
     """A QIF document under construction: the root, the next free id and the helpers that add
     elements. Ids are the positive integers the schema's QIFIdUnique asks for, counted from 1."""
 
-    def __init__(self):
+    def __init__(self, root=None):
+        """A new document, or one read (root: its QIFDocument element), whose new ids follow its
+        idMax."""
+        if root is not None:
+            self.root, self.last_id = root, int(root.get("idMax", "0"))
+            return
         self.root = ET.Element(tag("QIFDocument"), {"versionQIF": QIF_VERSION, "idMax": "0"})
         self.last_id = 0
         self.add(self.root, "QPId", new_qpid())
