@@ -290,16 +290,21 @@ class PartPlanGroup(TypedProxy):
     def add_properties(obj):
         """Create the plan's stated properties it lacks (a group made by an earlier version has none):
         Datums, the datum faces primary first, Tolerance, the profile tolerance planned to, and for
-        a plan from a QIF MBD model its file (MbdFile) and the characteristics planned."""
+        a plan from a QIF MBD model its file (MbdFile), the characteristics planned and the datums
+        its programs set the frame on (FrameDatums)."""
         for kind, name, doc in (
                 ("App::PropertyStringList", "Datums",
                  "The datum faces, primary first (datums A, B, C): measured first, the part's frame set on them"),
                 ("App::PropertyLength", "Tolerance",
-                 "The profile tolerance the plan was made to (mm); 0 for a plan to a total of points"),
+                 "The profile tolerance the plan was made to (mm); 0 for a plan to a total of points or "
+                 "with a tolerance per face (a QIF MBD model's)"),
                 ("App::PropertyFile", "MbdFile", "The QIF MBD model whose characteristics the plan was made from "
                  "('' for a plan of faces)"),
                 ("App::PropertyStringList", "Characteristics",
-                 "The model's characteristics planned: id, kind, tolerance, datums, faces")):
+                 "The model's characteristics planned: id, kind, tolerance, datums, faces"),
+                ("App::PropertyStringList", "FrameDatums",
+                 "A plan from a QIF MBD model: the datums its programs set the part's frame on, primary first, "
+                 "each its label and faces ('B Face43 Face44'), measured first")):
             if name not in obj.PropertiesList:
                 obj.addProperty(kind, name, "Plan", doc)
                 obj.setEditorMode(name, 1)
@@ -316,8 +321,9 @@ class PartPlanGroup(TypedProxy):
 
     def point_set(self, obj):
         """Every face's probe points as one :class:`cmmsampling.formats.pointset.PointSet`, face
-        by face (the datum faces first), with the plan's datums ({label: face}) and tolerance in
-        its metadata; InputError for a plan group without points."""
+        by face (the datum faces first), with the plan's datums ({label: face}, or {label: faces}
+        of a QIF MBD plan's frame) and tolerance in its metadata; InputError for a plan group
+        without points."""
         members = plan_probe_points(obj)
         if not members:
             raise InputError(f"{obj.Label} holds no probe points: plan the part again")
@@ -334,6 +340,9 @@ class PartPlanGroup(TypedProxy):
         datums, tolerance = self.stated(obj)
         if datums:
             metadata["datums"] = dict(zip(datum_labels(len(datums)), datums))
+        frame = [entry.split() for entry in getattr(obj, "FrameDatums", [])]
+        if frame:
+            metadata["datums"] = {label: faces for label, *faces in frame}
         if tolerance is not None:
             metadata["tolerance_mm"] = tolerance
         return PointSet(labels, np.concatenate([s.points for s in sets]), np.concatenate([s.normals for s in sets]),

@@ -104,7 +104,8 @@ def add_plan_to_document(plan: PartPlan, doc: FreeCAD.Document, part: FreeCAD.Do
             doc.removeObject(obj.Name)
         group = make_plan_group(doc)
         group.Datums = list(plan.datums)
-        group.Tolerance = plan.tolerance or 0.0
+        # Faces planned to their own tolerances (a QIF MBD model's) state no one profile tolerance.
+        group.Tolerance = 0.0 if plan.face_tolerances else (plan.tolerance or 0.0)
         _state_model(group, plan)
         if hide_others:
             hide_results(doc)
@@ -331,9 +332,11 @@ def _json_value(value):
 
 
 def _state_model(group: FreeCAD.DocumentObject, plan: PartPlan) -> None:
-    """A plan from a QIF MBD model (an MbdPlan) states the model's file and the characteristics
-    planned on its group (MbdFile, Characteristics); a plan of faces states none."""
+    """A plan from a QIF MBD model (an MbdPlan) states the model's file, the characteristics
+    planned and its programs' frame on its group (MbdFile, Characteristics, FrameDatums); a plan
+    of faces states none."""
     if not isinstance(plan, MbdPlan):
         return
     group.MbdFile = plan.model.path
     group.Characteristics = [f"{key} {text}" for key, text in plan.stated().items()]
+    group.FrameDatums = [" ".join([label, *faces]) for label, faces in plan.program_frame.items()]

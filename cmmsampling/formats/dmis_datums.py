@@ -65,12 +65,12 @@ class Cylinder:
 
 @dataclass
 class DatumGroup:
-    """One datum of a program: label ('A'), face ('Face3'), rows (its points' indices in the
-    point set), and its plane (centre (3,) mm, unit normal (3,) out of the material) where its
+    """One datum of a program: label ('A'), faces (('Face3',); a bore's halves ('Face43',
+    'Face44')), rows (its points' indices in the point set), and its plane (centre (3,) mm, unit normal (3,) out of the material) where its
     nominal points lie on one, or its Cylinder where they lie on one, else both None."""
 
     label: str
-    face: str
+    faces: tuple
     rows: np.ndarray
     plane: tuple[np.ndarray, np.ndarray] | None
     cylinder: Cylinder | None = None
@@ -89,20 +89,22 @@ class DatumGroup:
 
 
 def datum_groups(point_set) -> list[DatumGroup]:
-    """The DatumGroups of a point set whose metadata states ``datums`` ({label: face}, primary
-    first) and whose ``faces`` name each point's face; [] for one without."""
-    stated = point_set.metadata.get("datums") or {}
-    if not stated or point_set.faces is None:
-        return []
-    faces = np.array(point_set.faces, dtype=object)
-    groups = []
-    for label, face in stated.items():
-        rows = np.flatnonzero(faces == face)
-        if rows.size:
-            points, normals = point_set.points[rows], point_set.normals[rows]
-            plane = _plane(points, normals)
-            groups.append(DatumGroup(label, face, rows, plane, None if plane is not None else _cylinder(points, normals)))
-    return groups
+    """The DatumGroups of a point set whose metadata states ``datums`` ({label: face, or a list
+    of faces for a datum of several}, primary first) and whose ``faces`` name each point's face;
+    [] for one without. A datum of several faces is one DMIS feature where their points lie on
+    one plane or one cylinder (coplanar faces, a bore's halves)."""
+    stated = point_set.datum_faces()
+    return [DatumGroup(label, stated[label], rows, *datum_feature(point_set.points[rows], point_set.normals[rows]))
+            for label, rows in point_set.datum_rows().items()]
+
+
+def datum_feature(points: np.ndarray, normals: np.ndarray) -> tuple[tuple[np.ndarray, np.ndarray] | None,
+                                                                    Cylinder | None]:
+    """(plane, None) where a datum's nominal points (M, 3) mm with their normals (M, 3) lie on one
+    plane ((centre (3,), unit normal (3,))), (None, Cylinder) where on one cylinder, else (None,
+    None): a datum that has no DMIS feature here."""
+    plane = _plane(points, normals)
+    return plane, None if plane is not None else _cylinder(points, normals)
 
 
 def _plane(points: np.ndarray, normals: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
@@ -155,8 +157,9 @@ def datum_frame(groups: list[DatumGroup]) -> DatumFrame:
     else the given frame's X or Y axis made square to Z; Y = Z x X. Each datum then sets the
     origin's coordinates not set before it that it can: a plane the one along its normal (the
     origin on the plane), a cylinder the two square to its axis (the origin on the axis); the
-    others stay where the given frame's origin is nearest. ValueError for datums that cannot set
-    it (a datum that adds nothing DATSET can state; a direction or origin along no frame axis)."""
+    others stay where the given frame's origin is nearest. A datum that adds nothing DATSET can
+    state (a second bore parallel to the first) has no words: what it would fix stays as given.
+    ValueError for a direction or origin along no frame axis."""
     directions = [_direction(group) for group in groups]
     z, x = directions[0], None
     words: list[list[str]] = [["ZDIR"]] + [[] for _ in groups[1:]]
@@ -178,8 +181,6 @@ def datum_frame(groups: list[DatumGroup]) -> DatumFrame:
             row = group.plane[1] if group.plane is not None else axes[name]
             rows.append(row)
             values.append(row @ _anchor(group))
-        if not said:
-            raise ValueError(f"datum {group.label} sets nothing the datums before it leave free that DATSET can state")
     frame = np.eye(4)
     frame[:3, :3] = np.column_stack([axes["X"], axes["Y"], axes["Z"]])
     frame[:3, 3] = np.linalg.lstsq(np.array(rows), np.array(values), rcond=None)[0]
@@ -257,7 +258,7 @@ def datum_feature_lines(group: DatumGroup, labels: list[str], statement) -> list
                             fixed(cylinder.axis, VECTOR_DECIMALS).tolist() + sizes)
         constructed = statement(["CONST/CYLNDR", f"F({group.feature})", "BF", *members])
     else:
-        return [f"$$ datum {group.label} ({group.face}) is no plane or cylinder: no DMIS datum feature is written",
+        return [f"$$ datum {group.label} ({' '.join(group.faces)}) is no plane or cylinder: no DMIS datum feature is written",
                 "$$+ for it; its points are reported for cmmsampling.inspect, which associates it"]
     return feature + constructed + [f"DATDEF/FA({group.feature}),DAT({group.label})"]
 
@@ -274,12 +275,17 @@ def frame_lines(groups: list[DatumGroup], statement) -> list[str]:
         found = datum_frame(groups)
     except ValueError as exc:
         return [f"$$ the datums set no frame here ({exc}): the part's frame stays as the operator set it"]
-    fields = [field for group, words in zip(groups, found.words) for field in [f"DAT({group.label})", *words]]
+    fields = [field for group, words in zip(groups, found.words) if words
+              for field in [f"DAT({group.label})", *words]]
     rotation, origin = found.frame[:3, :3], found.frame[:3, 3]
     back = np.eye(4)
     back[:3, :3] = rotation.T
     back[:3, 3] = -rotation.T @ origin
-    return (["$$ the frame the datums set, then the CAD model's frame in it"]
+    unstated = [f"datum {group.label} ({' '.join(group.faces)}) sets nothing DATSET can state after the datums "
+                "before it: what it would fix (the turn about a bore's axis) stays as the operator set it; "
+                "cmmsampling.inspect aligns the reported points on every datum"
+                for group, words in zip(groups, found.words) if not words]
+    return ([f"$$ {line}" for line in unstated] + ["$$ the frame the datums set, then the CAD model's frame in it"]
             + statement([f"D({DRF_LABEL})=DATSET/{fields[0]}", *fields[1:]])
             + placement_statements(CAD_LABEL, back, statement))
 

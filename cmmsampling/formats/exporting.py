@@ -217,15 +217,14 @@ def export(source: SamplingResult | PointSet | object, path: str | os.PathLike, 
 
 
 def measuring_groups(point_set: PointSet) -> list[np.ndarray]:
-    """The point indices a program measures one group after the other: each datum face's points
-    (metadata ``datums``, primary first), then the others; one group without datums."""
-    datums = point_set.metadata.get("datums") or {}
-    if not datums or point_set.faces is None:
+    """The point indices a program measures one group after the other: each datum's points
+    (metadata ``datums``, primary first; a datum of several faces one group), then the others;
+    one group without datums."""
+    datums = list(point_set.datum_rows().values())
+    if not datums:
         return [np.arange(len(point_set))]
-    faces = np.array(point_set.faces, dtype=object)
-    groups = [np.flatnonzero(faces == face) for face in datums.values()]
-    rest = np.flatnonzero(~np.isin(faces, list(datums.values())))
-    return [group for group in groups + [rest] if group.size]
+    rest = np.setdiff1d(np.arange(len(point_set)), np.concatenate(datums))
+    return datums + ([rest] if rest.size else [])
 
 
 def short_path_within(point_set: PointSet) -> PathOrder:

@@ -53,3 +53,18 @@ class PointSet:
             metadata=metadata,
             axes=None if result.access is None else np.array(result.access.axes, dtype=float),
         )
+
+    def datum_faces(self) -> dict[str, tuple[str, ...]]:
+        """{label: its faces} of the datums the metadata states (``datums``: {label: a face's
+        name, or a list of them for a datum of several faces}, primary first); {} for none."""
+        stated = self.metadata.get("datums") or {}
+        return {label: (faces,) if isinstance(faces, str) else tuple(faces) for label, faces in stated.items()}
+
+    def datum_rows(self) -> dict[str, np.ndarray]:
+        """{label: indices of its faces' points} of the datums stated (:meth:`datum_faces`) whose
+        faces hold points, primary first; {} for a point set whose points name no faces."""
+        if self.faces is None:
+            return {}
+        faces = np.array(self.faces, dtype=object)
+        rows = {label: np.flatnonzero(np.isin(faces, list(names))) for label, names in self.datum_faces().items()}
+        return {label: found for label, found in rows.items() if found.size}

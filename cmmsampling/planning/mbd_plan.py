@@ -16,7 +16,10 @@ from collections.abc import Callable
 from dataclasses import dataclass, field, fields, replace
 from typing import Any
 
+import numpy as np
+
 from ..access.probe import Probe
+from ..formats.dmis_datums import datum_feature
 from ..formats.pointset import PointSet
 from ..geometry.validation import InputError
 from .datum_points import DatumPoints, plan_datums
@@ -29,12 +32,14 @@ class ModelCharacteristics:
     """What a plan of a QIF MBD model judges: model (cmmsampling.formats.qif.model.MbdModel);
     characteristics: the judged characteristics planned; unplanned: (Characteristic, why) for
     judged ones that could not be; datum_faces: {label: its faces (FaceN)} of the datums the
-    planned characteristics name."""
+    planned characteristics name; program_frame: {label: its faces} of the datum reference frame
+    a program sets its frame on (:func:`program_frame`), primary first ({} for none)."""
 
     model: Any = None
     characteristics: list = field(default_factory=list)
     unplanned: list = field(default_factory=list)
     datum_faces: dict = field(default_factory=dict)
+    program_frame: dict = field(default_factory=dict)
 
     def stated(self) -> dict[str, str]:
         """{id: 'Flatness 0.2 mm on Face36'} each characteristic planned: kind, tolerance, datums
@@ -60,6 +65,8 @@ class MbdPlan(ModelCharacteristics, PartPlan):
         points = super().point_set()
         metadata = {**points.metadata, "mbd": self.model.path, "characteristics": self.stated(),
                     "datum_faces": {label: list(faces) for label, faces in self.datum_faces.items()}}
+        if self.program_frame:
+            metadata["datums"] = {label: list(faces) for label, faces in self.program_frame.items()}
         return replace(points, metadata=metadata)
 
     def table(self) -> str:
@@ -121,7 +128,7 @@ def _planned(model: Any, wanted: list, unplanned: list, datum_points: dict, stra
             if isinstance(points := datum_points.get(name), DatumPoints)]
     with_datums(result, kept, {points.face: model.shape.getElement(points.face) for points in kept})
     # The model's datums serve several frames: inspect() builds each characteristic's own from
-    # the points; the program measures the datum points first and sets no one frame.
+    # the points; a program sets its frame on one of them, its faces measured first.
     result.datums = []
     result.shapes.update({points.face: model.shape.getElement(points.face) for points in kept})
     if not result.cancelled and probe is not None:
@@ -131,11 +138,44 @@ def _planned(model: Any, wanted: list, unplanned: list, datum_points: dict, stra
     planned = []
     for c in wanted:
         missing = [name for name in c.faces if name in empty]
+        missing_datums = [(label, name) for label in c.datums for name in datum_faces[label] if name in empty]
         if missing:
             unplanned.append((c, f"{missing[0]} holds no points: {empty[missing[0]]}"))
+        elif missing_datums:
+            label, name = missing_datums[0]
+            unplanned.append((c, f"datum {label}'s {name} holds no points: {empty[name]}"))
         else:
             planned.append(c)
-    return MbdPlan(**stated, model=model, characteristics=planned, unplanned=unplanned, datum_faces=datum_faces)
+    if not planned:
+        raise InputError(f"{model.path}: none of its characteristics can be planned here: "
+                         + "; ".join(f"{c.id}: {why}" for c, why in unplanned))
+    frame = program_frame(planned, datum_faces, {face.name: face for face in result.placed})
+    order = [name for faces in frame.values() for name in faces]
+    stated["faces"] = sorted(result.faces, key=lambda face: order.index(face.name) if face.name in order else len(order))
+    return MbdPlan(**stated, model=model, characteristics=planned, unplanned=unplanned, datum_faces=datum_faces,
+                   program_frame=frame)
+
+
+def program_frame(planned: list, datum_faces: dict, placed: dict) -> dict[str, tuple[str, ...]]:
+    """{label: its faces} of the datum reference frame a program sets the part's frame on, primary
+    first: of the planned characteristics' frames whose datums' faces all hold points (placed:
+    {name: FacePlan}), one whose datums are each a plane or a cylinder (a DMIS datum feature),
+    then the one of most datums, then the one most characteristics use, then the first; {} where
+    none holds points. Every characteristic is still judged on its own frame (inspect builds each)."""
+    frames = [tuple(c.datums) for c in planned
+              if c.datums and all(name in placed for label in c.datums for name in datum_faces[label])]
+    if not frames:
+        return {}
+
+    def settable(labels: tuple) -> bool:
+        faces = [[placed[name] for name in datum_faces[label]] for label in labels]
+        return all(any(part is not None for part in datum_feature(np.concatenate([f.points for f in plans]),
+                                                                   np.concatenate([f.normals for f in plans])))
+                   for plans in faces)
+
+    chosen = max(frames, key=lambda labels: (settable(labels), len(labels), frames.count(labels),
+                                             -frames.index(labels)))
+    return {label: tuple(datum_faces[label]) for label in chosen}
 
 
 def _plannable(c: Any, model: Any, unplanned: list) -> bool:

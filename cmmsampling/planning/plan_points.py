@@ -14,7 +14,7 @@ from ..access.obstacles import Obstacles
 from ..access.orientations import orientation_labels
 from ..access.probe_moves import moves_through
 from ..access.reach import Access, Reachability, fewest_orientations
-from ..formats.exporting import spacing_by_face
+from ..formats.exporting import measuring_groups, spacing_by_face
 from ..formats.pointset import PointSet
 from ..geometry.validation import InputError
 
@@ -59,25 +59,13 @@ def plan_moves(plan, motion=None):
     if plan.probe is None or any(face.axes is None for face in placed):
         raise InputError("a probe path needs the probe's reach on the part: plan with probe=cmmsampling.Probe(...), "
                          "or export with order='short_path'")
-    axes = np.concatenate([face.axes for face in placed])
     unreached = [face.name for face in placed if face.unreached]
     if unreached:
         raise InputError(f"the probe cannot reach some points of {', '.join(unreached)}; export with "
                          "order='short_path', or plan again")
-    points = np.concatenate([face.points for face in placed])
-    normals = np.concatenate([face.normals for face in placed])
-    return moves_through(plan.probe, Obstacles(plan.part), points, normals, axes, motion,
-                         groups=measuring_groups(placed))
-
-
-def measuring_groups(placed):
-    """The point indices of a plan's faces with points (FacePlans, datum faces first) measured
-    one group after the other: each datum face's, then all the others'."""
-    starts = np.cumsum([0] + [face.n for face in placed])
-    datums = [np.arange(starts[k], starts[k + 1]) for k, face in enumerate(placed) if face.datum]
-    rest = np.concatenate([np.arange(starts[k], starts[k + 1]) for k, face in enumerate(placed) if not face.datum]
-                          or [np.empty(0, dtype=int)])
-    return datums + ([rest] if rest.size else [])
+    point_set = plan.point_set()
+    return moves_through(plan.probe, Obstacles(plan.part), point_set.points, point_set.normals, point_set.axes, motion,
+                         groups=measuring_groups(point_set))
 
 
 # Seconds OCC may spend judging the poses a plan-wide cover of the orientations would take.

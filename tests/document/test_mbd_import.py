@@ -100,6 +100,12 @@ def test_a_models_plan_in_the_document_states_the_model_and_is_judged_as_the_pla
         group = cmmsampling.add_plan_to_document(plan, doc, part)
         assert group.MbdFile == ctc_01 and [line.split()[0] for line in group.Characteristics] == \
             [c.id for c in plan.characteristics]
+        assert group.FrameDatums == ["A Face36", "B Face43 Face44", "C Face57 Face58"]
+        cmmsampling.export(group, tmp_path / "group.dmi")
+        cmmsampling.export(plan, tmp_path / "plan.dmi")
+        programs = [(tmp_path / name).read_text().splitlines() for name in ("group.dmi", "plan.dmi")]
+        assert [line for line in programs[0] if "DAT" in line] == [line for line in programs[1] if "DAT" in line]
+        assert "D(DRF)=DATSET/DAT(A),ZDIR,ZORIG,DAT(B),XORIG,YORIG" in programs[0], "the same frame from the group"
         measured = cmmsampling.simulate_measurement(group, tmp_path / "m.csv", form_error=0.05, seed=3).path
         in_document = cmmsampling.inspect(group, measured)
         in_hand = cmmsampling.inspect(plan, measured)

@@ -112,9 +112,9 @@ def test_each_characteristic_is_judged_as_an_independent_fit_finds(model, tmp_pa
     mbd_plan = cmmsampling.plan(mbd, strategy="hammersley", n_max=25)
     planned = mbd_plan.point_set()
     assert planned.metadata["mbd"] == mbd.path
-    datum_rows = [face in {n for names in mbd_plan.datum_faces.values() for n in names}
-                  and face not in {n for c in mbd_plan.characteristics for n in c.faces} for face in planned.faces]
-    assert not any(datum_rows[datum_rows.index(False):]), "the datum points come first"
+    frame_faces = {name for names in mbd_plan.program_frame.values() for name in names}
+    first = [face in frame_faces for face in planned.faces]
+    assert frame_faces and first == sorted(first, reverse=True), "the program frame's datum points come first"
     amplitudes = known_errors(mbd_plan)
     errors = field_of(planned, amplitudes)
     tree = cKDTree(planned.points)

@@ -253,21 +253,26 @@ def product(doc, name):
 
 @dataclass(frozen=True)
 class PlannedDatum:
-    """A datum of a plan: label ('A'), face ('Face1'), criterion (the inspection's default,
-    tangent); measurement None (its points are the measured file's, planned on its face)."""
+    """A datum of a plan: label ('A'), faces (('Face1',); a bore's halves ('Face43', 'Face44')),
+    criterion (the inspection's default, tangent); measurement None (its points are the measured
+    file's, planned on its faces)."""
 
     label: str
-    face: str
+    faces: tuple
     criterion: str = "tangent"
     measurement: None = None
 
+    @property
+    def face(self) -> str:
+        """Its faces' names, space-separated ('Face43 Face44')."""
+        return " ".join(self.faces)
+
 
 def planned_datums(point_set):
-    """The PlannedDatums a point set's metadata states (``datums``: {label: face}, primary first)
-    whose faces hold points; [] for none."""
-    faces = set(point_set.faces or [])
-    return [PlannedDatum(label, face) for label, face in (point_set.metadata.get("datums") or {}).items()
-            if face in faces]
+    """The PlannedDatums a point set's metadata states (``datums``: {label: face or faces},
+    primary first) whose faces hold points; [] for none."""
+    stated = point_set.datum_faces()
+    return [PlannedDatum(label, stated[label]) for label in point_set.datum_rows()]
 
 
 def write(point_set, facts, options):
@@ -289,8 +294,8 @@ def write(point_set, facts, options):
     found = features(doc, point_set, groups, resource_ids)
     doc.id_list(part, "FeatureNominalIds", [found[face][0] for face, _ in groups])
     for datum, (element, _) in zip(datums, defined):
-        doc.id_list(element, "FeatureNominalIds", [found[datum.face][0]])
-    toleranced = [(face, rows) for face, rows in groups if face not in {datum.face for datum in datums}]
+        doc.id_list(element, "FeatureNominalIds", [found[name][0] for name in datum.faces if name in found])
+    toleranced = [(face, rows) for face, rows in groups if face not in {name for datum in datums for name in datum.faces}]
     items = {} if tolerance is None else characteristics(doc, toleranced, found, tolerance, standard, resource_ids[0])
     if items and frame_id is not None:
         framed_profile(doc, 0.0, frame_id)
