@@ -65,6 +65,8 @@ _API = {
     "measure": "cmm.client",
     "MeasuredRun": "cmm.client",
     "MeasurementStopped": "cmm.client",
+    "measure_until_decided": "cmm.decided",
+    "DecidedRun": "cmm.decided",
     "SimulatedCMM": "cmm.server",
     "Misplacement": "inspection.simulate",
     "sanitise_labels": "formats.dmis",

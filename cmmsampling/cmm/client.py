@@ -26,7 +26,7 @@ import os
 import re
 import socket
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -169,9 +169,11 @@ class Journal:
     fsync, rename), with a ``run_end`` line that says how the run ended ('in progress' while it
     runs, so a file left by a killed run says so)."""
 
-    def __init__(self, planned: PointSet, out: str, log: str | None, server: str) -> None:
+    def __init__(self, planned: PointSet, out: str, log: str | None, server: str, chosen: bool = False) -> None:
         self.planned, self.out, self.server = planned, out, server
         self.touched: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+        # A run that chooses its points as it goes (chosen) owes only those it chose.
+        self.wanted: list[str] | None = [] if chosen else None
         self.tool, self.radius = "", 0.0
         self.stream = None if log is None else open(log, "w", encoding="ascii", errors="replace")
 
@@ -187,9 +189,10 @@ class Journal:
         self.write("in progress")
 
     def labels(self) -> tuple[list, list]:
-        """(labels measured, labels not measured), in the planned order."""
-        return ([label for label in self.planned.labels if label in self.touched],
-                [label for label in self.planned.labels if label not in self.touched])
+        """(labels measured, labels not measured), in the planned order (in the order chosen, of
+        the points chosen, for a run that chooses them)."""
+        wanted = self.planned.labels if self.wanted is None else self.wanted
+        return [label for label in wanted if label in self.touched], [label for label in wanted if label not in self.touched]
 
     def write(self, end: str) -> None:
         """Write the points measured (in the planned order), if any, and sync the transcript."""
@@ -364,6 +367,28 @@ def measure(source: object, server: str, out: str | os.PathLike = "measured.csv"
     ``run``); Ctrl-C (KeyboardInterrupt) is raised again after writing them, the run in its
     note. InputError (or ExportError for a path that cannot be written) before connecting.
     """
+    link = link_settings(server, out, log, timeout_s, volume)
+    planned, moves, probe_radius = _planned_path(source)
+    return run_session(link, planned, moves, probe_radius, tool, progress, fixed_order(planned))
+
+
+@dataclass(frozen=True)
+class Link:
+    """Where a session measures and writes: host, port, the measured file (target) and the
+    transcript (record, or None), the longest wait for a command (s), the machine volume box."""
+
+    host: str
+    port: int
+    target: str
+    record: str | None
+    timeout_s: float
+    box: np.ndarray
+
+
+def link_settings(server: str, out: str | os.PathLike, log: str | os.PathLike | None, timeout_s: float,
+                  volume: Sequence[Sequence[float]] | None) -> Link:
+    """The Link of measure()'s arguments, checked before connecting (InputError, or ExportError
+    for a path that cannot be written)."""
     host, port = server_address(server)
     fmt = resolve_format(out)
     if fmt not in MEASURED_FORMATS:
@@ -371,17 +396,34 @@ def measure(source: object, server: str, out: str | os.PathLike = "measured.csv"
                          "files cmmsampling.inspect reads back")
     target = check_writable(out)
     record = None if log is None else check_writable(log)
-    timeout_s = check_real("timeout_s", timeout_s, above=0.0)
-    box = machine_volume(volume)
-    planned, moves, probe_radius = _planned_path(source)
-    journal = Journal(planned, target, record, address_text(host, port))
+    return Link(host, port, target, record, check_real("timeout_s", timeout_s, above=0.0), machine_volume(volume))
+
+
+def fixed_order(planned: PointSet) -> Callable[[Journal], Iterator[tuple[int, str]]]:
+    """The order of a fixed plan: each planned point in turn, 'point k of N'."""
+    def order(journal: Journal) -> Iterator[tuple[int, str]]:
+        count = len(planned)
+        for index in range(count):
+            yield index, f"point {index + 1} of {count}"
+    return order
+
+
+def run_session(link: Link, planned: PointSet, moves: list | None, probe_radius: float, tool: str | None,
+                progress: Callable[[str | None], bool | None] | None,
+                order: Callable[[Journal], Iterator[tuple[int, str]]], chosen: bool = False) -> MeasuredRun:
+    """Measure the points of planned (a PointSet; moves: the travel before each, or None) that
+    order(journal) yields ((row, progress message), one after the other; it may look at the
+    points the journal kept so far), each written as it comes; the MeasuredRun (see
+    :func:`measure`: what ends the run, and what it raises). chosen: the points are chosen as
+    the run goes (only those yielded count as planned)."""
+    journal = Journal(planned, link.target, link.record, address_text(link.host, link.port), chosen)
     try:
-        sock = _connect(host, port, timeout_s)
-        connection = Connection(sock, timeout_s, progress, journal)
+        sock = _connect(link.host, link.port, link.timeout_s)
+        connection = Connection(sock, link.timeout_s, progress, journal)
         state = {"cancelled": False, "radius": probe_radius}
-        failure = _measured(connection, planned, moves, tool, box, state)
-        run = MeasuredRun(target, *journal.labels(), journal.tool, journal.radius, journal.server,
-                          state["cancelled"], list(connection.commands), list(connection.warnings))
+        failure = _measured(connection, planned, moves, tool, link.box, state, order)
+        run = MeasuredRun(link.target, *journal.labels(), journal.tool, journal.radius, journal.server,
+                          bool(state["cancelled"]), list(connection.commands), list(connection.warnings))
         journal.write(_ending(failure, state["cancelled"]))
     finally:
         journal.close()
@@ -401,12 +443,12 @@ def _connect(host, port, timeout_s):
     return sock
 
 
-def _measured(connection, planned, moves, tool, box, state):
+def _measured(connection, planned, moves, tool, box, state, order):
     """Run the session and end it as far as the link allows whatever stops it; the exception
     that stopped it (None: every point, or Cancel)."""
     failure = None
     try:
-        _session(connection, planned, moves, tool, box, state)
+        _session(connection, planned, moves, tool, box, state, order)
     except _Cancelled:
         state["cancelled"] = True
         connection.abort()
@@ -483,8 +525,9 @@ def _probe_radius(source):
     return 0.5 * float(stated["ball_diameter"]) if isinstance(stated, dict) and "ball_diameter" in stated else 0.0
 
 
-def _session(connection, planned, moves, tool, box, state):
-    """The session's commands up to the last point, each point kept by the journal as it comes."""
+def _session(connection, planned, moves, tool, box, state, order):
+    """The session's commands up to the last point order yields, each point kept by the journal
+    as it comes."""
     journal = connection.journal
     connection.call("StartSession()")
     if connection.call("IsHomed()")[0].args != (1.0,):
@@ -496,9 +539,10 @@ def _session(connection, planned, moves, tool, box, state):
     journal.tool = tool or tools[0]
     connection.call(f'ChangeTool("{journal.tool}")')
     connection.call(REPORT)
-    count = len(planned)
-    for index in range(count):
-        if connection.progress is not None and _asked(connection.progress, f"point {index + 1} of {count}"):
+    for index, message in order(journal):
+        if journal.wanted is not None:
+            journal.wanted.append(planned.labels[index])
+        if connection.progress is not None and _asked(connection.progress, message):
             raise _Cancelled
         point, vector = planned.points[index], planned.normals[index]
         if moves is not None:

@@ -3,12 +3,11 @@ server (the virtual CMM of simulate_measurement behind the protocol, on 127.0.0.
 inspection of what it measured is the file route's, NIST's command checker passes every command
 stream it sends, and a Cancel, a lost connection, an I++ error or a silent server leave a
 consistent file of the points measured and an ended session."""
-import re
 import socket
-import threading
 
 import numpy as np
 import pytest
+from support.dropping_server import serve_then_drop
 from support.faces import walled_part
 from support.ippdme import check_answers, check_commands, checker, response_parser
 
@@ -128,42 +127,6 @@ def test_an_ipp_error_is_named_and_the_points_before_it_are_kept(result, tmp_pat
             measure(result, cmm.address, tmp_path / "q.csv", tool="Star")
     assert caught.value.run.commands[-1].endswith("EndSession()")
     nist_passes(caught.value.run.commands, tmp_path)
-
-
-def touched(command):
-    """'X(..), Y(..), Z(..), IJK(..)' of a PtMeas command's ball centre where it touches at the
-    nominal point (a 1 mm ball)."""
-    values = dict(re.findall(r"([A-Z]+)\(([^()]*)\)", command))
-    vector = np.array([float(v) for v in values["IJK"].split(",")])
-    centre = np.array([float(values[axis]) for axis in "XYZ"]) + vector
-    return f"X({centre[0]:.6f}), Y({centre[1]:.6f}), Z({centre[2]:.6f}), IJK({values['IJK']})"
-
-
-def serve_then_drop(commands_before_drop, answers=True):
-    """A server that answers like I++ (& then %) and closes after some commands (or, not
-    answering, keeps silent until the client goes); its address."""
-    listener = socket.socket()
-    listener.bind(("127.0.0.1", 0))
-    listener.listen(1)
-
-    def run():
-        connection, _ = listener.accept()
-        stream = connection.makefile("rb")
-        for count in range(commands_before_drop):
-            line = stream.readline().decode().strip()
-            tag = line.split(" ")[0]
-            method = line.split(" ")[1].split("(")[0]
-            data = ([f"{tag} # {touched(line)}, ER(1)"] if method == "PtMeas" else
-                    {"IsHomed": [f"{tag} # IsHomed(1)"], "EnumTools": [f'{tag} # "Probe1"']}.get(method, []))
-            if answers:
-                connection.sendall("".join(f"{a}\r\n" for a in [f"{tag} &", *data, f"{tag} %"]).encode())
-        if not answers:
-            stream.read()   # silent until the client goes
-        connection.close()
-        listener.close()
-
-    threading.Thread(target=run, daemon=True).start()
-    return "127.0.0.1:%d" % listener.getsockname()[1]
 
 
 def test_a_lost_connection_keeps_the_points_measured(result, tmp_path):

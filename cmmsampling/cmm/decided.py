@@ -1,0 +1,227 @@
+"""Measure a face over I++ DME until its profile verdict is decided: the CMM touches only until
+the verdict is certain either way (the rule: :mod:`cmmsampling.inspection.decide`).
+
+The run starts from FIRST points spread over the face, then after each touch weighs what the
+points say about the whole face (the probability that it conforms, and that it does not) and
+touches next where that is least known, counting the travel; it stops when one side holds with
+probability 1 - risk, or at max_points (undecided, said so). Either verdict stands only where
+the inspection of the measured points agrees by ISO 14253-1's rule (a pass within t - U, a fail
+beyond t + U): the run never stops on a verdict the measured points do not bear out, and a
+fail the model expects is looked for where it is likeliest. Each point is written as it comes
+(:func:`cmmsampling.cmm.client.run_session`), whatever ends the run.
+"""
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Iterator, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ..fitting.series import PlaneCoordinates
+from ..formats.pointset import PointSet
+from ..geometry.surface import SurfaceModel, as_face
+from ..geometry.validation import InputError, check_real
+from ..inspection.decide import FEWEST_POINTS, Belief, Candidates, belief, next_row, spread_design
+from ..inspection.judge import Inspection, inspect
+from .client import Journal, MeasuredRun, link_settings, run_session
+
+# Places on the face the touches are chosen among (a raster of its parameters, those on the face);
+# the points spread over it first; the coverage factor of the expanded uncertainty the belief
+# takes from the probing's standard uncertainty (U = k u); the default risk of a wrong verdict.
+CANDIDATES = 400
+FIRST = FEWEST_POINTS
+COVERAGE = 2.0
+RISK = 0.05
+
+
+@dataclass
+class DecidedRun:
+    """What :func:`measure_until_decided` measured and found: run (the MeasuredRun: the file,
+    a path-like), inspection (cmmsampling.inspect of the measured points with the tolerance and
+    uncertainty; None where fewer than FIRST points came), decision ('conforms', 'does not
+    conform', or None: undecided), p_conform and p_nonconform (the last belief's), points (how
+    many were measured), stopped (why the run ended, in words), history ((points, p_conform,
+    p_nonconform) after each belief)."""
+
+    run: MeasuredRun
+    inspection: Inspection | None
+    decision: str | None
+    p_conform: float
+    p_nonconform: float
+    points: int
+    stopped: str
+    history: list = field(default_factory=list)
+
+    def __fspath__(self) -> str:
+        return os.fspath(self.run)
+
+    def __str__(self) -> str:
+        verdict = self.decision or "undecided"
+        return (f"{verdict} after {self.points} points (P(conforms) {self.p_conform:.3f}, P(does not conform) "
+                f"{self.p_nonconform:.3f}): {self.stopped}. {self.run}")
+
+
+def face_candidates(face: Any, count: int = CANDIDATES, edge_offset: float = 0.0) -> tuple[Candidates, np.ndarray]:
+    """(Candidates, uv (M, 2)) of a face: a raster of its parameter range about count places,
+    those on the face edge_offset mm from its edges; InputError where fewer than 2 FIRST are."""
+    from ..strategies.face_setup import setup_of
+
+    setup = setup_of(as_face(face))
+    model: SurfaceModel = setup.model
+    side = int(np.ceil(np.sqrt(count)))
+    raster = model.raster((side, side)).reshape(-1, 2)
+    uv = raster[setup.domain(edge_offset).on_face(raster)]
+    if len(uv) < 2 * FIRST:
+        raise InputError(f"only {len(uv)} of {len(raster)} raster places lie on the face{' that far from its edges' if edge_offset else ''}: "
+                         "give more candidates or a smaller edge_offset")
+    return Candidates(model.points(uv), model.normals(uv), PlaneCoordinates(model)(uv)), uv
+
+
+def measure_until_decided(source: Any, server: str, tolerance: float, uncertainty: float = 0.0,
+                          out: str | os.PathLike = "measured.csv", risk: float = RISK, max_points: int | None = None,
+                          *, edge_offset: float = 0.0, candidates: int = CANDIDATES, tool: str | None = None,
+                          progress: Callable[[str | None], bool | None] | None = None, timeout_s: float = 60.0,
+                          log: str | os.PathLike | None = None, volume: Sequence[Sequence[float]] | None = None,
+                          seed: int = 0) -> DecidedRun:
+    """Measure a face (a Part.Face, or a shape of one face, on the CMM in the CAD model's
+    coordinates) over the I++ DME server at 'host:port' until its profile verdict to tolerance t
+    (mm, no datums) is decided with probability 1 - risk, or max_points (default: every
+    candidate place) are measured. uncertainty: u, mm, the probing's standard uncertainty per
+    point (as cmmsampling.inspect takes it); out, tool, progress, timeout_s, log, volume as
+    :func:`cmmsampling.measure` takes them; edge_offset: mm the points keep from the face's
+    edges; candidates: about how many places the points are chosen among; seed: the belief's
+    random samples. Returns a DecidedRun; InputError before connecting for bad arguments."""
+    tolerance = check_real("tolerance", tolerance, above=0.0)
+    uncertainty = check_real("uncertainty", uncertainty, minimum=0.0)
+    risk = check_real("risk", risk, above=0.0)
+    if risk >= 0.5:
+        raise InputError(f"risk ({risk:g}) must be below 0.5: it is the chance of a wrong verdict the run accepts")
+    link = link_settings(server, out, log, timeout_s, volume)
+    places, _ = face_candidates(source, int(check_real("candidates", candidates, above=0.0)), edge_offset)
+    limit = _points_limit(max_points, len(places))
+    labels = [f"C{row + 1}" for row in range(len(places))]
+    planned = PointSet(labels, places.points, places.normals, metadata={"source": "measure until decided"})
+    rules = _Rules(as_face(source), places, tolerance, uncertainty, risk, limit, seed)
+    run = run_session(link, planned, None, 0.0, tool, progress, rules.order, chosen=True)
+    return rules.result(run)
+
+
+def _points_limit(max_points: int | None, count: int) -> int:
+    """The most points a run measures: max_points (FIRST at least, at most the candidates'
+    count), or every candidate."""
+    if max_points is None:
+        return count
+    if isinstance(max_points, bool) or not isinstance(max_points, (int, np.integer)) or max_points < FIRST:
+        raise InputError(f"max_points ({max_points!r}) must be a whole number of at least {FIRST}, the points spread "
+                         "over the face first, or None for no limit")
+    return min(int(max_points), count)
+
+
+class _Rules:
+    """The run's choice of points and its stop (see the module's doc): order(journal) yields
+    the rows to touch; result(run) the DecidedRun."""
+
+    def __init__(self, face: Any, places: Candidates, tolerance: float, uncertainty: float, risk: float,
+                 limit: int, seed: int) -> None:
+        self.face, self.places, self.tolerance, self.uncertainty = face, places, tolerance, uncertainty
+        self.risk, self.limit, self.seed = risk, limit, seed
+        self.rows: list[int] = []
+        self.found: Belief | None = None
+        self.history: list[tuple[int, float, float]] = []
+        self.stopped = "the run ended before the first points were measured"
+
+    def order(self, journal: Journal) -> Iterator[tuple[int, str]]:
+        """The rows to touch: FIRST spread over the face, then one at a time where the belief is
+        least sure, until decided (confirmed by the inspection) or at the limit."""
+        for row in spread_design(self.places, FIRST):
+            self.rows.append(int(row))
+            yield int(row), f"point {len(self.rows)} of at most {self.limit} (spread over the face)"
+        while True:
+            found, decided = self._decided(journal)
+            if decided is not None:
+                self.stopped = decided
+                return
+            if len(self.rows) >= self.limit:
+                self.stopped = f"undecided at the limit of {self.limit} points"
+                return
+            row = next_row(self.places, found, np.array(self.rows), self.rows[-1],
+                           found.decision(self.risk) == "does not conform")
+            self.rows.append(row)
+            yield row, (f"point {len(self.rows)} of at most {self.limit}: P(conforms) {found.p_conform:.3f}, "
+                        f"P(does not conform) {found.p_nonconform:.3f}")
+
+    def _decided(self, journal: Journal) -> tuple[Belief, str | None]:
+        """(the Belief of the points measured, why the run stops now or None): the belief decides,
+        and the profile cmmsampling.inspect finds for them (to the bounded face, minimum zone)
+        agrees by ISO 14253-1's rule with U = COVERAGE u (the Monte Carlo U comes with the run's
+        final inspection): within t - U for 'conforms', beyond t + U for 'does not conform'.
+        A belief of 'does not conform' the points do not show yet sends the next touch where the
+        excess is likeliest."""
+        rows, d = self._deviations(journal)
+        found = belief(self.places, rows, d, self.tolerance, COVERAGE * self.uncertainty, seed=self.seed)
+        self.found = found
+        self.history.append((len(rows), found.p_conform, found.p_nonconform))
+        decision = found.decision(self.risk)
+        if decision is None:
+            return found, None
+        profile = inspect(self.face, _measured_points(journal), tolerance=self.tolerance).profile
+        guard = COVERAGE * self.uncertainty
+        if decision == "does not conform" and profile - guard > self.tolerance:
+            return found, (f"decided: P(does not conform) {found.p_nonconform:.3f} >= {1 - self.risk:g}, the "
+                           f"measured points show it (profile {profile:.4f} mm)")
+        if decision == "conforms" and profile + guard <= self.tolerance:
+            return found, (f"decided: P(conforms) {found.p_conform:.3f} >= {1 - self.risk:g}, the measured points "
+                           f"agree (profile {profile:.4f} mm)")
+        return found, None
+
+    def _deviations(self, journal: Journal) -> tuple[np.ndarray, np.ndarray]:
+        """(rows measured (n,), their deviations (n,) mm along the nominal normals)."""
+        labels = journal.planned.labels
+        rows = np.array([row for row in self.rows if labels[row] in journal.touched])
+        contacts = np.array([journal.touched[labels[row]][0] for row in rows])
+        offsets = contacts - self.places.points[rows]
+        return rows, np.einsum("ij,ij->i", offsets, self.places.normals[rows])
+
+        decision = self.found.decision(self.risk)
+        self.seeking = decision == "does not conform"
+        if decision is None:
+            return None
+        profile = inspect(self.face, _measured_points(journal), tolerance=self.tolerance).profile
+        guard = COVERAGE * self.uncertainty
+        if decision == "does not conform" and profile - guard > self.tolerance:
+            return (f"decided: P(does not conform) {self.found.p_nonconform:.3f} >= {1 - self.risk:g}, the measured "
+                    f"points show it (profile {profile:.4f} mm)")
+        if decision == "conforms" and profile + guard <= self.tolerance:
+            return (f"decided: P(conforms) {self.found.p_conform:.3f} >= {1 - self.risk:g}, the measured points "
+                    f"agree (profile {profile:.4f} mm)")
+        return None
+    def _inspection(self, measured: os.PathLike) -> Inspection:
+        """cmmsampling.inspect of the measured file on the face with the run's tolerance and u
+        (its expanded uncertainty and decision where u is given)."""
+        return inspect(self.face, measured, tolerance=self.tolerance, uncertainty=self.uncertainty or None,
+                       seed=self.seed)
+
+    def result(self, run: MeasuredRun) -> DecidedRun:
+        """The DecidedRun of the run: its inspection, and the decision where the run stopped
+        on one ('does not conform' also where the measured points prove it)."""
+        measured = len(run.labels)
+        inspection = self._inspection(run) if measured >= FIRST else None
+        decision = None
+        if inspection is not None and inspection.decision == "does not conform":
+            decision = "does not conform"
+        elif self.stopped.startswith("decided") and self.found is not None:
+            decision = self.found.decision(self.risk)
+        p_conform = self.found.p_conform if self.found is not None else float("nan")
+        p_nonconform = self.found.p_nonconform if self.found is not None else float("nan")
+        return DecidedRun(run, inspection, decision, p_conform, p_nonconform, measured, self.stopped,
+                          list(self.history))
+
+
+def _measured_points(journal: Journal) -> PointSet:
+    """The contact points the journal kept, in the order measured."""
+    labels = list(journal.touched)
+    return PointSet(labels, np.array([journal.touched[label][0] for label in labels]),
+                    np.array([journal.touched[label][1] for label in labels]))
+

@@ -1,0 +1,105 @@
+"""measure_until_decided on the simulated CMM: the paper's reference face made with a known form
+error and misplaced on the table is touched over I++ DME until its profile verdict is decided.
+The verdict must be the one an independent minimum zone of the true error over a dense raster of
+the face gives (a linear programme over the rigid motions, not the run's own alignment), with
+far fewer points than the face's candidate places; a part whose profile is the tolerance itself
+is never decided; a dropped connection leaves the points measured in the file."""
+import numpy as np
+import pytest
+from scipy.optimize import linprog
+from support.dropping_server import serve_then_drop
+from support.ippdme import check_commands, checker
+
+import cmmsampling
+from cmmsampling.cmm.client import MeasurementStopped
+from cmmsampling.cmm.decided import FIRST, face_candidates, measure_until_decided
+from cmmsampling.cmm.server import SimulatedCMM, VirtualPart
+from cmmsampling.geometry.validation import InputError
+from cmmsampling.inspection.simulate import Misplacement, form_waves
+
+TOLERANCE = 0.05
+PLACED = Misplacement(x=0.3, y=-0.2, rz=0.1)
+NOISE_MM = 0.0005
+# The raster per direction of the face on which the true profile is found.
+DENSE = 40
+
+
+@pytest.fixture(scope="module")
+def places(reference):
+    return face_candidates(reference)[0]
+
+
+def true_profile(face, form):
+    """The minimum zone (mm, about the nominal, rigid motions free) of the form error over a
+    DENSE x DENSE raster of the face, from OCC's points and normals: a linear programme."""
+    u0, u1, v0, v1 = face.ParameterRange
+    grid = [(u, v) for u in np.linspace(u0, u1, DENSE) for v in np.linspace(v0, v1, DENSE)]
+    points = np.array([tuple(face.valueAt(u, v)) for u, v in grid])
+    normals = np.array([tuple(face.normalAt(u, v)) for u, v in grid])
+    error = form(points)
+    jacobian = np.hstack([normals, np.cross(points - points.mean(axis=0), normals)])
+    zone = -np.ones((len(error), 1))
+    upper = np.vstack([np.hstack([jacobian, zone]), np.hstack([-jacobian, zone])])   # |error - J m| <= z
+    found = linprog(np.r_[np.zeros(6), 1.0], A_ub=upper, b_ub=np.r_[-error, error],
+                    bounds=[(None, None)] * 6 + [(0, None)], method="highs")
+    assert found.success, found.message
+    return 2.0 * found.x[-1]
+
+
+def made(places, amplitude, seed=3):
+    """(the VirtualPart: waves of amplitude mm over the face, misplaced by PLACED, probing noise),
+    its form error."""
+    form = form_waves(places.points, amplitude, seed)
+    return VirtualPart(form, PLACED.matrix(places.points.mean(axis=0)), NOISE_MM, np.random.default_rng(seed)), form
+
+
+@pytest.mark.parametrize("amplitude", [0.02, 0.07])
+def test_the_verdict_is_the_true_profiles_with_few_points(reference, places, amplitude, tmp_path):
+    part, form = made(places, amplitude)
+    truth = true_profile(reference, form)
+    assert abs(truth - TOLERANCE) > 0.01, "a part clearly on one side"
+    with SimulatedCMM(part) as cmm:
+        found = measure_until_decided(reference, cmm.address, TOLERANCE, out=tmp_path / "m.csv")
+    assert found.decision == ("conforms" if truth <= TOLERANCE else "does not conform"), (truth, found)
+    assert found.stopped.startswith("decided") and max(found.p_conform, found.p_nonconform) >= 0.95
+    assert FIRST <= found.points <= 3 * FIRST < len(places) / 10
+    measured = cmmsampling.read_points(tmp_path / "m.csv")
+    assert len(measured) == found.points and found.history[-1][0] == found.points
+    assert found.inspection.profile <= truth + 4 * NOISE_MM, "the measured points' zone within the whole face's"
+    if checker() is not None:
+        assert check_commands(found.run.commands, str(tmp_path)) == []
+
+
+def test_a_part_whose_profile_is_the_tolerance_is_not_decided(reference, places, tmp_path):
+    part, form = made(places, 0.04)
+    truth = true_profile(reference, form)
+    with SimulatedCMM(part) as cmm:
+        found = measure_until_decided(reference, cmm.address, truth + 3 * NOISE_MM, out=tmp_path / "m.csv",
+                                      max_points=FIRST + 4)
+    assert found.decision is None and found.stopped == f"undecided at the limit of {FIRST + 4} points"
+    assert found.points == FIRST + 4 == len(cmmsampling.read_points(tmp_path / "m.csv"))
+    assert max(found.p_conform, found.p_nonconform) < 0.95
+
+
+def test_a_dropped_connection_keeps_the_points_measured(reference, tmp_path):
+    with pytest.raises(MeasurementStopped, match="the CMM closed the connection during|the connection to the CMM was "
+                                                 "lost during") as caught:
+        measure_until_decided(reference, serve_then_drop(5 + 2 * 8), TOLERANCE, out=tmp_path / "m.csv")
+    assert len(caught.value.run.labels) == 8 and not caught.value.run.missing[1:]
+    kept = cmmsampling.read_points(tmp_path / "m.csv")
+    assert len(kept) == 8 and kept.metadata["run_end"].startswith("stopped")
+    assert cmmsampling.inspect(reference, tmp_path / "m.csv").profile < 1e-3, "usable: the perfect part it touched"
+
+
+@pytest.mark.parametrize("arguments, message", [
+    ({"tolerance": 0.0}, "tolerance"),
+    ({"risk": 0.5}, "risk"),
+    ({"max_points": 5}, "max_points"),
+    ({"out": "m.dmi"}, "written as CSV"),
+])
+def test_bad_arguments_are_refused_before_connecting(reference, tmp_path, arguments, message):
+    given = {"tolerance": TOLERANCE, "out": tmp_path / "m.csv", **arguments}
+    if not str(given["out"]).startswith("/"):
+        given["out"] = tmp_path / given["out"]
+    with pytest.raises((InputError, ValueError), match=message):
+        measure_until_decided(reference, "127.0.0.1:1", **given)
