@@ -54,6 +54,8 @@ run_one() {
                              "$PY" benchmarks/inspection_speed.py --beside-busy ;;
     series-error) page series-error "Sampling aimed at a series' error: points a next part needs, with and without the model" \
                     "$PY" benchmarks/series_error.py ;;
+    until-decided) page until-decided "Measuring until decided against a fixed plan: 100 simulated parts on two faces" \
+                     "$PY" benchmarks/until_decided.py ;;
     memory) page memory "Peak memory against sample()'s estimate" "$PY" benchmarks/memory.py --quick ;;
     first-run-estimate) page first-run-estimate "The time estimate against a first run, in a fresh process" \
                           "$PY" benchmarks/first_run_estimate.py ;;
@@ -61,7 +63,7 @@ run_one() {
     *) echo "unknown benchmark '$1'; choose from: $ALL" >&2; return 2 ;;
   esac
 }
-ALL="inspection-speed inspection-speed-busy speed part-plan-speed part-plan-ventilator part-plan-ventilator-optimal speed-busy long-runs memory near-optimal probe-plans probe-plans-busy probe-path probe-orientations part-plan-points delivered-deviation paper-run-spread series-error first-run-estimate reopen"
+ALL="inspection-speed inspection-speed-busy speed part-plan-speed part-plan-ventilator part-plan-ventilator-optimal speed-busy long-runs memory near-optimal probe-plans probe-plans-busy probe-path probe-orientations part-plan-points delivered-deviation paper-run-spread series-error until-decided first-run-estimate reopen"
 status=0
 for name in ${@:-$ALL}; do
   echo "== $name"

@@ -6,12 +6,14 @@ points say about the whole face (the probability that it conforms, and that it d
 touches next where that is least known, counting the travel; it stops when one side holds with
 probability 1 - risk, or at max_points (undecided, said so). Either verdict stands only where
 the inspection of the measured points agrees by ISO 14253-1's rule (a pass within t - U, a fail
-beyond t + U): the run never stops on a verdict the measured points do not bear out, and a
-fail the model expects is looked for where it is likeliest. Each point is written as it comes
+beyond t + U), and points that show a zone beyond t + U stop it as a fail: the run never stops
+on a verdict the measured points do not bear out, and a fail the model expects is looked for
+where it is likeliest. Each point is written as it comes
 (:func:`cmmsampling.cmm.client.run_session`), whatever ends the run.
 """
 from __future__ import annotations
 
+import functools
 import os
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
@@ -23,7 +25,7 @@ from ..fitting.series import PlaneCoordinates
 from ..formats.pointset import PointSet
 from ..geometry.surface import SurfaceModel, as_face
 from ..geometry.validation import InputError, check_real
-from ..inspection.decide import FEWEST_POINTS, Belief, Candidates, belief, next_row, spread_design
+from ..inspection.decide import FEWEST_POINTS, Belief, Candidates, belief, minimum_zones, next_row, spread_design
 from ..inspection.judge import Inspection, inspect
 from .client import Journal, MeasuredRun, link_settings, run_session
 
@@ -39,20 +41,25 @@ RISK = 0.05
 @dataclass
 class DecidedRun:
     """What :func:`measure_until_decided` measured and found: run (the MeasuredRun: the file,
-    a path-like), inspection (cmmsampling.inspect of the measured points with the tolerance and
-    uncertainty; None where fewer than FIRST points came), decision ('conforms', 'does not
-    conform', or None: undecided), p_conform and p_nonconform (the last belief's), points (how
-    many were measured), stopped (why the run ended, in words), history ((points, p_conform,
-    p_nonconform) after each belief)."""
+    a path-like), decision ('conforms', 'does not conform', or None: undecided), p_conform and
+    p_nonconform (the last belief's), points (how many were measured), stopped (why the run
+    ended, in words), history ((points, p_conform, p_nonconform) after each belief); inspection
+    (cmmsampling.inspect of the measured file with the tolerance and uncertainty, made on first
+    use: its Monte Carlo U takes a while; None where fewer than FIRST points came)."""
 
     run: MeasuredRun
-    inspection: Inspection | None
     decision: str | None
     p_conform: float
     p_nonconform: float
     points: int
     stopped: str
     history: list = field(default_factory=list)
+    judge: Callable[[MeasuredRun], Inspection] | None = field(default=None, repr=False)
+
+    @functools.cached_property
+    def inspection(self) -> Inspection | None:
+        """The measured file's inspection (see the class's doc)."""
+        return None if self.judge is None or self.points < FIRST else self.judge(self.run)
 
     def __fspath__(self) -> str:
         return os.fspath(self.run)
@@ -129,6 +136,7 @@ class _Rules:
         self.risk, self.limit, self.seed = risk, limit, seed
         self.rows: list[int] = []
         self.found: Belief | None = None
+        self.decision: str | None = None
         self.history: list[tuple[int, float, float]] = []
         self.stopped = "the run ended before the first points were measured"
 
@@ -157,21 +165,25 @@ class _Rules:
         and the profile cmmsampling.inspect finds for them (to the bounded face, minimum zone)
         agrees by ISO 14253-1's rule with U = COVERAGE u (the Monte Carlo U comes with the run's
         final inspection): within t - U for 'conforms', beyond t + U for 'does not conform'.
-        A belief of 'does not conform' the points do not show yet sends the next touch where the
+        Points that show a zone beyond t + U decide 'does not conform' whatever the belief. A
+        belief of 'does not conform' the points do not show yet sends the next touch where the
         excess is likeliest."""
         rows, d = self._deviations(journal)
         found = belief(self.places, rows, d, self.tolerance, COVERAGE * self.uncertainty, seed=self.seed)
         self.found = found
         self.history.append((len(rows), found.p_conform, found.p_nonconform))
         decision = found.decision(self.risk)
-        if decision is None:
+        guard = COVERAGE * self.uncertainty
+        seen = float(minimum_zones(d[None], self.places.rigid_basis()[rows])[0][0])
+        if decision is None and seen - guard <= self.tolerance:
             return found, None
         profile = inspect(self.face, _measured_points(journal), tolerance=self.tolerance).profile
-        guard = COVERAGE * self.uncertainty
-        if decision == "does not conform" and profile - guard > self.tolerance:
-            return found, (f"decided: P(does not conform) {found.p_nonconform:.3f} >= {1 - self.risk:g}, the "
-                           f"measured points show it (profile {profile:.4f} mm)")
+        if profile - guard > self.tolerance:
+            self.decision = "does not conform"
+            return found, (f"decided: the measured points show it (profile {profile:.4f} mm beyond t + U), "
+                           f"P(does not conform) {found.p_nonconform:.3f}")
         if decision == "conforms" and profile + guard <= self.tolerance:
+            self.decision = decision
             return found, (f"decided: P(conforms) {found.p_conform:.3f} >= {1 - self.risk:g}, the measured points "
                            f"agree (profile {profile:.4f} mm)")
         return found, None
@@ -204,19 +216,11 @@ class _Rules:
                        seed=self.seed)
 
     def result(self, run: MeasuredRun) -> DecidedRun:
-        """The DecidedRun of the run: its inspection, and the decision where the run stopped
-        on one ('does not conform' also where the measured points prove it)."""
-        measured = len(run.labels)
-        inspection = self._inspection(run) if measured >= FIRST else None
-        decision = None
-        if inspection is not None and inspection.decision == "does not conform":
-            decision = "does not conform"
-        elif self.stopped.startswith("decided") and self.found is not None:
-            decision = self.found.decision(self.risk)
+        """The DecidedRun of the run: the decision it stopped on (None where it did not)."""
         p_conform = self.found.p_conform if self.found is not None else float("nan")
         p_nonconform = self.found.p_nonconform if self.found is not None else float("nan")
-        return DecidedRun(run, inspection, decision, p_conform, p_nonconform, measured, self.stopped,
-                          list(self.history))
+        return DecidedRun(run, self.decision, p_conform, p_nonconform, len(run.labels), self.stopped,
+                          list(self.history), self._inspection)
 
 
 def _measured_points(journal: Journal) -> PointSet:
