@@ -10,7 +10,7 @@ scaled to its true profile, misplaced on the table by up to 0.3 mm and 0.1 degre
 probing noise. The true profile is the minimum zone of the field over a DENSE x DENSE raster of
 OCC's points (a linear programme). Each part is measured on the simulated I++ DME server twice:
 (a) the fixed plan: the fewest uniform parametric points that points_for_verdict finds for the
-face (the profile they give within a tenth of t of the true one on 95 % of parts with errors up
+face (placed the probe's edge offset from the edges, as measure_until_decided places its own) (the profile they give within a tenth of t of the true one on 95 % of parts with errors up
 to the series' largest), judged by cmmsampling.inspect with ISO 14253-1's rule (U = 2 u);
 (b) measure_until_decided with the same t, u and risk 0.05, at most the fixed plan's points (the
 run never costs more than the plan it replaces; undecided there).
@@ -34,6 +34,7 @@ from cmmsampling.formats.pointset import PointSet  # noqa: E402
 from cmmsampling.inspection.simulate import Misplacement, form_waves  # noqa: E402
 from cmmsampling.inspection.uncertainty import decide  # noqa: E402
 from cmmsampling.inspection.verdict_points import points_for_verdict  # noqa: E402
+from cmmsampling.strategies.sampling import probe_edge_offset  # noqa: E402
 
 TOLERANCE, U_PROBE, NOISE_MM, RISK = 0.05, 0.001, 0.0005, 0.05
 SHARES = {"good": (0.6, 0.3, 0.8), "bad": (0.25, 1.2, 2.0), "marginal": (0.15, 0.9, 1.1)}
@@ -107,7 +108,8 @@ def run_face(name, face, count, seed, folder):
     largest = TOLERANCE * SHARES["bad"][2]
     needed = points_for_verdict(face, TOLERANCE, largest / 2.0)
     fixed_n = needed.n if needed.n is not None else max(needed.counts)
-    planned = PointSet.from_result(cmmsampling.sample(face, fixed_n, "uniform_parametric", occ_check=False))
+    planned = PointSet.from_result(cmmsampling.sample(face, fixed_n, "uniform_parametric", occ_check=False,
+                                                      edge_offset=probe_edge_offset(face)))
     print(f"{name}: fixed plan of {fixed_n} uniform parametric points (points_for_verdict"
           f"{'' if needed.n is not None else ': none of its counts was enough, the largest taken'})", flush=True)
     fixed, decided = [], []

@@ -27,6 +27,7 @@ from ..geometry.surface import SurfaceModel, as_face
 from ..geometry.validation import InputError, check_real
 from ..inspection.decide import FEWEST_POINTS, Belief, Candidates, belief, minimum_zones, next_row, spread_design
 from ..inspection.judge import Inspection, inspect
+from ..strategies.sampling import probe_edge_offset
 from .client import Journal, MeasuredRun, link_settings, run_session
 
 # Places on the face the touches are chosen among (a raster of its parameters, those on the face);
@@ -88,7 +89,7 @@ def face_candidates(face: Any, count: int = CANDIDATES, edge_offset: float = 0.0
 
 def measure_until_decided(source: Any, server: str, tolerance: float, uncertainty: float = 0.0,
                           out: str | os.PathLike = "measured.csv", risk: float = RISK, max_points: int | None = None,
-                          *, edge_offset: float = 0.0, candidates: int = CANDIDATES, tool: str | None = None,
+                          *, edge_offset: float | None = None, candidates: int = CANDIDATES, tool: str | None = None,
                           progress: Callable[[str | None], bool | None] | None = None, timeout_s: float = 60.0,
                           log: str | os.PathLike | None = None, volume: Sequence[Sequence[float]] | None = None,
                           seed: int = 0) -> DecidedRun:
@@ -98,7 +99,8 @@ def measure_until_decided(source: Any, server: str, tolerance: float, uncertaint
     candidate place) are measured. uncertainty: u, mm, the probing's standard uncertainty per
     point (as cmmsampling.inspect takes it); out, tool, progress, timeout_s, log, volume as
     :func:`cmmsampling.measure` takes them; edge_offset: mm the points keep from the face's
-    edges; candidates: about how many places the points are chosen among; seed: the belief's
+    edges (None: a probe ball's radius and a margin, less on a narrow face, as *Sample face*
+    starts with: a point on an edge of a misplaced part lies beyond it); candidates: about how many places the points are chosen among; seed: the belief's
     random samples. Returns a DecidedRun; InputError before connecting for bad arguments."""
     tolerance = check_real("tolerance", tolerance, above=0.0)
     uncertainty = check_real("uncertainty", uncertainty, minimum=0.0)
@@ -106,7 +108,8 @@ def measure_until_decided(source: Any, server: str, tolerance: float, uncertaint
     if risk >= 0.5:
         raise InputError(f"risk ({risk:g}) must be below 0.5: it is the chance of a wrong verdict the run accepts")
     link = link_settings(server, out, log, timeout_s, volume)
-    places, _ = face_candidates(source, int(check_real("candidates", candidates, above=0.0)), edge_offset)
+    offset = probe_edge_offset(as_face(source)) if edge_offset is None else check_real("edge_offset", edge_offset, 0.0)
+    places, _ = face_candidates(source, int(check_real("candidates", candidates, above=0.0)), offset)
     limit = _points_limit(max_points, len(places))
     labels = [f"C{row + 1}" for row in range(len(places))]
     planned = PointSet(labels, places.points, places.normals, metadata={"source": "measure until decided"})

@@ -11,7 +11,10 @@ by the rigid motion that makes its largest deviation smallest (the minimum zone,
 inspection aligns: :func:`minimum_zones`), and a sample's profile is twice that largest
 deviation over the face (ISO 1101's zone about the nominal, no datums). With the
 measurement's expanded uncertainty U, ISO 14253-1's rule decides per sample: conformance where
-the profile + U <= t, non-conformance where the profile - U > t. The face is decided when one of
+the profile + U <= t, non-conformance where the profile - U > t. P(conforms) is the smaller of
+the shares under the fitted field and under one of ROUGHER times its length (a length fitted to
+a few points is often too long, and the field between them then too sure: a pass must not rest
+on it). The face is decided when one of
 the two holds for all but a share ``risk`` of the samples; its verdict is then wrong with a
 probability below risk under the model (Dumas et al., Precision Engineering 37, 2013: kriging
 that confirms a large surface's conformity at a stated confidence with few points).
@@ -24,7 +27,7 @@ by 1 + the travel from the last touch over the face's extent. Where the samples 
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.linalg import cho_factor, cho_solve, eigh
@@ -41,6 +44,9 @@ MOTION_SPREAD = 10.0
 JITTER = 1e-12
 # Rounds of Lawson's algorithm that bring each sample near its minimum zone.
 LAWSON_STEPS = 30
+# A pass must also hold for a field this much shorter in length than the fitted one (a length
+# fitted to a few points can be too long, and the field between them too sure).
+ROUGHER = 0.5
 
 
 @dataclass(frozen=True)
@@ -104,6 +110,19 @@ def belief(candidates: Candidates, rows: np.ndarray, deviations: np.ndarray, tol
     basis = candidates.rigid_basis()
     motion = np.linalg.lstsq(basis[rows], d, rcond=None)[0]
     field = fit_field(candidates.x[rows], d - basis[rows] @ motion)
+    profile, aligned = _sampled_zones(candidates, basis, rows, d, field, tolerance, samples, seed)
+    rougher = replace(field, length=ROUGHER * field.length)
+    rough_profile = _sampled_zones(candidates, basis, rows, d, rougher, tolerance, samples, seed)[0]
+    half = 0.5 * max(tolerance - uncertainty, 0.0)
+    p_conform = min(np.mean(profile + uncertainty <= tolerance), np.mean(rough_profile + uncertainty <= tolerance))
+    return Belief(float(p_conform), float(np.mean(profile - uncertainty > tolerance)),
+                  profile, (np.abs(aligned) > half).mean(axis=0), aligned.std(axis=0))
+
+
+def _sampled_zones(candidates: Candidates, basis: np.ndarray, rows: np.ndarray, d: np.ndarray, field: FieldFit,
+                   tolerance: float, samples: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
+    """(profiles (S,) mm, aligned samples (S, M) mm) of S posterior samples of the deviation at
+    every candidate given d (n,) mm at rows, each at its minimum zone."""
     spread = MOTION_SPREAD * (np.abs(d).max() + tolerance)
     mean, covariance = _posterior(candidates, basis, rows, d, field, spread)
     # The rigid motions change no zone: their part of the field is left out before sampling.
@@ -112,10 +131,7 @@ def belief(candidates: Candidates, rows: np.ndarray, deviations: np.ndarray, tol
     values, vectors = eigh(0.5 * (free_covariance + free_covariance.T))
     root = vectors * np.sqrt(np.clip(values, 0.0, None))
     drawn = rigid_free @ mean + np.random.default_rng(seed).standard_normal((samples, len(values))) @ root.T
-    profile, aligned = minimum_zones(drawn, basis)
-    half = 0.5 * max(tolerance - uncertainty, 0.0)
-    return Belief(float(np.mean(profile + uncertainty <= tolerance)), float(np.mean(profile - uncertainty > tolerance)),
-                  profile, (np.abs(aligned) > half).mean(axis=0), aligned.std(axis=0))
+    return minimum_zones(drawn, basis)
 
 
 def minimum_zones(fields: np.ndarray, basis: np.ndarray, steps: int = LAWSON_STEPS) -> tuple[np.ndarray, np.ndarray]:
