@@ -80,7 +80,7 @@ def face_candidates(face: Any, count: int = CANDIDATES, edge_offset: float = 0.0
     model: SurfaceModel = setup.model
     side = int(np.ceil(np.sqrt(count)))
     raster = model.raster((side, side)).reshape(-1, 2)
-    uv = raster[setup.domain(edge_offset).on_face(raster)]
+    uv = raster[setup.domain(edge_offset).contains(raster)]
     if len(uv) < 2 * FIRST:
         raise InputError(f"only {len(uv)} of {len(raster)} raster places lie on the face{' that far from its edges' if edge_offset else ''}: "
                          "give more candidates or a smaller edge_offset")
