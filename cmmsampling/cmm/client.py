@@ -194,6 +194,12 @@ class Journal:
         wanted = self.planned.labels if self.wanted is None else self.wanted
         return [label for label in wanted if label in self.touched], [label for label in wanted if label not in self.touched]
 
+    def measured(self, metadata: dict | None = None) -> PointSet:
+        """The contact points kept so far (in the order :meth:`labels` gives), with metadata."""
+        labels = self.labels()[0]
+        return PointSet(labels, np.array([self.touched[label][0] for label in labels]).reshape(-1, 3),
+                        np.array([self.touched[label][1] for label in labels]).reshape(-1, 3), metadata=metadata or {})
+
     def write(self, end: str) -> None:
         """Write the points measured (in the planned order), if any, and sync the transcript."""
         labels, missing = self.labels()
@@ -202,8 +208,7 @@ class Journal:
                         "tool_radius_mm": self.radius, "run_end": end}
             if missing:
                 metadata["not_measured"] = " ".join(missing)
-            export(PointSet(labels, np.array([self.touched[label][0] for label in labels]),
-                            np.array([self.touched[label][1] for label in labels]), metadata=metadata), self.out)
+            export(self.measured(metadata), self.out)
         if self.stream is not None:
             os.fsync(self.stream.fileno())
 

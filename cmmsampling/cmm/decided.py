@@ -108,12 +108,13 @@ def measure_until_decided(source: Any, server: str, tolerance: float, uncertaint
     if risk >= 0.5:
         raise InputError(f"risk ({risk:g}) must be below 0.5: it is the chance of a wrong verdict the run accepts")
     link = link_settings(server, out, log, timeout_s, volume)
-    offset = probe_edge_offset(as_face(source)) if edge_offset is None else check_real("edge_offset", edge_offset, 0.0)
-    places, _ = face_candidates(source, int(check_real("candidates", candidates, above=0.0)), offset)
+    face = as_face(source)
+    offset = probe_edge_offset(face) if edge_offset is None else check_real("edge_offset", edge_offset, 0.0)
+    places, _ = face_candidates(face, int(check_real("candidates", candidates, above=0.0)), offset)
     limit = _points_limit(max_points, len(places))
     labels = [f"C{row + 1}" for row in range(len(places))]
     planned = PointSet(labels, places.points, places.normals, metadata={"source": "measure until decided"})
-    rules = _Rules(as_face(source), places, tolerance, uncertainty, risk, limit, seed)
+    rules = _Rules(face, places, tolerance, uncertainty, risk, limit, seed)
     run = run_session(link, planned, None, 0.0, tool, progress, rules.order, chosen=True)
     return rules.result(run)
 
@@ -172,15 +173,15 @@ class _Rules:
         belief of 'does not conform' the points do not show yet sends the next touch where the
         excess is likeliest."""
         rows, d = self._deviations(journal)
-        found = belief(self.places, rows, d, self.tolerance, COVERAGE * self.uncertainty, seed=self.seed)
+        guard = COVERAGE * self.uncertainty
+        found = belief(self.places, rows, d, self.tolerance, guard, seed=self.seed)
         self.found = found
         self.history.append((len(rows), found.p_conform, found.p_nonconform))
         decision = found.decision(self.risk)
-        guard = COVERAGE * self.uncertainty
         seen = float(minimum_zones(d[None], self.places.rigid_basis()[rows])[0][0])
         if decision is None and seen - guard <= self.tolerance:
             return found, None
-        profile = inspect(self.face, _measured_points(journal), tolerance=self.tolerance).profile
+        profile = inspect(self.face, journal.measured(), tolerance=self.tolerance).profile
         if profile - guard > self.tolerance:
             self.decision = "does not conform"
             return found, (f"decided: the measured points show it (profile {profile:.4f} mm beyond t + U), "
@@ -203,7 +204,7 @@ class _Rules:
         self.seeking = decision == "does not conform"
         if decision is None:
             return None
-        profile = inspect(self.face, _measured_points(journal), tolerance=self.tolerance).profile
+        profile = inspect(self.face, journal.measured(), tolerance=self.tolerance).profile
         guard = COVERAGE * self.uncertainty
         if decision == "does not conform" and profile - guard > self.tolerance:
             return (f"decided: P(does not conform) {self.found.p_nonconform:.3f} >= {1 - self.risk:g}, the measured "
@@ -224,11 +225,4 @@ class _Rules:
         p_nonconform = self.found.p_nonconform if self.found is not None else float("nan")
         return DecidedRun(run, self.decision, p_conform, p_nonconform, len(run.labels), self.stopped,
                           list(self.history), self._inspection)
-
-
-def _measured_points(journal: Journal) -> PointSet:
-    """The contact points the journal kept, in the order measured."""
-    labels = list(journal.touched)
-    return PointSet(labels, np.array([journal.touched[label][0] for label in labels]),
-                    np.array([journal.touched[label][1] for label in labels]))
 
