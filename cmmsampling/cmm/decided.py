@@ -26,7 +26,7 @@ from ..formats.pointset import PointSet
 from ..geometry.surface import SurfaceModel, as_face
 from ..geometry.validation import InputError, check_real
 from ..inspection.decide import FEWEST_POINTS, Belief, Candidates, belief, minimum_zones, next_row, spread_design
-from ..inspection.judge import Inspection, inspect
+from ..inspection.judge import Inspection, Progress, inspect
 from ..strategies.sampling import probe_edge_offset
 from .client import Journal, MeasuredRun, link_settings, run_session
 
@@ -55,12 +55,19 @@ class DecidedRun:
     points: int
     stopped: str
     history: list = field(default_factory=list)
-    judge: Callable[[MeasuredRun], Inspection] | None = field(default=None, repr=False)
+    judge: Callable[[MeasuredRun, Progress | None], Inspection] | None = field(default=None, repr=False)
 
     @functools.cached_property
     def inspection(self) -> Inspection | None:
         """The measured file's inspection (see the class's doc)."""
-        return None if self.judge is None or self.points < FIRST else self.judge(self.run)
+        return None if self.judge is None or self.points < FIRST else self.judge(self.run, None)
+
+    def judged(self, progress: Progress | None = None) -> Inspection | None:
+        """The inspection, made now where it is not yet, with progress as cmmsampling.inspect
+        takes it (InspectionCancelled where it returns True; the next call starts again)."""
+        if "inspection" not in self.__dict__ and self.judge is not None and self.points >= FIRST:
+            self.__dict__["inspection"] = self.judge(self.run, progress)
+        return self.inspection
 
     def __fspath__(self) -> str:
         return os.fspath(self.run)
@@ -72,19 +79,39 @@ class DecidedRun:
 
 
 def face_candidates(face: Any, count: int = CANDIDATES, edge_offset: float = 0.0) -> tuple[Candidates, np.ndarray]:
-    """(Candidates, uv (M, 2)) of a face: a raster of its parameter range about count places,
-    those on the face edge_offset mm from its edges; InputError where fewer than 2 FIRST are."""
+    """(Candidates, uv (M, 2)) of a face: about count places of a raster of its parameter range
+    inside its edges, samples of its edges about as far apart as the raster's places (the
+    tolerance holds to the edges) and, to touch next to them, each of those moved inwards to
+    where the probe keeps edge_offset mm from the edges; touchable those edge_offset mm from the
+    edges; InputError where fewer than 2 FIRST are."""
     from ..strategies.face_setup import setup_of
 
     setup = setup_of(as_face(face))
     model: SurfaceModel = setup.model
     side = int(np.ceil(np.sqrt(count)))
     raster = model.raster((side, side)).reshape(-1, 2)
-    uv = raster[setup.domain(edge_offset).contains(raster)]
-    if len(uv) < 2 * FIRST:
-        raise InputError(f"only {len(uv)} of {len(raster)} raster places lie on the face{' that far from its edges' if edge_offset else ''}: "
+    u0, u1, v0, v1 = model.bounds
+    inner = (raster[:, 0] > u0) & (raster[:, 0] < u1) & (raster[:, 1] > v0) & (raster[:, 1] < v1)
+    raster = raster[inner & setup.domain(0.0).on_face(raster)]
+    edges = _edge_places(model, np.sqrt(model.area / count))
+    reached = setup.domain(edge_offset)
+    ring = _inward(edges, raster.mean(axis=0), reached.contains)
+    uv = np.vstack([raster, edges, ring])
+    touchable = reached.contains(uv)
+    if touchable.sum() < 2 * FIRST:
+        raise InputError(f"only {touchable.sum()} of {len(uv)} places on the face lie {edge_offset:g} mm from its edges: "
                          "give more candidates or a smaller edge_offset")
-    return Candidates(model.points(uv), model.normals(uv), PlaneCoordinates(model)(uv)), uv
+    return Candidates(model.points(uv), model.normals(uv), PlaneCoordinates(model)(uv), touchable), uv
+
+
+def _edge_places(model: SurfaceModel, spacing: float) -> np.ndarray:
+    """(K, 2) uv: samples of the face's edges about spacing mm apart along them."""
+    kept = []
+    for loop in model.trim_loops(0.25 * spacing):
+        steps = np.linalg.norm(np.diff(model.points(loop), axis=0), axis=1)
+        walked = np.floor(np.r_[0.0, np.cumsum(steps)] / spacing)
+        kept.append(loop[np.r_[True, np.diff(walked) > 0]])
+    return np.vstack(kept)
 
 
 def measure_until_decided(source: Any, server: str, tolerance: float, uncertainty: float = 0.0,
@@ -93,30 +120,55 @@ def measure_until_decided(source: Any, server: str, tolerance: float, uncertaint
                           progress: Callable[[str | None], bool | None] | None = None, timeout_s: float = 60.0,
                           log: str | os.PathLike | None = None, volume: Sequence[Sequence[float]] | None = None,
                           seed: int = 0) -> DecidedRun:
-    """Measure a face (a Part.Face, or a shape of one face, on the CMM in the CAD model's
-    coordinates) over the I++ DME server at 'host:port' until its profile verdict to tolerance t
+    """Measure a face (a Part.Face, a shape of one face, or the workbench's probe points of one
+    face, whose source face it takes; on the CMM in the CAD model's coordinates) over the I++ DME server at 'host:port' until its profile verdict to tolerance t
     (mm, no datums) is decided with probability 1 - risk, or max_points (default: every
     candidate place) are measured. uncertainty: u, mm, the probing's standard uncertainty per
     point (as cmmsampling.inspect takes it); out, tool, progress, timeout_s, log, volume as
     :func:`cmmsampling.measure` takes them; edge_offset: mm the points keep from the face's
     edges (None: a probe ball's radius and a margin, less on a narrow face, as *Sample face*
-    starts with: a point on an edge of a misplaced part lies beyond it); candidates: about how many places the points are chosen among; seed: the belief's
-    random samples. Returns a DecidedRun; InputError before connecting for bad arguments."""
+    starts with: a point on an edge of a misplaced part lies beyond it); candidates: about how
+    many places the points are chosen among; seed: the belief's random samples. Returns a DecidedRun; InputError before connecting for bad arguments."""
     tolerance = check_real("tolerance", tolerance, above=0.0)
     uncertainty = check_real("uncertainty", uncertainty, minimum=0.0)
     risk = check_real("risk", risk, above=0.0)
     if risk >= 0.5:
         raise InputError(f"risk ({risk:g}) must be below 0.5: it is the chance of a wrong verdict the run accepts")
     link = link_settings(server, out, log, timeout_s, volume)
-    face = as_face(source)
+    face = measured_face(source)
     offset = probe_edge_offset(face) if edge_offset is None else check_real("edge_offset", edge_offset, 0.0)
     places, _ = face_candidates(face, int(check_real("candidates", candidates, above=0.0)), offset)
-    limit = _points_limit(max_points, len(places))
+    limit = _points_limit(max_points, int(places.touch.sum()))
     labels = [f"C{row + 1}" for row in range(len(places))]
     planned = PointSet(labels, places.points, places.normals, metadata={"source": "measure until decided"})
     rules = _Rules(face, places, tolerance, uncertainty, risk, limit, seed)
     run = run_session(link, planned, None, 0.0, tool, progress, rules.order, chosen=True)
     return rules.result(run)
+
+
+def _inward(uv: np.ndarray, centre: np.ndarray, inside: Callable[[np.ndarray], np.ndarray],
+            steps: int = 64) -> np.ndarray:
+    """(K', 2): each of uv (K, 2) moved towards centre (2,) by the first of steps fractions of
+    the way (up to half) where inside(uv) holds; those it never holds for left out."""
+    fractions = np.linspace(0.0, 0.5, steps + 1)[1:]
+    moved = uv[:, None, :] + fractions[None, :, None] * (centre - uv)[:, None, :]     # (K, steps, 2)
+    holds = inside(moved.reshape(-1, 2)).reshape(len(uv), steps)
+    found = holds.any(axis=1)
+    return moved[found, holds[found].argmax(axis=1)]
+
+
+def measured_face(source: Any) -> Any:
+    """The Part.Face a run until decided measures: source itself (a face, or a shape of one), or
+    the one face of a document object whose Proxy has planned(obj) (the workbench's probe
+    points); InputError for a part plan of several faces."""
+    method = getattr(getattr(source, "Proxy", None), "planned", None)
+    if not callable(method):
+        return as_face(source)
+    faces = method(source).faces
+    if len(faces) != 1:
+        raise InputError(f"{source.Label} holds the points of {len(faces)} faces: measuring until decided judges one "
+                         "face; select one face's probe points")
+    return faces[0]
 
 
 def _points_limit(max_points: int | None, count: int) -> int:
@@ -178,7 +230,7 @@ class _Rules:
         self.found = found
         self.history.append((len(rows), found.p_conform, found.p_nonconform))
         decision = found.decision(self.risk)
-        seen = float(minimum_zones(d[None], self.places.rigid_basis()[rows])[0][0])
+        seen = float(minimum_zones(d[None], self.places.rigid[rows])[0][0])
         if decision is None and seen - guard <= self.tolerance:
             return found, None
         profile = inspect(self.face, journal.measured(), tolerance=self.tolerance).profile
@@ -200,24 +252,11 @@ class _Rules:
         offsets = contacts - self.places.points[rows]
         return rows, np.einsum("ij,ij->i", offsets, self.places.normals[rows])
 
-        decision = self.found.decision(self.risk)
-        self.seeking = decision == "does not conform"
-        if decision is None:
-            return None
-        profile = inspect(self.face, journal.measured(), tolerance=self.tolerance).profile
-        guard = COVERAGE * self.uncertainty
-        if decision == "does not conform" and profile - guard > self.tolerance:
-            return (f"decided: P(does not conform) {self.found.p_nonconform:.3f} >= {1 - self.risk:g}, the measured "
-                    f"points show it (profile {profile:.4f} mm)")
-        if decision == "conforms" and profile + guard <= self.tolerance:
-            return (f"decided: P(conforms) {self.found.p_conform:.3f} >= {1 - self.risk:g}, the measured points "
-                    f"agree (profile {profile:.4f} mm)")
-        return None
-    def _inspection(self, measured: os.PathLike) -> Inspection:
+    def _inspection(self, measured: os.PathLike, progress: Progress | None) -> Inspection:
         """cmmsampling.inspect of the measured file on the face with the run's tolerance and u
-        (its expanded uncertainty and decision where u is given)."""
+        (its expanded uncertainty and decision where u is given), progress as it takes it."""
         return inspect(self.face, measured, tolerance=self.tolerance, uncertainty=self.uncertainty or None,
-                       seed=self.seed)
+                       seed=self.seed, progress=progress)
 
     def result(self, run: MeasuredRun) -> DecidedRun:
         """The DecidedRun of the run: the decision it stopped on (None where it did not)."""

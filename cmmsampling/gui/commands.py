@@ -272,12 +272,12 @@ class MeasureOnCMM(GuardedCommand):
         from .measure_dialog import ask_measurement, measurement_call, run_with_progress
 
         [points] = selected_export_sources()
-        arguments = ask_measurement(points)
-        if arguments is None:
+        request = ask_measurement(points)
+        if request is None:
             return
         status = FreeCADGui.getMainWindow().statusBar()
         try:
-            run = run_with_progress(points, arguments)
+            run = run_with_progress(points, request)
         except MeasurementStopped as exc:
             status.showMessage(f"Measurement stopped: {str(exc).splitlines()[0]}", 20000)
             warn(self.TITLE, str(exc))
@@ -287,13 +287,33 @@ class MeasureOnCMM(GuardedCommand):
             warn(self.TITLE, str(exc))
             return
         FreeCADGui.doCommand("import cmmsampling")
-        with handed("measure", points, arguments, run):
-            FreeCADGui.doCommand(measurement_call(points, arguments))
+        with handed(request.function, points, request.arguments, run):
+            FreeCADGui.doCommand(measurement_call(points, request))
         FreeCAD.Console.PrintMessage(f"cmmsampling: {run}\n")
         status.showMessage(str(run), 20000)
-        if run.labels and not run.cancelled:
-            settings.save({"InspectFile": run.path})
+        measured = run.run if request.until_decided else run
+        if not measured.labels or measured.cancelled:
+            return
+        settings.save({"InspectFile": measured.path})
+        if request.until_decided:
+            add_decided_inspection(points, run)
+        else:
             FreeCADGui.runCommand(InspectMeasured.NAME)
+
+
+def add_decided_inspection(points, run):
+    """Add the inspection a run until decided made in the background (DecidedRun.inspection) to
+    the document, echoed, and report it; nothing where it was not made (cancelled, or too few
+    points)."""
+    from .inspect_dialog import report_inspection
+
+    if "inspection" not in run.__dict__ or run.inspection is None:
+        return
+    doc = f"App.getDocument({points.Document.Name!r})"
+    FreeCADGui.doCommand("inspection = run.inspection")
+    FreeCADGui.doCommand(f"group = cmmsampling.add_inspection_to_document(inspection, {doc}, "
+                         f"source={doc}.getObject({points.Name!r}))")
+    report_inspection(run.inspection)
 
 
 class CompareStrategies(FaceCommand):

@@ -1,31 +1,53 @@
 """*Measure on CMM...*: the I++ DME server (host, port), the tool and the file for the measured
-points, asked in a small dialog; the measurement runs in the background behind a progress
-dialog (the point under way, Cancel), is echoed as ``run = cmmsampling.measure(...)`` (handed
-over: cmmsampling.gui.handover, so the echo does not move the machine again) and ends in *Inspect measured points...* with
-the file it wrote.
+points, asked in a small dialog, and whether to touch every planned point or, on one face's
+probe points, only until the verdict is decided (its tolerance, the probing's uncertainty and
+the risk of a wrong verdict). The measurement runs in the background behind a progress dialog
+(the point under way, Cancel) and is echoed as ``run = cmmsampling.measure(...)`` or
+``run = cmmsampling.measure_until_decided(...)`` (handed over: cmmsampling.gui.handover, so the
+echo does not move the machine again). Every planned point measured ends in *Inspect measured
+points...* with the file it wrote; a run until decided ends in its own inspection, made in the
+background too and added to the document.
 
 The values persist in the workbench's parameter group.
 """
 import os
+from dataclasses import dataclass
 
 import FreeCADGui
 from PySide import QtGui
 
 from ..cmm.client import DEFAULT_PORT, measure
+from ..cmm.decided import RISK, measure_until_decided
 from ..document import settings
 from ..formats.exporting import along_moves, as_point_set
 from . import icon
 from .background import BackgroundTask, behind_progress
 from .qt_compat import asked, browse_row
 
-DEFAULTS = {"MeasureHost": "127.0.0.1", "MeasurePort": DEFAULT_PORT, "MeasureTool": ""}
+DEFAULTS = {"MeasureHost": "127.0.0.1", "MeasurePort": DEFAULT_PORT, "MeasureTool": "",
+            "MeasureUntilDecided": False, "MeasureTolerance": 0.05, "MeasureUncertainty": 0.001, "MeasureRisk": RISK}
+
+
+@dataclass(frozen=True)
+class MeasureRequest:
+    """What the dialog asks for: function, the cmmsampling function that measures ('measure' or
+    'measure_until_decided'), and its keyword arguments (server, out, tool; until decided also
+    tolerance, uncertainty, risk)."""
+
+    function: str
+    arguments: dict
+
+    @property
+    def until_decided(self):
+        return self.function == "measure_until_decided"
 
 
 class MeasureDialog(QtGui.QDialog):
     """Where and with what to measure the probe points ``title`` names: host, port, tool (empty:
-    the first the server lists) and the measured file (``path``: where it starts)."""
+    the first the server lists), the measured file (``path``: where it starts) and, where
+    one_face, whether to measure until the verdict is decided."""
 
-    def __init__(self, title, path, parent=None):
+    def __init__(self, title, path, parent=None, one_face=True):
         super().__init__(parent)
         self.setObjectName("MeasureOnCMM")
         self.setWindowTitle(f"Measure on CMM: {title}")
@@ -51,11 +73,47 @@ class MeasureDialog(QtGui.QDialog):
         self.path.setObjectName("path")
         self.path.setToolTip("The measured contact points are written here (CSV), then inspected")
         layout.addRow("Measured file", browse_row(self, self.path, "Choose the folder and name of the measured file"))
+        self._add_decision_rows(layout, stored, one_face)
         self.buttons = QtGui.QDialogButtonBox(QtGui.QDialogButtonBox.Ok | QtGui.QDialogButtonBox.Cancel, parent=self)
         self.buttons.accepted.connect(self.accept)
         self.buttons.rejected.connect(self.reject)
         layout.addRow(self.buttons)
         self.resize(520, self.sizeHint().height())
+
+    def _add_decision_rows(self, layout, stored, one_face):
+        """The choice to measure until decided and its tolerance, uncertainty and risk (enabled
+        with it; the choice itself only for one face's points)."""
+        self.until = QtGui.QCheckBox("Only until the verdict is decided", self)
+        self.until.setObjectName("until")
+        self.until.setToolTip(
+            "Touch the face where the verdict is least certain, one point at a time, and stop as soon as "
+            "'conforms' or 'does not conform' holds with the chance of a wrong verdict below the risk "
+            "(the planned points are not used; the face's profile to the tolerance, no datums)"
+            if one_face else "Measuring until decided judges one face: select one face's probe points")
+        self.until.setEnabled(one_face)
+        self.until.setChecked(one_face and bool(stored["MeasureUntilDecided"]))
+        layout.addRow("Points", self.until)
+        self.tolerance = _millimetres(self, "tolerance", stored["MeasureTolerance"], 0.0001,
+                                      "The face's profile tolerance t (the zone's full width)")
+        layout.addRow("Profile tolerance", self.tolerance)
+        self.uncertainty = _millimetres(self, "uncertainty", stored["MeasureUncertainty"], 0.0,
+                                        "The probing's standard uncertainty u per point; the verdict keeps "
+                                        "U = 2u from the limit (ISO 14253-1)")
+        layout.addRow("Probing uncertainty u", self.uncertainty)
+        self.risk = QtGui.QDoubleSpinBox(self)
+        self.risk.setObjectName("risk")
+        self.risk.setDecimals(3)
+        self.risk.setRange(0.001, 0.49)
+        self.risk.setSingleStep(0.01)
+        self.risk.setValue(float(stored["MeasureRisk"]))
+        self.risk.setToolTip("The chance of a wrong verdict the run accepts before it stops")
+        layout.addRow("Risk of a wrong verdict", self.risk)
+        self.until.toggled.connect(self._decision_enabled)
+        self._decision_enabled(self.until.isChecked())
+
+    def _decision_enabled(self, on):
+        for field in (self.tolerance, self.uncertainty, self.risk):
+            field.setEnabled(on)
 
     def browse(self):
         """Choose the measured file to write (CSV); the extension is added where it is missing."""
@@ -63,35 +121,62 @@ class MeasureDialog(QtGui.QDialog):
         if path:
             self.path.setText(path if path.lower().endswith(".csv") else path + ".csv")
 
-    def arguments(self):
-        """{"server": 'host:port', "out": path, "tool": name or None}: keyword arguments of
-        cmmsampling.measure."""
-        return {"server": f"{self.host.text().strip()}:{self.port.value()}", "out": self.path.text().strip(),
-                "tool": self.tool.text().strip() or None}
+    def request(self):
+        """The MeasureRequest of the dialog's values."""
+        arguments = {"server": f"{self.host.text().strip()}:{self.port.value()}", "out": self.path.text().strip(),
+                     "tool": self.tool.text().strip() or None}
+        if not self.until.isChecked():
+            return MeasureRequest("measure", arguments)
+        arguments.update(tolerance=self.tolerance.value(), uncertainty=self.uncertainty.value(), risk=self.risk.value())
+        return MeasureRequest("measure_until_decided", arguments)
 
     def stored(self):
         """The values to keep for the next measurement."""
         return {"MeasureHost": self.host.text().strip(), "MeasurePort": self.port.value(),
-                "MeasureTool": self.tool.text().strip()}
+                "MeasureTool": self.tool.text().strip(), "MeasureUntilDecided": self.until.isChecked(),
+                "MeasureTolerance": self.tolerance.value(), "MeasureUncertainty": self.uncertainty.value(),
+                "MeasureRisk": self.risk.value()}
+
+
+def _millimetres(dialog, name, value, lowest, tip):
+    """A spin box of mm (4 decimals, from lowest to 10 mm) named name, at value."""
+    box = QtGui.QDoubleSpinBox(dialog)
+    box.setObjectName(name)
+    box.setDecimals(4)
+    box.setRange(lowest, 10.0)
+    box.setSingleStep(0.001)
+    box.setSuffix(" mm")
+    box.setValue(float(value))
+    box.setToolTip(tip)
+    return box
 
 
 def ask_measurement(points):
     """Ask where to measure a probe-points object or a part plan's group; None when the user
-    cancels, else the keyword arguments of cmmsampling.measure (MeasureDialog.arguments)."""
+    cancels, else the MeasureRequest."""
+    from ..document.object_types import is_part_plan
+
     doc = points.Document
     folder = os.path.dirname(doc.FileName) if doc.FileName else os.path.expanduser("~")
     dialog = MeasureDialog(points.Label, os.path.join(folder, f"{points.Name}_measured.csv"),
-                           FreeCADGui.getMainWindow())
-    return asked(dialog, MeasureDialog.arguments)
+                           FreeCADGui.getMainWindow(), one_face=not is_part_plan(points))
+    return asked(dialog, MeasureDialog.request)
 
 
-def measurement_call(points, arguments):
-    """The echoed line: ``run = cmmsampling.measure(<points>, 'host:port', 'file'[, tool=...])``."""
-    source = f"App.getDocument({points.Document.Name!r}).getObject({points.Name!r})"
-    words = [source, repr(arguments["server"]), repr(arguments["out"])]
+def measurement_call(points, request):
+    """The echoed line: ``run = cmmsampling.measure(<points>, 'host:port', 'file'[, tool=...])``,
+    or ``run = cmmsampling.measure_until_decided(<points>, 'host:port', t, u, 'file', risk=...
+    [, tool=...])``."""
+    arguments = request.arguments
+    words = [f"App.getDocument({points.Document.Name!r}).getObject({points.Name!r})", repr(arguments["server"])]
+    if request.until_decided:
+        words += [repr(arguments["tolerance"]), repr(arguments["uncertainty"]), repr(arguments["out"]),
+                  f"risk={arguments['risk']!r}"]
+    else:
+        words.append(repr(arguments["out"]))
     if arguments["tool"] is not None:
         words.append(f"tool={arguments['tool']!r}")
-    return f"run = cmmsampling.measure({', '.join(words)})"
+    return f"run = cmmsampling.{request.function}({', '.join(words)})"
 
 
 def planned_points(points):
@@ -127,12 +212,37 @@ class BackgroundMeasurement(BackgroundTask):
         self.run = measure(self.point_set, progress=self._progress, **self.arguments)
 
 
-def run_with_progress(points, arguments):
-    """Measure the points in the background behind a progress dialog with Cancel: the
-    MeasuredRun (``cancelled`` where the user stopped it), or the run's exception raised here."""
-    job = BackgroundMeasurement(planned_points(points), arguments)
+class BackgroundDecision(BackgroundMeasurement):
+    """cmmsampling.measure_until_decided of one face's probe points in a daemon thread, then the
+    DecidedRun's inspection (its Monte Carlo U takes a while); ``cancel()`` stops either (the
+    points measured kept; a cancelled inspection is left unmade)."""
+
+    def __init__(self, points, arguments):
+        super().__init__(None, arguments)
+        self.points = points
+
+    def _work(self):
+        from ..inspection.judge import InspectionCancelled
+
+        self.run = measure_until_decided(self.points, progress=self._progress, **self.arguments)
+        if not self.cancelled and self.run.points:
+            self.message = f"{self.run.decision or 'undecided'} after {self.run.points} points; judging them"
+            try:
+                self.run.judged(self._progress)
+            except InspectionCancelled:
+                pass
+
+
+def run_with_progress(points, request):
+    """Measure the points as the MeasureRequest asks in the background behind a progress dialog
+    with Cancel: the MeasuredRun or DecidedRun (``cancelled`` where the user stopped it), or
+    the run's exception raised here."""
+    if request.until_decided:
+        job = BackgroundDecision(points, request.arguments)
+    else:
+        job = BackgroundMeasurement(planned_points(points), request.arguments)
     behind_progress(job, "Measure on CMM", "MeasureProgress",
-                    lambda: f"Measuring {points.Label} on {arguments['server']}: {job.message}...")
+                    lambda: f"Measuring {points.Label} on {request.arguments['server']}: {job.message}...")
     if job.error is not None:
         raise job.error
     return job.run

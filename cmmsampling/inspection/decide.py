@@ -3,85 +3,116 @@ given the points measured so far, and where the next touch tells most about it.
 
 The face's deviation along its normals, e(x), is a Gaussian field over plane coordinates x (mm,
 :class:`cmmsampling.fitting.series.PlaneCoordinates`): a rigid motion of the part on the table
-(its six components along the candidates' rigid basis J, a broad prior) plus a Matern 5/2 field
-whose length scale, variance and probing noise are fitted by maximum likelihood to the measured
-deviations less their least-squares rigid motion (:func:`cmmsampling.fitting.series.fit_field`).
-Given the measured deviations, posterior samples of e on every candidate place are each aligned
-by the rigid motion that makes its largest deviation smallest (the minimum zone, as the
+(its components along the places' rigid basis J, unknown: a flat prior) plus a Matern 5/2 field
+of unknown variance, length scale and probing noise. The variance is integrated out (Jeffreys'
+prior: the field between the points is Student-t with n - p degrees of freedom, p the rigid
+motions), and the length scale and the noise are weighed over a grid by their restricted
+likelihood (the rigid motions integrated out), not fixed at the likeliest: a few points say
+little about how rough the face is between them, and a belief that takes the likeliest length
+is too sure there. Posterior samples of e on places covering the whole face, its edges
+included (the tolerance holds to the edges, which the probe keeps its offset from), are each
+aligned by the rigid motion that makes its largest deviation smallest (the minimum zone, as the
 inspection aligns: :func:`minimum_zones`), and a sample's profile is twice that largest
-deviation over the face (ISO 1101's zone about the nominal, no datums). With the
-measurement's expanded uncertainty U, ISO 14253-1's rule decides per sample: conformance where
-the profile + U <= t, non-conformance where the profile - U > t. P(conforms) is the smaller of
-the shares under the fitted field and under one of ROUGHER times its length (a length fitted to
-a few points is often too long, and the field between them then too sure: a pass must not rest
-on it). The face is decided when one of
-the two holds for all but a share ``risk`` of the samples; its verdict is then wrong with a
-probability below risk under the model (Dumas et al., Precision Engineering 37, 2013: kriging
-that confirms a large surface's conformity at a stated confidence with few points).
+deviation (ISO 1101's zone about the nominal, no datums). With the measurement's expanded
+uncertainty U, ISO 14253-1's rule decides per sample: conformance where the profile + U <= t,
+non-conformance where the profile - U > t. The face is decided when one of the two holds for
+all but a share ``risk`` of the samples; its verdict is then wrong with a probability below risk
+under the model (Dumas et al., Precision Engineering 37, 2013: kriging that confirms a large
+surface's conformity at a stated confidence with few points).
 
 The next touch goes where the samples disagree most on whether the aligned deviation leaves
-the half zone: each candidate's share q of samples beyond (t - U) / 2, scored q (1 - q) (the
-AK-ILS learning function's spirit: the place whose side of the limit is least known), divided
-by 1 + the travel from the last touch over the face's extent. Where the samples already say
-"does not conform", the touch goes where q is largest, to measure the excess itself.
+the half zone: each place's share q of samples beyond (t - U) / 2, scored q (1 - q) (the AK-ILS
+learning function's spirit: the place whose side of the limit is least known), divided by 1 +
+the travel from the last touch over the face's extent; a place the probe may not touch (near
+an edge) lends its score to the nearest place it may. Where the samples already say "does not
+conform", the touch goes where q is largest, to measure the excess itself.
 """
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, replace
 
 import numpy as np
-from scipy.linalg import cho_factor, cho_solve, eigh
+from scipy.linalg import cho_factor, cho_solve, cholesky, eigh, solve
+from scipy.spatial import cKDTree
 
-from ..fitting.series import FieldFit, fit_field, matern
+from ..fitting.series import matern
 from ..geometry.validation import InputError
 
-# Posterior samples of the field drawn per decision; the fewest points a field is fitted from
-# (the six rigid motions and three hyper-parameters need more); the rigid motion's prior spread,
-# as a multiple of the largest measured deviation (plus the tolerance).
+# Posterior samples of the field drawn per decision; the fewest points a belief is formed from
+# (the rigid motions and the field's scale need more than six); the length scales weighed, from
+# the places' spacing to twice their extent; the probing noise weighed, as shares of the
+# field's variance; the share of the weight the likeliest (length, noise) pairs must hold
+# between them to be the ones sampled.
 SAMPLES = 400
 FEWEST_POINTS = 12
-MOTION_SPREAD = 10.0
-JITTER = 1e-12
+LENGTHS = 16
+NOISE_RATIOS = (1e-4, 1e-3, 1e-2, 0.1)
+WEIGHT_KEPT = 0.999
+JITTER = 1e-10
 # Rounds of Lawson's algorithm that bring each sample near its minimum zone.
 LAWSON_STEPS = 30
-# A pass must also hold for a field this much shorter in length than the fitted one (a length
-# fitted to a few points can be too long, and the field between them too sure).
-ROUGHER = 0.5
 
 
 @dataclass(frozen=True)
 class Candidates:
-    """The places the probe may touch on a face: points (M, 3) mm on the nominal face, normals
-    (M, 3) unit out of the material, x (M, 2) mm the face's plane coordinates there."""
+    """The places on a face the belief weighs: points (M, 3) mm on the nominal face, normals
+    (M, 3) unit out of the material, x (M, 2) mm the face's plane coordinates there, touchable
+    (M,) bool where the probe may touch (the others, nearer the edges than the probe's offset,
+    are judged but not touched; all where None)."""
 
     points: np.ndarray
     normals: np.ndarray
     x: np.ndarray
+    touchable: np.ndarray | None = None
 
     def __len__(self) -> int:
         return len(self.points)
 
     @property
     def extent(self) -> float:
-        """mm: the largest side of the candidates' bounding box (at least 1e-9)."""
+        """mm: the largest side of the places' bounding box (at least 1e-9)."""
         return max(float(np.ptp(self.points, axis=0).max()), 1e-9)
 
-    def rigid_basis(self) -> np.ndarray:
-        """(M, 6): each candidate's deviation along its normal per small rigid motion of the part
-        (three shifts in mm, three turns in rad about the candidates' centroid scaled by the
-        extent), columns of unit RMS."""
+    @functools.cached_property
+    def touch(self) -> np.ndarray:
+        """(M,) bool: where the probe may touch (see the class's doc)."""
+        return np.ones(len(self), bool) if self.touchable is None else np.asarray(self.touchable, bool)
+
+    @functools.cached_property
+    def nearest_touch(self) -> np.ndarray:
+        """(M,) int: each place's nearest touchable place (itself where it is one)."""
+        rows = np.flatnonzero(self.touch)
+        if len(rows) == 0:
+            raise InputError("no place on the face is far enough from its edges to be touched: give a smaller edge offset")
+        return rows[cKDTree(self.points[rows]).query(self.points)[1]]
+
+    @functools.cached_property
+    def rigid(self) -> np.ndarray:
+        """(M, p): each place's deviation along its normal per small rigid motion of the part,
+        the p <= 6 motions that move the face at all (a plane's own slides and turn do not),
+        columns orthonormal."""
         arm = (self.points - self.points.mean(axis=0)) / self.extent
         basis = np.hstack([self.normals, np.cross(arm, self.normals)])
-        return basis / np.maximum(np.sqrt((basis ** 2).mean(axis=0)), 1e-12)
+        vectors, sizes, _ = np.linalg.svd(basis, full_matrices=False)
+        return vectors[:, sizes > 1e-9 * sizes.max()]
+
+    @functools.cached_property
+    def lengths(self) -> np.ndarray:
+        """(LENGTHS,) mm: the field's length scales weighed, log-spaced from the places' median
+        spacing (in plane coordinates) to twice their extent."""
+        spacing = float(np.median(cKDTree(self.x).query(self.x, k=2)[0][:, 1]))
+        extent = max(float(np.ptp(self.x, axis=0).max()), 1e-9)
+        return np.geomspace(max(spacing, 1e-3 * extent), 2.0 * extent, LENGTHS)
 
 
 @dataclass(frozen=True)
 class Belief:
     """What the measured points say about the face: p_conform and p_nonconform, the shares of
     posterior samples that ISO 14253-1 judges conforming (profile + U <= t) and not (profile - U
-    > t); profile: (S,) mm the samples' profiles; beyond: (M,) each candidate's share of samples
+    > t); profile: (S,) mm the samples' profiles; beyond: (M,) each place's share of samples
     whose aligned deviation leaves the half zone (t - U) / 2; spread: (M,) mm the aligned
-    deviation's posterior standard deviation at each candidate."""
+    deviation's posterior standard deviation at each place."""
 
     p_conform: float
     p_nonconform: float
@@ -99,6 +130,22 @@ class Belief:
         return None
 
 
+@dataclass(frozen=True)
+class _Field:
+    """One (length mm, noise ratio) of the field and what the points say under it: weight (its
+    posterior share), scale (mm^2, the residual sum of squares the variance is drawn from), and
+    the pieces of its posterior given the points."""
+
+    length: float
+    ratio: float
+    log_weight: float
+    scale: float
+    factor: tuple
+    motion: np.ndarray
+    residual: np.ndarray
+    information: np.ndarray
+
+
 def belief(candidates: Candidates, rows: np.ndarray, deviations: np.ndarray, tolerance: float,
            uncertainty: float = 0.0, samples: int = SAMPLES, seed: int = 0) -> Belief:
     """The Belief of a face from deviations (n,) mm along the normals measured at candidate rows
@@ -107,31 +154,75 @@ def belief(candidates: Candidates, rows: np.ndarray, deviations: np.ndarray, tol
     rows, d = np.asarray(rows, dtype=int), np.asarray(deviations, dtype=float)
     if len(rows) < FEWEST_POINTS:
         raise InputError(f"a face's belief needs {FEWEST_POINTS} measured points at least, got {len(rows)}")
-    basis = candidates.rigid_basis()
-    motion = np.linalg.lstsq(basis[rows], d, rcond=None)[0]
-    field = fit_field(candidates.x[rows], d - basis[rows] @ motion)
-    profile, aligned = _sampled_zones(candidates, basis, rows, d, field, tolerance, samples, seed)
-    rougher = replace(field, length=ROUGHER * field.length)
-    rough_profile = _sampled_zones(candidates, basis, rows, d, rougher, tolerance, samples, seed)[0]
+    rng = np.random.default_rng(seed)
+    fields = _weighed_fields(candidates, rows, d)
+    shares = np.exp(np.array([found.log_weight for found in fields]))
+    counts = rng.multinomial(samples, shares / shares.sum())
+    drawn = np.vstack([_draw(candidates, rows, found, count, rng) for found, count in zip(fields, counts) if count])
+    profile, aligned = minimum_zones(drawn, candidates.rigid)
     half = 0.5 * max(tolerance - uncertainty, 0.0)
-    p_conform = min(np.mean(profile + uncertainty <= tolerance), np.mean(rough_profile + uncertainty <= tolerance))
-    return Belief(float(p_conform), float(np.mean(profile - uncertainty > tolerance)),
+    return Belief(float(np.mean(profile + uncertainty <= tolerance)), float(np.mean(profile - uncertainty > tolerance)),
                   profile, (np.abs(aligned) > half).mean(axis=0), aligned.std(axis=0))
 
 
-def _sampled_zones(candidates: Candidates, basis: np.ndarray, rows: np.ndarray, d: np.ndarray, field: FieldFit,
-                   tolerance: float, samples: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
-    """(profiles (S,) mm, aligned samples (S, M) mm) of S posterior samples of the deviation at
-    every candidate given d (n,) mm at rows, each at its minimum zone."""
-    spread = MOTION_SPREAD * (np.abs(d).max() + tolerance)
-    mean, covariance = _posterior(candidates, basis, rows, d, field, spread)
-    # The rigid motions change no zone: their part of the field is left out before sampling.
-    rigid_free = np.eye(len(candidates)) - basis @ np.linalg.pinv(basis)
-    free_covariance = rigid_free @ covariance @ rigid_free.T
-    values, vectors = eigh(0.5 * (free_covariance + free_covariance.T))
-    root = vectors * np.sqrt(np.clip(values, 0.0, None))
-    drawn = rigid_free @ mean + np.random.default_rng(seed).standard_normal((samples, len(values))) @ root.T
-    return minimum_zones(drawn, basis)
+def _weighed_fields(candidates: Candidates, rows: np.ndarray, d: np.ndarray) -> list[_Field]:
+    """The likeliest (length, noise ratio) pairs of the grid that hold WEIGHT_KEPT of the
+    posterior weight between them (a flat prior over the grid), each with its log weight
+    (normalised to the largest 0) and posterior pieces."""
+    motions = candidates.rigid[rows]
+    freedom = len(rows) - motions.shape[1]
+    fields = []
+    for length in candidates.lengths:
+        correlation = matern(candidates.x[rows], candidates.x[rows], float(length), 1.0)
+        for ratio in NOISE_RATIOS:
+            try:
+                factor = cho_factor(correlation + (ratio + JITTER) * np.eye(len(rows)))
+            except np.linalg.LinAlgError:
+                continue
+            across = cho_solve(factor, np.column_stack([d, motions]))
+            information = motions.T @ across[:, 1:]
+            motion = solve(information, motions.T @ across[:, 0], assume_a="pos")
+            residual = d - motions @ motion
+            scale = max(float(residual @ cho_solve(factor, residual)), 1e-300)
+            log_weight = (-np.log(np.diag(factor[0])).sum() - 0.5 * np.linalg.slogdet(information)[1]
+                          - 0.5 * freedom * np.log(scale))
+            fields.append(_Field(float(length), ratio, float(log_weight), scale, factor, motion, residual, information))
+    if not fields:
+        raise InputError(f"no deviation field fits these {len(rows)} points (no covariance was positive definite): "
+                         "check for repeated points")
+    fields.sort(key=lambda found: -found.log_weight)
+    weights = np.exp(np.array([found.log_weight for found in fields]) - fields[0].log_weight)
+    kept = int(np.searchsorted(np.cumsum(weights) / weights.sum(), WEIGHT_KEPT)) + 1
+    return [replace(found, log_weight=float(weight)) for found, weight in zip(fields[:kept], np.log(weights[:kept]))]
+
+
+def _draw(candidates: Candidates, rows: np.ndarray, found: _Field, count: int,
+          rng: np.random.Generator) -> np.ndarray:
+    """(count, M) mm posterior samples of the deviation at every place under one field: the
+    universal kriging mean and covariance (the rigid motion's uncertainty included) at unit
+    variance, times a variance drawn from its posterior, scale / chi^2 with n - p degrees of
+    freedom."""
+    motions, every = candidates.rigid[rows], candidates.rigid
+    across = matern(candidates.x, candidates.x[rows], found.length, 1.0)
+    weighted = cho_solve(found.factor, across.T)                    # (n, M)
+    mean = every @ found.motion + weighted.T @ found.residual
+    left = every - weighted.T @ motions                             # (M, p)
+    covariance = (matern(candidates.x, candidates.x, found.length, 1.0) - across @ weighted
+                  + left @ solve(found.information, left.T, assume_a="pos"))
+    root = _root(0.5 * (covariance + covariance.T))
+    variance = found.scale / rng.chisquare(len(rows) - motions.shape[1], count)
+    return mean + np.sqrt(variance)[:, None] * (rng.standard_normal((count, len(mean))) @ root.T)
+
+
+def _root(covariance: np.ndarray) -> np.ndarray:
+    """(M, M) R with R R^T = covariance (a positive semi-definite (M, M)): Cholesky's with a
+    small jitter, or the eigenvectors' where that fails."""
+    try:
+        return cholesky(covariance + JITTER * max(float(np.trace(covariance)) / len(covariance), 1e-30)
+                        * np.eye(len(covariance)), lower=True)
+    except np.linalg.LinAlgError:
+        values, vectors = eigh(covariance)
+        return vectors * np.sqrt(np.clip(values, 0.0, None))
 
 
 def minimum_zones(fields: np.ndarray, basis: np.ndarray, steps: int = LAWSON_STEPS) -> tuple[np.ndarray, np.ndarray]:
@@ -157,41 +248,40 @@ def minimum_zones(fields: np.ndarray, basis: np.ndarray, steps: int = LAWSON_STE
     return best, aligned
 
 
-def _posterior(candidates: Candidates, basis: np.ndarray, rows: np.ndarray, d: np.ndarray, field: FieldFit,
-               spread: float) -> tuple[np.ndarray, np.ndarray]:
-    """(mean (M,) mm, covariance (M, M) mm^2) of the deviation at every candidate given d at rows:
-    prior covariance the field's Matern plus spread^2 J J^T (the rigid motion), noise the
-    field's."""
-    prior = matern(candidates.x, candidates.x, field.length, field.variance) + spread ** 2 * basis @ basis.T
-    measured = prior[np.ix_(rows, rows)] + (field.noise + JITTER) * np.eye(len(rows))
-    factor = cho_factor(measured)
-    across = prior[:, rows]
-    return across @ cho_solve(factor, d), prior - across @ cho_solve(factor, across.T)
-
-
 def next_row(candidates: Candidates, found: Belief, measured: np.ndarray, last: int | None,
              seek_excess: bool = False) -> int:
-    """The candidate row to touch next: the largest q (1 - q) (q: found.beyond), or with
-    seek_excess the largest q (where the zone is most likely left: to measure it), over 1 + the
-    travel from row last (mm) over the face's extent; where every score is 0, the largest
-    posterior spread; never a row already measured."""
-    score = found.beyond.copy() if seek_excess else found.beyond * (1.0 - found.beyond)
+    """The touchable row to touch next: the largest q (1 - q) (q: found.beyond), or with
+    seek_excess the largest q (where the zone is most likely left: to measure it), each place
+    lending its score to its nearest touchable place, over 1 + the travel from row last (mm)
+    over the face's extent; where every score is 0, the largest posterior spread; never a row
+    already measured."""
+    score = _lent(candidates, found.beyond if seek_excess else found.beyond * (1.0 - found.beyond))
     if last is not None:
         score = score / (1.0 + np.linalg.norm(candidates.points - candidates.points[last], axis=1) / candidates.extent)
     score[np.asarray(measured, dtype=int)] = -np.inf
     if not np.isfinite(score.max()) or score.max() <= 0.0:
-        score = np.where(np.isfinite(score), found.spread, -np.inf)
+        score = np.where(np.isfinite(score), _lent(candidates, found.spread), -np.inf)
     return int(np.argmax(score))
 
 
+def _lent(candidates: Candidates, score: np.ndarray) -> np.ndarray:
+    """(M,): at each touchable place the largest score (M,) of the places nearest it, -inf at
+    the others."""
+    lent = np.full(len(candidates), -np.inf)
+    np.maximum.at(lent, candidates.nearest_touch, score)
+    return lent
+
+
 def spread_design(candidates: Candidates, n: int) -> np.ndarray:
-    """(n,) candidate rows spread over the face: the farthest-point order in plane coordinates
-    from the candidate nearest the centre."""
-    if n > len(candidates):
-        raise InputError(f"{n} first points asked for on a face with {len(candidates)} candidate places")
-    start = int(np.argmin(np.linalg.norm(candidates.x - candidates.x.mean(axis=0), axis=1)))
-    chosen, distance = [start], np.linalg.norm(candidates.x - candidates.x[start], axis=1)
+    """(n,) touchable rows spread over the face: the farthest-point order in plane coordinates
+    from the touchable place nearest the centre."""
+    rows = np.flatnonzero(candidates.touch)
+    if n > len(rows):
+        raise InputError(f"{n} first points asked for on a face with {len(rows)} places the probe may touch")
+    x = candidates.x[rows]
+    start = int(np.argmin(np.linalg.norm(x - candidates.x.mean(axis=0), axis=1)))
+    chosen, distance = [start], np.linalg.norm(x - x[start], axis=1)
     for _ in range(n - 1):
         chosen.append(int(np.argmax(distance)))
-        distance = np.minimum(distance, np.linalg.norm(candidates.x - candidates.x[chosen[-1]], axis=1))
-    return np.array(chosen)
+        distance = np.minimum(distance, np.linalg.norm(x - x[chosen[-1]], axis=1))
+    return rows[np.array(chosen)]

@@ -112,3 +112,43 @@ def test_cancel_keeps_the_points_measured_and_asks_nothing_more(points, tmp_path
     assert "Not measured (cancelled)" in main_window().statusBar().currentMessage()
     assert not [o for o in points.Document.Objects if is_measured_points(o)], "a cancelled run is not inspected"
     assert np.isfinite(back.points).all()
+
+
+def test_measure_until_decided_stops_on_the_verdict_and_adds_its_inspection(points, tmp_path, artifacts):
+    doc = points.Document
+    out = str(tmp_path / "decided.csv")
+    seen = {}
+    with cmmsampling.SimulatedCMM.measuring(points, form_error=0.004, misplacement=MISPLACED, seed=5) as cmm:
+        port = int(cmm.address.rsplit(":", 1)[1])
+
+        def choose(dialog):
+            dialog.port.setValue(port)
+            dialog.path.setText(out)
+            seen["enabled before"] = dialog.tolerance.isEnabled()
+            dialog.until.setChecked(True)
+            seen["enabled after"] = dialog.tolerance.isEnabled() and dialog.risk.isEnabled()
+            dialog.tolerance.setValue(0.05)
+            dialog.uncertainty.setValue(0.0005)
+            dialog.risk.setValue(0.05)
+            dialog.grab().save(os.path.join(artifacts, "measure_until_decided_dialog.png"))
+            dialog.accept()
+
+        console = dock_text("Python console")
+        measure_with(points, choose, timeout_s=240)
+        served, touched = cmm.connections, sum("PtMeas(" in command for command in cmm.commands)
+    assert seen == {"enabled before": False, "enabled after": True}
+    assert served == 1, "the echoed call did not measure a second time"
+    echoed = dock_text("Python console")[len(console):]
+    assert (f"run = cmmsampling.measure_until_decided(App.getDocument({doc.Name!r}).getObject({points.Name!r}), "
+            f"'127.0.0.1:{port}', 0.05, 0.0005, {out!r}, risk=0.05)") in echoed
+    assert "inspection = run.inspection" in echoed
+    back = cmmsampling.read_points(out)
+    assert len(back) == touched and 12 <= len(back) < 40, "every touch in the file, far fewer than the candidates"
+    assert wait_until(lambda: f"conforms after {len(back)} points" in dock_text("Report view"), 2)
+    [measured] = [o for o in doc.Objects if is_measured_points(o)]
+    assert len(measured.Labels) == len(back) and measured.Profile.Value <= 0.05
+    assert "conforms" in main_window().statusBar().currentMessage() or measured.Verdict == "PASS"
+    FreeCADGui.SendMsgToActiveView("ViewFit")
+    process_events(0.3)
+    FreeCADGui.ActiveDocument.ActiveView.saveImage(os.path.join(artifacts, "measured_until_decided.png"), 1000, 750,
+                                                   "White")
