@@ -46,7 +46,8 @@ class DecidedRun:
     p_nonconform (the last belief's), points (how many were measured), stopped (why the run
     ended, in words), history ((points, p_conform, p_nonconform) after each belief); inspection
     (cmmsampling.inspect of the measured file with the tolerance and uncertainty, made on first
-    use: its Monte Carlo U takes a while; None where fewer than FIRST points came)."""
+    use, or by judged(progress): its Monte Carlo U takes a while; None where fewer than FIRST
+    points came). cmmsampling.export(run, 'results.qif') writes its inspection's results."""
 
     run: MeasuredRun
     decision: str | None

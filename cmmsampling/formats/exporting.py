@@ -113,6 +113,18 @@ def is_inspection(source):
             or is_mbd_inspection(source))
 
 
+def _judged(source):
+    """source, or the inspection of a run that judges its own points (a callable judged());
+    InputError where it has none (too few points)."""
+    judged = getattr(source, "judged", None)
+    if not callable(judged) or is_inspection(source):
+        return source
+    inspection = judged()
+    if inspection is None:
+        raise InputError(f"{type(source).__name__} measured too few points to be judged: it has no results to write")
+    return inspection
+
+
 def is_mbd_inspection(source):
     """True for a QIF MBD model's characteristics judged (cmmsampling.inspection.characteristics.
     MbdInspection), whose results go into the model's own document."""
@@ -143,7 +155,9 @@ def export(source: SamplingResult | PointSet | object, path: str | os.PathLike, 
     """Write probe points to a file for a CMM.
 
     source: a PointSet, a SamplingResult, a PartPlan, a document object whose Proxy has
-    ``point_set(obj)``, or an Inspection (its results, QIF only: ResultsReport);
+    ``point_set(obj)``, or an Inspection, or a run that judges its own points with judged()
+    (cmmsampling.measure_until_decided's DecidedRun: its inspection) (their results, QIF only:
+    ResultsReport);
     points: (N, 3) mm, normals (N, 3) unit vectors out of the material (the probe travels along
     -normal), both global. path: the file; format: 'dmis', 'xyz', 'csv' or 'qif', by default
     from the extension (.dmi/.dmis, .xyz/.txt, .csv, .qif).
@@ -177,6 +191,7 @@ def export(source: SamplingResult | PointSet | object, path: str | os.PathLike, 
     input, ExportError (an OSError) naming the path and the reason when it cannot be written.
     """
     fmt = resolve_format(path, format)
+    source = _judged(source)
     if is_inspection(source):
         return export_results(source, path, fmt, label, frame=(frame, None), probe_radius=(probe_radius, 0.0),
                               order=(order, None))

@@ -14,6 +14,7 @@ import cmmsampling
 from cmmsampling.cmm.client import MeasurementStopped
 from cmmsampling.cmm.decided import FIRST, face_candidates, measure_until_decided
 from cmmsampling.cmm.server import SimulatedCMM, VirtualPart
+from cmmsampling.formats.qif.schema import schema_errors
 from cmmsampling.geometry.validation import InputError
 from cmmsampling.inspection.simulate import Misplacement, form_waves
 
@@ -66,6 +67,10 @@ def test_the_verdict_is_the_true_profiles_with_few_points(reference, places, amp
     measured = cmmsampling.read_points(tmp_path / "m.csv")
     assert len(measured) == found.points and found.history[-1][0] == found.points
     assert found.inspection.profile <= truth + 4 * NOISE_MM, "the measured points' zone within the whole face's"
+    report = cmmsampling.export(found, tmp_path / "results.qif")
+    assert schema_errors(open(tmp_path / "results.qif", encoding="utf-8").read()) == []
+    assert report.passed is found.inspection.passed and report.count == found.points
+    assert cmmsampling.read_points(tmp_path / "results.qif").labels == measured.labels
     if checker() is not None:
         assert check_commands(found.run.commands, str(tmp_path)) == []
 
@@ -103,3 +108,20 @@ def test_bad_arguments_are_refused_before_connecting(reference, tmp_path, argume
         given["out"] = tmp_path / given["out"]
     with pytest.raises((InputError, ValueError), match=message):
         measure_until_decided(reference, "127.0.0.1:1", **given)
+
+
+def test_a_plane_whose_slides_move_nothing_is_decided(tmp_path):
+    """A plane's own slides and turn change no deviation: the belief keeps the three motions
+    that do, and decides a good and a bad plate."""
+    import Part
+
+    plate = next(face for face in Part.makeBox(120, 80, 10).Faces if face.normalAt(0, 0).z > 0.5)
+    flat = face_candidates(plate)[0]
+    assert flat.rigid.shape[1] == 3
+    for amplitude, expected in ((0.01, "conforms"), (0.08, "does not conform")):
+        part, form = made(flat, amplitude, seed=4)
+        truth = true_profile(plate, form)
+        assert (truth <= TOLERANCE) == (expected == "conforms"), truth
+        with SimulatedCMM(part) as cmm:
+            found = measure_until_decided(plate, cmm.address, TOLERANCE, 0.0005, tmp_path / "m.csv", max_points=40)
+        assert found.decision == expected, (truth, found)
