@@ -1,9 +1,10 @@
 """Measure a face over I++ DME until its profile verdict is decided: the CMM touches only until
 the verdict is certain either way (the rule: :mod:`cmmsampling.inspection.decide`).
 
-The run starts from FIRST points spread over the face, then after each touch weighs what the
-points say about the whole face (the probability that it conforms, and that it does not) and
-touches next where that is least known, counting the travel; it stops when one side holds with
+The run starts from FIRST points spread over the face (where earlier parts of the series are
+given, those part_error places, and the belief expects their systematic error), then after each
+touch weighs what the points say about the whole face (the probability that it conforms, and
+that it does not) and touches next where that is least known, counting the travel; it stops when one side holds with
 probability 1 - risk, or at max_points (undecided, said so). Either verdict stands only where
 the inspection of the measured points agrees by ISO 14253-1's rule (a pass within t - U, a fail
 beyond t + U), and points that show a zone beyond t + U stop it as a fail: the run never stops
@@ -16,17 +17,18 @@ from __future__ import annotations
 import functools
 import os
 from collections.abc import Callable, Iterator, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
 
-from ..fitting.series import PlaneCoordinates
+from ..fitting.series import PlaneCoordinates, SeriesModel, greedy_design
 from ..formats.pointset import PointSet
 from ..geometry.surface import SurfaceModel, as_face
 from ..geometry.validation import InputError, check_real
 from ..inspection.decide import FEWEST_POINTS, Belief, Candidates, belief, minimum_zones, next_row, spread_design
 from ..inspection.judge import Inspection, Progress, inspect
+from ..inspection.series import series_model
 from ..strategies.sampling import probe_edge_offset
 from .client import Journal, MeasuredRun, link_settings, run_session
 
@@ -117,7 +119,7 @@ def _edge_places(model: SurfaceModel, spacing: float) -> np.ndarray:
 
 def measure_until_decided(source: Any, server: str, tolerance: float, uncertainty: float = 0.0,
                           out: str | os.PathLike = "measured.csv", risk: float = RISK, max_points: int | None = None,
-                          *, edge_offset: float | None = None, candidates: int = CANDIDATES, tool: str | None = None,
+                          *, prior: Sequence[Inspection] | SeriesModel | None = None, edge_offset: float | None = None, candidates: int = CANDIDATES, tool: str | None = None,
                           progress: Callable[[str | None], bool | None] | None = None, timeout_s: float = 60.0,
                           log: str | os.PathLike | None = None, volume: Sequence[Sequence[float]] | None = None,
                           seed: int = 0) -> DecidedRun:
@@ -129,7 +131,10 @@ def measure_until_decided(source: Any, server: str, tolerance: float, uncertaint
     :func:`cmmsampling.measure` takes them; edge_offset: mm the points keep from the face's
     edges (None: a probe ball's radius and a margin, less on a narrow face, as *Sample face*
     starts with: a point on an edge of a misplaced part lies beyond it); candidates: about how
-    many places the points are chosen among; seed: the belief's random samples. Returns a DecidedRun; InputError before connecting for bad arguments."""
+    many places the points are chosen among; seed: the belief's random samples; prior: earlier
+    parts of the series (a list of their Inspections, or a SeriesModel, as sample's part_error
+    takes it): the first points are those part_error places on the touchable places, and the
+    belief expects the series' systematic error in an unknown amount. Returns a DecidedRun; InputError before connecting for bad arguments."""
     tolerance = check_real("tolerance", tolerance, above=0.0)
     uncertainty = check_real("uncertainty", uncertainty, minimum=0.0)
     risk = check_real("risk", risk, above=0.0)
@@ -138,11 +143,14 @@ def measure_until_decided(source: Any, server: str, tolerance: float, uncertaint
     link = link_settings(server, out, log, timeout_s, volume)
     face = measured_face(source)
     offset = probe_edge_offset(face) if edge_offset is None else check_real("edge_offset", edge_offset, 0.0)
-    places, _ = face_candidates(face, int(check_real("candidates", candidates, above=0.0)), offset)
+    places, uv = face_candidates(face, int(check_real("candidates", candidates, above=0.0)), offset)
+    first = spread_design(places, FIRST)
+    if prior is not None:
+        places, first = _with_series(places, uv, series_model(face, prior))
     limit = _points_limit(max_points, int(places.touch.sum()))
     labels = [f"C{row + 1}" for row in range(len(places))]
     planned = PointSet(labels, places.points, places.normals, metadata={"source": "measure until decided"})
-    rules = _Rules(face, places, tolerance, uncertainty, risk, limit, seed)
+    rules = _Rules(face, places, first, tolerance, uncertainty, risk, limit, seed)
     run = run_session(link, planned, None, 0.0, tool, progress, rules.order, chosen=True)
     return rules.result(run)
 
@@ -172,6 +180,14 @@ def measured_face(source: Any) -> Any:
     return faces[0]
 
 
+def _with_series(places: Candidates, uv: np.ndarray, series: SeriesModel) -> tuple[Candidates, np.ndarray]:
+    """(places with the series' systematic error as their trend, the FIRST touchable rows that
+    leave the next part's error least known over every place: part_error's greedy design)."""
+    touchable = np.flatnonzero(places.touch)
+    chosen, _ = greedy_design(series, uv[touchable], FIRST, judged=uv)
+    return replace(places, trend=series.systematic(uv)[:, None]), touchable[chosen]
+
+
 def _points_limit(max_points: int | None, count: int) -> int:
     """The most points a run measures: max_points (FIRST at least, at most the candidates'
     count), or every candidate."""
@@ -187,9 +203,10 @@ class _Rules:
     """The run's choice of points and its stop (see the module's doc): order(journal) yields
     the rows to touch; result(run) the DecidedRun."""
 
-    def __init__(self, face: Any, places: Candidates, tolerance: float, uncertainty: float, risk: float,
-                 limit: int, seed: int) -> None:
-        self.face, self.places, self.tolerance, self.uncertainty = face, places, tolerance, uncertainty
+    def __init__(self, face: Any, places: Candidates, first: np.ndarray, tolerance: float, uncertainty: float,
+                 risk: float, limit: int, seed: int) -> None:
+        self.face, self.places, self.first = face, places, first
+        self.tolerance, self.uncertainty = tolerance, uncertainty
         self.risk, self.limit, self.seed = risk, limit, seed
         self.rows: list[int] = []
         self.found: Belief | None = None
@@ -198,11 +215,11 @@ class _Rules:
         self.stopped = "the run ended before the first points were measured"
 
     def order(self, journal: Journal) -> Iterator[tuple[int, str]]:
-        """The rows to touch: FIRST spread over the face, then one at a time where the belief is
-        least sure, until decided (confirmed by the inspection) or at the limit."""
-        for row in spread_design(self.places, FIRST):
+        """The rows to touch: the FIRST rows of the first design, then one at a time where the
+        belief is least sure, until decided (confirmed by the inspection) or at the limit."""
+        for row in self.first:
             self.rows.append(int(row))
-            yield int(row), f"point {len(self.rows)} of at most {self.limit} (spread over the face)"
+            yield int(row), f"point {len(self.rows)} of at most {self.limit} (the first design)"
         while True:
             found, decided = self._decided(journal)
             if decided is not None:

@@ -3,11 +3,12 @@ given the points measured so far, and where the next touch tells most about it.
 
 The face's deviation along its normals, e(x), is a Gaussian field over plane coordinates x (mm,
 :class:`cmmsampling.fitting.series.PlaneCoordinates`): a rigid motion of the part on the table
-(its components along the places' rigid basis J, unknown: a flat prior) plus a Matern 5/2 field
+(its components along the places' rigid basis J, unknown: a flat prior), where a series of
+earlier parts is known its systematic error in an unknown amount (flat too), plus a Matern 5/2 field
 of unknown variance, length scale and probing noise. The variance is integrated out (Jeffreys'
-prior: the field between the points is Student-t with n - p degrees of freedom, p the rigid
-motions), and the length scale and the noise are weighed over a grid by their restricted
-likelihood (the rigid motions integrated out), not fixed at the likeliest: a few points say
+prior: the field between the points is Student-t with n - p degrees of freedom, p the shapes
+held in unknown amounts), and the length scale and the noise are weighed over a grid by their restricted
+likelihood (those amounts integrated out), not fixed at the likeliest: a few points say
 little about how rough the face is between them, and a belief that takes the likeliest length
 is too sure there. Posterior samples of e on places covering the whole face, its edges
 included (the tolerance holds to the edges, which the probe keeps its offset from), are each
@@ -40,7 +41,7 @@ from ..fitting.series import matern
 from ..geometry.validation import InputError
 
 # Posterior samples of the field drawn per decision; the fewest points a belief is formed from
-# (the rigid motions and the field's scale need more than six); the length scales weighed, from
+# (the rigid motions, any trend and the field's scale need more than six); the length scales weighed, from
 # the places' spacing to twice their extent; the probing noise weighed, as shares of the
 # field's variance; the share of the weight the likeliest (length, noise) pairs must hold
 # between them to be the ones sampled.
@@ -59,12 +60,15 @@ class Candidates:
     """The places on a face the belief weighs: points (M, 3) mm on the nominal face, normals
     (M, 3) unit out of the material, x (M, 2) mm the face's plane coordinates there, touchable
     (M,) bool where the probe may touch (the others, nearer the edges than the probe's offset,
-    are judged but not touched; all where None)."""
+    are judged but not touched; all where None); trend: (M, q) mm shapes the deviation is
+    expected to hold in unknown amounts (a series' systematic error: flat priors, as the rigid
+    motions), or None."""
 
     points: np.ndarray
     normals: np.ndarray
     x: np.ndarray
     touchable: np.ndarray | None = None
+    trend: np.ndarray | None = None
 
     def __len__(self) -> int:
         return len(self.points)
@@ -96,6 +100,18 @@ class Candidates:
         basis = np.hstack([self.normals, np.cross(arm, self.normals)])
         vectors, sizes, _ = np.linalg.svd(basis, full_matrices=False)
         return vectors[:, sizes > 1e-9 * sizes.max()]
+
+    @functools.cached_property
+    def known(self) -> np.ndarray:
+        """(M, p'): the shapes the deviation holds in unknown amounts, the rigid motions' and the
+        trend's (less its rigid part; columns orthonormal, those that add nothing left out)."""
+        if self.trend is None:
+            return self.rigid
+        trend = np.asarray(self.trend, float).reshape(len(self), -1)
+        trend = trend - self.rigid @ (self.rigid.T @ trend)
+        vectors, sizes, _ = np.linalg.svd(trend, full_matrices=False)
+        scale = max(float(np.linalg.norm(trend)), 1e-300)
+        return np.hstack([self.rigid, vectors[:, sizes > 1e-6 * scale]])
 
     @functools.cached_property
     def lengths(self) -> np.ndarray:
@@ -169,7 +185,7 @@ def _weighed_fields(candidates: Candidates, rows: np.ndarray, d: np.ndarray) -> 
     """The likeliest (length, noise ratio) pairs of the grid that hold WEIGHT_KEPT of the
     posterior weight between them (a flat prior over the grid), each with its log weight
     (normalised to the largest 0) and posterior pieces."""
-    motions = candidates.rigid[rows]
+    motions = candidates.known[rows]
     freedom = len(rows) - motions.shape[1]
     fields = []
     for length in candidates.lengths:
@@ -199,10 +215,10 @@ def _weighed_fields(candidates: Candidates, rows: np.ndarray, d: np.ndarray) -> 
 def _draw(candidates: Candidates, rows: np.ndarray, found: _Field, count: int,
           rng: np.random.Generator) -> np.ndarray:
     """(count, M) mm posterior samples of the deviation at every place under one field: the
-    universal kriging mean and covariance (the rigid motion's uncertainty included) at unit
+    universal kriging mean and covariance (the unknown amounts' uncertainty included) at unit
     variance, times a variance drawn from its posterior, scale / chi^2 with n - p degrees of
     freedom."""
-    motions, every = candidates.rigid[rows], candidates.rigid
+    motions, every = candidates.known[rows], candidates.known
     across = matern(candidates.x, candidates.x[rows], found.length, 1.0)
     weighted = cho_solve(found.factor, across.T)                    # (n, M)
     mean = every @ found.motion + weighted.T @ found.residual

@@ -14,9 +14,11 @@ import cmmsampling
 from cmmsampling.cmm.client import MeasurementStopped
 from cmmsampling.cmm.decided import FIRST, face_candidates, measure_until_decided
 from cmmsampling.cmm.server import SimulatedCMM, VirtualPart
+from cmmsampling.fitting.series import greedy_design
 from cmmsampling.formats.qif.schema import schema_errors
 from cmmsampling.geometry.validation import InputError
 from cmmsampling.inspection.simulate import Misplacement, form_waves
+from cmmsampling.strategies.sampling import probe_edge_offset
 
 TOLERANCE = 0.05
 PLACED = Misplacement(x=0.3, y=-0.2, rz=0.1)
@@ -125,3 +127,44 @@ def test_a_plane_whose_slides_move_nothing_is_decided(tmp_path):
         with SimulatedCMM(part) as cmm:
             found = measure_until_decided(plate, cmm.address, TOLERANCE, 0.0005, tmp_path / "m.csv", max_points=40)
         assert found.decision == expected, (truth, found)
+
+
+@pytest.fixture(scope="module")
+def series(reference, places):
+    """(form(scale, seed): a part of a series on the reference face, a shape whose size varies
+    from part to part plus 2 um of waves of its own; two earlier parts' inspections, 100 points
+    each, their shape at 0.03 and 0.036 mm)."""
+    shape = form_waves(places.points, 1.0, 11)
+
+    def form(scale, seed):
+        own = form_waves(places.points, 0.002, 20 + seed)
+        return lambda p: scale * shape(p) + own(p)
+
+    planned = cmmsampling.PointSet.from_result(cmmsampling.sample(reference, 100, "uniform_parametric", occ_check=False))
+    earlier = []
+    for seed, scale in enumerate((0.03, 0.036)):
+        moved = planned.points + form(scale, seed)(planned.points)[:, None] * planned.normals
+        earlier.append(cmmsampling.inspect(reference, cmmsampling.PointSet(planned.labels, moved, planned.normals),
+                                           alignment="none"))
+    return form, earlier
+
+
+def test_earlier_parts_of_the_series_decide_a_part_near_the_limit_sooner(reference, places, series, tmp_path):
+    form, earlier = series
+    error = form(0.06, 5)
+    truth = true_profile(reference, error)
+    assert 0.9 * TOLERANCE < truth < TOLERANCE, truth
+    found = {}
+    for prior in (None, earlier):
+        part = VirtualPart(error, PLACED.matrix(places.points.mean(axis=0)), NOISE_MM, np.random.default_rng(1))
+        with SimulatedCMM(part) as cmm:
+            found[prior is None] = measure_until_decided(reference, cmm.address, TOLERANCE, NOISE_MM, tmp_path / "m.csv",
+                                                         prior=earlier if prior else None)
+    aimed, blind = found[False], found[True]
+    assert aimed.decision == blind.decision == "conforms", (aimed, blind)
+    assert aimed.points < blind.points, (aimed.points, blind.points)
+    model = cmmsampling.series_model(reference, earlier)
+    uv = face_candidates(reference, edge_offset=probe_edge_offset(reference))[1]
+    touchable = np.flatnonzero(face_candidates(reference, edge_offset=probe_edge_offset(reference))[0].touch)
+    first = [f"C{row + 1}" for row in touchable[greedy_design(model, uv[touchable], FIRST, judged=uv)[0]]]
+    assert cmmsampling.read_points(tmp_path / "m.csv").labels[:FIRST] == first, "part_error's first design"
