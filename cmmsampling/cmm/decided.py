@@ -102,8 +102,8 @@ def face_candidates(face: Any, count: int = CANDIDATES, edge_offset: float = 0.0
     uv = np.vstack([raster, edges, ring])
     touchable = reached.contains(uv)
     if touchable.sum() < 2 * FIRST:
-        raise InputError(f"only {touchable.sum()} of {len(uv)} places on the face lie {edge_offset:g} mm from its edges: "
-                         "give more candidates or a smaller edge_offset")
+        raise InputError(f"only {touchable.sum()} of {len(uv)} places on the face lie {edge_offset:g} mm from its "
+                         "edges: give more candidates or a smaller edge_offset")
     return Candidates(model.points(uv), model.normals(uv), PlaneCoordinates(model)(uv), touchable), uv
 
 
@@ -119,22 +119,25 @@ def _edge_places(model: SurfaceModel, spacing: float) -> np.ndarray:
 
 def measure_until_decided(source: Any, server: str, tolerance: float, uncertainty: float = 0.0,
                           out: str | os.PathLike = "measured.csv", risk: float = RISK, max_points: int | None = None,
-                          *, prior: Sequence[Inspection] | SeriesModel | None = None, edge_offset: float | None = None, candidates: int = CANDIDATES, tool: str | None = None,
+                          *, prior: Sequence[Inspection] | SeriesModel | None = None,
+                          edge_offset: float | None = None, candidates: int = CANDIDATES, tool: str | None = None,
                           progress: Callable[[str | None], bool | None] | None = None, timeout_s: float = 60.0,
                           log: str | os.PathLike | None = None, volume: Sequence[Sequence[float]] | None = None,
                           seed: int = 0) -> DecidedRun:
     """Measure a face (a Part.Face, a shape of one face, or the workbench's probe points of one
-    face, whose source face it takes; on the CMM in the CAD model's coordinates) over the I++ DME server at 'host:port' until its profile verdict to tolerance t
-    (mm, no datums) is decided with probability 1 - risk, or max_points (default: every
-    candidate place) are measured. uncertainty: u, mm, the probing's standard uncertainty per
-    point (as cmmsampling.inspect takes it); out, tool, progress, timeout_s, log, volume as
-    :func:`cmmsampling.measure` takes them; edge_offset: mm the points keep from the face's
-    edges (None: a probe ball's radius and a margin, less on a narrow face, as *Sample face*
-    starts with: a point on an edge of a misplaced part lies beyond it); candidates: about how
-    many places the points are chosen among; seed: the belief's random samples; prior: earlier
-    parts of the series (a list of their Inspections, or a SeriesModel, as sample's part_error
-    takes it): the first points are those part_error places on the touchable places, and the
-    belief expects the series' systematic error in an unknown amount. Returns a DecidedRun; InputError before connecting for bad arguments."""
+    face, whose source face it takes; on the CMM in the CAD model's coordinates) over the I++
+    DME server at 'host:port' until its profile verdict to tolerance t (mm, no datums) is
+    decided with probability 1 - risk, or max_points (default: every touchable place) are
+    measured. uncertainty: u, mm, the probing's standard uncertainty per point (as
+    cmmsampling.inspect takes it); out, tool, progress, timeout_s, log, volume as
+    :func:`cmmsampling.measure` takes them; prior: earlier parts of the series (a list of their
+    Inspections, or a SeriesModel, as sample's part_error takes it): the first points are those
+    part_error places on the touchable places, and the belief expects the series' systematic
+    error in an unknown amount; edge_offset: mm the points keep from the face's edges (None: a
+    probe ball's radius and a margin, less on a narrow face, as *Sample face* starts with: a
+    point on an edge of a misplaced part lies beyond it); candidates: about how many places the
+    points are chosen among; seed: the belief's random samples. Returns a DecidedRun;
+    InputError before connecting for bad arguments."""
     tolerance = check_real("tolerance", tolerance, above=0.0)
     uncertainty = check_real("uncertainty", uncertainty, minimum=0.0)
     risk = check_real("risk", risk, above=0.0)

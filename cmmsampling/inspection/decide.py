@@ -88,7 +88,8 @@ class Candidates:
         """(M,) int: each place's nearest touchable place (itself where it is one)."""
         rows = np.flatnonzero(self.touch)
         if len(rows) == 0:
-            raise InputError("no place on the face is far enough from its edges to be touched: give a smaller edge offset")
+            raise InputError("no place on the face is far enough from its edges to be touched: "
+                             "give a smaller edge offset")
         return rows[cKDTree(self.points[rows]).query(self.points)[1]]
 
     @functools.cached_property

@@ -140,7 +140,8 @@ def series(reference, places):
         own = form_waves(places.points, 0.002, 20 + seed)
         return lambda p: scale * shape(p) + own(p)
 
-    planned = cmmsampling.PointSet.from_result(cmmsampling.sample(reference, 100, "uniform_parametric", occ_check=False))
+    result = cmmsampling.sample(reference, 100, "uniform_parametric", occ_check=False)
+    planned = cmmsampling.PointSet.from_result(result)
     earlier = []
     for seed, scale in enumerate((0.03, 0.036)):
         moved = planned.points + form(scale, seed)(planned.points)[:, None] * planned.normals
@@ -158,13 +159,13 @@ def test_earlier_parts_of_the_series_decide_a_part_near_the_limit_sooner(referen
     for prior in (None, earlier):
         part = VirtualPart(error, PLACED.matrix(places.points.mean(axis=0)), NOISE_MM, np.random.default_rng(1))
         with SimulatedCMM(part) as cmm:
-            found[prior is None] = measure_until_decided(reference, cmm.address, TOLERANCE, NOISE_MM, tmp_path / "m.csv",
-                                                         prior=earlier if prior else None)
+            found[prior is None] = measure_until_decided(reference, cmm.address, TOLERANCE, NOISE_MM,
+                                                         tmp_path / "m.csv", prior=prior)
     aimed, blind = found[False], found[True]
     assert aimed.decision == blind.decision == "conforms", (aimed, blind)
     assert aimed.points < blind.points, (aimed.points, blind.points)
     model = cmmsampling.series_model(reference, earlier)
-    uv = face_candidates(reference, edge_offset=probe_edge_offset(reference))[1]
-    touchable = np.flatnonzero(face_candidates(reference, edge_offset=probe_edge_offset(reference))[0].touch)
+    touched, uv = face_candidates(reference, edge_offset=probe_edge_offset(reference))
+    touchable = np.flatnonzero(touched.touch)
     first = [f"C{row + 1}" for row in touchable[greedy_design(model, uv[touchable], FIRST, judged=uv)[0]]]
     assert cmmsampling.read_points(tmp_path / "m.csv").labels[:FIRST] == first, "part_error's first design"
