@@ -4,12 +4,12 @@ the verdict is certain either way (the rule: :mod:`cmmsampling.inspection.decide
 The run starts from FIRST points spread over the face (where earlier parts of the series are
 given, those part_error places, and the belief expects their systematic error), then after each
 touch weighs what the points say about the whole face (the probability that it conforms, and
-that it does not) and touches next where that is least known, counting the travel; it stops when one side holds with
-probability 1 - risk, or at max_points (undecided, said so). Either verdict stands only where
-the inspection of the measured points agrees by ISO 14253-1's rule (a pass within t - U, a fail
-beyond t + U), and points that show a zone beyond t + U stop it as a fail: the run never stops
-on a verdict the measured points do not bear out, and a fail the model expects is looked for
-where it is likeliest. Each point is written as it comes
+that it does not) and touches next where that is least known, counting the travel; it stops
+when one side holds with probability 1 - risk, or at max_points (undecided, said so). Either
+verdict stands only where the inspection of the measured points agrees by ISO 14253-1's rule (a
+pass within t - U, a fail beyond t + U), and points that show a zone beyond t + U stop it as a
+fail: the run never stops on a verdict the measured points do not bear out, and a fail the
+model expects is looked for where it is likeliest. Each point is written as it comes
 (:func:`cmmsampling.cmm.client.run_session`), whatever ends the run.
 """
 from __future__ import annotations
@@ -65,10 +65,15 @@ class DecidedRun:
         """The measured file's inspection (see the class's doc)."""
         return None if self.judge is None or self.points < FIRST else self.judge(self.run, None)
 
+    @property
+    def made(self) -> bool:
+        """True once the inspection is made (reading it then costs nothing)."""
+        return "inspection" in self.__dict__
+
     def judged(self, progress: Progress | None = None) -> Inspection | None:
         """The inspection, made now where it is not yet, with progress as cmmsampling.inspect
         takes it (InspectionCancelled where it returns True; the next call starts again)."""
-        if "inspection" not in self.__dict__ and self.judge is not None and self.points >= FIRST:
+        if not self.made and self.judge is not None and self.points >= FIRST:
             self.__dict__["inspection"] = self.judge(self.run, progress)
         return self.inspection
 
@@ -147,10 +152,11 @@ def measure_until_decided(source: Any, server: str, tolerance: float, uncertaint
     face = measured_face(source)
     offset = probe_edge_offset(face) if edge_offset is None else check_real("edge_offset", edge_offset, 0.0)
     places, uv = face_candidates(face, int(check_real("candidates", candidates, above=0.0)), offset)
-    first = spread_design(places, FIRST)
-    if prior is not None:
+    if prior is None:
+        first = spread_design(places, FIRST)
+    else:
         places, first = _with_series(places, uv, series_model(face, prior))
-    limit = _points_limit(max_points, int(places.touch.sum()))
+    limit = _points_limit(max_points, int(places.touchable.sum()))
     labels = [f"C{row + 1}" for row in range(len(places))]
     planned = PointSet(labels, places.points, places.normals, metadata={"source": "measure until decided"})
     rules = _Rules(face, places, first, tolerance, uncertainty, risk, limit, seed)
@@ -186,7 +192,7 @@ def measured_face(source: Any) -> Any:
 def _with_series(places: Candidates, uv: np.ndarray, series: SeriesModel) -> tuple[Candidates, np.ndarray]:
     """(places with the series' systematic error as their trend, the FIRST touchable rows that
     leave the next part's error least known over every place: part_error's greedy design)."""
-    touchable = np.flatnonzero(places.touch)
+    touchable = np.flatnonzero(places.touchable)
     chosen, _ = greedy_design(series, uv[touchable], FIRST, judged=uv)
     return replace(places, trend=series.systematic(uv)[:, None]), touchable[chosen]
 

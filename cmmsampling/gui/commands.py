@@ -307,7 +307,7 @@ def add_decided_inspection(points, run):
     points)."""
     from .inspect_dialog import report_inspection
 
-    if "inspection" not in run.__dict__ or run.inspection is None:
+    if not run.made or run.inspection is None:
         return
     doc = f"App.getDocument({points.Document.Name!r})"
     FreeCADGui.doCommand("inspection = run.inspection")

@@ -60,14 +60,13 @@ class Candidates:
     """The places on a face the belief weighs: points (M, 3) mm on the nominal face, normals
     (M, 3) unit out of the material, x (M, 2) mm the face's plane coordinates there, touchable
     (M,) bool where the probe may touch (the others, nearer the edges than the probe's offset,
-    are judged but not touched; all where None); trend: (M, q) mm shapes the deviation is
-    expected to hold in unknown amounts (a series' systematic error: flat priors, as the rigid
-    motions), or None."""
+    are judged but not touched); trend: (M, q) mm shapes the deviation is expected to hold in
+    unknown amounts (a series' systematic error: flat priors, as the rigid motions), or None."""
 
     points: np.ndarray
     normals: np.ndarray
     x: np.ndarray
-    touchable: np.ndarray | None = None
+    touchable: np.ndarray
     trend: np.ndarray | None = None
 
     def __len__(self) -> int:
@@ -79,14 +78,9 @@ class Candidates:
         return max(float(np.ptp(self.points, axis=0).max()), 1e-9)
 
     @functools.cached_property
-    def touch(self) -> np.ndarray:
-        """(M,) bool: where the probe may touch (see the class's doc)."""
-        return np.ones(len(self), bool) if self.touchable is None else np.asarray(self.touchable, bool)
-
-    @functools.cached_property
     def nearest_touch(self) -> np.ndarray:
         """(M,) int: each place's nearest touchable place (itself where it is one)."""
-        rows = np.flatnonzero(self.touch)
+        rows = np.flatnonzero(self.touchable)
         if len(rows) == 0:
             raise InputError("no place on the face is far enough from its edges to be touched: "
                              "give a smaller edge offset")
@@ -292,7 +286,7 @@ def _lent(candidates: Candidates, score: np.ndarray) -> np.ndarray:
 def spread_design(candidates: Candidates, n: int) -> np.ndarray:
     """(n,) touchable rows spread over the face: the farthest-point order in plane coordinates
     from the touchable place nearest the centre."""
-    rows = np.flatnonzero(candidates.touch)
+    rows = np.flatnonzero(candidates.touchable)
     if n > len(rows):
         raise InputError(f"{n} first points asked for on a face with {len(rows)} places the probe may touch")
     x = candidates.x[rows]

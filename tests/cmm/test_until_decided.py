@@ -166,6 +166,6 @@ def test_earlier_parts_of_the_series_decide_a_part_near_the_limit_sooner(referen
     assert aimed.points < blind.points, (aimed.points, blind.points)
     model = cmmsampling.series_model(reference, earlier)
     touched, uv = face_candidates(reference, edge_offset=probe_edge_offset(reference))
-    touchable = np.flatnonzero(touched.touch)
+    touchable = np.flatnonzero(touched.touchable)
     first = [f"C{row + 1}" for row in touchable[greedy_design(model, uv[touchable], FIRST, judged=uv)[0]]]
     assert cmmsampling.read_points(tmp_path / "m.csv").labels[:FIRST] == first, "part_error's first design"
