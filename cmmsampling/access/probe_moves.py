@@ -153,14 +153,23 @@ def _direct_moves(probe: Probe, obstacles: Obstacles, ready: np.ndarray, axes: n
     count = len(ready)
     same = np.abs(np.einsum("ic,jc->ij", axes, axes) - 1.0) < AXIS_TOLERANCE
     i, j = np.nonzero(np.triu(same, 1))
-    clear = ~obstacles.swept_blocked(ready[i], ready[j], probe.radius + probe.clearance)
-    i, j = i[clear], j[clear]
-    if i.size:
-        clear = ~_poses_blocked_along(probe, obstacles, ready[i], ready[j], axes[i])
-        i, j = i[clear], j[clear]
+    clear = _clear_moves(probe, obstacles, ready[i], ready[j], axes[i])
     direct = np.zeros((count, count), dtype=bool)
-    direct[i, j] = direct[j, i] = True
+    direct[i[clear], j[clear]] = direct[j[clear], i[clear]] = True
     return direct
+
+
+def _clear_moves(probe: Probe, obstacles: Obstacles, starts: np.ndarray, ends: np.ndarray,
+                 axes: np.ndarray) -> np.ndarray:
+    """(M,) bool: the straight moves from starts to ends (M, 3) mm of a probe on axes (M, 3)
+    unit that keep the clearance (the ball's sweep, and the stylus and body at poses along it)."""
+    if not len(starts):
+        return np.zeros(0, dtype=bool)
+    clear = ~obstacles.swept_blocked(starts, ends, probe.radius + probe.clearance)
+    rows = np.flatnonzero(clear)
+    if rows.size:
+        clear[rows] = ~_poses_blocked_along(probe, obstacles, starts[rows], ends[rows], axes[rows])
+    return clear
 
 
 def _poses_blocked_along(probe: Probe, obstacles: Obstacles, starts: np.ndarray, ends: np.ndarray,
@@ -288,3 +297,65 @@ def _waypoints(order: np.ndarray, centres: np.ndarray,
         if k < len(order):
             steps += [(centres[order[k]], "touch"), (arriving[-1][0], "touch")]
     return np.array([position for position, _ in steps]), np.array([kind for _, kind in steps[1:]])
+
+
+class StepMoves:
+    """Collision-free moves to points chosen one at a time (a run that picks its next touch from
+    what it has measured): the same moves as :func:`moves_through`'s, between any two points.
+
+    probe: the Probe; obstacles: the part (Obstacles); points, normals, axes: (N, 3) mm, unit,
+    unit: the places and the probe's axis at each (:func:`cmmsampling.access.reach.reach`; NaN
+    rows where it reaches none, which no move may go to). All positions are ball centres, mm.
+    """
+
+    def __init__(self, probe: Probe, obstacles: Obstacles, points: np.ndarray, normals: np.ndarray,
+                 axes: np.ndarray) -> None:
+        self.probe, self.obstacles = probe, obstacles
+        self.axes = np.asarray(axes, dtype=float).reshape(-1, 3)
+        points, normals = (np.asarray(v, dtype=float).reshape(-1, 3) for v in (points, normals))
+        self.ready = probe.stations(points, normals)[1]
+        self.reachable = np.isfinite(self.axes).all(axis=1)
+        grow = probe.radius + probe.clearance
+        self.exits = self.ready.copy()
+        self.exits[self.reachable] = obstacles.exits(self.ready[self.reachable], self.axes[self.reachable], grow)[1]
+        plane = obstacles.box[1, 2] + grow
+        self.above = np.column_stack([self.exits[:, :2], np.maximum(self.exits[:, 2], plane)])
+
+    def _direct(self, last: int, rows: np.ndarray) -> np.ndarray:
+        """(R,) bool: rows a straight move from row last reaches keeping the clearance."""
+        same = np.abs(self.axes[rows] @ np.nan_to_num(self.axes[last]) - 1.0) < AXIS_TOLERANCE
+        direct = np.zeros(len(rows), dtype=bool)
+        if same.any():
+            ends = self.ready[rows[same]]
+            starts = np.broadcast_to(self.ready[last], ends.shape)
+            direct[same] = _clear_moves(self.probe, self.obstacles, starts, ends,
+                                        np.broadcast_to(self.axes[last], ends.shape))
+        return direct
+
+    def lengths(self, last: int, rows: np.ndarray) -> np.ndarray:
+        """(R,) mm: the travel from row last's ready position to each of rows (R,) int: straight
+        where that keeps the clearance, else out along the axis, over the clearance plane and in;
+        inf at rows the probe does not reach."""
+        rows = np.asarray(rows, dtype=int)
+        lengths = np.full(len(rows), np.inf)
+        open_ = np.flatnonzero(self.reachable[rows])
+        if not open_.size:
+            return lengths
+        targets = rows[open_]
+        out = np.linalg.norm(self.exits - self.ready, axis=1) + np.linalg.norm(self.above - self.exits, axis=1)
+        detour = out[last] + out[targets] + np.linalg.norm(self.above[targets] - self.above[last], axis=1)
+        straight = np.linalg.norm(self.ready[targets] - self.ready[last], axis=1)
+        lengths[open_] = np.where(self._direct(last, targets), straight, detour)
+        return lengths
+
+    def leg(self, last: int | None, row: int) -> np.ndarray:
+        """(K, 3) mm: the ball centre's positions from row last's ready position (None: from
+        the start, over the clearance plane) to row's, its ready position last."""
+        if not self.reachable[row]:
+            raise InputError(f"the probe reaches no pose at place {row}: it cannot be touched")
+        arriving = [self.above[row], self.exits[row], self.ready[row]]
+        if last is None:
+            return np.array(arriving)
+        if self._direct(last, np.array([row]))[0]:
+            return self.ready[row][None]
+        return np.array([self.exits[last], self.above[last], *arriving])

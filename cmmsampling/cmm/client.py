@@ -413,10 +413,12 @@ def fixed_order(planned: PointSet) -> Callable[[Journal], Iterator[tuple[int, st
     return order
 
 
-def run_session(link: Link, planned: PointSet, moves: list | None, probe_radius: float, tool: str | None,
+def run_session(link: Link, planned: PointSet, moves: list | Callable[[int | None, int], np.ndarray] | None,
+                probe_radius: float, tool: str | None,
                 progress: Callable[[str | None], bool | None] | None,
                 order: Callable[[Journal], Iterator[tuple[int, str]]], chosen: bool = False) -> MeasuredRun:
-    """Measure the points of planned (a PointSet; moves: the travel before each, or None) that
+    """Measure the points of planned (a PointSet; moves: the travel before each (a list by point, or
+    moves(previous point or None, point) -> (K, 3) mm), or None: straight) that
     order(journal) yields ((row, progress message), one after the other; it may look at the
     points the journal kept so far), each written as it comes; the MeasuredRun (see
     :func:`measure`: what ends the run, and what it raises). chosen: the points are chosen as
@@ -544,17 +546,16 @@ def _session(connection, planned, moves, tool, box, state, order):
     journal.tool = tool or tools[0]
     connection.call(f'ChangeTool("{journal.tool}")')
     connection.call(REPORT)
+    previous = None
     for index, message in order(journal):
         if journal.wanted is not None:
             journal.wanted.append(planned.labels[index])
         if connection.progress is not None and _asked(connection.progress, message):
             raise _Cancelled
         point, vector = planned.points[index], planned.normals[index]
-        if moves is not None:
-            for position in np.concatenate([part for part in moves[index] if len(part)] or [np.empty((0, 3))]):
-                connection.call(f"GoTo({point_arguments(position)})")
-        else:
-            connection.call(f"GoTo({point_arguments(point + (APPROACH_MM + journal.radius) * vector)})")
+        for position in _travel(moves, previous, index, point + (APPROACH_MM + journal.radius) * vector):
+            connection.call(f"GoTo({point_arguments(position)})")
+        previous = index
         what = f"PtMeas({point_arguments(point, vector)})"
         centre, normal, radius = _report(connection.call(what), f"{tag_text(connection.count)} {what}", box)
         state["radius"] = _checked_radius(radius, state["radius"], planned.labels[index])
@@ -562,6 +563,18 @@ def _session(connection, planned, moves, tool, box, state, order):
         contact = centre - radius * normal
         _check_scale(planned, journal, index, contact)
         journal.point(planned.labels[index], contact, normal)
+
+
+def _travel(moves, previous, index, straight):
+    """(K, 3) mm: the positions the probe goes to before touching point index: moves[index]'s
+    (the travel pairs of a planned path), moves(previous, index)'s (a callable: the moves of a
+    run choosing its points as it goes; previous: the point touched before, None at the first),
+    or straight to ``straight`` (3,) where moves is None."""
+    if moves is None:
+        return straight[None]
+    if callable(moves):
+        return np.asarray(moves(previous, index), dtype=float).reshape(-1, 3)
+    return np.concatenate([part for part in moves[index] if len(part)] or [np.empty((0, 3))])
 
 
 def _report(data, what, box):

@@ -22,6 +22,9 @@ from typing import Any
 
 import numpy as np
 
+from ..access.probe import Probe
+from ..access.probe_moves import StepMoves
+from ..access.reach import Reachability, reach
 from ..fitting.series import PlaneCoordinates, SeriesModel, greedy_design
 from ..formats.pointset import PointSet
 from ..geometry.surface import SurfaceModel, as_face
@@ -29,7 +32,7 @@ from ..geometry.validation import InputError, check_real
 from ..inspection.decide import FEWEST_POINTS, Belief, Candidates, belief, minimum_zones, next_row, spread_design
 from ..inspection.judge import Inspection, Progress, inspect
 from ..inspection.series import series_model
-from ..strategies.sampling import probe_edge_offset
+from ..strategies.sampling import probe_edge_offset, reachability_of
 from .client import Journal, MeasuredRun, link_settings, run_session
 
 # Places on the face the touches are chosen among (a raster of its parameters, those on the face);
@@ -125,7 +128,8 @@ def _edge_places(model: SurfaceModel, spacing: float) -> np.ndarray:
 def measure_until_decided(source: Any, server: str, tolerance: float, uncertainty: float = 0.0,
                           out: str | os.PathLike = "measured.csv", risk: float = RISK, max_points: int | None = None,
                           *, prior: Sequence[Inspection] | SeriesModel | None = None,
-                          edge_offset: float | None = None, candidates: int = CANDIDATES, tool: str | None = None,
+                          part: Any = None, probe: Probe | None = None, edge_offset: float | None = None,
+                          candidates: int = CANDIDATES, tool: str | None = None,
                           progress: Callable[[str | None], bool | None] | None = None, timeout_s: float = 60.0,
                           log: str | os.PathLike | None = None, volume: Sequence[Sequence[float]] | None = None,
                           seed: int = 0) -> DecidedRun:
@@ -138,9 +142,14 @@ def measure_until_decided(source: Any, server: str, tolerance: float, uncertaint
     :func:`cmmsampling.measure` takes them; prior: earlier parts of the series (a list of their
     Inspections, or a SeriesModel, as sample's part_error takes it): the first points are those
     part_error places on the touchable places, and the belief expects the series' systematic
-    error in an unknown amount; edge_offset: mm the points keep from the face's edges (None: a
-    probe ball's radius and a margin, less on a narrow face, as *Sample face* starts with: a
-    point on an edge of a misplaced part lies beyond it); candidates: about how many places the
+    error in an unknown amount; part, probe: the solid the face belongs to (a Part.Shape) and
+    the Probe (default cmmsampling.Probe()): the run touches only the places the probe reaches
+    and goes between them by collision-free moves (those of a plan's probe path); a probe
+    points object sampled with its part and probe brings both; without a part the moves are
+    straight, as :func:`cmmsampling.measure` moves for a plan made without one; edge_offset: mm
+    the points keep from the face's edges (None: a probe ball's radius and a margin, less on a
+    narrow face, as *Sample face* starts with: a point on an edge of a misplaced part lies
+    beyond it); candidates: about how many places the
     points are chosen among; seed: the belief's random samples. Returns a DecidedRun;
     InputError before connecting for bad arguments."""
     tolerance = check_real("tolerance", tolerance, above=0.0)
@@ -152,6 +161,7 @@ def measure_until_decided(source: Any, server: str, tolerance: float, uncertaint
     face = measured_face(source)
     offset = probe_edge_offset(face) if edge_offset is None else check_real("edge_offset", edge_offset, 0.0)
     places, uv = face_candidates(face, int(check_real("candidates", candidates, above=0.0)), offset)
+    places, moves = _reached(places, _reachability(source, face, part, probe))
     if prior is None:
         first = spread_design(places, FIRST)
     else:
@@ -159,8 +169,9 @@ def measure_until_decided(source: Any, server: str, tolerance: float, uncertaint
     limit = _points_limit(max_points, int(places.touchable.sum()))
     labels = [f"C{row + 1}" for row in range(len(places))]
     planned = PointSet(labels, places.points, places.normals, metadata={"source": "measure until decided"})
-    rules = _Rules(face, places, first, tolerance, uncertainty, risk, limit, seed)
-    run = run_session(link, planned, None, 0.0, tool, progress, rules.order, chosen=True)
+    rules = _Rules(face, places, first, tolerance, uncertainty, risk, limit, seed, moves)
+    run = run_session(link, planned, None if moves is None else moves.leg,
+                      0.0 if moves is None else moves.probe.radius, tool, progress, rules.order, chosen=True)
     return rules.result(run)
 
 
@@ -189,6 +200,33 @@ def measured_face(source: Any) -> Any:
     return faces[0]
 
 
+def _reachability(source: Any, face: Any, part: Any, probe: Probe | None) -> Reachability | None:
+    """The probe's Reachability on the part (None: no part, straight moves): part and probe as
+    given, else those of a probe points object sampled with its part and probe."""
+    proxy: Any = getattr(source, "Proxy", None)
+    sampled_with_part = callable(getattr(proxy, "follows_probe", None)) and proxy.follows_probe(source)
+    if part is None and probe is None and sampled_with_part:
+        part, probe = source.Source[0].Shape, proxy.path_probe(source)
+    return reachability_of(part, probe, face)
+
+
+def _reached(places: Candidates, reachability: Reachability | None) -> tuple[Candidates, StepMoves | None]:
+    """(places, the moves between them): without a Reachability, as they are and None; with
+    one, touchable only where the probe reaches, and its collision-free StepMoves."""
+    if reachability is None:
+        return places, None
+    rows = np.flatnonzero(places.touchable)
+    access = reach(reachability.probe, reachability.obstacles, places.points[rows], places.normals[rows])
+    if not access.reachable.any():
+        raise InputError("the probe reaches none of the face's places on this part: check the probe's stylus "
+                         "length and tilt (probe=), or the part (part=)")
+    axes = np.full((len(places), 3), np.nan)
+    axes[rows] = access.axes
+    touchable = np.isfinite(axes).all(axis=1)
+    moves = StepMoves(reachability.probe, reachability.obstacles, places.points, places.normals, axes)
+    return replace(places, touchable=touchable), moves
+
+
 def _with_series(places: Candidates, uv: np.ndarray, series: SeriesModel) -> tuple[Candidates, np.ndarray]:
     """(places with the series' systematic error as their trend, the FIRST touchable rows that
     leave the next part's error least known over every place: part_error's greedy design)."""
@@ -213,8 +251,8 @@ class _Rules:
     the rows to touch; result(run) the DecidedRun."""
 
     def __init__(self, face: Any, places: Candidates, first: np.ndarray, tolerance: float, uncertainty: float,
-                 risk: float, limit: int, seed: int) -> None:
-        self.face, self.places, self.first = face, places, first
+                 risk: float, limit: int, seed: int, moves: StepMoves | None = None) -> None:
+        self.face, self.places, self.first, self.moves = face, places, first, moves
         self.tolerance, self.uncertainty = tolerance, uncertainty
         self.risk, self.limit, self.seed = risk, limit, seed
         self.rows: list[int] = []
@@ -238,10 +276,17 @@ class _Rules:
                 self.stopped = f"undecided at the limit of {self.limit} points"
                 return
             row = next_row(self.places, found, np.array(self.rows), self.rows[-1],
-                           found.decision(self.risk) == "does not conform")
+                           found.decision(self.risk) == "does not conform",
+                           None if self.moves is None else self._travel)
             self.rows.append(row)
             yield row, (f"point {len(self.rows)} of at most {self.limit}: P(conforms) {found.p_conform:.3f}, "
                         f"P(does not conform) {found.p_nonconform:.3f}")
+
+    def _travel(self, last: int) -> np.ndarray:
+        """(M,) mm: the probe's travel along its moves from row last to every place (inf where
+        it cannot go)."""
+        assert self.moves is not None   # only asked for with the part's moves
+        return self.moves.lengths(last, np.arange(len(self.places)))
 
     def _decided(self, journal: Journal) -> tuple[Belief, str | None]:
         """(the Belief of the points measured, why the run stops now or None): the belief decides,

@@ -31,6 +31,7 @@ conform", the touch goes where q is largest, to measure the excess itself.
 from __future__ import annotations
 
 import functools
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -260,15 +261,18 @@ def minimum_zones(fields: np.ndarray, basis: np.ndarray, steps: int = LAWSON_STE
 
 
 def next_row(candidates: Candidates, found: Belief, measured: np.ndarray, last: int | None,
-             seek_excess: bool = False) -> int:
+             seek_excess: bool = False, travel: Callable[[int], np.ndarray] | None = None) -> int:
     """The touchable row to touch next: the largest q (1 - q) (q: found.beyond), or with
     seek_excess the largest q (where the zone is most likely left: to measure it), each place
     lending its score to its nearest touchable place, over 1 + the travel from row last (mm)
     over the face's extent; where every score is 0, the largest posterior spread; never a row
-    already measured."""
+    already measured. travel(last): (M,) mm from row last to every place, inf where the probe
+    cannot go (None: straight)."""
     score = _lent(candidates, found.beyond if seek_excess else found.beyond * (1.0 - found.beyond))
     if last is not None:
-        score = score / (1.0 + np.linalg.norm(candidates.points - candidates.points[last], axis=1) / candidates.extent)
+        moved = np.linalg.norm(candidates.points - candidates.points[last], axis=1) if travel is None else travel(last)
+        goes = np.isfinite(moved)
+        score = np.where(goes, score / (1.0 + np.where(goes, moved, 0.0) / candidates.extent), -np.inf)
     score[np.asarray(measured, dtype=int)] = -np.inf
     if not np.isfinite(score.max()) or score.max() <= 0.0:
         score = np.where(np.isfinite(score), _lent(candidates, found.spread), -np.inf)

@@ -96,7 +96,7 @@ def problem_for(face: Part.Face, settings: SampleSettings, *, strategy: str | No
     setup = setup_of(face)
     model = setup.model
     _check_area(model)
-    reachability = _reachability(part, probe, model.source_face)
+    reachability = reachability_of(part, probe, model.source_face)
     domain = setup.domain(settings.edge_offset, reachability, out_of_reach)
     by_default = settings.min_spacing is None
     min_spacing = (default_min_spacing(model.area, settings.n, domain.feasible_area) if by_default
@@ -118,8 +118,8 @@ def check_arguments(strategy: str, arguments: dict, n: int = MIN_POINTS) -> None
     check_probe(arguments.get("probe"))
 
 
-def _reachability(part: Part.Shape | Reachability | None, probe: Probe | None,
-                  face: Part.Face) -> Reachability | None:
+def reachability_of(part: Part.Shape | Reachability | None, probe: Probe | None,
+                    face: Part.Face) -> Reachability | None:
     """The Reachability of a probe on a part (part itself when it is one), None without a part;
     TypeError for a part that is no shape or a probe that is no Probe, InputError for a part
     that face (a Part.Face) is not on."""

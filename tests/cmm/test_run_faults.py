@@ -14,7 +14,7 @@ import time
 
 import numpy as np
 import pytest
-from support.faulty_cmm import FaultyCMM, at, from_point, report_of, scaled
+from support.faulty_cmm import FaultyCMM, at, from_point, held_at, report_of, scaled
 from support.paths import ROOT
 
 import cmmsampling
@@ -88,19 +88,6 @@ def _measuring_process(result, tmp_path, server):
               f"cmmsampling.measure(cmmsampling.read_points({str(tmp_path / 'planned.csv')!r}), {server!r}, "
               f"{str(tmp_path / 'p.csv')!r}, log={str(tmp_path / 'run.log')!r})\n")
     return subprocess.Popen([PYTHON, "-c", script], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-
-
-def held_at(point, reached, release):
-    """A fault: the answer to the point's PtMeas waits until release (a threading.Event) is set;
-    reached is set when the command has come, so that a signal reaches the measuring process while
-    it waits for that point, whatever the machine's load."""
-
-    def hold(tag, answers):
-        reached.set()
-        release.wait(60)
-        return answers
-
-    return at("PtMeas", point, hold)
 
 
 def _signalled_while_held(result, tmp_path, point, signum):

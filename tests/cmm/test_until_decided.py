@@ -4,11 +4,20 @@ The verdict must be the one an independent minimum zone of the true error over a
 the face gives (a linear programme over the rigid motions, not the run's own alignment), with
 far fewer points than the face's candidate places; a part whose profile is the tolerance itself
 is never decided; a dropped connection leaves the points measured in the file."""
+import os
+import re
+import signal
+import subprocess
+import sys
+import threading
+
 import numpy as np
 import pytest
 from scipy.optimize import linprog
 from support.dropping_server import serve_then_drop
+from support.faulty_cmm import FaultyCMM, held_at
 from support.ippdme import check_commands, checker
+from support.paths import ROOT
 
 import cmmsampling
 from cmmsampling.cmm.client import MeasurementStopped
@@ -25,6 +34,7 @@ PLACED = Misplacement(x=0.3, y=-0.2, rz=0.1)
 NOISE_MM = 0.0005
 # The raster per direction of the face on which the true profile is found.
 DENSE = 40
+PYTHON = "/usr/bin/python3" if os.path.exists("/usr/bin/python3") else sys.executable
 
 
 @pytest.fixture(scope="module")
@@ -169,3 +179,85 @@ def test_earlier_parts_of_the_series_decide_a_part_near_the_limit_sooner(referen
     touchable = np.flatnonzero(touched.touchable)
     first = [f"C{row + 1}" for row in touchable[greedy_design(model, uv[touchable], FIRST, judged=uv)[0]]]
     assert cmmsampling.read_points(tmp_path / "m.csv").labels[:FIRST] == first, "part_error's first design"
+
+
+def ball_paths_clear(part, commands, radius):
+    """(moves between the run's GoTo positions, those whose straight path brings the ball centre
+    nearer the part than radius mm: OCC's distance of each segment to the part)."""
+    import FreeCAD
+    import Part
+
+    positions = np.array([[float(value) for value in re.findall(r"[XYZ]\(([-+0-9.eE]+)\)", command)]
+                          for command in commands if " GoTo(" in command])
+    moves = [(a, b) for a, b in zip(positions[:-1], positions[1:]) if np.linalg.norm(b - a) > 1e-9]
+    near = [a for a, b in moves
+            if Part.LineSegment(FreeCAD.Vector(*a), FreeCAD.Vector(*b)).toShape().distToShape(part)[0] < radius - 1e-6]
+    return len(moves), len(near)
+
+
+def test_on_a_part_the_probe_goes_round_what_stands_on_the_face(tmp_path):
+    """A base whose upward face surrounds a pillar: with part= and probe= (or the face's probe
+    points sampled with them) the run goes round the pillar (no move brings the ball nearer the
+    part than its radius, by OCC's distance), and it touches more than the first design; without
+    the part its straight moves cross the pillar."""
+    import FreeCAD
+    import Part
+
+    part = Part.makeBox(80, 60, 10).fuse(Part.makeBox(12, 12, 40, FreeCAD.Vector(34, 24, 10))).removeSplitter()
+    face = next(face for face in part.Faces if len(face.Wires) == 2)
+    probe = cmmsampling.Probe()
+
+    def form(points):
+        return 0.02 * np.sin(points[:, 0] / 9.0) * np.cos(points[:, 1] / 7.0)
+
+    document = FreeCAD.newDocument("pillar")
+    try:
+        base = document.addObject("Part::Feature", "Base")
+        base.Shape = part
+        name = f"Face{next(k for k, one in enumerate(base.Shape.Faces, start=1) if len(one.Wires) == 2)}"
+        sampled = cmmsampling.sample(base.Shape.getElement(name), 16, "uniform_parametric", part=part, probe=probe,
+                                     occ_check=False)
+        points = cmmsampling.add_to_document(sampled, document, source=(base, name)).Group[0]
+        found = {}
+        for key, source, given in (("part", face, {"part": part, "probe": probe}), ("object", points, {}),
+                                   ("none", face, {})):
+            virtual = VirtualPart(form, np.eye(4), NOISE_MM, np.random.default_rng(1))
+            with SimulatedCMM(virtual) as cmm:
+                found[key] = measure_until_decided(source, cmm.address, TOLERANCE, out=tmp_path / "m.csv", **given)
+    finally:
+        FreeCAD.closeDocument(document.Name)
+    around, straight = found["part"], found["none"]
+    assert around.decision == straight.decision == "conforms" and around.points > FIRST, (around, straight)
+    moves, near = ball_paths_clear(part, around.run.commands, probe.radius)
+    assert moves > around.points and near == 0, "detours, every one clear"
+    assert ball_paths_clear(part, straight.run.commands, probe.radius)[1] > 0, "straight moves cross the pillar"
+    gotos = [[command.split(" ", 1)[1] for command in run.run.commands if " GoTo(" in command]
+             for run in (around, found["object"])]
+    assert gotos[0] == gotos[1], "probe points sampled with the part and probe bring both"
+    if checker() is not None:
+        assert check_commands(around.run.commands, str(tmp_path)) == []
+
+
+def test_kill_9_mid_run_leaves_the_points_measured_for_inspect(reference, places, tmp_path):
+    """The measuring process killed (kill -9) while it waits for its 15th touch, chosen by the
+    belief: the 14 points before are in the file, which inspect reads."""
+    part, _ = made(places, 0.045)
+    reached, release = threading.Event(), threading.Event()
+    script = (f"import sys\nsys.path.insert(0, {ROOT!r})\nimport cmmsampling\n"
+              f"cmmsampling.measure_until_decided(cmmsampling.reference_face(), sys.argv[1], {TOLERANCE}, "
+              f"out={str(tmp_path / 'm.csv')!r})\n")
+    with FaultyCMM(part, held_at(FIRST + 3, reached, release)) as cmm:
+        process = subprocess.Popen([PYTHON, "-c", script, cmm.address], stdout=subprocess.PIPE,
+                                   stderr=subprocess.PIPE, text=True)
+        try:
+            assert reached.wait(300), f"the run never asked for point {FIRST + 3}: {process.poll()}"
+            process.send_signal(signal.SIGKILL)
+        finally:
+            release.set()
+            _, err = process.communicate(timeout=60)
+    assert process.returncode == -signal.SIGKILL, err
+    kept = cmmsampling.read_points(tmp_path / "m.csv")
+    assert len(kept) == FIRST + 2 and kept.metadata["run_end"] == "in progress"
+    assert np.isfinite(kept.points).all() and len(set(kept.labels)) == FIRST + 2
+    found = cmmsampling.inspect(reference, tmp_path / "m.csv", tolerance=TOLERANCE)
+    assert len(found.labels) == FIRST + 2 and found.profile < TOLERANCE

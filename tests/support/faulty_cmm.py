@@ -65,3 +65,16 @@ def scaled(tag, answers, factor):
         return f"{name}({','.join(f'{float(value) * factor:.6f}' for value in values.split(','))})"
 
     return [re.sub(r"([A-Z]+)\(([^()]*)\)", times, line) if line == report else line for line in answers]
+
+
+def held_at(point, reached, release):
+    """A fault: the answer to the point's PtMeas waits until release (a threading.Event) is set;
+    reached is set when the command has come, so that a signal reaches the measuring process while
+    it waits for that point, whatever the machine's load."""
+
+    def hold(tag, answers):
+        reached.set()
+        release.wait(60)
+        return answers
+
+    return at("PtMeas", point, hold)
