@@ -350,12 +350,15 @@ class StepMoves:
 
     def leg(self, last: int | None, row: int) -> np.ndarray:
         """(K, 3) mm: the ball centre's positions from row last's ready position (None: from
-        the start, over the clearance plane) to row's, its ready position last."""
+        the start, over the clearance plane) to row's, its ready position last (a position the
+        path is already at left out)."""
         if not self.reachable[row]:
             raise InputError(f"the probe reaches no pose at place {row}: it cannot be touched")
         arriving = [self.above[row], self.exits[row], self.ready[row]]
         if last is None:
-            return np.array(arriving)
-        if self._direct(last, np.array([row]))[0]:
+            path = np.array(arriving)
+        elif self._direct(last, np.array([row]))[0]:
             return self.ready[row][None]
-        return np.array([self.exits[last], self.above[last], *arriving])
+        else:
+            path = np.array([self.exits[last], self.above[last], *arriving])
+        return path[np.r_[True, np.linalg.norm(np.diff(path, axis=0), axis=1) > 1e-9]]

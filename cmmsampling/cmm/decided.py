@@ -1,8 +1,10 @@
 """Measure a face over I++ DME until its profile verdict is decided: the CMM touches only until
 the verdict is certain either way (the rule: :mod:`cmmsampling.inspection.decide`).
 
-The run starts from FIRST points spread over the face (where earlier parts of the series are
-given, those part_error places, and the belief expects their systematic error), then after each
+On datums (:mod:`cmmsampling.cmm.frame`) their faces are measured first and the face is judged
+in their frame. The run starts from FIRST points spread over the face (where earlier parts of
+the series are given, those part_error places, and the belief expects their systematic error);
+on a part with a probe, only where the probe reaches, by collision-free moves. Then after each
 touch weighs what the points say about the whole face (the probability that it conforms, and
 that it does not) and touches next where that is least known, counting the travel; it stops
 when one side holds with probability 1 - risk, or at max_points (undecided, said so). Either
@@ -27,6 +29,7 @@ from ..access.probe_moves import StepMoves
 from ..access.reach import Reachability, reach
 from ..fitting.series import PlaneCoordinates, SeriesModel, greedy_design
 from ..formats.pointset import PointSet
+from ..formats.pointfiles import read_points
 from ..geometry.surface import SurfaceModel, as_face
 from ..geometry.validation import InputError, check_real
 from ..inspection.decide import FEWEST_POINTS, Belief, Candidates, belief, minimum_zones, next_row, spread_design
@@ -34,6 +37,7 @@ from ..inspection.judge import Inspection, Progress, inspect
 from ..inspection.series import series_model
 from ..strategies.sampling import probe_edge_offset, reachability_of
 from .client import Journal, MeasuredRun, link_settings, run_session
+from .frame import DATUM_PREFIX, RunFrame, run_frame
 
 # Places on the face the touches are chosen among (a raster of its parameters, those on the face);
 # the points spread over it first; the coverage factor of the expanded uncertainty the belief
@@ -128,14 +132,15 @@ def _edge_places(model: SurfaceModel, spacing: float) -> np.ndarray:
 def measure_until_decided(source: Any, server: str, tolerance: float, uncertainty: float = 0.0,
                           out: str | os.PathLike = "measured.csv", risk: float = RISK, max_points: int | None = None,
                           *, prior: Sequence[Inspection] | SeriesModel | None = None,
-                          part: Any = None, probe: Probe | None = None, edge_offset: float | None = None,
+                          part: Any = None, probe: Probe | None = None, datums: Sequence[Any] | None = None,
+                          edge_offset: float | None = None,
                           candidates: int = CANDIDATES, tool: str | None = None,
                           progress: Callable[[str | None], bool | None] | None = None, timeout_s: float = 60.0,
                           log: str | os.PathLike | None = None, volume: Sequence[Sequence[float]] | None = None,
                           seed: int = 0) -> DecidedRun:
     """Measure a face (a Part.Face, a shape of one face, or the workbench's probe points of one
     face, whose source face it takes; on the CMM in the CAD model's coordinates) over the I++
-    DME server at 'host:port' until its profile verdict to tolerance t (mm, no datums) is
+    DME server at 'host:port' until its profile verdict to tolerance t (mm) is
     decided with probability 1 - risk, or max_points (default: every touchable place) are
     measured. uncertainty: u, mm, the probing's standard uncertainty per point (as
     cmmsampling.inspect takes it); out, tool, progress, timeout_s, log, volume as
@@ -146,7 +151,11 @@ def measure_until_decided(source: Any, server: str, tolerance: float, uncertaint
     the Probe (default cmmsampling.Probe()): the run touches only the places the probe reaches
     and goes between them by collision-free moves (those of a plan's probe path); a probe
     points object sampled with its part and probe brings both; without a part the moves are
-    straight, as :func:`cmmsampling.measure` moves for a plan made without one; edge_offset: mm
+    straight, as :func:`cmmsampling.measure` moves for a plan made without one; datums: the
+    datum reference frame (Datums, or faces: Part.Faces or names of part's faces, A, B, C in
+    order, primary first): their faces are measured first (a plan's datum points, unless a
+    Datum brings its points), and the face is judged in their frame, floated only in the
+    motions they leave free (the profile is location and form); edge_offset: mm
     the points keep from the face's edges (None: a probe ball's radius and a margin, less on a
     narrow face, as *Sample face* starts with: a point on an edge of a misplaced part lies
     beyond it); candidates: about how many places the
@@ -161,15 +170,27 @@ def measure_until_decided(source: Any, server: str, tolerance: float, uncertaint
     face = measured_face(source)
     offset = probe_edge_offset(face) if edge_offset is None else check_real("edge_offset", edge_offset, 0.0)
     places, uv = face_candidates(face, int(check_real("candidates", candidates, above=0.0)), offset)
-    places, moves = _reached(places, _reachability(source, face, part, probe))
+    reachability = _reachability(source, face, part, probe)
+    places, axes = _reached(places, reachability)
+    frame = run_frame(datums, None if reachability is None else reachability.part,
+                      None if reachability is None else reachability.probe, places.points.mean(axis=0))
+    if frame is not None:
+        places = replace(places, motions=frame.motions(places.points, places.normals))
     if prior is None:
         first = spread_design(places, FIRST)
     else:
         places, first = _with_series(places, uv, series_model(face, prior))
     limit = _points_limit(max_points, int(places.touchable.sum()))
-    labels = [f"C{row + 1}" for row in range(len(places))]
-    planned = PointSet(labels, places.points, places.normals, metadata={"source": "measure until decided"})
-    rules = _Rules(face, places, first, tolerance, uncertainty, risk, limit, seed, moves)
+    lead = PointSet([], np.empty((0, 3)), np.empty((0, 3))) if frame is None else frame.point_set()
+    labels = list(lead.labels) + [f"C{row + 1}" for row in range(len(places))]
+    planned = PointSet(labels, np.vstack([lead.points, places.points]), np.vstack([lead.normals, places.normals]),
+                       metadata={"source": "measure until decided"})
+    moves = None
+    if reachability is not None and axes is not None:
+        lead_axes = np.empty((0, 3)) if frame is None else frame.axes()
+        moves = StepMoves(reachability.probe, reachability.obstacles, planned.points, planned.normals,
+                          np.vstack([lead_axes, axes]))
+    rules = _Rules(face, places, first, _Limits(tolerance, uncertainty, risk, limit, seed), moves, frame)
     run = run_session(link, planned, None if moves is None else moves.leg,
                       0.0 if moves is None else moves.probe.radius, tool, progress, rules.order, chosen=True)
     return rules.result(run)
@@ -210,9 +231,9 @@ def _reachability(source: Any, face: Any, part: Any, probe: Probe | None) -> Rea
     return reachability_of(part, probe, face)
 
 
-def _reached(places: Candidates, reachability: Reachability | None) -> tuple[Candidates, StepMoves | None]:
-    """(places, the moves between them): without a Reachability, as they are and None; with
-    one, touchable only where the probe reaches, and its collision-free StepMoves."""
+def _reached(places: Candidates, reachability: Reachability | None) -> tuple[Candidates, np.ndarray | None]:
+    """(places, the probe's axis at each (M, 3), NaN where it reaches none): without a
+    Reachability, as they are and None; with one, touchable only where the probe reaches."""
     if reachability is None:
         return places, None
     rows = np.flatnonzero(places.touchable)
@@ -222,9 +243,7 @@ def _reached(places: Candidates, reachability: Reachability | None) -> tuple[Can
                          "length and tilt (probe=), or the part (part=)")
     axes = np.full((len(places), 3), np.nan)
     axes[rows] = access.axes
-    touchable = np.isfinite(axes).all(axis=1)
-    moves = StepMoves(reachability.probe, reachability.obstacles, places.points, places.normals, axes)
-    return replace(places, touchable=touchable), moves
+    return replace(places, touchable=np.isfinite(axes).all(axis=1)), axes
 
 
 def _with_series(places: Candidates, uv: np.ndarray, series: SeriesModel) -> tuple[Candidates, np.ndarray]:
@@ -246,15 +265,29 @@ def _points_limit(max_points: int | None, count: int) -> int:
     return min(int(max_points), count)
 
 
+@dataclass(frozen=True)
+class _Limits:
+    """What a run until decided judges by: tolerance t and u (mm), the risk of a wrong verdict,
+    the most points it measures, the belief's seed."""
+
+    tolerance: float
+    uncertainty: float
+    risk: float
+    limit: int
+    seed: int
+
+
 class _Rules:
     """The run's choice of points and its stop (see the module's doc): order(journal) yields
-    the rows to touch; result(run) the DecidedRun."""
+    the rows to touch (the frame's datum points first, then the face's places: planned rows,
+    a place's row after the datum points); result(run) the DecidedRun."""
 
-    def __init__(self, face: Any, places: Candidates, first: np.ndarray, tolerance: float, uncertainty: float,
-                 risk: float, limit: int, seed: int, moves: StepMoves | None = None) -> None:
-        self.face, self.places, self.first, self.moves = face, places, first, moves
-        self.tolerance, self.uncertainty = tolerance, uncertainty
-        self.risk, self.limit, self.seed = risk, limit, seed
+    def __init__(self, face: Any, places: Candidates, first: np.ndarray, limits: _Limits,
+                 moves: StepMoves | None = None, frame: RunFrame | None = None) -> None:
+        self.face, self.places, self.first, self.moves, self.frame = face, places, first, moves, frame
+        self.limits = limits
+        self.lead = 0 if frame is None else len(frame.point_set())
+        self.transform: np.ndarray | None = None
         self.rows: list[int] = []
         self.found: Belief | None = None
         self.decision: str | None = None
@@ -262,78 +295,98 @@ class _Rules:
         self.stopped = "the run ended before the first points were measured"
 
     def order(self, journal: Journal) -> Iterator[tuple[int, str]]:
-        """The rows to touch: the FIRST rows of the first design, then one at a time where the
-        belief is least sure, until decided (confirmed by the inspection) or at the limit."""
+        """The rows to touch: the datum points, the FIRST places of the first design, then one
+        place at a time where the belief is least sure, until decided (confirmed by the
+        inspection) or at the limit."""
+        for row in range(self.lead):
+            yield row, f"datum point {row + 1} of {self.lead}"
+        limit = self.limits.limit
         for row in self.first:
             self.rows.append(int(row))
-            yield int(row), f"point {len(self.rows)} of at most {self.limit} (the first design)"
+            yield self.lead + int(row), f"point {len(self.rows)} of at most {limit} (the first design)"
         while True:
             found, decided = self._decided(journal)
             if decided is not None:
                 self.stopped = decided
                 return
-            if len(self.rows) >= self.limit:
-                self.stopped = f"undecided at the limit of {self.limit} points"
+            if len(self.rows) >= limit:
+                self.stopped = f"undecided at the limit of {limit} points"
                 return
             row = next_row(self.places, found, np.array(self.rows), self.rows[-1],
-                           found.decision(self.risk) == "does not conform",
+                           found.decision(self.limits.risk) == "does not conform",
                            None if self.moves is None else self._travel)
             self.rows.append(row)
-            yield row, (f"point {len(self.rows)} of at most {self.limit}: P(conforms) {found.p_conform:.3f}, "
-                        f"P(does not conform) {found.p_nonconform:.3f}")
+            yield self.lead + row, (f"point {len(self.rows)} of at most {limit}: P(conforms) {found.p_conform:.3f}, "
+                                    f"P(does not conform) {found.p_nonconform:.3f}")
 
     def _travel(self, last: int) -> np.ndarray:
-        """(M,) mm: the probe's travel along its moves from row last to every place (inf where
+        """(M,) mm: the probe's travel along its moves from place last to every place (inf where
         it cannot go)."""
         assert self.moves is not None   # only asked for with the part's moves
-        return self.moves.lengths(last, np.arange(len(self.places)))
+        return self.moves.lengths(self.lead + last, self.lead + np.arange(len(self.places)))
 
     def _decided(self, journal: Journal) -> tuple[Belief, str | None]:
         """(the Belief of the points measured, why the run stops now or None): the belief decides,
-        and the profile cmmsampling.inspect finds for them (to the bounded face, minimum zone)
-        agrees by ISO 14253-1's rule with U = COVERAGE u (the Monte Carlo U comes with the run's
-        final inspection): within t - U for 'conforms', beyond t + U for 'does not conform'.
-        Points that show a zone beyond t + U decide 'does not conform' whatever the belief. A
-        belief of 'does not conform' the points do not show yet sends the next touch where the
-        excess is likeliest."""
+        and the profile cmmsampling.inspect finds for them (to the bounded face, minimum zone; in
+        the datum frame where there is one) agrees by ISO 14253-1's rule with U = COVERAGE u (the
+        Monte Carlo U comes with the run's final inspection): within t - U for 'conforms', beyond
+        t + U for 'does not conform'. Points that show a zone beyond t + U decide 'does not
+        conform' whatever the belief. A belief of 'does not conform' the points do not show yet
+        sends the next touch where the excess is likeliest."""
+        limits = self.limits
         rows, d = self._deviations(journal)
-        guard = COVERAGE * self.uncertainty
-        found = belief(self.places, rows, d, self.tolerance, guard, seed=self.seed)
+        guard = COVERAGE * limits.uncertainty
+        found = belief(self.places, rows, d, limits.tolerance, guard, seed=limits.seed)
         self.found = found
         self.history.append((len(rows), found.p_conform, found.p_nonconform))
-        decision = found.decision(self.risk)
+        decision = found.decision(limits.risk)
         seen = float(minimum_zones(d[None], self.places.rigid[rows])[0][0])
-        if decision is None and seen - guard <= self.tolerance:
+        if decision is None and seen - guard <= limits.tolerance:
             return found, None
-        profile = inspect(self.face, journal.measured(), tolerance=self.tolerance).profile
-        if profile - guard > self.tolerance:
+        profile = self._judge(journal.measured()).profile
+        if profile - guard > limits.tolerance:
             self.decision = "does not conform"
             return found, (f"decided: the measured points show it (profile {profile:.4f} mm beyond t + U), "
                            f"P(does not conform) {found.p_nonconform:.3f}")
-        if decision == "conforms" and profile + guard <= self.tolerance:
+        if decision == "conforms" and profile + guard <= limits.tolerance:
             self.decision = decision
-            return found, (f"decided: P(conforms) {found.p_conform:.3f} >= {1 - self.risk:g}, the measured points "
+            return found, (f"decided: P(conforms) {found.p_conform:.3f} >= {1 - limits.risk:g}, the measured points "
                            f"agree (profile {profile:.4f} mm)")
         return found, None
 
+    def _judge(self, measured: PointSet, **options: Any) -> Inspection:
+        """cmmsampling.inspect of measured points (a PointSet of the run's, datum points included)
+        on the face with the run's tolerance, in the frame's datums where there is one; options:
+        inspect's others."""
+        if self.frame is None:
+            return inspect(self.face, measured, tolerance=self.limits.tolerance, **options)
+        toleranced, datums = self.frame.measured(measured)
+        return inspect(self.face, toleranced, tolerance=self.limits.tolerance, datums=datums, **options)
+
     def _deviations(self, journal: Journal) -> tuple[np.ndarray, np.ndarray]:
-        """(rows measured (n,), their deviations (n,) mm along the nominal normals)."""
+        """(places measured (n,), their deviations (n,) mm along the nominal normals; in the
+        datum frame where there is one: the contacts moved by the datums' association)."""
         labels = journal.planned.labels
-        rows = np.array([row for row in self.rows if labels[row] in journal.touched])
-        contacts = np.array([journal.touched[labels[row]][0] for row in rows])
+        rows = np.array([row for row in self.rows if labels[self.lead + row] in journal.touched])
+        contacts = np.array([journal.touched[labels[self.lead + row]][0] for row in rows])
+        if self.frame is not None:
+            if self.transform is None:
+                self.transform = self._judge(journal.measured(), alignment="none").transform
+            contacts = contacts @ self.transform[:3, :3].T + self.transform[:3, 3]
         offsets = contacts - self.places.points[rows]
         return rows, np.einsum("ij,ij->i", offsets, self.places.normals[rows])
 
     def _inspection(self, measured: os.PathLike, progress: Progress | None) -> Inspection:
         """cmmsampling.inspect of the measured file on the face with the run's tolerance and u
-        (its expanded uncertainty and decision where u is given), progress as it takes it."""
-        return inspect(self.face, measured, tolerance=self.tolerance, uncertainty=self.uncertainty or None,
-                       seed=self.seed, progress=progress)
+        (its expanded uncertainty and decision where u is given; in the datum frame where there is
+        one), progress as it takes it."""
+        return self._judge(read_points(measured), uncertainty=self.limits.uncertainty or None,
+                           seed=self.limits.seed, progress=progress)
 
     def result(self, run: MeasuredRun) -> DecidedRun:
         """The DecidedRun of the run: the decision it stopped on (None where it did not)."""
         p_conform = self.found.p_conform if self.found is not None else float("nan")
         p_nonconform = self.found.p_nonconform if self.found is not None else float("nan")
-        return DecidedRun(run, self.decision, p_conform, p_nonconform, len(run.labels), self.stopped,
-                          list(self.history), self._inspection)
-
+        points = sum(not label.startswith(DATUM_PREFIX) for label in run.labels)
+        return DecidedRun(run, self.decision, p_conform, p_nonconform, points, self.stopped, list(self.history),
+                          self._inspection)

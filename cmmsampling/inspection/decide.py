@@ -62,13 +62,16 @@ class Candidates:
     (M, 3) unit out of the material, x (M, 2) mm the face's plane coordinates there, touchable
     (M,) bool where the probe may touch (the others, nearer the edges than the probe's offset,
     are judged but not touched); trend: (M, q) mm shapes the deviation is expected to hold in
-    unknown amounts (a series' systematic error: flat priors, as the rigid motions), or None."""
+    unknown amounts (a series' systematic error: flat priors, as the rigid motions), or None;
+    motions: (M, k) the deviation per unit of each motion the part is free to make (the ones a
+    datum reference frame leaves free; k may be 0), or None: every rigid motion."""
 
     points: np.ndarray
     normals: np.ndarray
     x: np.ndarray
     touchable: np.ndarray
     trend: np.ndarray | None = None
+    motions: np.ndarray | None = None
 
     def __len__(self) -> int:
         return len(self.points)
@@ -89,11 +92,16 @@ class Candidates:
 
     @functools.cached_property
     def rigid(self) -> np.ndarray:
-        """(M, p): each place's deviation along its normal per small rigid motion of the part,
-        the p <= 6 motions that move the face at all (a plane's own slides and turn do not),
-        columns orthonormal."""
-        arm = (self.points - self.points.mean(axis=0)) / self.extent
-        basis = np.hstack([self.normals, np.cross(arm, self.normals)])
+        """(M, p): each place's deviation along its normal per small rigid motion of the part
+        (those ``motions`` leaves free), the p <= 6 motions that move the face at all (a plane's
+        own slides and turn do not), columns orthonormal."""
+        if self.motions is None:
+            arm = (self.points - self.points.mean(axis=0)) / self.extent
+            basis = np.hstack([self.normals, np.cross(arm, self.normals)])
+        else:
+            basis = np.asarray(self.motions, float).reshape(len(self), -1)
+        if not basis.shape[1]:
+            return basis
         vectors, sizes, _ = np.linalg.svd(basis, full_matrices=False)
         return vectors[:, sizes > 1e-9 * sizes.max()]
 
@@ -193,7 +201,7 @@ def _weighed_fields(candidates: Candidates, rows: np.ndarray, d: np.ndarray) -> 
                 continue
             across = cho_solve(factor, np.column_stack([d, motions]))
             information = motions.T @ across[:, 1:]
-            motion = solve(information, motions.T @ across[:, 0], assume_a="pos")
+            motion = _solved(information, motions.T @ across[:, 0])
             residual = d - motions @ motion
             scale = max(float(residual @ cho_solve(factor, residual)), 1e-300)
             log_weight = (-np.log(np.diag(factor[0])).sum() - 0.5 * np.linalg.slogdet(information)[1]
@@ -220,10 +228,17 @@ def _draw(candidates: Candidates, rows: np.ndarray, found: _Field, count: int,
     mean = every @ found.motion + weighted.T @ found.residual
     left = every - weighted.T @ motions                             # (M, p)
     covariance = (matern(candidates.x, candidates.x, found.length, 1.0) - across @ weighted
-                  + left @ solve(found.information, left.T, assume_a="pos"))
+                  + left @ _solved(found.information, left.T))
     root = _root(0.5 * (covariance + covariance.T))
     variance = found.scale / rng.chisquare(len(rows) - motions.shape[1], count)
     return mean + np.sqrt(variance)[:, None] * (rng.standard_normal((count, len(mean))) @ root.T)
+
+
+def _solved(information: np.ndarray, right: np.ndarray) -> np.ndarray:
+    """information^-1 right for a positive definite (p, p) information, p = 0 included."""
+    if not len(information):
+        return np.zeros(right.shape)
+    return solve(information, right, assume_a="pos")
 
 
 def _root(covariance: np.ndarray) -> np.ndarray:
@@ -242,7 +257,9 @@ def minimum_zones(fields: np.ndarray, basis: np.ndarray, steps: int = LAWSON_STE
     motion (basis (M, 6)) that makes its largest deviation smallest, by Lawson's reweighted least
     squares (steps rounds, all fields at once; each round's alignment is a real one, so the
     smallest zone found is never below the minimum zone), its profile twice that largest
-    deviation (ISO 1101's zone about the nominal)."""
+    deviation (ISO 1101's zone about the nominal); with no motion (basis (M, 0)), as they are."""
+    if not basis.shape[1]:
+        return 2.0 * np.abs(fields).max(axis=1), fields.copy()
     weights = np.full(fields.shape, 1.0 / fields.shape[1])
     best, aligned = np.full(len(fields), np.inf), fields.copy()
     ridge = 1e-12 * np.eye(basis.shape[1])

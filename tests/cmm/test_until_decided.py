@@ -261,3 +261,44 @@ def test_kill_9_mid_run_leaves_the_points_measured_for_inspect(reference, places
     assert np.isfinite(kept.points).all() and len(set(kept.labels)) == FIRST + 2
     found = cmmsampling.inspect(reference, tmp_path / "m.csv", tolerance=TOLERANCE)
     assert len(found.labels) == FIRST + 2 and found.profile < TOLERANCE
+
+
+def test_a_face_judged_on_datums_is_measured_after_them_and_its_location_counts(tmp_path):
+    """A block's top face 0.03 mm too high, with 5 um waves, misplaced on the table: without
+    datums its form conforms; on datums A | B | C (bottom, front, left: their points measured
+    first, as a plan's) its profile holds the height, twice 0.035 mm, and it does not conform. A
+    top only 0.012 mm high conforms on the datums. The true profiles: twice the largest error over
+    a raster of the top (the datum faces are exact, so the frame is the nominal)."""
+    import Part
+
+    block = Part.makeBox(60, 40, 20)
+
+    def face(normal):
+        return next(one for one in block.Faces if np.allclose(tuple(one.normalAt(0.5, 0.5)), normal))
+
+    top, frame = face((0, 0, 1)), [face((0, 0, -1)), face((0, -1, 0)), face((-1, 0, 0))]
+    grid = np.array([(x, y, 20.0) for x in np.linspace(0, 60, 61) for y in np.linspace(0, 40, 41)])
+    placed = PLACED.matrix(np.array([30.0, 20.0, 10.0]))
+    found = {}
+    for height, datums in ((0.03, None), (0.03, frame), (0.012, frame)):
+        def form(points, height=height):
+            on_top = points[:, 2] > 20.0 - 1e-6
+            return np.where(on_top, height + 0.005 * np.sin(points[:, 0] / 8.0) * np.cos(points[:, 1] / 6.0), 0.0)
+
+        truth = 2.0 * np.abs(form(grid)).max()
+        with SimulatedCMM(VirtualPart(form, placed, NOISE_MM, np.random.default_rng(2))) as cmm:
+            run = measure_until_decided(top, cmm.address, TOLERANCE, NOISE_MM, tmp_path / "m.csv", datums=datums,
+                                        max_points=40)
+        found[height, datums is None] = run
+        if datums is not None:
+            assert run.decision == ("conforms" if truth < TOLERANCE else "does not conform"), (truth, run)
+            labels = cmmsampling.read_points(tmp_path / "m.csv").labels
+            assert labels[:14] == [f"D{label}{k}" for label, count in (("A", 6), ("B", 4), ("C", 4))
+                                   for k in range(1, count + 1)], "the datum points first"
+            assert [fit.label for fit in run.inspection.datums] == ["A", "B", "C"]
+            assert abs(run.inspection.profile - truth) < 0.01 and run.points == len(labels) - 14
+    assert found[0.03, True].decision == "conforms", "the form alone is within t"
+    report = cmmsampling.export(found[0.03, False], tmp_path / "results.qif")
+    written = open(tmp_path / "results.qif", encoding="utf-8").read()
+    assert schema_errors(written) == [] and "DatumReferenceFrame" in written and "DA1" in written
+    assert report.passed is False
