@@ -1,7 +1,7 @@
 """*Measure on CMM...*: the I++ DME server (host, port), the tool and the file for the measured
 points, asked in a small dialog, and whether to touch every planned point or, on one face's
-probe points, only until the verdict is decided (its tolerance, the probing's uncertainty and
-the risk of a wrong verdict). The measurement runs in the background behind a progress dialog
+probe points, only until the verdict is decided (its tolerance, the probing's uncertainty, the
+risk of a wrong verdict, the datums among the part's faces and the earlier parts of the series). The measurement runs in the background behind a progress dialog
 (the point under way, Cancel) and is echoed as ``run = cmmsampling.measure(...)`` or
 ``run = cmmsampling.measure_until_decided(...)`` (handed over: cmmsampling.gui.handover, so the
 echo does not move the machine again). Every planned point measured ends in *Inspect measured
@@ -11,7 +11,8 @@ background too and added to the document.
 The values persist in the workbench's parameter group.
 """
 import os
-from dataclasses import dataclass
+import re
+from dataclasses import dataclass, field
 
 import FreeCADGui
 from PySide import QtGui
@@ -19,9 +20,13 @@ from PySide import QtGui
 from ..cmm.client import DEFAULT_PORT, measure
 from ..cmm.decided import RISK, measure_until_decided
 from ..document import settings
+from ..document.object_types import is_measured_points
+from ..geometry.validation import InputError
 from ..formats.exporting import along_moves, as_point_set
 from . import icon
 from .background import BackgroundTask, behind_progress
+from .echo import prior_expression
+from .panels.fields import add_checkable, checked_data
 from .qt_compat import asked, browse_row
 
 DEFAULTS = {"MeasureHost": "127.0.0.1", "MeasurePort": DEFAULT_PORT, "MeasureTool": "",
@@ -32,10 +37,12 @@ DEFAULTS = {"MeasureHost": "127.0.0.1", "MeasurePort": DEFAULT_PORT, "MeasureToo
 class MeasureRequest:
     """What the dialog asks for: function, the cmmsampling function that measures ('measure' or
     'measure_until_decided'), and its keyword arguments (server, out, tool; until decided also
-    tolerance, uncertainty, risk)."""
+    tolerance, uncertainty, risk and, where chosen, datums and prior); echoed: the console text
+    of the arguments that are objects (datums, prior), by name."""
 
     function: str
     arguments: dict
+    echoed: dict = field(default_factory=dict)
 
     @property
     def until_decided(self):
@@ -45,9 +52,11 @@ class MeasureRequest:
 class MeasureDialog(QtGui.QDialog):
     """Where and with what to measure the probe points ``title`` names: host, port, tool (empty:
     the first the server lists), the measured file (``path``: where it starts) and, where
-    one_face, whether to measure until the verdict is decided."""
+    one_face, whether to measure until the verdict is decided; then also the datums among the
+    faces of part (the probe points' source object, or None) and the earlier parts of the series
+    among the measured-points objects earlier (document objects)."""
 
-    def __init__(self, title, path, parent=None, one_face=True):
+    def __init__(self, title, path, parent=None, one_face=True, part=None, earlier=()):
         super().__init__(parent)
         self.setObjectName("MeasureOnCMM")
         self.setWindowTitle(f"Measure on CMM: {title}")
@@ -74,6 +83,8 @@ class MeasureDialog(QtGui.QDialog):
         self.path.setToolTip("The measured contact points are written here (CSV), then inspected")
         layout.addRow("Measured file", browse_row(self, self.path, "Choose the folder and name of the measured file"))
         self._add_decision_rows(layout, stored, one_face)
+        self._add_frame_rows(layout, part, earlier)
+        self._decision_enabled(self.until.isChecked())
         self.buttons = QtGui.QDialogButtonBox(QtGui.QDialogButtonBox.Ok | QtGui.QDialogButtonBox.Cancel, parent=self)
         self.buttons.accepted.connect(self.accept)
         self.buttons.rejected.connect(self.reject)
@@ -88,7 +99,7 @@ class MeasureDialog(QtGui.QDialog):
         self.until.setToolTip(
             "Touch the face where the verdict is least certain, one point at a time, and stop as soon as "
             "'conforms' or 'does not conform' holds with the chance of a wrong verdict below the risk "
-            "(the planned points are not used; the face's profile to the tolerance, no datums)"
+            "(the planned points are not used; the face's profile to the tolerance, on the datums if given)"
             if one_face else "Measuring until decided judges one face: select one face's probe points")
         self.until.setEnabled(one_face)
         self.until.setChecked(one_face and bool(stored["MeasureUntilDecided"]))
@@ -109,11 +120,61 @@ class MeasureDialog(QtGui.QDialog):
         self.risk.setToolTip("The chance of a wrong verdict the run accepts before it stops")
         layout.addRow("Risk of a wrong verdict", self.risk)
         self.until.toggled.connect(self._decision_enabled)
-        self._decision_enabled(self.until.isChecked())
+
+    def _add_frame_rows(self, layout, part, earlier):
+        """The datums (faces of part by name, primary first) and the earlier parts (a checkable
+        list of the measured-points objects earlier) of a run until decided."""
+        self.part, self.earlier_objects = part, {obj.Name: obj for obj in earlier}
+        self.datums = QtGui.QLineEdit(self)
+        self.datums.setObjectName("datums")
+        self.datums.setPlaceholderText("none: the face's form alone" if part is not None else "no part known")
+        self.datums.setToolTip(
+            f"The faces of {part.Label} the profile is judged on (ISO 5459: A, B, C in this order, primary first), "
+            "e.g. Face5, Face3, Face1: measured first, they fix the part's place, so the profile holds location "
+            "and form" if part is not None else "The probe points have no source object whose faces could be datums")
+        layout.addRow("Datums", self.datums)
+        self.earlier = QtGui.QListWidget(self)
+        self.earlier.setObjectName("earlier")
+        self.earlier.setToolTip("Inspections of earlier parts of the series on this face: the first points go where "
+                                "they leave the least unknown, and the belief expects their repeated error")
+        for obj in earlier:
+            group = obj.getParentGroup()
+            where = f"{group.Label}: " if group is not None else ""
+            add_checkable(self.earlier, f"{where}{obj.Label} ({len(obj.Labels)} points)", obj.Name,
+                          obj.MeasuredFile or obj.Label)
+        if not earlier:
+            QtGui.QListWidgetItem("no inspection in this document", self.earlier)
+        self.earlier.setMaximumHeight(90)
+        layout.addRow("Earlier parts", self.earlier)
 
     def _decision_enabled(self, on):
-        for field in (self.tolerance, self.uncertainty, self.risk):
+        for field in (self.tolerance, self.uncertainty, self.risk, self.earlier):
             field.setEnabled(on)
+        self.datums.setEnabled(on and self.part is not None)
+
+    def datum_names(self):
+        """The datum faces' names typed, in order ('Face5', ...); InputError naming one the
+        part does not have."""
+        names = [name for name in re.split(r"[,;\s]+", self.datums.text().strip()) if name]
+        if names and self.part is None:
+            raise InputError("the probe points have no source object whose faces could be datums: leave Datums empty")
+        for name in names:
+            try:
+                self.part.Shape.getElement(name)
+            except Exception:
+                raise InputError(f"{self.part.Label} has no face {name!r}: give its faces as Face1, Face2, ... "
+                                 "primary first, or leave Datums empty") from None
+        return names
+
+    def accept(self):
+        """Close with OK, unless a datum names no face of the part (said in a message box)."""
+        if self.until.isChecked():
+            try:
+                self.datum_names()
+            except InputError as exc:
+                QtGui.QMessageBox.warning(self, "Measure on CMM", str(exc))
+                return
+        super().accept()
 
     def browse(self):
         """Choose the measured file to write (CSV); the extension is added where it is missing."""
@@ -128,7 +189,17 @@ class MeasureDialog(QtGui.QDialog):
         if not self.until.isChecked():
             return MeasureRequest("measure", arguments)
         arguments.update(tolerance=self.tolerance.value(), uncertainty=self.uncertainty.value(), risk=self.risk.value())
-        return MeasureRequest("measure_until_decided", arguments)
+        echoed = {}
+        names = self.datum_names()
+        if names:
+            arguments["datums"] = [self.part.Shape.getElement(name) for name in names]
+            shape = f"App.getDocument({self.part.Document.Name!r}).getObject({self.part.Name!r}).Shape"
+            echoed["datums"] = "[" + ", ".join(f"{shape}.getElement({name!r})" for name in names) + "]"
+        earlier = [self.earlier_objects[name] for name in checked_data(self.earlier)]
+        if earlier:
+            arguments["prior"] = [obj.Proxy.inspection(obj) for obj in earlier]
+            echoed["prior"] = prior_expression(earlier)
+        return MeasureRequest("measure_until_decided", arguments, echoed)
 
     def stored(self):
         """The values to keep for the next measurement."""
@@ -158,20 +229,23 @@ def ask_measurement(points):
 
     doc = points.Document
     folder = os.path.dirname(doc.FileName) if doc.FileName else os.path.expanduser("~")
+    source = getattr(points, "Source", None)
+    part = source[0] if source and getattr(source[0], "Shape", None) is not None else None
+    earlier = [obj for obj in doc.Objects if is_measured_points(obj)]
     dialog = MeasureDialog(points.Label, os.path.join(folder, f"{points.Name}_measured.csv"),
-                           FreeCADGui.getMainWindow(), one_face=not is_part_plan(points))
+                           FreeCADGui.getMainWindow(), one_face=not is_part_plan(points), part=part, earlier=earlier)
     return asked(dialog, MeasureDialog.request)
 
 
 def measurement_call(points, request):
     """The echoed line: ``run = cmmsampling.measure(<points>, 'host:port', 'file'[, tool=...])``,
     or ``run = cmmsampling.measure_until_decided(<points>, 'host:port', t, u, 'file', risk=...
-    [, tool=...])``."""
+    [, datums=[...]][, prior=[...]][, tool=...])``."""
     arguments = request.arguments
     words = [f"App.getDocument({points.Document.Name!r}).getObject({points.Name!r})", repr(arguments["server"])]
     if request.until_decided:
         words += [repr(arguments["tolerance"]), repr(arguments["uncertainty"]), repr(arguments["out"]),
-                  f"risk={arguments['risk']!r}"]
+                  f"risk={arguments['risk']!r}"] + [f"{name}={text}" for name, text in request.echoed.items()]
     else:
         words.append(repr(arguments["out"]))
     if arguments["tool"] is not None:

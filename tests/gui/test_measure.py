@@ -13,9 +13,9 @@ from cmmsampling import document
 from cmmsampling.document.object_types import is_measured_points
 from cmmsampling.gui import commands, inspect_dialog, measure_dialog
 
-from PySide import QtGui
+from PySide import QtCore, QtGui
 
-from .helpers import dock_text, handle_dialog, main_window, process_events, wait_until
+from .helpers import document_with, dock_text, handle_dialog, main_window, process_events, wait_until
 
 MISPLACED = {"rz": 0.5, "x": 0.8}
 
@@ -152,3 +152,74 @@ def test_measure_until_decided_stops_on_the_verdict_and_adds_its_inspection(poin
     process_events(0.3)
     FreeCADGui.ActiveDocument.ActiveView.saveImage(os.path.join(artifacts, "measured_until_decided.png"), 1000, 750,
                                                    "White")
+
+
+@pytest.fixture
+def block(workbench):
+    import Part
+
+    yield from document_with("GuiBlock", {"Block": Part.makeBox(60, 40, 20)})
+
+
+def test_measure_until_decided_on_datums_with_an_earlier_part(block, tmp_path, artifacts):
+    """A block's top 0.03 mm high, judged on datums Face5 | Face3 | Face1 (bottom, front, left)
+    typed in the dialog, with an earlier part's inspection checked: the datum points come first,
+    the echo names the datums and the earlier part (the run handed over, not measured again), and
+    the inspection added fails; a face the block does not have is refused in one line."""
+    from cmmsampling.cmm.server import SimulatedCMM, VirtualPart
+    from cmmsampling.geometry.validation import InputError
+    from cmmsampling.inspection.simulate import Misplacement
+
+    doc, part = block, block.Block
+    names = {tuple(np.round(face.normalAt(0.5, 0.5), 6)): f"Face{k}" for k, face in enumerate(part.Shape.Faces, 1)}
+    top, frame = names[(0.0, 0.0, 1.0)], [names[(0.0, 0.0, -1.0)], names[(0.0, -1.0, 0.0)], names[(-1.0, 0.0, 0.0)]]
+    result = cmmsampling.sample(part.Shape.getElement(top), 16, "halton", occ_check=False)
+    points = document.add_to_document(result, doc, source=(part, top)).Group[0]
+    cmmsampling.simulate_measurement(result, tmp_path / "earlier.csv", form_error=0.004, noise=0.0005, seed=1)
+    cmmsampling.add_inspection_to_document(cmmsampling.inspect(points, tmp_path / "earlier.csv"), doc, source=points)
+    [earlier] = [o for o in doc.Objects if is_measured_points(o)]
+    out = str(tmp_path / "decided.csv")
+
+    def form(touched):
+        high = touched[:, 2] > 20.0 - 1e-6
+        return np.where(high, 0.03 + 0.005 * np.sin(touched[:, 0] / 8.0) * np.cos(touched[:, 1] / 6.0), 0.0)
+
+    placed = Misplacement(x=0.3, y=-0.2, rz=0.1).matrix(np.array([30.0, 20.0, 10.0]))
+    seen = {}
+    with SimulatedCMM(VirtualPart(form, placed, 0.0005, np.random.default_rng(2))) as cmm:
+        port = int(cmm.address.rsplit(":", 1)[1])
+
+        def choose(dialog):
+            dialog.port.setValue(port)
+            dialog.path.setText(out)
+            dialog.until.setChecked(True)
+            dialog.tolerance.setValue(0.05)
+            dialog.uncertainty.setValue(0.0005)
+            dialog.datums.setText("Face99")
+            with pytest.raises(InputError, match="Block has no face 'Face99'"):
+                dialog.datum_names()
+            dialog.datums.setText(", ".join(frame))
+            seen["earlier"] = [dialog.earlier.item(row).text() for row in range(dialog.earlier.count())]
+            dialog.earlier.item(0).setCheckState(QtCore.Qt.Checked)
+            dialog.grab().save(os.path.join(artifacts, "measure_until_decided_datums_dialog.png"))
+            dialog.accept()
+
+        console = dock_text("Python console")
+        measure_with(points, choose, timeout_s=240)
+        served = cmm.connections
+    assert seen["earlier"] == [f"{earlier.getParentGroup().Label}: {earlier.Label} (16 points)"]
+    assert served == 1, "the echoed call did not measure a second time"
+    echoed = dock_text("Python console")[len(console):]
+    shape = f"App.getDocument({doc.Name!r}).getObject('Block').Shape"
+    assert "datums=[" + ", ".join(f"{shape}.getElement({name!r})" for name in frame) + "]" in echoed
+    assert f"prior=[App.getDocument({doc.Name!r}).getObject({earlier.Name!r}).Proxy.inspection(" in echoed
+    labels = cmmsampling.read_points(out).labels
+    assert labels[:14] == [f"D{label}{k}" for label, count in (("A", 6), ("B", 4), ("C", 4))
+                           for k in range(1, count + 1)], "the datum points first"
+    assert wait_until(lambda: "does not conform after" in dock_text("Report view"), 2)
+    [decided] = [o for o in doc.Objects if is_measured_points(o) and o is not earlier]
+    assert decided.Verdict == "FAIL" and decided.Profile.Value > 0.06
+    FreeCADGui.SendMsgToActiveView("ViewFit")
+    process_events(0.3)
+    FreeCADGui.ActiveDocument.ActiveView.saveImage(os.path.join(artifacts, "measured_until_decided_datums.png"),
+                                                   1000, 750, "White")
