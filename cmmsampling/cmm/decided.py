@@ -46,6 +46,10 @@ CANDIDATES = 400
 FIRST = FEWEST_POINTS
 COVERAGE = 2.0
 RISK = 0.05
+# A run stops undecided when this many points in a row have moved neither probability by more
+# than STALL_MOVE: what is left is what the points cannot settle.
+STALL_POINTS = 24
+STALL_MOVE = 0.02
 
 
 @dataclass
@@ -312,12 +316,25 @@ class _Rules:
             if len(self.rows) >= limit:
                 self.stopped = f"undecided at the limit of {limit} points"
                 return
+            if self._stalled():
+                self.stopped = (f"undecided: {STALL_POINTS} more points left P(conforms) at {found.p_conform:.2f} "
+                                "(within a few hundredths); what would decide it, a profile within U of t or an "
+                                "error where the probe cannot touch, the points cannot settle")
+                return
             row = next_row(self.places, found, np.array(self.rows), self.rows[-1],
                            found.decision(self.limits.risk) == "does not conform",
                            None if self.moves is None else self._travel)
             self.rows.append(row)
             yield self.lead + row, (f"point {len(self.rows)} of at most {limit}: P(conforms) {found.p_conform:.3f}, "
                                     f"P(does not conform) {found.p_nonconform:.3f}")
+
+    def _stalled(self) -> bool:
+        """True when the last STALL_POINTS points moved neither probability by more than
+        STALL_MOVE."""
+        if len(self.history) <= STALL_POINTS:
+            return False
+        recent = np.array(self.history[-STALL_POINTS - 1:])[:, 1:]
+        return bool((np.ptp(recent, axis=0) <= STALL_MOVE).all())
 
     def _travel(self, last: int) -> np.ndarray:
         """(M,) mm: the probe's travel along its moves from place last to every place (inf where
@@ -342,6 +359,10 @@ class _Rules:
         decision = found.decision(limits.risk)
         seen = float(minimum_zones(d[None], self.places.rigid[rows])[0][0])
         if decision is None and seen - guard <= limits.tolerance:
+            within = 1.0 - found.p_conform - found.p_nonconform
+            if within >= 1.0 - limits.risk:
+                return found, (f"undecided: the profile lies within U of t with probability {within:.3f} >= "
+                               f"{1 - limits.risk:g}, where ISO 14253-1 decides neither way")
             return found, None
         profile = self._judge(journal.measured()).profile
         if profile - guard > limits.tolerance:

@@ -98,6 +98,35 @@ def test_a_part_whose_profile_is_the_tolerance_is_not_decided(reference, places,
     assert max(found.p_conform, found.p_nonconform) < 0.95
 
 
+def test_a_part_within_u_of_the_tolerance_stops_as_undecided_once_the_belief_says_so(reference, places, tmp_path):
+    """t set to the part's true profile and U = 2 um: ISO 14253-1 decides neither way, and the run
+    stops, undecided, once the belief puts the profile within U of t with probability 1 - risk,
+    long before every place is touched."""
+    part, form = made(places, 0.045)
+    truth = true_profile(reference, form)
+    with SimulatedCMM(part) as cmm:
+        found = measure_until_decided(reference, cmm.address, truth, 0.001, tmp_path / "m.csv")
+    assert found.decision is None and found.stopped.startswith("undecided: the profile lies within U of t with "
+                                                               "probability"), found.stopped
+    assert 1.0 - found.p_conform - found.p_nonconform >= 0.95
+    assert found.points < int(places.touchable.sum()) / 2
+
+
+def test_a_run_whose_probabilities_stall_stops_undecided():
+    """The rule for a verdict the points cannot settle (e.g. an error only where the probe cannot
+    touch): STALL_POINTS points that moved neither probability by more than STALL_MOVE."""
+    from cmmsampling.cmm.decided import STALL_MOVE, STALL_POINTS, _Limits, _Rules
+
+    rules = _Rules(None, None, np.array([], dtype=int), _Limits(TOLERANCE, 0.0, 0.05, 500, 0))
+    flat = [(FIRST + k, 0.6 + 0.4 * STALL_MOVE * np.sin(k), 0.2) for k in range(STALL_POINTS + 1)]
+    rules.history = flat[:-1]
+    assert not rules._stalled(), "too few points yet"
+    rules.history = flat
+    assert rules._stalled()
+    rules.history = flat[:-1] + [(FIRST + STALL_POINTS, 0.6 + 2 * STALL_MOVE, 0.2)]
+    assert not rules._stalled(), "a probability that moved"
+
+
 def test_a_dropped_connection_keeps_the_points_measured(reference, tmp_path):
     with pytest.raises(MeasurementStopped, match="the CMM closed the connection during|the connection to the CMM was "
                                                  "lost during") as caught:
