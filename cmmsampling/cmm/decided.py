@@ -159,12 +159,11 @@ def measure_until_decided(source: Any, server: str, tolerance: float, uncertaint
     datum reference frame (Datums, or faces: Part.Faces or names of part's faces, A, B, C in
     order, primary first): their faces are measured first (a plan's datum points, unless a
     Datum brings its points), and the face is judged in their frame, floated only in the
-    motions they leave free (the profile is location and form); edge_offset: mm
-    the points keep from the face's edges (None: a probe ball's radius and a margin, less on a
-    narrow face, as *Sample face* starts with: a point on an edge of a misplaced part lies
-    beyond it); candidates: about how many places the
-    points are chosen among; seed: the belief's random samples. Returns a DecidedRun;
-    InputError before connecting for bad arguments."""
+    motions they leave free (the profile is location and form); edge_offset: mm the points
+    keep from the face's edges (None: a probe ball's radius and a margin, less on a narrow
+    face, as *Sample face* starts with: a point on an edge of a misplaced part lies beyond it);
+    candidates: about how many places the points are chosen among; seed: the belief's random
+    samples. Returns a DecidedRun; InputError before connecting for bad arguments."""
     tolerance = check_real("tolerance", tolerance, above=0.0)
     uncertainty = check_real("uncertainty", uncertainty, minimum=0.0)
     risk = check_real("risk", risk, above=0.0)
@@ -185,19 +184,27 @@ def measure_until_decided(source: Any, server: str, tolerance: float, uncertaint
     else:
         places, first = _with_series(places, uv, series_model(face, prior))
     limit = _points_limit(max_points, int(places.touchable.sum()))
-    lead = PointSet([], np.empty((0, 3)), np.empty((0, 3))) if frame is None else frame.point_set()
-    labels = list(lead.labels) + [f"C{row + 1}" for row in range(len(places))]
-    planned = PointSet(labels, np.vstack([lead.points, places.points]), np.vstack([lead.normals, places.normals]),
-                       metadata={"source": "measure until decided"})
-    moves = None
-    if reachability is not None and axes is not None:
-        lead_axes = np.empty((0, 3)) if frame is None else frame.axes()
-        moves = StepMoves(reachability.probe, reachability.obstacles, planned.points, planned.normals,
-                          np.vstack([lead_axes, axes]))
+    planned, moves = _planned(places, frame, reachability, axes)
     rules = _Rules(face, places, first, _Limits(tolerance, uncertainty, risk, limit, seed), moves, frame)
     run = run_session(link, planned, None if moves is None else moves.leg,
                       0.0 if moves is None else moves.probe.radius, tool, progress, rules.order, chosen=True)
     return rules.result(run)
+
+
+def _planned(places: Candidates, frame: RunFrame | None, reachability: Reachability | None,
+             axes: np.ndarray | None) -> tuple[PointSet, StepMoves | None]:
+    """(the PointSet the run may touch: the frame's datum points, then the places labelled
+    C1 ...; the collision-free StepMoves among them where the probe's reachability and the
+    places' axes (M, 3) are given, else None)."""
+    lead = PointSet([], np.empty((0, 3)), np.empty((0, 3))) if frame is None else frame.point_set()
+    labels = list(lead.labels) + [f"C{row + 1}" for row in range(len(places))]
+    planned = PointSet(labels, np.vstack([lead.points, places.points]), np.vstack([lead.normals, places.normals]),
+                       metadata={"source": "measure until decided"})
+    if reachability is None or axes is None:
+        return planned, None
+    lead_axes = np.empty((0, 3)) if frame is None else frame.axes()
+    return planned, StepMoves(reachability.probe, reachability.obstacles, planned.points, planned.normals,
+                              np.vstack([lead_axes, axes]))
 
 
 def _inward(uv: np.ndarray, centre: np.ndarray, inside: Callable[[np.ndarray], np.ndarray],

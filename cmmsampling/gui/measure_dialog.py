@@ -1,8 +1,9 @@
 """*Measure on CMM...*: the I++ DME server (host, port), the tool and the file for the measured
 points, asked in a small dialog, and whether to touch every planned point or, on one face's
 probe points, only until the verdict is decided (its tolerance, the probing's uncertainty, the
-risk of a wrong verdict, the datums among the part's faces and the earlier parts of the series). The measurement runs in the background behind a progress dialog
-(the point under way, Cancel) and is echoed as ``run = cmmsampling.measure(...)`` or
+risk of a wrong verdict, the datums among the part's faces and the earlier parts of the
+series). The measurement runs in the background behind a progress dialog (the point under
+way, Cancel) and is echoed as ``run = cmmsampling.measure(...)`` or
 ``run = cmmsampling.measure_until_decided(...)`` (handed over: cmmsampling.gui.handover, so the
 echo does not move the machine again). Every planned point measured ends in *Inspect measured
 points...* with the file it wrote; a run until decided ends in its own inspection, made in the
@@ -148,8 +149,8 @@ class MeasureDialog(QtGui.QDialog):
         layout.addRow("Earlier parts", self.earlier)
 
     def _decision_enabled(self, on):
-        for field in (self.tolerance, self.uncertainty, self.risk, self.earlier):
-            field.setEnabled(on)
+        for widget in (self.tolerance, self.uncertainty, self.risk, self.earlier):
+            widget.setEnabled(on)
         self.datums.setEnabled(on and self.part is not None)
 
     def datum_names(self):
