@@ -305,12 +305,16 @@ class StepMoves:
 
     probe: the Probe; obstacles: the part (Obstacles); points, normals, axes: (N, 3) mm, unit,
     unit: the places and the probe's axis at each (:func:`cmmsampling.access.reach.reach`; NaN
-    rows where it reaches none, which no move may go to). All positions are ball centres, mm.
+    rows where it reaches none, which no move may go to); motion: the CMM's speeds and an
+    indexing head's index time (default Motion()): a change of the head's orientation counts as
+    that much travel, as :func:`moves_through` counts it. All positions are ball centres, mm.
     """
 
     def __init__(self, probe: Probe, obstacles: Obstacles, points: np.ndarray, normals: np.ndarray,
-                 axes: np.ndarray) -> None:
+                 axes: np.ndarray, motion: Motion | None = None) -> None:
         self.probe, self.obstacles = probe, obstacles
+        motion = motion or Motion()
+        self.index_length = motion.index_time * motion.move_speed if probe.index_step is not None else 0.0
         self.axes = np.asarray(axes, dtype=float).reshape(-1, 3)
         points, normals = (np.asarray(v, dtype=float).reshape(-1, 3) for v in (points, normals))
         self.ready = probe.stations(points, normals)[1]
@@ -334,8 +338,9 @@ class StepMoves:
 
     def lengths(self, last: int, rows: np.ndarray) -> np.ndarray:
         """(R,) mm: the travel from row last's ready position to each of rows (R,) int: straight
-        where that keeps the clearance, else out along the axis, over the clearance plane and in;
-        inf at rows the probe does not reach."""
+        where that keeps the clearance, else out along the axis, over the clearance plane and in,
+        plus the index move's equivalent where the head turns; inf at rows the probe does not
+        reach."""
         rows = np.asarray(rows, dtype=int)
         lengths = np.full(len(rows), np.inf)
         open_ = np.flatnonzero(self.reachable[rows])
@@ -345,7 +350,8 @@ class StepMoves:
         out = np.linalg.norm(self.exits - self.ready, axis=1) + np.linalg.norm(self.above - self.exits, axis=1)
         detour = out[last] + out[targets] + np.linalg.norm(self.above[targets] - self.above[last], axis=1)
         straight = np.linalg.norm(self.ready[targets] - self.ready[last], axis=1)
-        lengths[open_] = np.where(self._direct(last, targets), straight, detour)
+        turns = np.abs(self.axes[targets] @ np.nan_to_num(self.axes[last]) - 1.0) >= AXIS_TOLERANCE
+        lengths[open_] = np.where(self._direct(last, targets), straight, detour) + self.index_length * turns
         return lengths
 
     def leg(self, last: int | None, row: int) -> np.ndarray:
