@@ -26,6 +26,7 @@ from cmmsampling.cmm.server import SimulatedCMM, VirtualPart
 from cmmsampling.fitting.series import greedy_design
 from cmmsampling.formats.qif.schema import schema_errors
 from cmmsampling.geometry.validation import InputError
+from cmmsampling.inspection.datums import Datum
 from cmmsampling.inspection.simulate import Misplacement, form_waves
 from cmmsampling.strategies.sampling import probe_edge_offset
 
@@ -296,7 +297,8 @@ def test_a_face_judged_on_datums_is_measured_after_them_and_its_location_counts(
     """A block's top face 0.03 mm too high, with 5 um waves, misplaced on the table: without
     datums its form conforms; on datums A | B | C (bottom, front, left: their points measured
     first, as a plan's) its profile holds the height, twice 0.035 mm, and it does not conform. A
-    top only 0.012 mm high conforms on the datums. The true profiles: twice the largest error over
+    top only 0.012 mm high conforms on the datums, also where datum A brings its own points (six
+    contacts on the bottom, measured before: only B and C are measured). The true profiles: twice the largest error over
     a raster of the top (the datum faces are exact, so the frame is the nominal)."""
     import Part
 
@@ -327,6 +329,14 @@ def test_a_face_judged_on_datums_is_measured_after_them_and_its_location_counts(
             assert [fit.label for fit in run.inspection.datums] == ["A", "B", "C"]
             assert abs(run.inspection.profile - truth) < 0.01 and run.points == len(labels) - 14
     assert found[0.03, True].decision == "conforms", "the form alone is within t"
+    bottom = np.array([(x, y, 0.0) for x in (5.0, 30.0, 55.0) for y in (5.0, 35.0)])   # the last form's part
+    own = Datum("A", frame[0], points=bottom @ placed[:3, :3].T + placed[:3, 3])
+    with SimulatedCMM(VirtualPart(form, placed, NOISE_MM, np.random.default_rng(2))) as cmm:
+        run = measure_until_decided(top, cmm.address, TOLERANCE, NOISE_MM, tmp_path / "own.csv",
+                                    datums=[own, Datum("B", frame[1]), Datum("C", frame[2])], max_points=40)
+    labels = cmmsampling.read_points(tmp_path / "own.csv").labels
+    assert labels[:8] == [f"D{label}{k}" for label in "BC" for k in range(1, 5)], "datum A brought its points"
+    assert run.decision == "conforms" and [fit.label for fit in run.inspection.datums] == ["A", "B", "C"]
     report = cmmsampling.export(found[0.03, False], tmp_path / "results.qif")
     written = open(tmp_path / "results.qif", encoding="utf-8").read()
     assert schema_errors(written) == [] and "DatumReferenceFrame" in written and "DA1" in written
