@@ -382,14 +382,18 @@ class _Rules:
                            f"agree (profile {profile:.4f} mm)")
         return found, None
 
-    def _judge(self, measured: PointSet, **options: Any) -> Inspection:
-        """cmmsampling.inspect of measured points (a PointSet of the run's, datum points included)
-        on the face with the run's tolerance, in the frame's datums where there is one; options:
-        inspect's others."""
+    def _judge(self, measured: PointSet | os.PathLike, **options: Any) -> Inspection:
+        """cmmsampling.inspect of measured points (a PointSet of the run's, or its file; datum
+        points included) on the face with the run's tolerance, in the frame's datums where there
+        is one (a file's name kept as the inspection's measured file); options: inspect's others."""
         if self.frame is None:
             return inspect(self.face, measured, tolerance=self.limits.tolerance, **options)
-        toleranced, datums = self.frame.measured(measured)
-        return inspect(self.face, toleranced, tolerance=self.limits.tolerance, datums=datums, **options)
+        read = measured if isinstance(measured, PointSet) else read_points(measured)
+        toleranced, datums = self.frame.measured(read)
+        found = inspect(self.face, toleranced, tolerance=self.limits.tolerance, datums=datums, **options)
+        if not isinstance(measured, PointSet):
+            found.measured_file = os.fspath(measured)
+        return found
 
     def _deviations(self, journal: Journal) -> tuple[np.ndarray, np.ndarray]:
         """(places measured (n,), their deviations (n,) mm along the nominal normals; in the
@@ -408,7 +412,7 @@ class _Rules:
         """cmmsampling.inspect of the measured file on the face with the run's tolerance and u
         (its expanded uncertainty and decision where u is given; in the datum frame where there is
         one), progress as it takes it."""
-        return self._judge(read_points(measured), uncertainty=self.limits.uncertainty or None,
+        return self._judge(measured, uncertainty=self.limits.uncertainty or None,
                            seed=self.limits.seed, progress=progress)
 
     def result(self, run: MeasuredRun) -> DecidedRun:

@@ -79,6 +79,7 @@ def test_the_verdict_is_the_true_profiles_with_few_points(reference, places, amp
     assert FIRST <= found.points <= 3 * FIRST < len(places) / 10
     measured = cmmsampling.read_points(tmp_path / "m.csv")
     assert len(measured) == found.points and found.history[-1][0] == found.points
+    assert found.inspection.measured_file == str(tmp_path / "m.csv")
     assert found.inspection.profile <= truth + 4 * NOISE_MM, "the measured points' zone within the whole face's"
     report = cmmsampling.export(found, tmp_path / "results.qif")
     assert schema_errors(open(tmp_path / "results.qif", encoding="utf-8").read()) == []
@@ -328,6 +329,7 @@ def test_a_face_judged_on_datums_is_measured_after_them_and_its_location_counts(
                                    for k in range(1, count + 1)], "the datum points first"
             assert [fit.label for fit in run.inspection.datums] == ["A", "B", "C"]
             assert abs(run.inspection.profile - truth) < 0.01 and run.points == len(labels) - 14
+            assert run.inspection.measured_file == str(tmp_path / "m.csv")
     assert found[0.03, True].decision == "conforms", "the form alone is within t"
     bottom = np.array([(x, y, 0.0) for x in (5.0, 30.0, 55.0) for y in (5.0, 35.0)])   # the last form's part
     own = Datum("A", frame[0], points=bottom @ placed[:3, :3].T + placed[:3, 3])
