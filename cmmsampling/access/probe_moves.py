@@ -92,9 +92,7 @@ def moves_through(probe: Probe, obstacles: Obstacles, points: np.ndarray, normal
     points, normals, axes = (np.asarray(v, dtype=float).reshape(-1, 3) for v in (points, normals, axes))
     motion = motion or Motion()
     centres, ready = probe.stations(points, normals)
-    exits = obstacles.exits(ready, axes, probe.radius + probe.clearance)[1]
-    plane = obstacles.box[1, 2] + probe.radius + probe.clearance
-    above = np.column_stack([exits[:, :2], np.maximum(exits[:, 2], plane)])
+    exits, above = _clearance_positions(probe, obstacles, ready, axes)
     direct = _direct_moves(probe, obstacles, ready, axes)
     lengths = _travel_lengths(ready, exits, above, direct)
     ends = _end_lengths(ready, exits, above)
@@ -124,6 +122,21 @@ def moves_through(probe: Probe, obstacles: Obstacles, points: np.ndarray, normal
     seconds = motion.seconds(travel, len(points), probe.approach, changes if indexing else 0)
     return ProbeMoves(order, waypoints, kinds, travel, straight, baseline, detours, seconds, ready, legs,
                       int(labels.max(initial=-1)) + 1, changes)
+
+
+def _clearance_positions(probe: Probe, obstacles: Obstacles, ready: np.ndarray,
+                         axes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(exits, above) (N, 3) mm of ready positions (N, 3) on axes (N, 3): where the probe leaves
+    the part's box (grown by the ball radius and the clearance) along its axis, and that point
+    raised to the clearance plane above the box."""
+    grow = probe.radius + probe.clearance
+    exits = obstacles.exits(ready, axes, grow)[1]
+    return exits, np.column_stack([exits[:, :2], np.maximum(exits[:, 2], obstacles.box[1, 2] + grow)])
+
+
+def _same_axis(axes: np.ndarray, axis: np.ndarray) -> np.ndarray:
+    """(R,) bool: which of axes (R, 3) unit are axis (3,) (NaN rows: none)."""
+    return np.abs(axes @ np.nan_to_num(axis) - 1.0) < AXIS_TOLERANCE
 
 
 def _end_lengths(ready: np.ndarray, exits: np.ndarray, above: np.ndarray) -> np.ndarray:
@@ -319,15 +332,14 @@ class StepMoves:
         points, normals = (np.asarray(v, dtype=float).reshape(-1, 3) for v in (points, normals))
         self.ready = probe.stations(points, normals)[1]
         self.reachable = np.isfinite(self.axes).all(axis=1)
-        grow = probe.radius + probe.clearance
-        self.exits = self.ready.copy()
-        self.exits[self.reachable] = obstacles.exits(self.ready[self.reachable], self.axes[self.reachable], grow)[1]
-        plane = obstacles.box[1, 2] + grow
-        self.above = np.column_stack([self.exits[:, :2], np.maximum(self.exits[:, 2], plane)])
+        self.exits, self.above = self.ready.copy(), self.ready.copy()
+        self.exits[self.reachable], self.above[self.reachable] = _clearance_positions(
+            probe, obstacles, self.ready[self.reachable], self.axes[self.reachable])
+        self.out = _end_lengths(self.ready, self.exits, self.above)
 
     def _direct(self, last: int, rows: np.ndarray) -> np.ndarray:
         """(R,) bool: rows a straight move from row last reaches keeping the clearance."""
-        same = np.abs(self.axes[rows] @ np.nan_to_num(self.axes[last]) - 1.0) < AXIS_TOLERANCE
+        same = _same_axis(self.axes[rows], self.axes[last])
         direct = np.zeros(len(rows), dtype=bool)
         if same.any():
             ends = self.ready[rows[same]]
@@ -347,10 +359,9 @@ class StepMoves:
         if not open_.size:
             return lengths
         targets = rows[open_]
-        out = np.linalg.norm(self.exits - self.ready, axis=1) + np.linalg.norm(self.above - self.exits, axis=1)
-        detour = out[last] + out[targets] + np.linalg.norm(self.above[targets] - self.above[last], axis=1)
+        detour = self.out[last] + self.out[targets] + np.linalg.norm(self.above[targets] - self.above[last], axis=1)
         straight = np.linalg.norm(self.ready[targets] - self.ready[last], axis=1)
-        turns = np.abs(self.axes[targets] @ np.nan_to_num(self.axes[last]) - 1.0) >= AXIS_TOLERANCE
+        turns = ~_same_axis(self.axes[targets], self.axes[last])
         lengths[open_] = np.where(self._direct(last, targets), straight, detour) + self.index_length * turns
         return lengths
 
