@@ -196,7 +196,7 @@ def _planned(places: Candidates, frame: RunFrame | None, reachability: Reachabil
     """(the PointSet the run may touch: the frame's datum points, then the places labelled
     C1 ...; the collision-free StepMoves among them where the probe's reachability and the
     places' axes (M, 3) are given, else None)."""
-    lead = PointSet([], np.empty((0, 3)), np.empty((0, 3))) if frame is None else frame.point_set()
+    lead = PointSet([], np.empty((0, 3)), np.empty((0, 3))) if frame is None else frame.lead
     labels = list(lead.labels) + [f"C{row + 1}" for row in range(len(places))]
     planned = PointSet(labels, np.vstack([lead.points, places.points]), np.vstack([lead.normals, places.normals]),
                        metadata={"source": "measure until decided"})
@@ -297,7 +297,7 @@ class _Rules:
                  moves: StepMoves | None = None, frame: RunFrame | None = None) -> None:
         self.face, self.places, self.first, self.moves, self.frame = face, places, first, moves, frame
         self.limits = limits
-        self.lead = 0 if frame is None else len(frame.point_set())
+        self.lead = 0 if frame is None else len(frame.lead)
         self.transform: np.ndarray | None = None
         self.rows: list[int] = []
         self.found: Belief | None = None

@@ -9,6 +9,7 @@ points are brought into the frame by cmmsampling.inspect's association of the da
 """
 from __future__ import annotations
 
+import functools
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from typing import Any, cast
@@ -41,7 +42,8 @@ class RunFrame:
     free: np.ndarray
     pivot: np.ndarray
 
-    def point_set(self) -> PointSet:
+    @functools.cached_property
+    def lead(self) -> PointSet:
         """The points the run measures first: each datum's that brings none, labelled 'DA1' ..."""
         chosen = [(datum, points) for datum, points, own in zip(self.datums, self.planned, self.own) if not own]
         labels = [f"{DATUM_PREFIX}{datum.label}{k}" for datum, points in chosen
@@ -51,7 +53,7 @@ class RunFrame:
                         np.vstack([p.normals for p in stacked] or [np.empty((0, 3))]))
 
     def axes(self) -> np.ndarray:
-        """(D, 3) unit: the probe's axis at each of :meth:`point_set`'s points (NaN without a probe)."""
+        """(D, 3) unit: the probe's axis at each of :attr:`lead`'s points (NaN without a probe)."""
         rows = [np.full((len(points.points), 3), np.nan) if points.access is None
                 else np.asarray(cast(Access, points.access).axes)
                 for points, own in zip(self.planned, self.own) if not own]

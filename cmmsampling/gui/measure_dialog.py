@@ -27,7 +27,7 @@ from ..formats.exporting import along_moves, as_point_set
 from . import icon
 from .background import BackgroundTask, behind_progress
 from .echo import prior_expression
-from .panels.fields import add_checkable, checked_data
+from .panels.fields import add_inspections, checked_data
 from .qt_compat import asked, browse_row
 
 DEFAULTS = {"MeasureHost": "127.0.0.1", "MeasurePort": DEFAULT_PORT, "MeasureTool": "",
@@ -138,13 +138,7 @@ class MeasureDialog(QtGui.QDialog):
         self.earlier.setObjectName("earlier")
         self.earlier.setToolTip("Inspections of earlier parts of the series on this face: the first points go where "
                                 "they leave the least unknown, and the belief expects their repeated error")
-        for obj in earlier:
-            group = obj.getParentGroup()
-            where = f"{group.Label}: " if group is not None else ""
-            add_checkable(self.earlier, f"{where}{obj.Label} ({len(obj.Labels)} points)", obj.Name,
-                          obj.MeasuredFile or obj.Label)
-        if not earlier:
-            QtGui.QListWidgetItem("no inspection in this document", self.earlier)
+        add_inspections(self.earlier, list(earlier), "no inspection in this document")
         self.earlier.setMaximumHeight(90)
         layout.addRow("Earlier parts", self.earlier)
 

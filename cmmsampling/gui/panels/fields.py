@@ -43,6 +43,19 @@ def add_checkable(listing, text, data, tip):
     return item
 
 
+def add_inspections(listing, objects, empty):
+    """A checkable line per measured-points object of objects (its group's label, its label and
+    point count; tooltip: its measured file) in the QListWidget ``listing``, holding its Name;
+    the line ``empty`` (not checkable) where there is none."""
+    for obj in objects:
+        group = obj.getParentGroup()
+        where = f"{group.Label}: " if group is not None else ""
+        add_checkable(listing, f"{where}{obj.Label} ({len(obj.Labels)} points)", obj.Name,
+                      obj.MeasuredFile or obj.Label)
+    if not objects:
+        QtGui.QListWidgetItem(empty, listing)
+
+
 def checked_data(listing):
     """The data of the checked lines of the QListWidget ``listing``, in its order."""
     items = (listing.item(row) for row in range(listing.count()))

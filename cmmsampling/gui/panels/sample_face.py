@@ -27,7 +27,7 @@ from ..background import BackgroundSampling
 from ..selection import SelectionError, selected_face
 from .base import ERROR_STYLE, BackgroundRunPanel
 from .fields import (
-    AUTO, Fields, add_checkable, add_choice, checked_data, detached, edge_offset_argument, probe_choice, snap_to_auto,
+    AUTO, Fields, add_choice, add_inspections, checked_data, detached, edge_offset_argument, probe_choice, snap_to_auto,
     spacing_argument,
 )
 
@@ -190,14 +190,9 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
         self.form.priorParts = QtGui.QListWidget(self.form.priorGroup)
         self.form.priorParts.setObjectName("priorParts")
         self.form.priorParts.setToolTip(PRIOR_TIP)
-        for obj in self.source[0].Document.Objects if self.source is not None else []:
-            if is_measured_points(obj):
-                group = obj.getParentGroup()
-                where = f"{group.Label}: " if group is not None else ""
-                add_checkable(self.form.priorParts, f"{where}{obj.Label} ({len(obj.Labels)} points)", obj.Name,
-                              obj.MeasuredFile or obj.Label)
-        if not self.form.priorParts.count():
-            QtGui.QListWidgetItem("no inspection in this document: inspect earlier parts first", self.form.priorParts)
+        objects = self.source[0].Document.Objects if self.source is not None else []
+        add_inspections(self.form.priorParts, [obj for obj in objects if is_measured_points(obj)],
+                        "no inspection in this document: inspect earlier parts first")
         self.form.priorParts.setMaximumHeight(PRIOR_LIST_HEIGHT)
         layout.addWidget(self.form.priorParts)
         main = self.form.layout()
