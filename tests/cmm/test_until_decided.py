@@ -330,6 +330,8 @@ def test_a_face_judged_on_datums_is_measured_after_them_and_its_location_counts(
             assert [fit.label for fit in run.inspection.datums] == ["A", "B", "C"]
             assert abs(run.inspection.profile - truth) < 0.01 and run.points == len(labels) - 14
             assert run.inspection.measured_file == str(tmp_path / "m.csv")
+            if checker() is not None:
+                assert check_commands(run.run.commands, str(tmp_path)) == []
     assert found[0.03, True].decision == "conforms", "the form alone is within t"
     bottom = np.array([(x, y, 0.0) for x in (5.0, 30.0, 55.0) for y in (5.0, 35.0)])   # the last form's part
     own = Datum("A", frame[0], points=bottom @ placed[:3, :3].T + placed[:3, 3])
