@@ -9,12 +9,15 @@ plain HTTP transport, and the branch's zip archive where a git host keeps it. Th
 on 127.0.0.1 and the add-on installed the way the Addon Manager installs a custom repository
 ``http://127.0.0.1:<port>/cmmsampling`` with branch ``main``: FreeCAD 1.0 clones it with git, 1.1
 downloads the zip archive (it uses git only for add-ons named in its ``force_git_in_repos``
-preference). The Addon Manager's fetch of its Python allow-list from GitHub is skipped (CI may
-have no internet). Exit code 0 when the add-on was installed into the user's Mod folder, its
-package.xml gives the Python dependencies numpy, scipy and matplotlib, none of them is missing,
+preference). The installer is given the allow-list of Python packages this FreeCAD ships (its
+fetch of the newest one from GitHub is skipped: CI may have no internet). Exit code 0 when the
+add-on was installed into the user's Mod folder, its package.xml gives the Python dependencies
+numpy, scipy, matplotlib and lxml (all on the allow-list) and the optional threadpoolctl and
+distributed, none of them is missing,
 a new ``freecadcmd``, started in the temporary folder, loads the installed copy (its Init.py
 registers the DMIS export), and the copy's tests/installed_smoke.py passes there (a PSO whose
-second process takes part, a document, a killed worker, a 2-face plan).
+second process takes part, a document exported as DMIS and QIF, a killed worker, a 2-face plan,
+and with lxml hidden QIF refused in one line and DMIS written).
 """
 import functools
 import http.server
@@ -24,13 +27,15 @@ import sys
 import tempfile
 import threading
 
+import addonmanager_installer
 import FreeCAD
 from Addon import Addon, MissingDependencies
 from addonmanager_installer import AddonInstaller
 
 NAME = "cmmsampling"
 BRANCH = "main"
-PYTHON_DEPENDENCIES = {"numpy", "scipy", "matplotlib"}
+PYTHON_DEPENDENCIES = {"numpy", "scipy", "matplotlib", "lxml"}
+OPTIONAL_DEPENDENCIES = {"threadpoolctl", "distributed"}
 LOAD_CHECK = """
 import os, FreeCAD, cmmsampling
 print(os.path.dirname(os.path.dirname(os.path.abspath(cmmsampling.__file__))))
@@ -51,10 +56,17 @@ def serve(folder):
     return f"http://127.0.0.1:{server.server_address[1]}"
 
 
+def allow_list():
+    """The Python packages this FreeCAD's Addon Manager installs (its own ALLOWED_PYTHON_PACKAGES.txt)."""
+    path = os.path.join(os.path.dirname(addonmanager_installer.__file__), "ALLOWED_PYTHON_PACKAGES.txt")
+    with open(path, encoding="utf-8") as handle:
+        return sorted({line.strip().lower() for line in handle if line.strip() and not line.startswith("#")})
+
+
 def install(url):
     """Install the add-on at ``url`` as the Addon Manager does; (addon, mod folder, errors)."""
     addon = Addon(NAME, url, Addon.Status.NOT_INSTALLED, BRANCH)
-    installer = AddonInstaller(addon, allow_list=sorted(PYTHON_DEPENDENCIES))
+    installer = AddonInstaller(addon, allow_list=allow_list())
     errors = []
     installer.failure.connect(lambda _, message: errors.append(message))
     if not installer.run():
@@ -101,8 +113,11 @@ def check():
     for name in ("package.xml", "Init.py", "InitGui.py", os.path.join(NAME, "__init__.py")):
         if not os.path.isfile(os.path.join(target, name)):
             problems.append(f"{name} is missing in {target}")
-    if addon.python_requires != PYTHON_DEPENDENCIES:
-        problems.append(f"package.xml's Python dependencies read as {sorted(addon.python_requires)}")
+    if addon.python_requires != PYTHON_DEPENDENCIES or addon.python_optional != OPTIONAL_DEPENDENCIES:
+        problems.append(f"package.xml's Python dependencies read as {sorted(addon.python_requires)}, optional "
+                        f"{sorted(addon.python_optional)}")
+    if not PYTHON_DEPENDENCIES <= set(allow_list()):
+        problems.append(f"the Addon Manager does not install {sorted(PYTHON_DEPENDENCIES - set(allow_list()))}")
     if missing_python_packages(addon):
         problems.append(f"the Addon Manager finds {missing_python_packages(addon)} missing")
     folder, init_ran = loaded_copy()

@@ -3,15 +3,18 @@
 temporary HOME's Mod folder.
 
 It samples the reference face with the paper's PSO on 2 processes (and checks that the second
-process answered and scored particles), adds the result to a document, saves, reopens and exports
-it, kills the worker in the middle of a second run (the run ends in this process, with the same
-points and a note), runs once more with a worker that cannot import the package, and plans 2
-faces of a box on 2 local processes. SIGPIPE is set to end the process, as FreeCAD 1.0 and 1.1
+process answered and scored particles), adds the result to a document, saves, reopens and
+exports it (DMIS, and QIF read back), kills the worker in the middle of a second run (the run
+ends in this process, with the same points and a note), runs once more with a worker that
+cannot import the package, and plans 2 faces of a box on 2 local processes; a new freecadcmd
+then runs the copy's tests/without_optional_packages.py (lxml hidden: QIF refused in one line,
+DMIS written). SIGPIPE is set to end the process, as FreeCAD 1.0 and 1.1
 leave it, so that a write to a dead worker would kill this process on every version. Each step
 prints one line starting with "ok"; any failure raises, and the process exits with 1.
 """
 import os
 import signal
+import subprocess
 import sys
 import tempfile
 import traceback
@@ -50,7 +53,21 @@ def document_round_trip(cmmsampling, result, folder):
     check(group is not None and len(points) == 1 and len(points[0].Points) == result.n, "saved and reopened")
     message = cmmsampling.export(points[0], os.path.join(folder, "installed.dmi"))
     check(os.path.getsize(os.path.join(folder, "installed.dmi")) > 0, f"exported: {str(message).splitlines()[0]}")
+    message = cmmsampling.export(points[0], os.path.join(folder, "installed.qif"))
+    check(len(cmmsampling.read_points(os.path.join(folder, "installed.qif"))) == result.n,
+          f"exported and read back: {str(message).splitlines()[0]}")
     FreeCAD.closeDocument(doc.Name)
+
+
+def without_optional_packages(cmmsampling):
+    """The copy's tests/without_optional_packages.py in a new freecadcmd: lxml, distributed and
+    threadpoolctl hidden, QIF and a Dask plan refused in one line, DMIS and CSV written."""
+    copy = os.path.dirname(os.path.dirname(os.path.abspath(cmmsampling.__file__)))
+    run = subprocess.run(["freecadcmd", os.path.join(copy, "tests", "without_optional_packages.py")],
+                         capture_output=True, text=True, timeout=300)
+    output = run.stdout + run.stderr
+    check(run.returncode == 0 and "without optional packages: passed" in output,
+          f"without lxml, distributed and threadpoolctl: {output[-2000:] if run.returncode else 'QIF refused'}")
 
 
 def worker_killed_mid_run(cmmsampling, parallel, face, expected):
@@ -100,6 +117,7 @@ def main():
         worker_killed_mid_run(cmmsampling, parallel, face, result)
         worker_cannot_import(cmmsampling, parallel, result, folder)
         plan_on_two_processes(cmmsampling)
+    without_optional_packages(cmmsampling)
     print("smoke run passed", flush=True)
 
 

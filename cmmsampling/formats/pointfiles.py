@@ -15,7 +15,8 @@ from ..geometry.validation import InputError, check_choice
 from . import csv_points, dmis, qif, xyzijk
 from .files import path_of, read_text
 from .pointset import PointSet
-from .registry import FORMATS, FileFormat, export_filter, extensions, register_format, unregister_format
+from .registry import (FORMATS, FileFormat, export_filter, extensions, register_format, require_packages,
+                       unregister_format)
 
 __all__ = ["FORMATS", "FileFormat", "READER_KEYS", "export_filter", "points_from_text", "read_points",
            "register_format", "resolve_format", "unregister_format"]
@@ -29,8 +30,17 @@ def resolve_format(path, format=None):
     """The format name for path: ``format`` if given, else from the extension (the registered
     formats' extensions).
 
-    ValueError listing the formats and their extensions when neither tells.
+    ValueError listing the formats and their extensions when neither tells; MissingPackage
+    naming the package and how to install it when the format needs one this Python lacks
+    (QIF: lxml).
     """
+    name = _format_name(path, format)
+    require_packages(FORMATS[name])
+    return name
+
+
+def _format_name(path, format):
+    """The registered format's name given, or of path's extension (see resolve_format)."""
     if format is not None:
         return check_choice("format", str(format).lower(), list(FORMATS))
     extension = os.path.splitext(os.fspath(path))[1].lower()

@@ -11,6 +11,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Protocol
 
 from ..geometry.validation import InputError, InputTypeError
+from ..runtime.packages import require
 
 if TYPE_CHECKING:   # for the annotations only: the formats' modules import this one
     import numpy as np
@@ -86,7 +87,9 @@ class FileFormat:
     differs from its planned one (DMIS output), else None (``write`` of the measured points);
     recognises: (the file's first line that is no comment, lower case without blanks) -> True
     where a file with one of its extensions is the format's own (its header), None for every
-    such file (a file not recognised is read as a labelled table of measured points).
+    such file (a file not recognised is read as a labelled table of measured points);
+    packages: the Python modules (keys of cmmsampling.runtime.packages.PACKAGES) it needs beyond
+    numpy and scipy, e.g. QIF's ("lxml",): without one, the format is refused in one line.
     """
 
     name: str
@@ -101,6 +104,7 @@ class FileFormat:
     measured: bool = False
     write_measured: MeasuredWriter | None = None
     recognises: Recogniser | None = None
+    packages: tuple[str, ...] = ()
 
     @property
     def patterns(self) -> str:
@@ -134,6 +138,19 @@ def unregister_format(name: str) -> None:
 def extensions() -> dict[str, str]:
     """{extension: format name} of every registered format."""
     return {extension: name for name, record in FORMATS.items() for extension in record.extensions}
+
+
+def require_packages(record: FileFormat) -> None:
+    """MissingPackage, in one line, when the format needs a Python package this Python cannot
+    import (its ``packages``); the message names the formats that work without it."""
+    for package in record.packages:
+        require(package, f"{record.title} files", formats_without(package))
+
+
+def formats_without(package: str) -> str:
+    """The formats that need no ``package``, in words: e.g. 'DMIS, XYZIJK and CSV files'."""
+    titles = [record.title for record in FORMATS.values() if package not in record.packages]
+    return f"{', '.join(titles[:-1])} and {titles[-1]} files" if len(titles) > 1 else "".join(titles) + " files"
 
 
 def measured_records() -> list[FileFormat]:

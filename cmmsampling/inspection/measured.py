@@ -22,6 +22,7 @@ from ..formats.pointset import PointSet
 from ..formats.registry import FORMATS
 from ..formats.text import number
 from ..geometry.validation import InputError
+from ..runtime.packages import MissingPackage
 from .columns import COORDINATES, header_columns
 from .text_report import is_text_report, read_text_report
 
@@ -62,9 +63,13 @@ def read_measured(path: str | os.PathLike) -> PointSet:
 def _project_format(path: str, text: str) -> str | None:
     """The name of the registered format that reads the file as its own (None for none): by its
     extension, and where the format tells its files by their header (``FileFormat.recognises``:
-    CSV's label,x,y,z,i,j,k, XYZIJK's), by the text's first line that is no comment."""
+    CSV's label,x,y,z,i,j,k, XYZIJK's), by the text's first line that is no comment.
+    MissingPackage when the format of its extension needs a package this Python lacks (QIF:
+    lxml), never a read as labelled text."""
     try:
         fmt = resolve_format(path, None)
+    except MissingPackage:
+        raise
     except InputError:
         return None
     recognises = FORMATS[fmt].recognises

@@ -34,6 +34,7 @@ from ..geometry.congruence import FacePrint, face_copies, raster, rigid_copy
 from ..geometry.freecad_env import import_part
 from ..geometry.surface import as_face
 from ..geometry.validation import InputError, InputTypeError, check_int, check_pair, check_real
+from ..runtime.packages import require
 from ..runtime.threads import blas_threads
 from ..strategies.estimates import duration_text, time_left_text
 from ..strategies.face_setup import reused, setup_of
@@ -408,6 +409,8 @@ def plan(shape_or_faces: Part.Shape | list, tolerance: float | Mapping[str, floa
     if (tolerance is None) == (n_total is None):
         raise InputError("give either tolerance= (mm, the deviation every face must meet) or n_total= "
                          "(the points of the whole part), not both or neither")
+    if scheduler is not None:
+        require("distributed", "Plans on a Dask cluster (scheduler=)", "plans on this machine's processes")
     named = named_faces(shape_or_faces, faces)
     datum_faces = _datum_faces(shape_or_faces, named, datums)
     named = [(name, face) for name, face in named if name not in dict(datum_faces)]

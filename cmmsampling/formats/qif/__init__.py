@@ -1,10 +1,9 @@
 """QIF 3.0 (ISO 23952, the Quality Information Framework): measurement plans (:mod:`.plan`) and
 inspection results (:mod:`.results`) written, points read back (:mod:`.read`), every document
-checked against the official schemas (:mod:`.schema`) before it is written where lxml is
-present."""
+checked against the official schemas (:mod:`.schema`, with lxml) before it is written."""
 from ..registry import FileFormat
 from . import plan, read, results
-from .schema import SchemaUnavailable, schema_errors
+from .schema import schema_errors
 
 
 class QIFSchemaError(RuntimeError):
@@ -12,12 +11,10 @@ class QIFSchemaError(RuntimeError):
 
 
 def checked(text):
-    """The document's text once the QIF 3.0 schemas accept it (unchecked without lxml);
-    QIFSchemaError naming the first complaint otherwise, so nothing is written."""
-    try:
-        errors = schema_errors(text)
-    except SchemaUnavailable:
-        return text
+    """The document's text once the QIF 3.0 schemas accept it; QIFSchemaError naming the first
+    complaint otherwise, so nothing is written (MissingPackage without lxml, SchemaUnavailable
+    without the schema files: nothing is written unchecked)."""
+    errors = schema_errors(text)
     if errors:
         raise QIFSchemaError(f"the QIF document does not pass the QIF 3.0 schemas ({errors[0]}); nothing was "
                              "written: please report this with the points")
@@ -50,4 +47,5 @@ FORMAT = FileFormat(
     read=read.read,
     contact_nominals=True,
     write_results=write_results,
+    packages=("lxml",),
 )

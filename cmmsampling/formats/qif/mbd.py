@@ -148,8 +148,8 @@ class MbdRecords(CharacteristicList):
 
 
 def read_mbd_records(path: str) -> MbdRecords:
-    """The PMI of the QIF 3.0 MBD document at ``path`` (checked by the QIF schemas where lxml is
-    present) as :class:`MbdRecords`; InputError naming the file and the problem when it is no
+    """The PMI of the QIF 3.0 MBD document at ``path`` (checked by the QIF schemas) as
+    :class:`MbdRecords`; InputError naming the file and the problem when it is no
     QIF document, holds no characteristics, or refers to an id it does not hold."""
     return records_of(parsed_file(path), path)
 

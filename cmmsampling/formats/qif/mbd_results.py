@@ -14,7 +14,7 @@ characteristics, datums and ids unchanged) with, added under fresh ids above its
   INDETERMINATE), NOT_CALCULATED where it has no value; the part's status as the inspection's.
 
 So the MBD's owner merges the results by the ids of the file they wrote. The document is
-checked against the official schemas where lxml is present (as every QIF file written here).
+checked against the official schemas (as every QIF file written here).
 """
 from __future__ import annotations
 

@@ -13,7 +13,8 @@ Measured points, in this order of preference:
 
 Points a CMM left uncompensated (``Compensated`` false, with a ``ProbeRadius``) are ball
 centres: the metadata states the radius (``probe_radius_mm``). A document that does not parse,
-is not QIF 3.0 or that the QIF 3.0 schemas refuse (where lxml can check) is refused in one line,
+is not QIF 3.0 or that the QIF 3.0 schemas refuse (lxml checks; without it no QIF file is read)
+is refused in one line,
 as is one whose data disagree with their counts: a point set's ``count``, a list's ``n``, a
 list of numbers that is no whole number of points, an id list of another length than the points,
 with an id twice or an id of no element, two point sets that share some planned points but not
@@ -30,7 +31,7 @@ import numpy as np
 
 from ...geometry.validation import InputError
 from ..pointset import PointSet
-from .schema import SchemaUnavailable, UncheckedDocument, schema_errors
+from .schema import UncheckedDocument, require_lxml, schema_errors
 from .xml import tag
 
 # What a refusal of a document's content asks for, unless it says otherwise.
@@ -40,8 +41,9 @@ SET_LISTS = {"Points": (3, "points"), "Normals": (3, "vectors"), "Deviations": (
 
 
 def parsed(text, path):
-    """The root of a QIF 3.0 document's text, checked by the schemas where lxml is present;
-    InputError naming the file and the first problem."""
+    """The root of a QIF 3.0 document's text, checked by the schemas; InputError naming the file
+    and the first problem (MissingPackage, before anything is parsed, without lxml)."""
+    require_lxml()
     try:
         root = ET.fromstring(text.encode("utf-8"))
     except ET.ParseError as exc:
@@ -51,8 +53,6 @@ def parsed(text, path):
                          f"in {root.tag.split('}')[0].lstrip('{') or 'no namespace'}); give a QIF 3.0 file")
     try:
         errors = schema_errors(text)
-    except SchemaUnavailable:
-        errors = []
     except UncheckedDocument as exc:
         raise InputError(f"{path}: {exc}") from None
     if errors:

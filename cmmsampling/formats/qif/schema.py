@@ -1,13 +1,18 @@
 """The official QIF 3.0 XML schemas (ISO 23952), shipped in ``resources/qif3/schema`` with their
 Boost licence, and the check of a document against them.
 
-lxml (Debian's ``python3-lxml``) validates; without it :func:`schema_errors` says so instead of
-checking. The schema set takes about 0.3 s to load and is loaded once per process.
+lxml (Debian's ``python3-lxml``) validates: without it no QIF file is read or written, and
+:func:`schema_errors` refuses in one line (MissingPackage) naming how to install it. The schema
+set takes about 0.3 s to load and is loaded once per process.
 """
 from __future__ import annotations
 
 import functools
 import os
+
+from ...geometry.validation import InputError
+from ...runtime.packages import require
+from ..registry import formats_without
 
 ADDON_DIR = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
 SCHEMA_PATH = os.path.join(ADDON_DIR, "resources", "qif3", "schema", "QIFDocument.xsd")
@@ -15,8 +20,8 @@ SCHEMA_PATH = os.path.join(ADDON_DIR, "resources", "qif3", "schema", "QIFDocumen
 ERRORS_SHOWN = 3
 
 
-class SchemaUnavailable(RuntimeError):
-    """lxml or the schema files are missing, so a document cannot be checked."""
+class SchemaUnavailable(InputError):
+    """The schema files are missing, so a document cannot be checked."""
 
 
 class UncheckedDocument(ValueError):
@@ -27,25 +32,29 @@ class UncheckedDocument(ValueError):
 
 @functools.lru_cache(maxsize=1)
 def qif_schema():
-    """The QIF 3.0 schema set as an lxml XMLSchema (loaded once); SchemaUnavailable without
-    lxml or the schema files."""
-    try:
-        from lxml import etree
-    except ImportError:
-        raise SchemaUnavailable("lxml is not installed (Debian: python3-lxml), so QIF files are written "
-                                "unchecked") from None
+    """The QIF 3.0 schema set as an lxml XMLSchema (loaded once); MissingPackage without lxml,
+    SchemaUnavailable without the schema files."""
+    require_lxml()
+    from lxml import etree
+
     if not os.path.isfile(SCHEMA_PATH):
         raise SchemaUnavailable(f"the QIF 3.0 schemas are missing ({SCHEMA_PATH}); reinstall the workbench")
     return etree.XMLSchema(etree.parse(SCHEMA_PATH))
 
 
+def require_lxml() -> None:
+    """MissingPackage, in one line, where lxml cannot be imported: no QIF file is then read or
+    written."""
+    require("lxml", "QIF 3.0 files", formats_without("lxml"))
+
+
 def schema_errors(text: str | bytes) -> list[str]:
     """The QIF 3.0 schemas' complaints about a document's text ('line 12: ...'), [] when they
-    accept it; SchemaUnavailable when they cannot be loaded, UncheckedDocument when they cannot
-    judge it."""
+    accept it; MissingPackage or SchemaUnavailable when they cannot be loaded, UncheckedDocument
+    when they cannot judge it."""
+    schema = qif_schema()
     from lxml import etree
 
-    schema = qif_schema()
     data = text.encode("utf-8") if isinstance(text, str) else text
     try:
         document = etree.fromstring(data, etree.XMLParser(resolve_entities=False, huge_tree=True))
