@@ -102,6 +102,7 @@ def smoke_run(target):
                          text=True, cwd=tempfile.gettempdir(), timeout=600)
     if run.returncode != 0 or "smoke run passed" not in run.stdout:
         return f"the installed copy's smoke run failed ({run.returncode}): {(run.stdout + run.stderr)[-2000:]}"
+    print("".join(line[:160] + "\n" for line in run.stdout.splitlines() if line.startswith("ok ")), end="")
     return None
 
 
