@@ -20,7 +20,7 @@ VERSION_ROOMS = ("tests/fitting/test_delivered_deviation.py", "tests/fitting/tes
                  "tests/fitting/test_trimmed_substitute.py", "tests/fitting/test_stretched_substitute.py",
                  "tests/geometry/", "tests/package/test_sweep.py", "tests/package/test_real_parts.py",
                  "tests/package/test_installed.py", "tests/package/test_command_line.py", "tests/document/",
-                 "tests/formats/", "tests/gui/", "tests/runtime/", "tests/planning/test_face_runs.py", "tests/cmm/")
+                 "tests/formats/", "tests/gui/", "tests/runtime/", "tests/runtime/test_jobs.py", "tests/cmm/")
 VERSION_WORDS = ("dask", "cancel", "process", "worker", "hand", "script", "command_line", "installed")
 
 

@@ -35,13 +35,12 @@ from ..formats.exporting import along_moves, as_point_set, export
 from ..formats.files import check_writable
 from ..formats.pointfiles import resolve_format
 from ..formats.pointset import PointSet
+from ..formats.registry import FORMATS, live_records
 from ..geometry.validation import InputError, check_real
 from .answers import IPPSIZE, ResponseError, parse_response
 from .protocol import LINE_END, point_arguments, tag_text
 
 DEFAULT_PORT = 1294
-# The formats the measured points are written in: those read back as measured points.
-MEASURED_FORMATS = ("csv", "xyz")
 # mm before each point along its normal, where the plan has no probe of its own.
 APPROACH_MM = 5.0
 POLL_S = 0.1
@@ -396,9 +395,11 @@ def link_settings(server: str, out: str | os.PathLike, log: str | os.PathLike | 
     for a path that cannot be written)."""
     host, port = server_address(server)
     fmt = resolve_format(out)
-    if fmt not in MEASURED_FORMATS:
-        raise InputError(f"{os.fspath(out)}: measured points are written as CSV (.csv) or XYZIJK (.xyz, .txt), the "
-                         "files cmmsampling.inspect reads back")
+    live = live_records()
+    if FORMATS[fmt] not in live:
+        kinds = " or ".join(f"{record.title} ({', '.join(record.extensions)})" for record in live)
+        raise InputError(f"{os.fspath(out)}: measured points are written as {kinds}, the files cmmsampling.inspect "
+                         "reads back")
     target = check_writable(out)
     record = None if log is None else check_writable(log)
     return Link(host, port, target, record, check_real("timeout_s", timeout_s, above=0.0), machine_volume(volume))

@@ -130,4 +130,5 @@ def recognises(first):
     return all(name in re.split(r"[,;]", first) for name in CSV_COLUMNS[:7])
 
 
-FORMAT = FileFormat("csv", NAME, DESCRIPTION, EXTENSIONS, ENCODING, write, read, measured=True, recognises=recognises)
+FORMAT = FileFormat("csv", NAME, DESCRIPTION, EXTENSIONS, ENCODING, write, read, measured=True, recognises=recognises,
+                    live=True)

@@ -71,7 +71,8 @@ def write(point_set, facts, options):
     ijk = fixed(point_set.normals, VECTOR_DECIMALS)
     entries = [(key, text.encode("ascii", "backslashreplace").decode("ascii"))
                for key, text in comment_entries(point_set, facts, options)]
-    lines = [f"DMISMN/'{options.name}',{DMIS_VERSION}", f"{DMIS_COMMENT} probe points written by cmmsampling"]
+    name = dmis_program_name(options.name)
+    lines = [f"DMISMN/'{name}',{DMIS_VERSION}", f"{DMIS_COMMENT} probe points written by cmmsampling"]
     lines += metadata_comment_lines(entries, f"{DMIS_COMMENT} ", DMIS_COMMENT_CONTINUED, DMIS_LINE_LIMIT)
     path = point_set.travel is not None
     sensors = sensor_labels(point_set) if path else [VERTICAL_SENSOR] * len(point_set)
@@ -79,7 +80,7 @@ def write(point_set, facts, options):
     lines += ["UNITS/MM,ANGDEC", "MODE/AUTO,PROG,MAN" if path else "MODE/PROG,MAN"]
     lines += DATUMS_MEASURED if groups else ALIGNMENT_ASSUMED
     lines += frame_statements(facts)
-    lines += [f"DID({OUTPUT_DEVICE})=DEVICE/STOR,'{options.name[:DMIS_NAME_LIMIT - 4]}.dmo'",
+    lines += [f"DID({OUTPUT_DEVICE})=DEVICE/STOR,'{name[:DMIS_NAME_LIMIT - 4]}.dmo'",
               f"OPEN/DID({OUTPUT_DEVICE}),FDATA,DMIS,OUTPUT"]
     distances = {"APPRCH": options.approach, "RETRCT": options.retract, "SEARCH": options.search}
     lines += [f"SNSET/{word},{fixed(value, COORDINATE_DECIMALS).item()}" for word, value in distances.items()]
@@ -416,5 +417,13 @@ def dmis_output(nominal, actual, name):
     return "\n".join(lines) + "\n"
 
 
+def unmeasured(point_set):
+    """Why a DMIS file's points are no measurement (its nominal F(label) statements only), or None."""
+    if point_set.metadata.get("dmis_features") != "nominal":
+        return None
+    return ("holds the program's nominal points only (F(label)=FEAT/POINT), no measured FA(label) values; give the "
+            "DMIS output file the CMM wrote after measuring")
+
+
 FORMAT = FileFormat("dmis", NAME, DESCRIPTION, EXTENSIONS, ENCODING, write, read, contact_nominals=True,
-                    measured=True, write_measured=dmis_output)
+                    measured=True, write_measured=dmis_output, unmeasured=unmeasured)

@@ -18,7 +18,6 @@ from ..access.probe_moves import probe_moves
 from ..geometry.probe_path import PathOrder, path_length, short_path, unchanged
 from ..geometry.validation import InputError, InputTypeError, check_choice, check_real
 from ..strategies.result import SamplingResult
-from .dmis import dmis_program_name
 from .files import write_atomically
 from .frames import FRAME_KEYS, frame_facts, resolve_frame, to_local
 from .pointfiles import FORMATS, READER_KEYS, resolve_format
@@ -135,10 +134,10 @@ def export_results(inspection, path, fmt, label=None, **asked):
     """Write an inspection's results (a format with write_results: QIF). asked: export()'s
     options that do not apply to results, refused unless left at their defaults."""
     if FORMATS[fmt].write_results is None:
-        with_results = [f"{record.title} ({', '.join(record.extensions)})" for record in FORMATS.values()
-                        if record.write_results is not None]
-        raise InputError(f"an inspection's results are written as {', '.join(with_results)}, not "
-                         f"{FORMATS[fmt].title}; give a path ending in {FORMATS['qif'].extensions[0]}")
+        with_results = [record for record in FORMATS.values() if record.write_results is not None]
+        kinds = ", ".join(f"{record.title} ({', '.join(record.extensions)})" for record in with_results)
+        raise InputError(f"an inspection's results are written as {kinds}, not {FORMATS[fmt].title}; give a path "
+                         f"ending in {with_results[0].extensions[0]}")
     changed = [name for name, (value, default) in asked.items() if value != default]
     if changed:
         raise InputError(f"an inspection's results are written as measured and aligned; leave {', '.join(changed)} "
@@ -199,7 +198,7 @@ def export(source: SamplingResult | PointSet | object, path: str | os.PathLike, 
         "probe_path" if made_with_probe(source) else "as_optimised")
     radius = check_real("probe_radius", probe_radius, minimum=0.0)
     options = WriteOptions(
-        name=dmis_program_name(_stem(path) if name is None else name),
+        name=_stem(path) if name is None else str(name),
         approach=check_real("approach", approach, above=0.0),
         retract=check_real("retract", retract, above=0.0),
         search=check_real("search", search, above=0.0),

@@ -23,8 +23,10 @@ EXPORT_TITLE = "CMM probe points"
 
 @dataclass(frozen=True)
 class WriteOptions:
-    """What the writers need besides the points: DMIS program name, approach, retract and search
-    distances (mm), and whether to write the descriptive comments."""
+    """What the writers need besides the points: the program's name (the file's name without its
+    extension, or the one given; a format that names its programs cleans it to what its language
+    takes, as DMIS does), approach, retract and search distances (mm), and whether to write the
+    descriptive comments."""
 
     name: str
     approach: float
@@ -61,6 +63,13 @@ class MeasuredWriter(Protocol):
     def __call__(self, nominal: PointSet, actual: np.ndarray, name: str, /) -> str: ...
 
 
+class Unmeasured(Protocol):
+    """(a PointSet read from a file of the format) -> why its points are no measurement (a
+    program's planned points: what to give instead), or None for measured points."""
+
+    def __call__(self, point_set: PointSet, /) -> str | None: ...
+
+
 class Recogniser(Protocol):
     """(a file's first line that is no comment, lower case without blanks) -> whether the file
     is the format's own."""
@@ -89,7 +98,11 @@ class FileFormat:
     where a file with one of its extensions is the format's own (its header), None for every
     such file (a file not recognised is read as a labelled table of measured points);
     packages: the Python modules (keys of cmmsampling.runtime.packages.PACKAGES) it needs beyond
-    numpy and scipy, e.g. QIF's ("lxml",): without one, the format is refused in one line.
+    numpy and scipy, e.g. QIF's ("lxml",): without one, the format is refused in one line; live:
+    a CMM's touches are written in it as they arrive (cmmsampling.measure rewrites the file after
+    each touch with ``write``) and read back from it as measured points; unmeasured: (PointSet
+    read) -> why its points are no measurement (a DMIS program's nominals, a QIF plan), or None,
+    for a format that holds planned points as well as measured ones.
     """
 
     name: str
@@ -105,6 +118,8 @@ class FileFormat:
     write_measured: MeasuredWriter | None = None
     recognises: Recogniser | None = None
     packages: tuple[str, ...] = ()
+    live: bool = False
+    unmeasured: Unmeasured | None = None
 
     @property
     def patterns(self) -> str:
@@ -151,6 +166,11 @@ def formats_without(package: str) -> str:
     """The formats that need no ``package``, in words: e.g. 'DMIS, XYZIJK and CSV files'."""
     titles = [record.title for record in FORMATS.values() if package not in record.packages]
     return f"{', '.join(titles[:-1])} and {titles[-1]} files" if len(titles) > 1 else "".join(titles) + " files"
+
+
+def live_records() -> list[FileFormat]:
+    """The FileFormats a live run writes its touches in as they arrive (``live``)."""
+    return [record for record in FORMATS.values() if record.live]
 
 
 def measured_records() -> list[FileFormat]:

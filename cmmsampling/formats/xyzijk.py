@@ -51,4 +51,4 @@ def recognises(first):
     return first.startswith("xyzijk")
 
 
-FORMAT = FileFormat("xyz", NAME, DESCRIPTION, EXTENSIONS, ENCODING, write, read, recognises=recognises)
+FORMAT = FileFormat("xyz", NAME, DESCRIPTION, EXTENSIONS, ENCODING, write, read, recognises=recognises, live=True)

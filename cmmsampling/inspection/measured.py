@@ -44,12 +44,10 @@ def read_measured(path: str | os.PathLike) -> PointSet:
     fmt = _project_format(path, text)
     if fmt is not None:
         point_set = points_from_text(text, path, fmt)
-        if point_set.metadata.get("dmis_features") == "nominal":
-            raise InputError(f"{path}: holds the program's nominal points only (F(label)=FEAT/POINT), no measured "
-                             "FA(label) values; give the DMIS output file the CMM wrote after measuring")
-        if point_set.metadata.get("qif") == "plan":
-            raise InputError(f"{path}: a QIF plan (planned points, no measured point set or feature measurement); "
-                             "give the QIF results file the CMM software wrote after measuring")
+        unmeasured = FORMATS[fmt].unmeasured
+        why = None if unmeasured is None else unmeasured(point_set)
+        if why is not None:
+            raise InputError(f"{path}: {why}")
         return point_set
     if is_text_report(text):
         point_set = read_text_report(text, path)

@@ -29,7 +29,7 @@ import numpy as np
 
 from ..formats.files import read_text
 from ..formats.pointset import PointSet
-from ..formats.qif.read import QIFDocument, parsed
+from ..formats.qif.read import RESULTS_METADATA, QIFDocument, parsed
 from ..formats.qif.datum_frame import DATUM_ALGORITHMS, OWN_POINTS, PRECEDENCES
 from ..formats.qif.results import PART_DECISION_STATUS
 from ..formats.qif.xml import tag
@@ -207,7 +207,7 @@ def _in_order(blocks: list[PointSet], order: str, name: str) -> PointSet:
     points = np.vstack([block.points for block in blocks])[rows]
     faces = [face for block in blocks for face in block.faces or []]
     return PointSet(wanted, points, np.full_like(points, np.nan), faces=[faces[row] for row in rows],
-                    metadata={"qif": "results", "path": os.path.abspath(name)})
+                    metadata={**RESULTS_METADATA, "path": os.path.abspath(name)})
 
 
 def _tolerance(document: QIFDocument) -> float | None:

@@ -6,7 +6,7 @@ and scatter); this module finds each inspection's points on the face and their p
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
@@ -15,13 +15,21 @@ from ..fitting.series import SeriesModel, error_map
 from ..geometry.validation import InputError, InputTypeError
 from ..strategies.face_setup import setup_of
 
-if TYPE_CHECKING:   # for the annotations only: judge imports this module; FreeCAD ships no type stubs
+if TYPE_CHECKING:   # FreeCAD ships no type stubs
     import Part
 
-    from .judge import Inspection
+
+class Inspected(Protocol):
+    """What the series reads of an inspection (cmmsampling.inspection.judge.Inspection, which
+    imports this module): faces, the face's name of each of its N points (None: one face);
+    points (N, 3) mm, aligned to the CAD model; deviations (N,) mm, signed."""
+
+    faces: list | None
+    points: np.ndarray
+    deviations: np.ndarray
 
 
-def face_rows(inspection: Inspection, name: str | None = None) -> tuple[np.ndarray, str]:
+def face_rows(inspection: Inspected, name: str | None = None) -> tuple[np.ndarray, str]:
     """(rows (M,) int, the face's name) of an inspection's points on the face called ``name``
     (None: the inspection's only face; InputError when it has several)."""
     names = list(dict.fromkeys(inspection.faces or [""]))
@@ -42,7 +50,7 @@ def nearest_parameters(face: Part.Face) -> NearestParameters:
     return NearestParameters(setup.model, setup.domain().on_face if setup.model.trimmed else None)
 
 
-def measured_parameters(face: Part.Face, inspection: Inspection, name: str | None = None,
+def measured_parameters(face: Part.Face, inspection: Inspected, name: str | None = None,
                         nearest: NearestParameters | None = None) -> tuple[np.ndarray, np.ndarray]:
     """(uv (M, 2) on face, signed deviations (M,) mm) of the inspection's points on ``face`` (a
     Part.Face; name: the face's name in the inspection, None for its only face; nearest: the
@@ -53,7 +61,7 @@ def measured_parameters(face: Part.Face, inspection: Inspection, name: str | Non
     return nearest(inspection.points[rows]), inspection.deviations[rows]
 
 
-def series_model(face: Part.Face, prior: Sequence[Inspection] | SeriesModel, name: str | None = None) -> SeriesModel:
+def series_model(face: Part.Face, prior: Sequence[Inspected] | SeriesModel, name: str | None = None) -> SeriesModel:
     """The series model of ``face`` (a Part.Face) from the inspections of earlier parts.
 
     prior: a list of Inspections (cmmsampling.inspect), at least one, each with points on the
@@ -64,7 +72,7 @@ def series_model(face: Part.Face, prior: Sequence[Inspection] | SeriesModel, nam
     return _series_model(face, prior, name)
 
 
-def _series_model(face: Part.Face, prior: Sequence[Inspection] | SeriesModel, name: str | None,
+def _series_model(face: Part.Face, prior: Sequence[Inspected] | SeriesModel, name: str | None,
                   nearest: NearestParameters | None = None) -> SeriesModel:
     """:func:`series_model`, with the face's :func:`nearest_parameters` where already built."""
     if isinstance(prior, SeriesModel):
@@ -77,8 +85,8 @@ def _series_model(face: Part.Face, prior: Sequence[Inspection] | SeriesModel, na
     return SeriesModel(nearest.model, [measured_parameters(face, inspection, name, nearest) for inspection in parts])
 
 
-def deviation_map(inspection: Inspection, face: Part.Face, uv: np.ndarray,
-                  prior: Sequence[Inspection] | SeriesModel | None = None, name: str | None = None) -> np.ndarray:
+def deviation_map(inspection: Inspected, face: Part.Face, uv: np.ndarray,
+                  prior: Sequence[Inspected] | SeriesModel | None = None, name: str | None = None) -> np.ndarray:
     """The measured part's signed deviation from the CAD face at uv (M, 2) of its parameter
     range: (M,) mm, from the inspection's points on ``face`` alone (prior None: kriging,
     cmmsampling.fitting.series.fit_field) or with the series model of ``prior`` (a list of

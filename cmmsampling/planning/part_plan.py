@@ -6,7 +6,7 @@ local bound, or the reason the face holds no points (too narrow for the edge off
 area), never silently dropped.
 
 - With a tolerance, each face gets its own fewest N (:func:`points_needed`); faces run in
-  parallel (:mod:`cmmsampling.planning.face_runs`). A face that is a rigid copy of another
+  parallel (:mod:`cmmsampling.runtime.jobs`). A face that is a rigid copy of another
   (:mod:`cmmsampling.geometry.congruence`: a pattern's instances, a fan's blades) is not searched
   again: once its original is done, the original's points are moved onto it and judged there;
   where its domain (edge offset, trim, probe reach) or that judgement differs from the
@@ -34,12 +34,12 @@ from ..geometry.congruence import FacePrint, face_copies, raster, rigid_copy
 from ..geometry.freecad_env import import_part
 from ..geometry.surface import as_face
 from ..geometry.validation import InputError, InputTypeError, check_int, check_pair, check_real
+from ..runtime import jobs as face_runs
 from ..runtime.packages import require
 from ..runtime.threads import blas_threads
 from ..strategies.estimates import duration_text, time_left_text
 from ..strategies.face_setup import reused, setup_of
 from ..strategies.sampling import BEST_STRATEGY, STRATEGIES, check_arguments, evaluate, probe_edge_offset, sample
-from . import face_runs
 from .plan_points import plan_moves, plan_point_set, share_orientations
 from .points_needed import (DEFAULT_MAX_POINTS, RISE_FACTOR, check_max_points, fewest_points, points_needed,
                             step_counts)

@@ -52,12 +52,13 @@ def available(module: str) -> bool:
 
 
 def require(module: str, feature: str, without: str = "") -> None:
-    """MissingPackage unless ``module`` (a key of PACKAGES) can be imported. feature: what needs
+    """MissingPackage unless ``module`` (a key of PACKAGES, or a user's format's: named as on
+    PyPI and Debian's python3-<module>) can be imported. feature: what needs
     it, the message's first words (e.g. "QIF files"); without: what works without it (e.g. "CSV,
     XYZ and DMIS files"), said after the fix."""
     if available(module):
         return
-    package = PACKAGES[module]
+    package = PACKAGES.get(module, Package(module, module, f"python3-{module}", addon_manager=False, optional=True))
     python = f"{sys.version_info.major}.{sys.version_info.minor}"
     tail = f"; {without} work without it" if without else ""
     manager = "the Addon Manager (it installs CMM Sampling's dependencies) or " if package.addon_manager else ""

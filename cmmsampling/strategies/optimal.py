@@ -32,23 +32,18 @@ from ..fitting.exact import Linearisation
 from ..geometry.bspline import kron_rows
 from ..geometry.validation import check_choice, check_int, check_real, check_uv
 from . import blind
-from .registry import STRATEGIES, Setting, Strategy, StrategyOutcome, layouts
+from .registry import STRATEGIES, Progress, Setting, Strategy, StrategyOutcome, layouts
+from .settings import BEST_STARTS
 
-if TYPE_CHECKING:   # for the annotations only: sampling imports this module
+if TYPE_CHECKING:
     from ..fitting.deviation import DeviationObjective
     from ..fitting.exact import ExactDeviation
     from .problem import SamplingProblem
-    from .sampling import Progress
 
 KAPPAS = (10.0, 30.0, 100.0, 300.0, 1000.0, 3000.0, 10000.0)
 STAGE_ITERATIONS = 800
 CHUNK_ITERATIONS = 400
 MIN_CHUNK_ITERATIONS = 5
-SPACING_FRACTION = 0.1
-# Points nearer than this measure one spot twice with a CMM's ball: the default spacing keeps it
-# wherever the face has room, mm.
-BALL_SEPARATION_MM = 0.1
-PACKING = np.sqrt(3) / 2
 # A run told where to stop (stop_at, a search for the fewest points) and given a time limit ends
 # early when, this share of the limit in, its maximum is still this many times stop_at: measured
 # on the Ventilator's faces, no run that far off after 30 % of its time met stop_at by its end
@@ -59,20 +54,6 @@ HOPELESS_FACTOR = 20.0
 
 class Stop(Exception):
     """Raised inside the objective to end the descent (budget spent or cancelled)."""
-
-
-def default_min_spacing(area: float, n: int, feasible_area: float | None = None) -> float:
-    """The default distance every strategy keeps between points, mm.
-
-    A tenth of the spacing of N points spread evenly over a face of ``area`` mm^2, at least
-    BALL_SEPARATION_MM (0.1 mm: nearer points measure one spot twice with a ball); where the
-    feasible part of the face (``feasible_area`` mm^2, after the edge offset) cannot hold N
-    points that far apart, half the spacing that fits there.
-    """
-    spacing = max(SPACING_FRACTION * float(np.sqrt(area / n)), BALL_SEPARATION_MM)
-    if feasible_area is not None:
-        spacing = min(spacing, 0.5 * float(np.sqrt(feasible_area / (PACKING * n))))
-    return spacing
 
 
 @dataclass
@@ -313,7 +294,6 @@ def _accept(chunk: _Chunk, best: _Best, judge: Callable[[np.ndarray], ExactDevia
 
 # The strategy: the descent on a sampling problem, from the best blind layout.
 OPTIMAL_DEFAULTS = {"start": "best", "time_limit": None, "max_evaluations": None, "stop_at": None}
-BEST_STARTS = ("uniform_parametric", "uniform_cartesian", "halton", "hammersley")
 OPTIMAL_SETTINGS = (Setting("time_limit", float, "seconds the optimal strategy may take (default: until it "
                                                  "converges; in a plan 10 s per run)"),)
 

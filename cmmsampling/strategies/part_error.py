@@ -21,12 +21,11 @@ from ..fitting.exact import NearestParameters
 from ..fitting.series import SeriesModel, greedy_design
 from ..geometry.validation import InputError
 from .blind import feasible_candidates
-from .optimal import BEST_STARTS
-from .registry import STRATEGIES, Strategy, StrategyOutcome, layouts
+from .registry import STRATEGIES, Progress, Strategy, StrategyOutcome, layouts
+from .settings import BEST_STARTS
 
-if TYPE_CHECKING:   # for the annotations only: sampling imports this module
+if TYPE_CHECKING:
     from .problem import SamplingProblem
-    from .sampling import Progress
 
 CANDIDATES = 1200
 JUDGED = 30

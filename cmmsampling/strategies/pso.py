@@ -26,13 +26,13 @@ from ..fitting.lattice import LATTICE_LIMIT_BYTES
 from ..geometry.validation import InputError, check_int, check_real
 from ..runtime import memory
 from . import blind
-from .registry import STRATEGIES, Setting, Strategy, StrategyOutcome, layouts
+from .registry import STRATEGIES, Progress, Setting, Strategy, StrategyOutcome, layouts
+from .settings import UNIFORM_LAYOUTS
 
-if TYPE_CHECKING:   # for the annotations only: sampling imports this module
+if TYPE_CHECKING:
     from ..fitting.deviation import DeviationObjective
     from ..runtime.parallel import TwoProcessObjective
     from .problem import SamplingProblem
-    from .sampling import Progress
 
 
 @dataclass
@@ -267,7 +267,7 @@ def _uniform_seeds(problem: SamplingProblem) -> dict[str, tuple[np.ndarray, list
     """{label: (uv (N, 2), notes)} of the uniform layouts that fit the face (uniform Cartesian
     may refuse), as their strategies deliver them: with the points OCC finds off the face moved
     onto it and notes saying so (blind.onto_face)."""
-    found = layouts(problem, required=("uniform_parametric",), optional=("uniform_cartesian",))
+    found = layouts(problem, required=UNIFORM_LAYOUTS[:1], optional=UNIFORM_LAYOUTS[1:])
     return {STRATEGIES[name].label: blind.onto_face(problem, uv) for name, uv in found.items()}
 
 

@@ -61,6 +61,8 @@ class Setting:
     help: str
 
 
+# A strategy's progress: (iteration, best maximum deviation mm) -> True to cancel.
+Progress = Callable[[int, float], bool | None]
 # A strategy's run: (problem: the SamplingProblem, progress: callable(iteration, best maximum mm)
 # -> True to cancel, or None, **its options) -> StrategyOutcome. The options differ from strategy
 # to strategy (part_error's prior, pso's population), so the type states what comes back.
@@ -86,7 +88,7 @@ class Strategy:
     run's base (cmmsampling.runtime.memory), None for nothing that grows with N;
     requires: the options it cannot run without (part_error's prior): studies, plans and panels
     run it only where those are given (:func:`self_contained`).
-    Every strategy keeps the same default minimum spacing (cmmsampling.strategies.optimal.default_min_spacing).
+    Every strategy keeps the same default minimum spacing (cmmsampling.strategies.settings.default_min_spacing).
     """
 
     name: str

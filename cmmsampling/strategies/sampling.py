@@ -5,7 +5,6 @@ tables and panels list them; the registry's names are the public ones (``__all__
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
 from dataclasses import asdict
 from typing import TYPE_CHECKING, Any, cast
 
@@ -25,13 +24,13 @@ from ..runtime import memory
 from ..runtime.threads import blas_threads
 from . import blind, optimal, part_error, pso
 from .face_setup import setup_of
-from .optimal import BALL_SEPARATION_MM, default_min_spacing
 from .problem import SamplingProblem
-from .registry import (STRATEGIES, Setting, Strategy, StrategyOutcome, baseline, register_strategy, self_contained,
-                       strategy_label, strategy_options, unregister_strategy)
+from .registry import (STRATEGIES, Progress, Setting, Strategy, StrategyOutcome, baseline, register_strategy,
+                       self_contained, strategy_label, strategy_options, unregister_strategy)
 from .result import EXACT_FIT, SamplingResult
 from .space_choice import chosen_space
-from .settings import KEYWORDS, MIN_POINTS, Pair, SampleSettings, resolve_fit_poles
+from .settings import (BALL_SEPARATION_MM, BEST_STRATEGY, DEFAULT_STRATEGY, KEYWORDS, MIN_POINTS, Pair, SampleSettings,
+                       default_min_spacing, resolve_fit_poles)
 
 if TYPE_CHECKING:   # FreeCAD ships no type stubs: to the type checker Part's classes are Any
     import Part
@@ -44,21 +43,16 @@ else:
 __all__ = ["STRATEGIES", "Setting", "Strategy", "StrategyOutcome", "register_strategy", "unregister_strategy",
            "strategy_label", "strategy_options", "baseline", "self_contained", "SampleSettings", "make_problem",
            "problem_for", "sample", "evaluate", "lower_bound", "probe_edge_offset", "check_arguments",
-           "DEFAULT_STRATEGY", "BEST_STRATEGY", "PROBE_EDGE_OFFSET_MM", "MIN_POINTS"]
+           "DEFAULT_STRATEGY", "BEST_STRATEGY", "PROBE_EDGE_OFFSET_MM", "MIN_POINTS", "Progress"]
 
 # sample()'s keyword arguments that every strategy takes (the others are the strategy's options):
 # those SampleSettings checks whatever the face, and these.
 COMMON_ARGUMENTS = KEYWORDS + ("progress", "occ_check", "part", "probe")
-# progress(iteration, best maximum deviation mm) -> True to cancel.
-Progress = Callable[[int, float], bool | None]
 MIN_AREA_RATIO = 1e-12
 
 
 for _record in (*blind.RECORDS, pso.RECORD, optimal.RECORD, part_error.RECORD):
     register_strategy(_record)
-DEFAULT_STRATEGY = "pso"
-# What the command line starts with: the strategy that goes furthest.
-BEST_STRATEGY = "optimal"
 # The edge offset the command line and the panel start with, mm: a probe ball's radius plus
 # a margin (sample() itself defaults to 0, the paper's setting).
 PROBE_EDGE_OFFSET_MM = 1.5
@@ -85,7 +79,7 @@ def problem_for(face: Part.Face, settings: SampleSettings, *, strategy: str | No
                 probe: Probe | None = None, out_of_reach: np.ndarray | None = None) -> SamplingProblem:
     """The SamplingProblem of checked settings on a face.
 
-    min_spacing None: the default (cmmsampling.strategies.optimal.default_min_spacing), lowered where the
+    min_spacing None: the default (cmmsampling.strategies.settings.default_min_spacing), lowered where the
     face's feasible part cannot hold N points that far apart. strategy, options (checked): the
     run it is for, whose memory is checked (:func:`memory_needed`) before anything is built;
     None checks every run's base. part, probe: as in :func:`sample`; out_of_reach: instead,

@@ -1,14 +1,32 @@
-"""SampleSettings: the settings every strategy shares, checked once per call and passed by name."""
+"""SampleSettings: the settings every strategy shares, checked once per call and passed by name,
+and the defaults they share (the strategy sample() runs by default, the best one, the spacing every
+strategy keeps, the blind layouts a search starts from), so that no strategy reads another's."""
 from __future__ import annotations
 
 import os
 from dataclasses import dataclass, replace
+
+import numpy as np
 
 from ..fitting.deviation import DEFAULT_GRID
 from ..fitting.substitute import DEFAULT_DEGREE, DEFAULT_SMOOTHING, default_pole_count
 from ..geometry.validation import InputError, check_int, check_pair, check_real
 
 MIN_POINTS = 4
+# sample()'s strategy when none is named: the paper's.
+DEFAULT_STRATEGY = "pso"
+# What the command line, the plans and Plan part start with: the strategy that goes furthest.
+BEST_STRATEGY = "optimal"
+# The blind layouts a descent's "best" start, and part_error's fallback, are chosen from.
+BEST_STARTS = ("uniform_parametric", "uniform_cartesian", "halton", "hammersley")
+# The uniform layouts a swarm's result is judged against (the first is always possible; the
+# second is left out where the face refuses it).
+UNIFORM_LAYOUTS = ("uniform_parametric", "uniform_cartesian")
+SPACING_FRACTION = 0.1
+# Points nearer than this measure one spot twice with a CMM's ball: the default spacing keeps it
+# wherever the face has room, mm.
+BALL_SEPARATION_MM = 0.1
+PACKING = np.sqrt(3) / 2
 # An int for both parameter directions or a (u, v) pair of them.
 Pair = int | tuple[int, int]
 # The keyword arguments of sample() that SampleSettings.checked takes, besides n.
@@ -65,6 +83,20 @@ class SampleSettings:
         """The same settings for n points (>= MIN_POINTS): the poles follow n unless given."""
         poles = self.fit_poles if self.poles_given else resolve_fit_poles(None, n, self.fit_degree)
         return replace(self, n=n, fit_poles=poles)
+
+
+def default_min_spacing(area: float, n: int, feasible_area: float | None = None) -> float:
+    """The default distance every strategy keeps between points, mm.
+
+    A tenth of the spacing of N points spread evenly over a face of ``area`` mm^2, at least
+    BALL_SEPARATION_MM (0.1 mm: nearer points measure one spot twice with a ball); where the
+    feasible part of the face (``feasible_area`` mm^2, after the edge offset) cannot hold N
+    points that far apart, half the spacing that fits there.
+    """
+    spacing = max(SPACING_FRACTION * float(np.sqrt(area / n)), BALL_SEPARATION_MM)
+    if feasible_area is not None:
+        spacing = min(spacing, 0.5 * float(np.sqrt(feasible_area / (PACKING * n))))
+    return spacing
 
 
 def resolve_fit_poles(fit_poles: tuple[int, int] | None, n: int, fit_degree: tuple[int, int]) -> tuple[int, int]:

@@ -12,7 +12,7 @@ import pytest
 from support.faces import TESTDATA, Part, holed_face, rational_saddle, strip_face
 
 import cmmsampling
-from cmmsampling.strategies.optimal import default_min_spacing
+from cmmsampling.strategies.settings import default_min_spacing
 from cmmsampling.strategies.sampling import make_problem
 
 

@@ -1,13 +1,26 @@
 """A point-file format is one module with one record (tests/toy_format.py): registered, it is
 written and read by export() and read_points(), offered by the command line's --out and --help,
 by File > Export's filter and its hook; unregistered, it is gone."""
+import ast
+import pathlib
+from dataclasses import replace
+
 import numpy as np
 import pytest
 from support.toy_format import TOY_FORMAT
 
 import cmmsampling
 from cmmsampling import cli, document
-from cmmsampling.formats.pointfiles import export_filter, resolve_format
+from cmmsampling.cmm.client import link_settings
+from cmmsampling.formats.pointfiles import FORMATS, export_filter, resolve_format
+from cmmsampling.inspection.measured import read_measured
+from cmmsampling.runtime.packages import MissingPackage
+
+PACKAGE = pathlib.Path(cmmsampling.__file__).parent
+# The formats' own modules: the records and the code that reads and writes their files.
+FORMAT_HOLDERS = ("formats/dmis.py", "formats/csv_points.py", "formats/xyzijk.py", "formats/qif/")
+# Format names that are also plain words of the code ("xyz": the axes), left out of the check.
+WORDS = {"xyz"}
 
 
 @pytest.fixture
@@ -69,10 +82,7 @@ def test_an_unregistered_format_is_gone_and_a_bad_record_is_refused():
 
 
 def test_a_format_registered_as_measured_holds_a_simulated_measurement_read_back_by_inspect(result, tmp_path):
-    from dataclasses import replace
-
     from cmmsampling.formats.registry import measured_filter
-    from cmmsampling.inspection.measured import read_measured
 
     with pytest.raises(ValueError, match=r"a measurement is written as DMIS \(.dmi, .dmis, .dmo, .dms\) or CSV"):
         cmmsampling.simulate_measurement(result, tmp_path / "m.toy")
@@ -87,3 +97,50 @@ def test_a_format_registered_as_measured_holds_a_simulated_measurement_read_back
         assert read_measured(tmp_path / "table.toy").metadata["format"] == "labelled text", "not the format's header"
     finally:
         cmmsampling.unregister_format(TOY_FORMAT.name)
+
+
+def test_a_formats_record_says_what_live_runs_and_inspect_and_its_package_need(result, tmp_path):
+    """live: a live run writes its touches in it; unmeasured: inspect refuses its planned points
+    in the format's words; packages: the format is refused in one line without them."""
+    with pytest.raises(ValueError, match=r"m.dmi: measured points are written as XYZIJK text \(.xyz, .txt\) or CSV"):
+        link_settings("127.0.0.1:1294", tmp_path / "m.dmi", None, 5.0, None)
+    planned = replace(TOY_FORMAT, live=True, unmeasured=lambda point_set: "a toy plan; give the toy results")
+    cmmsampling.register_format(planned)
+    try:
+        assert link_settings("127.0.0.1:1294", tmp_path / "m.toy", None, 5.0, None).target.endswith("m.toy")
+        cmmsampling.export(result, tmp_path / "plan.toy")
+        with pytest.raises(ValueError, match=r"plan.toy: a toy plan; give the toy results$"):
+            read_measured(tmp_path / "plan.toy")
+        cmmsampling.register_format(replace(TOY_FORMAT, packages=("cmmsampling_no_such_package",)))
+        with pytest.raises(MissingPackage) as refused:
+            cmmsampling.export(result, tmp_path / "again.toy")
+        assert str(refused.value).startswith("toy points files need the Python package cmmsampling_no_such_package, ")
+        assert "apt install python3-cmmsampling_no_such_package" in str(refused.value)
+        assert not (tmp_path / "again.toy").exists()
+        with pytest.raises(MissingPackage):
+            read_measured(tmp_path / "plan.toy")
+    finally:
+        cmmsampling.unregister_format(TOY_FORMAT.name)
+
+
+def _named_formats(source):
+    """The format names (but WORDS) that a module's code (not its docstrings) spells as string
+    constants."""
+    tree = ast.parse(source)
+    docstrings = {id(node.value) for node in ast.walk(tree) if isinstance(node, ast.Expr)}
+    return sorted({node.value for node in ast.walk(tree)
+                   if isinstance(node, ast.Constant) and id(node) not in docstrings
+                   and node.value in set(FORMATS) - WORDS})
+
+
+def test_no_module_outside_the_formats_names_a_format():
+    """export(), the live run, inspect, the command line and the panels read the records."""
+    found = {path.relative_to(PACKAGE).as_posix(): _named_formats(path.read_text())
+             for path in sorted(PACKAGE.rglob("*.py"))}
+    assert {module: names for module, names in found.items()
+            if names and not module.startswith(FORMAT_HOLDERS)} == {}
+
+
+def test_the_check_finds_a_named_format():
+    assert _named_formats('"""Writes "dmis"."""\nx = FORMATS["qif"]\n') == ["qif"]
+    assert _named_formats('"""Writes "dmis"."""\naxes = "xyz"\n') == []

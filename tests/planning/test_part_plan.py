@@ -117,7 +117,7 @@ PAGE_FAULTS = """
 import resource, sys
 import numpy as np
 sys.path.insert(0, {root!r})
-from cmmsampling.planning.face_runs import set_heap_thresholds
+from cmmsampling.runtime.jobs import set_heap_thresholds
 if {tuned}:
     assert set_heap_thresholds()
 before = resource.getrusage(resource.RUSAGE_SELF).ru_minflt

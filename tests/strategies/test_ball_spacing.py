@@ -9,7 +9,7 @@ from scipy.spatial.distance import pdist
 from support.faces import TESTDATA, Part
 
 import cmmsampling
-from cmmsampling.strategies.optimal import BALL_SEPARATION_MM, default_min_spacing
+from cmmsampling.strategies.settings import BALL_SEPARATION_MM, default_min_spacing
 
 
 def test_the_default_is_a_tenth_of_the_even_spacing_but_not_below_a_ball_s_separation():

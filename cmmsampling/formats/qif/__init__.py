@@ -21,6 +21,14 @@ def checked(text):
     return text
 
 
+def unmeasured(point_set):
+    """Why a QIF document's points are no measurement (a plan's), or None."""
+    if point_set.metadata.get("qif") != "plan":
+        return None
+    return ("a QIF plan (planned points, no measured point set or feature measurement); give the QIF results file "
+            "the CMM software wrote after measuring")
+
+
 def write(point_set, facts, options):
     """A measurement plan of written probe points (:func:`.plan.write`), checked."""
     return checked(plan.write(point_set, facts, options))
@@ -48,4 +56,5 @@ FORMAT = FileFormat(
     contact_nominals=True,
     write_results=write_results,
     packages=("lxml",),
+    unmeasured=unmeasured,
 )

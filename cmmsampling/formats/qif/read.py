@@ -34,6 +34,8 @@ from ..pointset import PointSet
 from .schema import UncheckedDocument, require_lxml, schema_errors
 from .xml import tag
 
+# The metadata of the measured points read from a results document.
+RESULTS_METADATA = {"qif": "results"}
 # What a refusal of a document's content asks for, unless it says otherwise.
 CORRECT = "correct the file or export it again"
 # The number lists of a MeasuredPointSet read, by name: numbers a row, what a row is.
@@ -213,7 +215,7 @@ class QIFDocument:
         if locations:
             names = [self._feature_name(m) or f"PT{index}" for index, m in enumerate(locations, start=1)]
             points = np.concatenate([self.point(m, "Location") for m in locations])
-            return PointSet(names, points, np.full_like(points, np.nan), metadata={"qif": "results"})
+            return PointSet(names, points, np.full_like(points, np.nan), metadata=dict(RESULTS_METADATA))
         return None
 
     def _feature_name(self, measurement):
@@ -329,7 +331,7 @@ class QIFDocument:
 
     def _point_set(self, labels, faces, blocks, normals, deviations, radii):
         """One PointSet of the blocks read; ball centres' radius in the metadata (one radius)."""
-        metadata = {"qif": "results"}
+        metadata = dict(RESULTS_METADATA)
         stated = {radius for radius in radii if radius > 0}
         if len(stated) > 1:
             radii_mm = ", ".join(f"{r:g}" for r in sorted(stated))

@@ -20,8 +20,8 @@ from ...fitting.substitute import DEFAULT_DEGREE, default_pole_count
 from ...document import settings
 from ...document.object_types import is_measured_points, source_face
 from ...runtime import memory
-from ...strategies import estimates, optimal, sampling
-from ...strategies.settings import resolve_fit_poles
+from ...strategies import estimates, sampling
+from ...strategies.settings import BEST_STARTS, resolve_fit_poles
 from .. import echo
 from ..background import BackgroundSampling
 from ..selection import SelectionError, selected_face
@@ -148,7 +148,7 @@ class SampleFaceTaskPanel(BackgroundRunPanel):
     def _fill_strategies(self):
         """The strategy list and the starts of a descent ("best" and the blind strategies): each
         entry shows the strategy's label and holds its name, with its description as tooltip."""
-        best = ", ".join(sampling.STRATEGIES[name].label for name in optimal.BEST_STARTS)
+        best = ", ".join(sampling.STRATEGIES[name].label for name in BEST_STARTS)
         add_choice(self.form.start, "best", "best start", f"the best of {best} for this face")
         for name, strategy in sampling.STRATEGIES.items():
             add_choice(self.form.strategy, name, strategy.label, strategy.description)

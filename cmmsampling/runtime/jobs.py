@@ -1,7 +1,8 @@
-"""Independent per-face runs, in parallel: in this process, on local processes or on a Dask cluster.
+"""Independent jobs, in parallel: in this process, on local processes or on a Dask cluster
+(:func:`run_all`; a part plan's faces, cmmsampling.planning.part_plan, are such jobs).
 
-A job is plain data (the face as a BREP string, numbers, names) and its outcome is plain data,
-so both cross process and machine boundaries. Local processes are started with this Python
+A job is plain data (for a face: the face as a BREP string, numbers, names) and its outcome is
+plain data, so both cross process and machine boundaries. Local processes are started with this Python
 (also from inside FreeCAD, whose ``sys.executable`` is the FreeCAD binary) by the ``spawn``
 method; a Dask cluster is reached through ``distributed.Client`` (Debian's python3-distributed).
 
@@ -10,6 +11,8 @@ mmap threshold at 128 KiB: every temporary array of the fit and the deviation is
 unmapped anew, and a face took 1.65x as long (22.5 s against 13.6 s, measured). A job run on Dask
 first sets glibc's thresholds back to sizes that keep those arrays in the heap.
 """
+from __future__ import annotations
+
 import concurrent.futures
 import contextvars
 import ctypes
@@ -22,11 +25,13 @@ import tempfile
 import threading
 import time
 import zipfile
+from collections.abc import Callable, Generator, Sequence
 from concurrent.futures.process import BrokenProcessPool
+from typing import Any
 
 from ..geometry.validation import check_int
-from ..runtime.memory import free_bytes, gib
-from ..runtime.parallel import ignore_broken_pipes, package_parent, python_executable
+from .memory import free_bytes, gib
+from .parallel import ignore_broken_pipes, package_parent, python_executable
 
 # Memory one local process takes for a face (FreeCAD, numpy, scipy and a face's arrays), bytes:
 # a Ventilator face's process peaked at about 180 MB; this leaves room for larger grids.
@@ -34,6 +39,8 @@ PROCESS_BYTES = 400 * 2**20
 PARENT_CHECK_SECONDS = 1.0
 # How often a run reports that jobs are still under way (and can be cancelled), s.
 BEAT_SECONDS = 0.5
+# What the job runners yield: (index, outcome) for each job that ends, (None, None) for a beat.
+Runs = Generator[tuple["int | None", Any], None, None]
 
 
 # Local processes that import the package alone: spawn's children normally run the parent's
@@ -46,25 +53,25 @@ PROCESS_PREFIX = "cmmsampling-"
 _MAIN_KEYS = ("init_main_from_path", "init_main_from_name")
 
 
-def _package_only(prepare):
+def _package_only(prepare: Callable[[str], dict[str, Any]]) -> Callable[[str], dict[str, Any]]:
     """multiprocessing.spawn.get_preparation_data, without the main module for this module's
     processes (named PROCESS_PREFIX...), as it was for any other."""
 
-    def prepared(name):
+    def prepared(name: str) -> dict[str, Any]:
         data = prepare(name)
         if name.startswith(PROCESS_PREFIX):
             for key in _MAIN_KEYS:
                 data.pop(key, None)
         return data
 
-    prepared.package_only = True
+    setattr(prepared, "package_only", True)
     return prepared
 
 
 class _PackageProcess(multiprocessing.context.SpawnProcess):
     """A spawned process that runs none of the parent's __main__ (see PROCESS_PREFIX)."""
 
-    def __init__(self, *args, **kwargs):
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
         super().__init__(*args, **kwargs)
         self.name = PROCESS_PREFIX + self.name
 
@@ -75,12 +82,13 @@ class _PackageContext(multiprocessing.context.SpawnContext):
     Process = _PackageProcess
 
 
-def package_context():
+def package_context() -> multiprocessing.context.SpawnContext:
     """A spawn context whose processes import the package alone, never the parent's __main__,
     started with this Python (python_executable: also from inside FreeCAD)."""
     ignore_broken_pipes()
     if not getattr(multiprocessing.spawn.get_preparation_data, "package_only", False):
-        multiprocessing.spawn.get_preparation_data = _package_only(multiprocessing.spawn.get_preparation_data)
+        prepare = _package_only(multiprocessing.spawn.get_preparation_data)
+        setattr(multiprocessing.spawn, "get_preparation_data", prepare)
     context = _PackageContext()
     executable = python_executable()
     if executable is not None:
@@ -93,7 +101,10 @@ class WorkersFailed(RuntimeError):
     package); the message says why."""
 
 
-def run_all(function, jobs, processes=None, scheduler=None, progress=None, describe=None, during=None):
+def run_all(function: Callable[[Any], Any], jobs: Sequence[Any], processes: int | None = None, scheduler: Any = None,
+            progress: Callable[[int, int, str | None], bool | None] | None = None,
+            describe: Callable[[Any, Any], str] | None = None,
+            during: Callable[[int, str], None] | None = None) -> tuple[list[Any], list[str]]:
     """``function(job)`` for every job; returns (outcomes in the jobs' order, notes).
 
     function: a module-level function (picklable); jobs: a list of picklable jobs;
@@ -113,17 +124,18 @@ def run_all(function, jobs, processes=None, scheduler=None, progress=None, descr
     processes that failed, after which the jobs left ran here).
     """
     total = len(jobs)
-    outcomes, notes = [None] * total, []
+    outcomes: list[Any] = [None] * total
+    notes: list[str] = []
     reports = _Reports()
     if scheduler is not None:
         runs = _dask_runs(function, jobs, scheduler)
     else:
         count = process_count(processes, total, notes)
         runs = _here(function, jobs, reports) if count == 1 else _local_processes(function, jobs, count, reports)
-    describe = describe or _message
+    message = describe or _message
     done = 0
 
-    def record(index, outcome):
+    def record(index: int | None, outcome: Any) -> bool:
         """Keep an outcome and report it (a beat where index is None); True when the caller cancels."""
         nonlocal done
         if index is None:
@@ -133,7 +145,7 @@ def run_all(function, jobs, processes=None, scheduler=None, progress=None, descr
             return progress is not None and bool(progress(done, total, None))
         done += 1
         outcomes[index] = outcome
-        return progress is not None and bool(progress(done, total, describe(jobs[index], outcome)))
+        return progress is not None and bool(progress(done, total, message(jobs[index], outcome)))
 
     try:
         any(record(index, outcome) for index, outcome in runs)
@@ -147,7 +159,7 @@ def run_all(function, jobs, processes=None, scheduler=None, progress=None, descr
     return outcomes, notes
 
 
-def process_count(processes, jobs, notes=None):
+def process_count(processes: int | None, jobs: int, notes: list[str] | None = None) -> int:
     """Local processes to start: the given count (>= 1) or all cores, never more than the
     cores, the jobs, or the processes the free memory holds (PROCESS_BYTES each); a note in
     ``notes`` when fewer than asked are started for the cores or the memory."""
@@ -157,12 +169,13 @@ def process_count(processes, jobs, notes=None):
     room = cores if free is None else max(1, int(free // PROCESS_BYTES))
     count = max(1, min(asked, cores, room, jobs))
     if notes is not None and count < min(asked, jobs):
-        why = f"{cores} core(s)" if cores <= room else f"{gib(free)} of free memory, about {gib(PROCESS_BYTES)} each"
-        notes.append(f"{count} local process(es) ran the faces, not {asked}: the machine has {why}")
+        why = (f"{cores} core(s)" if free is None or cores <= room else
+               f"{gib(free)} of free memory, about {gib(PROCESS_BYTES)} each")
+        notes.append(f"{count} local process(es) ran the jobs, not {asked}: the machine has {why}")
     return count
 
 
-def _here(function, jobs, reports):
+def _here(function: Callable[[Any], Any], jobs: Sequence[Any], reports: _Reports) -> Runs:
     """Each job in this process, in order, in a thread of its own: (index, outcome), and
     (None, None) every BEAT_SECONDS while it runs; what a job says of itself (:func:`report`) goes
     to ``reports`` (a _Reports). Closing the generator early asks the job under way to stop
@@ -170,7 +183,7 @@ def _here(function, jobs, reports):
     stop = threading.Event()
     try:
         for index, job in enumerate(jobs):
-            ended = {}
+            ended: dict[str, Any] = {}
             thread = threading.Thread(target=_run_job, args=(function, job, stop, ended, reports.teller(index)),
                                       daemon=True, name="cmmsampling-job")
             thread.start()
@@ -185,10 +198,12 @@ def _here(function, jobs, reports):
         stop.set()
 
 
-_STOP = contextvars.ContextVar("cmmsampling_job_stop", default=None)
+_STOP: contextvars.ContextVar[threading.Event | _TaskCancelled | None] = contextvars.ContextVar(
+    "cmmsampling_job_stop", default=None)
 
 
-def _run_job(function, job, stop, ended, teller):
+def _run_job(function: Callable[[Any], Any], job: Any, stop: threading.Event, ended: dict[str, Any],
+             teller: Callable[[str], None]) -> None:
     """function(job) into ended["outcome"] (or its exception into ended["error"]), with
     :func:`stop_asked` answering from ``stop`` (a threading.Event) and :func:`report` telling
     ``teller`` (callable(text))."""
@@ -200,12 +215,13 @@ def _run_job(function, job, stop, ended, teller):
         ended["error"] = exc
 
 
-_TELL = contextvars.ContextVar("cmmsampling_job_report", default=None)
+_TELL: contextvars.ContextVar[Callable[[str], None] | None] = contextvars.ContextVar(
+    "cmmsampling_job_report", default=None)
 # In a local process: the queue its jobs' reports go to (set by _start_process).
-_PROCESS_QUEUE = None
+_PROCESS_QUEUE: Any = None
 
 
-def report(text):
+def report(text: str) -> None:
     """Say how the job under way in this thread is getting on (e.g. "N = 36 (best so far ...)"):
     run_all hands the latest text of each job to its ``during`` at the next beat. Does nothing
     outside a job of run_all or on Dask."""
@@ -218,24 +234,26 @@ class _Reports:
     """The latest text each job under way said of itself (:func:`report`): jobs in this process
     write them here directly, jobs in local processes through a queue (:meth:`queue`)."""
 
-    def __init__(self):
-        self._latest, self._lock, self._queue = {}, threading.Lock(), None
+    def __init__(self) -> None:
+        self._latest: dict[int, str] = {}
+        self._lock = threading.Lock()
+        self._queue: Any = None
 
-    def teller(self, index):
+    def teller(self, index: int) -> Callable[[str], None]:
         """callable(text) that keeps ``text`` as job ``index``'s latest."""
 
-        def tell(text):
+        def tell(text: str) -> None:
             with self._lock:
                 self._latest[index] = text
 
         return tell
 
-    def queue(self, context):
+    def queue(self, context: multiprocessing.context.SpawnContext) -> Any:
         """A queue of the multiprocessing ``context`` for local processes' reports (index, text)."""
         self._queue = context.Queue()
         return self._queue
 
-    def drain(self):
+    def drain(self) -> list[tuple[int, str]]:
         """[(index, latest text)] said since the last drain, each job once."""
         while self._queue is not None:
             try:
@@ -247,7 +265,7 @@ class _Reports:
             latest, self._latest = self._latest, {}
         return sorted(latest.items())
 
-    def close(self):
+    def close(self) -> None:
         """Let go of the queue (its feeder thread ends)."""
         if self._queue is not None:
             self._queue.close()
@@ -255,7 +273,7 @@ class _Reports:
             self._queue = None
 
 
-def _start_process(parent, reports):
+def _start_process(parent: int, reports: Any) -> None:
     """A local process's initializer: follow the parent (:func:`follow_parent`) and send its
     jobs' reports to the queue ``reports``."""
     global _PROCESS_QUEUE
@@ -263,7 +281,7 @@ def _start_process(parent, reports):
     follow_parent(parent)
 
 
-def _in_process(function, index, job):
+def _in_process(function: Callable[[Any], Any], index: int, job: Any) -> Any:
     """function(job) in a local process, its :func:`report` texts sent as (index, text)."""
     queue_ = _PROCESS_QUEUE
     token = _TELL.set(None if queue_ is None else (lambda text: queue_.put((index, text))))
@@ -273,7 +291,7 @@ def _in_process(function, index, job):
         _TELL.reset(token)
 
 
-def stop_asked():
+def stop_asked() -> bool:
     """True when the run of the job under way in this thread was cancelled (a job run in this
     process by :func:`run_all`, or on a Dask worker; a job in a local process is stopped from
     outside: the process ends)."""
@@ -281,7 +299,7 @@ def stop_asked():
     return stop is not None and stop.is_set()
 
 
-def _local_processes(function, jobs, count, reports):
+def _local_processes(function: Callable[[Any], Any], jobs: Sequence[Any], count: int, reports: _Reports) -> Runs:
     """The jobs on ``count`` local processes as they end: (index, outcome); closing the
     generator early stops the processes. WorkersFailed when a process dies (or cannot import
     the package). Each process ends itself when this one dies (:func:`follow_parent`) and sends
@@ -306,11 +324,11 @@ def _local_processes(function, jobs, count, reports):
         _stop(pool)
 
 
-def follow_parent(parent):
+def follow_parent(parent: int) -> None:
     """In a local process: end this process as soon as ``parent`` (pid) is no longer its parent
     (it was killed), checked every PARENT_CHECK_SECONDS by a daemon thread."""
 
-    def watch():
+    def watch() -> None:
         while os.getppid() == parent:
             time.sleep(PARENT_CHECK_SECONDS)
         os._exit(1)
@@ -318,7 +336,7 @@ def follow_parent(parent):
     threading.Thread(target=watch, name="follow-parent", daemon=True).start()
 
 
-def _stop(pool):
+def _stop(pool: concurrent.futures.ProcessPoolExecutor) -> None:
     """Shut a process pool down now: pending jobs cancelled, running processes terminated."""
     processes = list((getattr(pool, "_processes", None) or {}).values())
     pool.shutdown(wait=False, cancel_futures=True)
@@ -329,7 +347,7 @@ def _stop(pool):
         process.join(5)
 
 
-def _dask_runs(function, jobs, scheduler):
+def _dask_runs(function: Callable[[Any], Any], jobs: Sequence[Any], scheduler: Any) -> Runs:
     """The jobs on a Dask cluster as they end: (index, outcome), and (None, None) every
     BEAT_SECONDS while none ends; closing the generator early (or Ctrl-C) cancels the jobs still
     queued or running. The package is uploaded to the workers first (:func:`upload_package`);
@@ -361,7 +379,7 @@ def _dask_runs(function, jobs, scheduler):
             client.close()
 
 
-def upload_package(client):
+def upload_package(client: Any) -> None:
     """Send this cmmsampling package to every worker of a Dask client as a zip, which the
     workers put first on their sys.path: they run the same code as this process, and need only
     FreeCAD, numpy and scipy installed."""
@@ -385,7 +403,7 @@ M_TRIM_THRESHOLD, M_MMAP_THRESHOLD = -1, -3
 HEAP_THRESHOLDS = {M_TRIM_THRESHOLD: 128 * 2 ** 20, M_MMAP_THRESHOLD: 32 * 2 ** 20}
 
 
-def run_on_worker(function, job):
+def run_on_worker(function: Callable[[Any], Any], job: Any) -> Any:
     """``function(job)`` on a Dask worker, after :func:`set_heap_thresholds`, with
     :func:`stop_asked` answering whether the client cancelled this task: Dask cannot stop a
     running task, so a job that asks ends early instead of holding the worker's thread."""
@@ -405,15 +423,15 @@ class _TaskCancelled:
     the worker's own state of the task (no call to the scheduler), gone or no longer to be
     computed once the client cancels it."""
 
-    def __init__(self, worker, key):
+    def __init__(self, worker: Any, key: str) -> None:
         self.worker, self.key = worker, key
 
-    def is_set(self):
+    def is_set(self) -> bool:
         task = self.worker.state.tasks.get(self.key)
         return task is None or task.state in ("cancelled", "released", "forgotten")
 
 
-def set_heap_thresholds():
+def set_heap_thresholds() -> bool:
     """Let glibc keep arrays up to 32 MiB in the heap and return freed memory to the system only
     above 128 MiB (HEAP_THRESHOLDS), for this process; True when set, False where the C library
     is not glibc."""
@@ -423,6 +441,6 @@ def set_heap_thresholds():
     return all(mallopt(parameter, size) == 1 for parameter, size in HEAP_THRESHOLDS.items())
 
 
-def _message(job, outcome):
+def _message(job: Any, outcome: Any) -> str:
     """What a finished job's progress line says by default: its name where it has one."""
     return f"{getattr(job, 'name', 'job')} done"

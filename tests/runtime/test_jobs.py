@@ -14,7 +14,7 @@ from support.faces import Part
 from support.paths import ROOT
 
 import cmmsampling
-from cmmsampling.planning import face_runs
+from cmmsampling.runtime import jobs as face_runs
 
 PYTHON = "/usr/bin/python3" if os.path.exists("/usr/bin/python3") else sys.executable
 
@@ -75,7 +75,7 @@ def test_starting_local_processes_turns_a_closed_pipe_into_an_error_not_an_exit(
     script = ("import os, signal, sys\n"
               f"sys.path.insert(0, {ROOT!r})\n"
               "signal.signal(signal.SIGPIPE, signal.SIG_DFL)\n"
-              "from cmmsampling.planning import face_runs\n"
+              "from cmmsampling.runtime import jobs as face_runs\n"
               "face_runs.package_context()\n"
               "reader, writer = os.pipe()\n"
               "os.close(reader)\n"
@@ -91,7 +91,7 @@ def test_more_processes_than_cores_are_capped_and_said():
     notes = []
     count = face_runs.process_count(1000, 500, notes)
     assert count == min(os.cpu_count(), 500)
-    assert notes == [f"{count} local process(es) ran the faces, not 1000: the machine has {os.cpu_count()} core(s)"]
+    assert notes == [f"{count} local process(es) ran the jobs, not 1000: the machine has {os.cpu_count()} core(s)"]
     assert face_runs.process_count(1, 5, notes) == 1 and len(notes) == 1
 
 
@@ -122,7 +122,7 @@ def test_a_killed_parent_takes_its_processes_with_it(tmp_path):
     end within a few seconds instead of living on under PID 1."""
     script = tmp_path / "long_jobs.py"
     script.write_text(f"import sys, time\nsys.path.insert(0, {ROOT!r})\n"
-                      "from cmmsampling.planning import face_runs\n"
+                      "from cmmsampling.runtime import jobs as face_runs\n"
                       "if __name__ == '__main__':\n"
                       "    print('started', flush=True)\n"
                       "    face_runs.run_all(time.sleep, [60, 60, 60], processes=2)\n")
