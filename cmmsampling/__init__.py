@@ -49,7 +49,7 @@ _API = {
     "ExportError": "formats.files",
     "measured_deviation": "measurement",
     "inspect": "inspection.inspecting",
-    "Inspection": "inspection.judge",
+    "Inspection": "inspection.result",
     "read_record": "inspection.record",
     "read_mbd": "formats.qif.model",
     "MbdModel": "formats.qif.model",

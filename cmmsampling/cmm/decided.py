@@ -33,7 +33,8 @@ from ..formats.pointfiles import read_points
 from ..geometry.surface import SurfaceModel, as_face
 from ..geometry.validation import InputError, check_real
 from ..inspection.decide import FEWEST_POINTS, Belief, Candidates, belief, minimum_zones, next_row, spread_design
-from ..inspection.judge import Inspection, Progress, inspect
+from ..inspection.judge import Progress, inspect
+from ..inspection.result import Inspection
 from ..inspection.series import series_model
 from ..strategies.sampling import probe_edge_offset, reachability_of
 from .client import Journal, MeasuredRun, link_settings, run_session

@@ -16,7 +16,7 @@ from ..geometry.validation import InputError, InputTypeError
 from ..inspection.align import Alignment
 from ..inspection.datums import DatumFit
 from ..formats.exporting import is_mbd_inspection
-from ..inspection.judge import Inspection, verdict_text, verdict_word
+from ..inspection.result import Inspection, verdict_text, verdict_word
 from ..inspection.uncertainty import NO_UNCERTAINTY, ProfileUncertainty
 from .object_types import MEASURED_POINTS, in_document, is_measured_points
 from .objects import TypedProxy
@@ -144,7 +144,7 @@ def verdict(inspection):
 class MeasuredPoints(TypedProxy):
     """Proxy of the measured points of an inspection: N points measured on the part, aligned to
     the CAD model, with their signed deviations (+ out of the material) and bands in the
-    tolerance zone (cmmsampling.inspection.judge.BANDS).
+    tolerance zone (cmmsampling.inspection.result.BANDS).
 
     Properties: Labels, Faces (the face each was judged on); Points (aligned, mm), Measured (as
     read, mm), Nominal (planned, mm; 0 where none was planned); Deviation (mm); Bands (-2 .. 2);

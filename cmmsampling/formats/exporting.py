@@ -106,7 +106,7 @@ class ResultsReport:
 
 
 def is_inspection(source):
-    """True for an inspection's results (cmmsampling.inspection.judge.Inspection: measured points,
+    """True for an inspection's results (cmmsampling.inspection.result.Inspection: measured points,
     their deviations and the alignment's transform)."""
     return (all(hasattr(source, name) for name in ("deviations", "transform", "face_profiles", "measured"))
             or is_mbd_inspection(source))

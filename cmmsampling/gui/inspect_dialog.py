@@ -16,7 +16,8 @@ from ..document import settings
 from ..formats.registry import measured_filter
 from ..inspection.align import ALIGNMENTS, DEGREES_OF_FREEDOM
 from ..inspection.characteristics import MbdInspection, inspect_model_file, planned_ids
-from ..inspection.judge import InspectionCancelled, inspect, stated, verdict_words
+from ..inspection.judge import InspectionCancelled, inspect, stated
+from ..inspection.result import verdict_words
 from . import icon
 from .background import BackgroundTask, behind_progress
 from .qt_compat import asked, browse_row

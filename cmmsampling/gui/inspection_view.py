@@ -11,7 +11,7 @@ from PySide import QtCore
 
 from ..document.object_types import is_measured_points
 from ..fitting.deviation import mm_text
-from ..inspection.judge import band_limits
+from ..inspection.result import band_limits
 from . import colormap, icon, labels
 from .view_providers import LABEL_COLOUR, Annotated, hide_other_legends
 

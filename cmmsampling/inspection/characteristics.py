@@ -39,8 +39,9 @@ from ..geometry.freecad_env import import_part
 from ..geometry.validation import InputError
 from ..planning.mbd_plan import ModelCharacteristics
 from .datums import Datum
-from .judge import (Inspection, InspectionCancelled, Planned, _measured_point_set, _planned, _positions, inspect, pair,
+from .judge import (InspectionCancelled, Planned, _measured_point_set, _planned, _positions, inspect, pair,
                     planned_face)
+from .result import Inspection
 
 Part = import_part()
 

@@ -18,7 +18,7 @@ from matplotlib.collections import PolyCollection
 from matplotlib.figure import Figure
 
 from ..geometry.surface import as_face
-from .judge import Inspection, verdict_words
+from .result import Inspection, verdict_words
 
 if TYPE_CHECKING:   # FreeCAD ships no type stubs: to the type checker Part's classes are Any
     import Part

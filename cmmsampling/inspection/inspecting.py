@@ -12,8 +12,8 @@ from ..formats.pointset import PointSet
 from ..geometry.validation import InputError
 from ..planning.mbd_plan import MbdPlan
 from .characteristics import MbdInspection, inspect_mbd, inspect_model_group
-from .judge import Inspection
 from .judge import inspect as inspect_points
+from .result import Inspection
 
 # inspect()'s options a model's plan takes (the rest come from the model).
 MODEL_OPTIONS = ("uncertainty", "probe_radius", "seed", "progress")

@@ -37,7 +37,8 @@ from ..geometry.validation import InputError
 from .datums import Datum
 
 if TYPE_CHECKING:   # judge imports FreeCAD's Part: imported when a record is judged
-    from .judge import Inspection, Progress
+    from .judge import Progress
+    from .result import Inspection
 
 # The attributes every record states (the others are stated where they apply).
 RECORD_FACTS = ("alignment", "lockedMotions", "zoneOffset_mm", "profile_mm", "pointOrder")

@@ -20,7 +20,7 @@ if TYPE_CHECKING:   # FreeCAD ships no type stubs
 
 
 class Inspected(Protocol):
-    """What the series reads of an inspection (cmmsampling.inspection.judge.Inspection, which
+    """What the series reads of an inspection (cmmsampling.inspection.result.Inspection, which
     imports this module): faces, the face's name of each of its N points (None: one face);
     points (N, 3) mm, aligned to the CAD model; deviations (N,) mm, signed."""
 

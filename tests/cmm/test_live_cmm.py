@@ -144,7 +144,7 @@ def test_a_silent_server_is_a_named_time_out(result, tmp_path):
 
 @pytest.mark.parametrize("server, out, message", [
     ("localhost:http", "m.csv", r"give the I\+\+ DME server as 'host:port'"),
-    ("127.0.0.1:1294", "m.dmi", "measured points are written as XYZIJK text (.xyz, .txt) or CSV (.csv)"),
+    ("127.0.0.1:1294", "m.dmi", r"measured points are written as XYZIJK text \(.xyz, .txt\) or CSV \(.csv\)"),
 ])
 def test_bad_arguments_are_refused_before_connecting(result, tmp_path, server, out, message):
     with pytest.raises(InputError, match=message):

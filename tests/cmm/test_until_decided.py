@@ -143,7 +143,7 @@ def test_a_dropped_connection_keeps_the_points_measured(reference, tmp_path):
     ({"tolerance": 0.0}, "tolerance"),
     ({"risk": 0.5}, "risk"),
     ({"max_points": 5}, "max_points"),
-    ({"out": "m.dmi"}, "written as CSV"),
+    ({"out": "m.dmi"}, r"written as XYZIJK text \(.xyz, .txt\) or CSV"),
 ])
 def test_bad_arguments_are_refused_before_connecting(reference, tmp_path, arguments, message):
     given = {"tolerance": TOLERANCE, "out": tmp_path / "m.csv", **arguments}

@@ -16,7 +16,7 @@ from cmmsampling.document.object_types import is_measured_points
 from cmmsampling.fitting.deviation import mm_text
 from cmmsampling.formats.qif.schema import schema_errors
 from cmmsampling.gui import colormap, commands, inspect_dialog, inspection_view
-from cmmsampling.inspection.judge import tolerance_bands
+from cmmsampling.inspection.result import tolerance_bands
 
 from pivy import coin
 from PySide import QtGui

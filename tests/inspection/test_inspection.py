@@ -207,7 +207,7 @@ def test_each_face_of_a_plan_has_a_form_profile_of_its_own(tmp_path):
 def test_an_offset_zone_judges_from_its_own_centre(planned):
     """ISO 1101's UZ: a face measured all out of the material (0.01 .. 0.03 mm) fails a centred
     0.03 mm zone and passes the unilateral one outside (offset +t/2); bands follow the centre."""
-    from cmmsampling.inspection.judge import band_limits, tolerance_bands
+    from cmmsampling.inspection.result import band_limits, tolerance_bands
 
     away = np.linspace(0.01, 0.03, planned.n)
     measured = cmmsampling.PointSet([f"P{i}" for i in range(1, planned.n + 1)],

@@ -1,4 +1,4 @@
-"""QIF 3.0 results of an inspection (:class:`cmmsampling.inspection.judge.Inspection`): what
+"""QIF 3.0 results of an inspection (:class:`cmmsampling.inspection.result.Inspection`): what
 ``cmmsampling.export(inspection, "results.qif")`` writes.
 
 The planned side is written as a plan's (:mod:`.plan`: the part, a point-defined surface
