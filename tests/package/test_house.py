@@ -131,5 +131,5 @@ def test_the_checker_sees_an_arrow_up_and_a_circle():
     # of its own instead of importing judge, and the strategies take Progress from the registry.
     with_type_only = {"judge": {"series"}, "series": {"judge"}, "plain": set()}
     assert circle(with_type_only) == "judge -> series -> judge"
-    assert "inspection.series" in RUN_GRAPH["inspection.judge"] and "inspection.judge" not in GRAPH["inspection.series"]
+    assert "inspection.series" in RUN_GRAPH["inspection.result"] and "inspection.judge" not in GRAPH["inspection.series"]
     assert "strategies.registry" in GRAPH["strategies.pso"] and "strategies.sampling" not in GRAPH["strategies.pso"]
