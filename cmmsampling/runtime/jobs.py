@@ -40,7 +40,7 @@ PARENT_CHECK_SECONDS = 1.0
 # How often a run reports that jobs are still under way (and can be cancelled), s.
 BEAT_SECONDS = 0.5
 # What the job runners yield: (index, outcome) for each job that ends, (None, None) for a beat.
-Runs = Generator[tuple["int | None", Any], None, None]
+Runs = Generator[tuple[int | None, Any], None, None]
 
 
 # Local processes that import the package alone: spawn's children normally run the parent's
